@@ -1,0 +1,64 @@
+//! The one error type of the `grainline` library.
+//!
+//! User errors (a bad file, a bad option) name the file, the line or the element, and what is
+//! wrong, in one line. Internal errors (a factorization that fails on valid input) say so.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in the `grainline` library.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be opened, read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// A syntax error in an input file, with the 1-based line where it was found (0 if unknown).
+    #[error("{path}:{line}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number, 0 when the parser could not tell.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The mesh is structurally unusable (empty, non-finite, bad indices, non-manifold, ...).
+    #[error("{path}: {message}")]
+    InvalidMesh {
+        /// The mesh file (or a description of where the mesh came from).
+        path: PathBuf,
+        /// What is wrong, naming the element (vertex, face, edge) and, where known, the line.
+        message: String,
+    },
+    /// An option or argument is out of its valid range.
+    #[error("invalid {name}: {message}")]
+    InvalidArgument {
+        /// The option's name as the user wrote it.
+        name: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A numerical procedure failed on valid input.
+    #[error("numerical failure in {stage}: {message}")]
+    Numerical {
+        /// The stage that failed.
+        stage: &'static str,
+        /// What happened.
+        message: String,
+    },
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    /// An [`Error::InvalidArgument`].
+    pub fn invalid_arg(name: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::InvalidArgument { name: name.into(), message: message.into() }
+    }
+}

@@ -1,0 +1,1 @@
+//! grainline-toolpaths: placeholder, filled by the toolpaths issue.
