@@ -1,0 +1,35 @@
+//! Command-line definitions and dispatch. No algorithm lives here.
+
+mod inspect;
+mod mesh_args;
+
+use clap::{Parser, Subcommand};
+
+pub use mesh_args::MeshArgs;
+
+/// grainline: design how brushed metal shines, get the toolpaths that brush it.
+#[derive(Debug, Parser)]
+#[command(name = "grainline", version, about, long_about = None)]
+pub struct Cli {
+    /// No progress bars or status lines.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// Worker threads (results are identical whatever the count).
+    #[arg(long, global = true, value_name = "N")]
+    pub threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Counts, topology, UV charts and problems of a mesh.
+    Inspect(inspect::InspectArgs),
+}
+
+/// Runs the parsed command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Inspect(a) => inspect::run(a, cli.quiet),
+    }
+}
