@@ -9,6 +9,8 @@
 //! `mesh` ← `geometry` ← `highlight`.
 
 pub mod error;
+pub mod generate;
+pub mod geometry;
 pub mod mesh;
 
 pub use error::{Error, Result};

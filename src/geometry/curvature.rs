@@ -1,0 +1,163 @@
+//! The Weingarten map by a local quadric (jet) fit, and principal curvatures.
+//!
+//! In the tangent frame [t, b, n] of vertex i each neighbour gives local coordinates
+//! (x, y, z) = [t b n]ᵀ(pⱼ − pᵢ), and we fit by least squares
+//!
+//! ```text
+//! z = g₁x + g₂y + ½(W₁₁x² + 2W₁₂xy + W₂₂y²)        (the paper's §4.2, repaired: math.md §5.6)
+//! ```
+//!
+//! with the columns scaled by the ring radius so the system is well conditioned at any scale.
+//! W is the Weingarten map in the sign convention of math.md §1 (W = C for z = ½xᵀCx with n up);
+//! the linear term g tilts the normal: n ← normalize(n − g₁t − g₂b), and the fit is repeated in
+//! the new frame. The 1-ring is used for interior vertices of valence ≥ 6; boundary and
+//! low-valence vertices (valence 5 would be exactly determined) use the 2-ring, and a vertex
+//! whose ring is still degenerate (collinear neighbours, slivers) grows it up to the 4-ring.
+//! A vertex with no usable ring gets W = 0 and is counted.
+
+use nalgebra::{Matrix2, SMatrix, SVector, Vector3};
+
+use super::frames::Frame;
+use super::rings::gather_ring;
+use crate::mesh::Adjacency;
+
+/// Result of the jet fit at one vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JetFit {
+    /// Weingarten map in the vertex frame (math.md §1 convention).
+    pub w: Matrix2<f64>,
+    /// Gradient of the height function (the normal's tilt) in the vertex frame.
+    pub slope: [f64; 2],
+    /// Ring depth that was used (0 when no ring could be fitted).
+    pub ring: u8,
+}
+
+/// The fit of `z = g·x + ½xᵀWx` over the given neighbours, or `None` when their tangential
+/// positions do not determine a quadric.
+pub fn fit_quadric(
+    positions: &[Vector3<f64>],
+    i: usize,
+    frame: &Frame,
+    ring: &[u32],
+) -> Option<(Matrix2<f64>, [f64; 2])> {
+    if ring.len() < 5 {
+        return None;
+    }
+    let pi = positions[i];
+    let mut r2 = 0.0;
+    for &j in ring {
+        r2 += (positions[j as usize] - pi).norm_squared();
+    }
+    let h = (r2 / ring.len() as f64).sqrt();
+    if !(h > 0.0 && h.is_finite()) {
+        return None;
+    }
+    let inv_h = 1.0 / h;
+    let mut ata = SMatrix::<f64, 5, 5>::zeros();
+    let mut atb = SVector::<f64, 5>::zeros();
+    for &j in ring {
+        let d = (positions[j as usize] - pi) * inv_h;
+        let (x, y, z) = (frame.t.dot(&d), frame.b.dot(&d), frame.n.dot(&d));
+        let row = SVector::<f64, 5>::new(x, y, 0.5 * x * x, x * y, 0.5 * y * y);
+        ata += row * row.transpose();
+        atb += row * z;
+    }
+    // Reject rank-deficient systems: a pivot tiny against the diagonal means the neighbours
+    // do not span the quadric's monomials.
+    let chol = ata.cholesky()?;
+    let l = chol.l_dirty();
+    for k in 0..5 {
+        if l[(k, k)] * l[(k, k)] < 1e-10 * ata[(k, k)].max(1e-300) {
+            return None;
+        }
+    }
+    let c = chol.solve(&atb);
+    if c.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    // Undo the scaling: x' = x/h, z' = z/h ⇒ slopes unchanged, second derivatives × 1/h.
+    let w = Matrix2::new(c[2], c[3], c[3], c[4]) * inv_h;
+    Some((w, [c[0], c[1]]))
+}
+
+/// Jet fit at vertex `i`, growing the ring as needed (see the module docs).
+pub fn jet_fit(
+    positions: &[Vector3<f64>],
+    adj: &Adjacency,
+    i: usize,
+    frame: &Frame,
+    bufs: &mut (Vec<u32>, Vec<u32>),
+) -> JetFit {
+    let start = if adj.valence(i) >= 6 && !adj.is_boundary_vertex(i) { 1 } else { 2 };
+    for depth in start..=4 {
+        gather_ring(adj, i, depth, &mut bufs.0, &mut bufs.1);
+        if let Some((w, slope)) = fit_quadric(positions, i, frame, &bufs.0) {
+            return JetFit { w, slope, ring: depth as u8 };
+        }
+    }
+    JetFit { w: Matrix2::zeros(), slope: [0.0; 2], ring: 0 }
+}
+
+/// Principal curvatures and directions at a vertex.
+///
+/// k1 ≥ k2 are the eigenvalues of −W: positive where the surface bends away from its normal
+/// (a sphere with outward normals has k1 = k2 = +1/r).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Principal {
+    /// Maximum principal curvature.
+    pub k1: f64,
+    /// Minimum principal curvature.
+    pub k2: f64,
+    /// Unit direction of k1 in the vertex frame (angle-doubled sign ambiguity: ±).
+    pub d1: [f64; 2],
+}
+
+impl Principal {
+    /// Eigen-decomposition of −W (closed form for a symmetric 2×2 matrix).
+    pub fn from_weingarten(w: &Matrix2<f64>) -> Self {
+        let (a, b, c) = (-w[(0, 0)], -0.5 * (w[(0, 1)] + w[(1, 0)]), -w[(1, 1)]);
+        let mean = 0.5 * (a + c);
+        let half_diff = 0.5 * (a - c);
+        let r = half_diff.hypot(b);
+        // The eigenvector of the larger eigenvalue is at angle θ/2 with θ = atan2(2b, a − c).
+        let theta = 0.5 * (2.0 * b).atan2(a - c);
+        Principal { k1: mean + r, k2: mean - r, d1: [theta.cos(), theta.sin()] }
+    }
+
+    /// Unit direction of k2 in the vertex frame (d1 turned by +90°).
+    pub fn d2(&self) -> [f64; 2] {
+        [-self.d1[1], self.d1[0]]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn principal_of_diagonal() {
+        let p = Principal::from_weingarten(&Matrix2::new(-2.0, 0.0, 0.0, -0.5));
+        assert!((p.k1 - 2.0).abs() < 1e-15 && (p.k2 - 0.5).abs() < 1e-15);
+        assert!((p.d1[0].abs() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn exact_on_a_quadric() {
+        // z = g·x + ½xᵀCx is fitted exactly from any 5+ points in general position.
+        let (g, c) = ([0.1, -0.3], Matrix2::new(0.7, 0.2, 0.2, -0.4));
+        let mut pos = vec![Vector3::zeros()];
+        for k in 0..7 {
+            let a = k as f64 * 0.9;
+            let (x, y) = (0.1 * a.cos(), 0.1 * (1.0 + 0.1 * k as f64) * a.sin());
+            let z = g[0] * x
+                + g[1] * y
+                + 0.5 * (c[(0, 0)] * x * x + 2.0 * c[(0, 1)] * x * y + c[(1, 1)] * y * y);
+            pos.push(Vector3::new(x, y, z));
+        }
+        let frame = Frame { t: Vector3::x(), b: Vector3::y(), n: Vector3::z() };
+        let ring: Vec<u32> = (1..8).collect();
+        let (w, s) = fit_quadric(&pos, 0, &frame, &ring).unwrap();
+        assert!((w - c).norm() < 1e-10, "{w} vs {c}");
+        assert!((s[0] - g[0]).abs() < 1e-12 && (s[1] - g[1]).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,160 @@
+//! Per-vertex normals.
+//!
+//! The default is the angle-weighted normal (Thürmer & Wüthrich 1998): the sum of the incident
+//! face normals weighted by the corner angle at the vertex. It is independent of how the
+//! one-ring is triangulated, unlike the area-weighted one. The jet fit ([`super::curvature`])
+//! refines it further.
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::mesh::Mesh;
+
+/// How the initial vertex normals are computed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum NormalSource {
+    /// Face normals weighted by the corner angle (the default).
+    #[default]
+    AngleWeighted,
+    /// Face normals weighted by the face area.
+    AreaWeighted,
+    /// The file's normals (`vn`), averaged over the corners of each vertex; falls back to
+    /// angle-weighted where the file has none.
+    File,
+}
+
+/// The direction used where a vertex has no usable normal (an isolated vertex, or a vertex
+/// whose faces all have zero area): +Z. Such vertices are counted by [`vertex_normals`].
+pub const FALLBACK_NORMAL: Vector3<f64> = Vector3::new(0.0, 0.0, 1.0);
+
+/// Unit face normals (zero vector for a zero-area face).
+pub fn face_normals(mesh: &Mesh) -> Vec<Vector3<f64>> {
+    (0..mesh.num_faces())
+        .into_par_iter()
+        .map(|f| {
+            let [a, b, c] = mesh.face_positions(f);
+            let n = (b - a).cross(&(c - a));
+            let len = n.norm();
+            if len > 0.0 && len.is_finite() {
+                n / len
+            } else {
+                Vector3::zeros()
+            }
+        })
+        .collect()
+}
+
+/// Interior angle of a triangle at `a` (between `b − a` and `c − a`), robust for tiny angles.
+#[inline]
+pub fn corner_angle(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> f64 {
+    let (u, v) = (b - a, c - a);
+    u.cross(&v).norm().atan2(u.dot(&v))
+}
+
+/// Per-vertex unit normals and the number of vertices that took [`FALLBACK_NORMAL`].
+///
+/// Accumulates per face and reduces per vertex through `vertex_faces` so the sum order, and
+/// hence every bit of the result, is independent of the thread count.
+pub fn vertex_normals(
+    mesh: &Mesh,
+    vertex_faces: &VertexFaces,
+    source: NormalSource,
+) -> (Vec<Vector3<f64>>, usize) {
+    let face_n = face_normals(mesh);
+    let file_avg = match (source, &mesh.normals) {
+        (NormalSource::File, Some(_)) => Some(file_vertex_normals(mesh, vertex_faces)),
+        _ => None,
+    };
+    let normals: Vec<Vector3<f64>> = (0..mesh.num_vertices())
+        .into_par_iter()
+        .map(|v| {
+            if let Some(n) = file_avg.as_ref().and_then(|f| f[v]) {
+                return n;
+            }
+            let mut sum = Vector3::zeros();
+            for &(f, c) in vertex_faces.of(v) {
+                let fv = mesh.faces[f as usize];
+                let p = |k: usize| mesh.positions[fv[(c as usize + k) % 3] as usize];
+                let w = match source {
+                    NormalSource::AreaWeighted => 0.5 * (p(1) - p(0)).cross(&(p(2) - p(0))).norm(),
+                    _ => corner_angle(&p(0), &p(1), &p(2)),
+                };
+                sum += w * face_n[f as usize];
+            }
+            normalize_or(sum, FALLBACK_NORMAL)
+        })
+        .collect();
+    let fallback = (0..mesh.num_vertices())
+        .filter(|&v| {
+            vertex_faces.of(v).iter().all(|&(f, _)| face_n[f as usize] == Vector3::zeros())
+        })
+        .count();
+    (normals, fallback)
+}
+
+fn file_vertex_normals(mesh: &Mesh, vf: &VertexFaces) -> Vec<Option<Vector3<f64>>> {
+    let attr = mesh.normals.as_ref().expect("checked by caller");
+    (0..mesh.num_vertices())
+        .into_par_iter()
+        .map(|v| {
+            let sum: Vector3<f64> = vf
+                .of(v)
+                .iter()
+                .map(|&(f, c)| attr.values[attr.corners[f as usize][c as usize] as usize])
+                .sum();
+            let n = sum.norm();
+            (n > 1e-12 && n.is_finite()).then(|| sum / n)
+        })
+        .collect()
+}
+
+/// `v / |v|`, or `fallback` when `v` is zero or not finite.
+#[inline]
+pub fn normalize_or(v: Vector3<f64>, fallback: Vector3<f64>) -> Vector3<f64> {
+    let n = v.norm();
+    if n > 1e-300 && n.is_finite() {
+        v / n
+    } else {
+        fallback
+    }
+}
+
+/// For each vertex, the faces around it as `(face, corner)` pairs, in face order.
+#[derive(Clone, Debug, Default)]
+pub struct VertexFaces {
+    offsets: Vec<u32>,
+    entries: Vec<(u32, u8)>,
+}
+
+impl VertexFaces {
+    /// Builds the vertex-to-face incidence of `mesh` (counting sort: linear time).
+    pub fn new(mesh: &Mesh) -> Self {
+        let nv = mesh.num_vertices();
+        let mut offsets = vec![0u32; nv + 1];
+        for f in &mesh.faces {
+            for &v in f {
+                offsets[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..nv {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut fill = offsets.clone();
+        let mut entries = vec![(0u32, 0u8); mesh.faces.len() * 3];
+        for (fi, f) in mesh.faces.iter().enumerate() {
+            for (c, &v) in f.iter().enumerate() {
+                let slot = &mut fill[v as usize];
+                entries[*slot as usize] = (fi as u32, c as u8);
+                *slot += 1;
+            }
+        }
+        VertexFaces { offsets, entries }
+    }
+
+    /// The `(face, corner)` pairs of vertex `v`.
+    #[inline]
+    pub fn of(&self, v: usize) -> &[(u32, u8)] {
+        &self.entries[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+}

@@ -1,0 +1,142 @@
+//! Curvature, normals and areas against analytic surfaces.
+
+use grainline::generate::{self, Grid, GridPattern};
+use grainline::geometry::{Geometry, GeometryOptions};
+use nalgebra::Vector3;
+
+fn geom(mesh: &grainline::mesh::Mesh) -> Geometry {
+    Geometry::compute(mesh, &GeometryOptions::default())
+}
+
+/// Max and RMS relative error of k1 over the vertices selected by `keep`.
+fn errors(g: &Geometry, truth: impl Fn(usize) -> (f64, f64), keep: impl Fn(usize) -> bool) -> (f64, f64, f64) {
+    let (mut max1, mut max2, mut sum, mut n) = (0.0f64, 0.0f64, 0.0, 0.0);
+    for i in (0..g.num_vertices()).filter(|&i| keep(i)) {
+        let (k1, k2) = truth(i);
+        let scale = k1.abs().max(k2.abs());
+        let e1 = (g.principal[i].k1 - k1).abs() / scale;
+        let e2 = (g.principal[i].k2 - k2).abs() / scale;
+        max1 = max1.max(e1);
+        max2 = max2.max(e2);
+        sum += e1 * e1;
+        n += 1.0;
+    }
+    (max1, max2, (sum / n).sqrt())
+}
+
+#[test]
+fn torus_128x32_k1_error_is_well_under_libigl() {
+    // libigl's principal_curvature (radius 2) has a 3.5 % k1 error here (issue 2); aim ≤ 1.75 %.
+    let (big_r, r) = (2.0, 0.5);
+    let mesh = generate::torus(big_r, r, 128, 32);
+    let g = geom(&mesh);
+    let (max1, max2, rms) = errors(&g, |i| generate::torus_curvatures(big_r, r, &mesh.positions[i]), |_| true);
+    eprintln!("torus 128x32: k1 max rel err {max1:.4}, k2 max {max2:.4}, k1 rms {rms:.5}");
+    assert!(max1 < 0.0175, "k1 max relative error {max1}");
+}
+
+#[test]
+fn sphere_curvature_positive_and_converging() {
+    let mut last = f64::INFINITY;
+    for sub in [2, 3, 4, 5] {
+        let r = 1.7;
+        let mesh = generate::icosphere(r, sub);
+        let g = geom(&mesh);
+        let (m1, m2, _) = errors(&g, |_| (1.0 / r, 1.0 / r), |_| true);
+        let err = m1.max(m2);
+        eprintln!("icosphere {sub}: max rel err {err:.3e}");
+        for i in 0..g.num_vertices() {
+            assert!(g.normal(i).dot(&mesh.positions[i]) > 0.0, "outward normal");
+            assert!(g.principal[i].k2 > 0.0, "sphere with outward normals: k > 0");
+        }
+        assert!(err < last, "error must fall with refinement");
+        last = err;
+    }
+    assert!(last < 2e-3);
+}
+
+#[test]
+fn cylinder_curvature_interior() {
+    let (r, h) = (0.8, 2.0);
+    let mut last = f64::INFINITY;
+    for n in [24, 48, 96] {
+        let mesh = generate::cylinder(r, h, n, n / 2);
+        let g = geom(&mesh);
+        let interior = |i: usize| !g.adjacency.is_boundary_vertex(i);
+        let (m1, m2, _) = errors(&g, |_| (1.0 / r, 0.0), interior);
+        let (b1, b2, _) = errors(&g, |_| (1.0 / r, 0.0), |i| !interior(i));
+        eprintln!("cylinder {n}: interior {m1:.2e} {m2:.2e}, boundary {b1:.2e} {b2:.2e}");
+        assert!(m1.max(m2) < last);
+        last = m1.max(m2);
+        assert!(b1.max(b2) < 0.1, "boundary vertices use the 2-ring and stay close");
+    }
+}
+
+/// Analytic Weingarten map of z = ½xᵀCx at (x, y), in a frame of the tangent plane: returns
+/// the principal curvatures (k1 ≥ k2, eigenvalues of −W for the upward normal).
+fn quadric_principal(c: [f64; 3], x: f64, y: f64) -> (f64, f64) {
+    let (zx, zy) = (c[0] * x + c[1] * y, c[1] * x + c[2] * y);
+    let (zxx, zxy, zyy) = (c[0], c[1], c[2]);
+    let w = (1.0 + zx * zx + zy * zy).sqrt();
+    // First and second fundamental forms (second w.r.t. the upward normal).
+    let (e, f, gg) = (1.0 + zx * zx, zx * zy, 1.0 + zy * zy);
+    let (l, m, n) = (zxx / w, zxy / w, zyy / w);
+    let k_mean = (e * n - 2.0 * f * m + gg * l) / (2.0 * (e * gg - f * f));
+    let k_gauss = (l * n - m * m) / (e * gg - f * f);
+    let d = (k_mean * k_mean - k_gauss).max(0.0).sqrt();
+    // W = II (sign of math.md), principal curvatures of −W:
+    (-k_mean + d, -k_mean - d)
+}
+
+#[test]
+fn quadric_patches_converge_on_every_pattern() {
+    let c = [0.8, 0.3, -0.5];
+    for pattern in [GridPattern::Regular, GridPattern::CrissCross, GridPattern::Jittered { amount: 0.25, seed: 7 }] {
+        let mut errs = Vec::new();
+        for n in [16, 32, 64] {
+            let mesh = generate::quadric_patch(c, 1.0, Grid { pattern, ..Grid::new(n, n) });
+            let g = geom(&mesh);
+            let (m1, m2, rms) = errors(
+                &g,
+                |i| quadric_principal(c, mesh.positions[i].x, mesh.positions[i].y),
+                |i| !g.adjacency.is_boundary_vertex(i),
+            );
+            errs.push(rms);
+            eprintln!("{pattern:?} n={n}: max {m1:.2e} {m2:.2e} rms {rms:.2e}");
+        }
+        let order = (errs[1] / errs[2]).log2();
+        eprintln!("{pattern:?}: observed order {order:.2}");
+        assert!(errs[2] < errs[1] && errs[1] < errs[0], "{pattern:?}: {errs:?}");
+        assert!(order > 0.8, "{pattern:?}: order {order}");
+    }
+}
+
+#[test]
+fn weingarten_is_symmetric_and_areas_sum_to_the_surface_area() {
+    for mesh in [generate::torus(2.0, 0.5, 64, 16), generate::icosphere(1.0, 3), generate::cylinder(1.0, 1.0, 32, 8)] {
+        let g = geom(&mesh);
+        for w in &g.weingarten {
+            assert_eq!(w[(0, 1)], w[(1, 0)]);
+        }
+        let total: f64 = g.areas.iter().sum();
+        assert!((total - mesh.area()).abs() < 1e-12 * mesh.area());
+    }
+    // And the mesh area converges to the analytic one.
+    let (big_r, r) = (2.0, 0.5);
+    let exact = 4.0 * std::f64::consts::PI.powi(2) * big_r * r;
+    let a1 = (generate::torus(big_r, r, 64, 16).area() - exact).abs();
+    let a2 = (generate::torus(big_r, r, 128, 32).area() - exact).abs();
+    assert!(a2 < a1 / 3.5, "second-order convergence of the area: {a1} {a2}");
+}
+
+#[test]
+fn normals_point_outward_on_the_torus() {
+    let (big_r, r) = (2.0, 0.5);
+    let mesh = generate::torus(big_r, r, 64, 16);
+    let g = geom(&mesh);
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let ring_centre = Vector3::new(p.x, p.y, 0.0).normalize() * big_r;
+        let exact = (p - ring_centre).normalize();
+        assert!(g.normal(i).dot(&exact) > 0.9999, "vertex {i}");
+    }
+}
