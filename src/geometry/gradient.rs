@@ -58,7 +58,7 @@ impl GradientStencil {
         frames: &[Frame],
         transport: &[f64],
     ) -> Self {
-        let per_vertex: Vec<(Vec<(u32, f64, [f64; 2])>, u8)> = (0..positions.len())
+        let per_vertex: Vec<StencilEntries> = (0..positions.len())
             .into_par_iter()
             .map_init(
                 || (Vec::new(), Vec::new()),

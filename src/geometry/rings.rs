@@ -17,8 +17,8 @@ pub fn gather_ring(
     for _ in 1..depth {
         let frontier_end = out.len();
         scratch.clear();
-        for k in frontier_start..frontier_end {
-            scratch.extend_from_slice(adj.neighbors(out[k] as usize));
+        for &v in &out[frontier_start..frontier_end] {
+            scratch.extend_from_slice(adj.neighbors(v as usize));
         }
         frontier_start = frontier_end;
         scratch.sort_unstable();

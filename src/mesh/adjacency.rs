@@ -140,7 +140,7 @@ impl Adjacency {
     /// True when vertex `i` lies on a boundary edge (or has no neighbour at all).
     pub fn is_boundary_vertex(&self, i: usize) -> bool {
         let r = self.slots(i);
-        r.is_empty() || self.edge_faces[r].iter().any(|&c| c == 1)
+        r.is_empty() || self.edge_faces[r].contains(&1)
     }
 
     /// Slots whose undirected edge is shared by three or more faces, each edge once (`i < j`).
