@@ -1,0 +1,136 @@
+//! The crate's single error type.
+//!
+//! User errors (bad input, bad options, a program that would be unsafe to run) are
+//! separated from internal errors (a broken invariant). Early stops of algorithms (a
+//! streamline hitting a boundary, a stroke skipped for tilt) are *not* errors: they are
+//! reported in result structs.
+
+use thiserror::Error;
+
+/// Everything that can go wrong in `grainline-toolpaths`.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ToolpathError {
+    /// A numeric option is NaN, infinite, or outside its allowed range.
+    #[error("invalid option `{name}` = {value}: {reason}")]
+    InvalidOption {
+        /// Option name as documented (e.g. `feed`, `width`).
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+        /// What the value must satisfy.
+        reason: &'static str,
+    },
+    /// The input mesh or field is malformed.
+    #[error("invalid mesh: {0}")]
+    InvalidMesh(String),
+    /// A UV triangle has (near) zero area, so barycentric coordinates are undefined.
+    #[error("triangle {face} is degenerate in UV (signed area {area:e})")]
+    DegenerateTriangle {
+        /// Face index.
+        face: usize,
+        /// Signed UV area.
+        area: f64,
+    },
+    /// A non-finite number (NaN or infinity) in the input.
+    #[error("non-finite value in {what} at index {index}")]
+    NonFinite {
+        /// Which array held it.
+        what: &'static str,
+        /// Element index.
+        index: usize,
+    },
+    /// The program would move outside the configured machine envelope.
+    #[error(
+        "{axis} = {value:.3} mm leaves the machine envelope [{min:.3}, {max:.3}] mm by {by:.3} mm \
+         (stroke {stroke:?})"
+    )]
+    OutsideEnvelope {
+        /// Axis name (`X`, `Y` or `Z`).
+        axis: char,
+        /// Offending coordinate.
+        value: f64,
+        /// Envelope minimum on that axis.
+        min: f64,
+        /// Envelope maximum on that axis.
+        max: f64,
+        /// Distance outside the envelope, mm.
+        by: f64,
+        /// Stroke index in the plan, if the move belongs to a stroke.
+        stroke: Option<usize>,
+    },
+    /// The program would drive the tool below the Z floor.
+    #[error("Z = {z:.3} mm goes below the Z floor {floor:.3} mm by {by:.3} mm (stroke {stroke:?})")]
+    BelowFloor {
+        /// Offending Z.
+        z: f64,
+        /// Configured floor.
+        floor: f64,
+        /// How far below, mm.
+        by: f64,
+        /// Stroke index in the plan, if the move belongs to a stroke.
+        stroke: Option<usize>,
+    },
+    /// In surface-following mode the surface normal tilts too far from the tool axis.
+    #[error(
+        "stroke {stroke}: surface normal tilts {angle_deg:.2}° from the tool axis, above the \
+         limit {limit_deg:.2}° by {by_deg:.2}°"
+    )]
+    TiltExceeded {
+        /// Stroke index in the plan.
+        stroke: usize,
+        /// Largest tilt on the stroke, degrees.
+        angle_deg: f64,
+        /// Configured limit, degrees.
+        limit_deg: f64,
+        /// Excess, degrees.
+        by_deg: f64,
+    },
+    /// A feature needs data the input does not have (e.g. surface following without a lift).
+    #[error("missing input: {0}")]
+    MissingInput(&'static str),
+    /// Serialization failed (strokes JSON, report).
+    #[error("serialization failed: {0}")]
+    Serialize(String),
+    /// A broken internal invariant; a bug in this crate.
+    #[error("internal error: {0}")]
+    Internal(String),
+}
+
+/// Result alias for this crate.
+pub type Result<T> = std::result::Result<T, ToolpathError>;
+
+/// Check that `value` is finite and strictly positive.
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(ToolpathError::InvalidOption { name, value, reason: "must be finite and > 0" })
+    }
+}
+
+/// Check that `value` is finite and ≥ 0.
+pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(ToolpathError::InvalidOption { name, value, reason: "must be finite and >= 0" })
+    }
+}
+
+/// Check that `value` is finite.
+pub(crate) fn finite(name: &'static str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(ToolpathError::InvalidOption { name, value, reason: "must be finite" })
+    }
+}
+
+/// Check that `value` lies in `[lo, hi)`.
+pub(crate) fn in_range(name: &'static str, value: f64, lo: f64, hi: f64) -> Result<f64> {
+    if value.is_finite() && value >= lo && value < hi {
+        Ok(value)
+    } else {
+        Err(ToolpathError::InvalidOption { name, value, reason: "out of range" })
+    }
+}

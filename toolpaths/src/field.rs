@@ -1,0 +1,127 @@
+//! Evaluating the direction field inside a triangle, and finding its singularities.
+//!
+//! Inside a triangle the field is the barycentric blend of the corner directions,
+//! `d(p) = Σ λᵢ(p) dᵢ`, normalized to unit *surface* length, `d / √I(d, d)`. For a line
+//! field (k = 2) each corner is first flipped so that `I(dᵢ, h) ≥ 0` for the current heading
+//! `h`; the blend is then a consistent vector field near the stroke and a stroke never
+//! reverses (Knöppel et al., *Globally optimal direction fields*, 2013, §6 traces the same
+//! way).
+//!
+//! A triangle is singular when the field turns by a non-zero multiple of 2π/k around its
+//! boundary (the discrete Poincaré index, Ray et al., *Geometry-aware direction field
+//! processing*, 2009, §3), or when a corner vector vanishes.
+
+use std::f64::consts::PI;
+
+use serde::{Deserialize, Serialize};
+
+use crate::geom::{cross, dot, norm, scale, Vec2};
+use crate::mesh::{Domain, Symmetry};
+
+/// Below this fraction of `Σ λᵢ |dᵢ|` the blended field counts as vanishing or incoherent.
+const VANISH_RATIO: f64 = 1e-2;
+
+/// Unit-surface-length field direction at barycentric `bary` of face `f`, aligned to
+/// `heading` for line fields (to the first corner when there is no heading). `None` where
+/// the field vanishes or its corners disagree.
+pub(crate) fn sample(dom: &Domain, f: u32, bary: [f64; 3], heading: Option<Vec2>) -> Option<Vec2> {
+    let t = dom.tris[f as usize];
+    let m = &dom.metric[f as usize];
+    let mut v = [0.0, 0.0];
+    let mut mag = 0.0;
+    let reference = heading.unwrap_or(dom.dirs[t[0] as usize]);
+    for i in 0..3 {
+        let mut d = dom.dirs[t[i] as usize];
+        if dom.symmetry == Symmetry::Line && m.inner(d, reference) < 0.0 {
+            d = [-d[0], -d[1]];
+        }
+        let w = bary[i].max(0.0);
+        v[0] += w * d[0];
+        v[1] += w * d[1];
+        mag += w * norm(d);
+    }
+    let len = norm(v);
+    if !(len > VANISH_RATIO * mag && mag > 0.0) {
+        return None;
+    }
+    let l = m.length(v);
+    (l > 0.0).then(|| scale(v, 1.0 / l))
+}
+
+/// A singular point of the field.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Singularity {
+    /// UV position (where the blended field vanishes, else the triangle centroid).
+    pub uv: Vec2,
+    /// Face that holds it.
+    pub face: u32,
+    /// Poincaré index: +1 vortex/source, −1 saddle, ±½ for line fields (−½ trisector).
+    pub index: f64,
+}
+
+fn wrap(a: f64) -> f64 {
+    let mut a = a % (2.0 * PI);
+    if a > PI {
+        a -= 2.0 * PI;
+    } else if a <= -PI {
+        a += 2.0 * PI;
+    }
+    a
+}
+
+/// All singular triangles of the field, in face order.
+pub fn singularities(dom: &Domain) -> Vec<Singularity> {
+    let k = match dom.symmetry {
+        Symmetry::Vector => 1.0,
+        Symmetry::Line => 2.0,
+    };
+    let mut out = Vec::new();
+    for (f, t) in dom.tris.iter().enumerate() {
+        let d = t.map(|v| dom.dirs[v as usize]);
+        let vanishing = d.iter().any(|x| norm(*x) == 0.0);
+        let ang = d.map(|x| k * x[1].atan2(x[0]));
+        let turn: f64 = (0..3).map(|i| wrap(ang[(i + 1) % 3] - ang[i])).sum();
+        // The sum is k · 2π · index, flipped by a mirrored (clockwise) UV triangle.
+        let c = dom.corners(f as u32);
+        let orient = cross(crate::geom::sub(c[1], c[0]), crate::geom::sub(c[2], c[0])).signum();
+        let index = (turn * orient / (2.0 * PI * k) * 2.0).round() / 2.0;
+        if vanishing || turn.abs() > PI {
+            out.push(Singularity { uv: zero_point(c, d, k), face: f as u32, index });
+        }
+    }
+    out
+}
+
+/// Where the blend of the corners' k-fold representation vanishes (solve
+/// `Σ λᵢ rᵢ = 0, Σ λᵢ = 1`), clamped to the triangle; the centroid if that fails.
+fn zero_point(c: [Vec2; 3], d: [Vec2; 3], k: f64) -> Vec2 {
+    let r = d.map(|x| {
+        let a = k * x[1].atan2(x[0]);
+        let l = norm(x);
+        [l * a.cos(), l * a.sin()]
+    });
+    // λ2 = 1 − λ0 − λ1: (r0 − r2) λ0 + (r1 − r2) λ1 = −r2.
+    let a = crate::geom::sub(r[0], r[2]);
+    let b = crate::geom::sub(r[1], r[2]);
+    let det = cross(a, b);
+    let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0];
+    if det.abs() < 1e-300 {
+        return centroid;
+    }
+    let rhs = [-r[2][0], -r[2][1]];
+    let l0 = cross(rhs, b) / det;
+    let l1 = cross(a, rhs) / det;
+    let l = [l0, l1, 1.0 - l0 - l1];
+    if l.iter().any(|x| !(-1e-9..=1.0 + 1e-9).contains(x)) {
+        return centroid;
+    }
+    [0, 1].map(|j| l[0] * c[0][j] + l[1] * c[1][j] + l[2] * c[2][j])
+}
+
+/// Whether `a` and `b` point the same way up to the field's symmetry.
+pub(crate) fn agrees(sym: Symmetry, a: Vec2, b: Vec2) -> bool {
+    match sym {
+        Symmetry::Vector => dot(a, b) > 0.0,
+        Symmetry::Line => true,
+    }
+}

@@ -1,0 +1,448 @@
+//! The input: a triangle mesh in UV carrying a direction field, and its validated form
+//! [`Domain`] with adjacency, per-triangle metric and point location.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, ToolpathError};
+use crate::geom::{cross, sub, Metric, Vec2, Vec3};
+use crate::locate::FaceGrid;
+
+/// Index of a UV vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct VertexId(pub u32);
+
+/// Index of a UV triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct FaceId(pub u32);
+
+/// Rotational symmetry of the direction field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Symmetry {
+    /// k = 1: an oriented vector field; strokes follow the arrows.
+    Vector,
+    /// k = 2: a line field (`d ≡ −d`); corners are aligned to the current heading before
+    /// interpolation, so a stroke never reverses.
+    Line,
+}
+
+impl Symmetry {
+    /// `k = 1 → Vector`, `k = 2 → Line`; any other k is an error.
+    pub fn from_k(k: u32) -> Result<Symmetry> {
+        match k {
+            1 => Ok(Symmetry::Vector),
+            2 => Ok(Symmetry::Line),
+            _ => Err(ToolpathError::InvalidOption {
+                name: "symmetry",
+                value: k as f64,
+                reason: "only k = 1 (vector) and k = 2 (line) fields are supported",
+            }),
+        }
+    }
+}
+
+/// Per-vertex directions, expressed in UV coordinates.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Directions {
+    /// A UV vector per vertex. Its length matters only near zero: a vanishing vector marks a
+    /// singularity.
+    Vectors(Vec<Vec2>),
+    /// An angle per vertex, radians counter-clockwise from the +U axis (unit length).
+    Angles(Vec<f64>),
+}
+
+/// Two boundary edges of the UV layout that are the same edge on the part (a UV seam):
+/// vertex `a[0]` is glued to `b[0]` and `a[1]` to `b[1]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SeamPair {
+    /// One side of the seam (two UV vertex indices).
+    pub a: [u32; 2],
+    /// The other side, corresponding vertex by vertex.
+    pub b: [u32; 2],
+}
+
+/// The crate's input: a UV triangle mesh with a direction field and optional 3D lift.
+///
+/// UV coordinates are in millimetres for flat-sheet work. When a `metric` (or 3D
+/// `positions`, from which it is derived) is given, lengths are measured on the part instead.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FieldMesh {
+    /// UV position per vertex.
+    pub uv: Vec<Vec2>,
+    /// Triangles as vertex indices (either orientation; mirrored charts are fine).
+    pub triangles: Vec<[u32; 3]>,
+    /// Direction per vertex.
+    pub directions: Directions,
+    /// k = 1 or 2.
+    pub symmetry: Symmetry,
+    /// Optional 3D position per vertex (mm), the lift back onto the part.
+    pub positions: Option<Vec<Vec3>>,
+    /// Optional 3D unit normal per vertex, for surface following and tilt checks.
+    pub normals: Option<Vec<Vec3>>,
+    /// Optional first fundamental form per triangle; derived from `positions` when absent,
+    /// identity when both are absent.
+    pub metric: Option<Vec<Metric>>,
+    /// UV seams across which strokes may continue (see [`crate::TraceOptions::cross_seams`]).
+    pub seams: Vec<SeamPair>,
+}
+
+impl FieldMesh {
+    /// A flat field mesh: UV in mm, no lift, identity metric.
+    pub fn new(
+        uv: Vec<Vec2>,
+        triangles: Vec<[u32; 3]>,
+        directions: Directions,
+        symmetry: Symmetry,
+    ) -> FieldMesh {
+        FieldMesh {
+            uv,
+            triangles,
+            directions,
+            symmetry,
+            positions: None,
+            normals: None,
+            metric: None,
+            seams: Vec::new(),
+        }
+    }
+
+    /// Attach per-vertex 3D positions and (optionally) normals.
+    pub fn with_lift(mut self, positions: Vec<Vec3>, normals: Option<Vec<Vec3>>) -> FieldMesh {
+        self.positions = Some(positions);
+        self.normals = normals;
+        self
+    }
+
+    /// Attach a per-triangle first fundamental form.
+    pub fn with_metric(mut self, metric: Vec<Metric>) -> FieldMesh {
+        self.metric = Some(metric);
+        self
+    }
+
+    /// Attach UV seam pairs.
+    pub fn with_seams(mut self, seams: Vec<SeamPair>) -> FieldMesh {
+        self.seams = seams;
+        self
+    }
+}
+
+/// Sentinel for "no neighbour" in [`Domain`] adjacency.
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Where a boundary edge continues across a UV seam.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SeamLink {
+    /// Face on the other side.
+    pub face: u32,
+    /// UV of the two glued vertices on this side, then on the other side.
+    pub from: [Vec2; 2],
+    pub to: [Vec2; 2],
+}
+
+/// A validated [`FieldMesh`] with triangle adjacency, metrics and a point-location grid.
+#[derive(Debug)]
+pub struct Domain {
+    pub(crate) uv: Vec<Vec2>,
+    pub(crate) tris: Vec<[u32; 3]>,
+    pub(crate) dirs: Vec<Vec2>,
+    pub(crate) symmetry: Symmetry,
+    pub(crate) positions: Option<Vec<Vec3>>,
+    pub(crate) normals: Option<Vec<Vec3>>,
+    pub(crate) metric: Vec<Metric>,
+    /// `sqrt(λ_min)` of each face's metric: the least surface length per UV unit.
+    pub(crate) min_stretch: Vec<f64>,
+    /// Neighbour across the edge opposite corner i, or [`NONE`].
+    pub(crate) neighbors: Vec<[u32; 3]>,
+    /// Seam continuation of boundary edges, keyed by (face, local edge).
+    pub(crate) seams: BTreeMap<(u32, u8), SeamLink>,
+    pub(crate) grid: FaceGrid,
+    pub(crate) bbox: [Vec2; 2],
+}
+
+fn check_finite2(what: &'static str, v: &[Vec2]) -> Result<()> {
+    match v.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        Some(index) => Err(ToolpathError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
+
+fn check_finite3(what: &'static str, v: &[Vec3]) -> Result<()> {
+    match v.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        Some(index) => Err(ToolpathError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
+
+impl Domain {
+    /// Validate `mesh` and build adjacency, metrics and the location grid.
+    ///
+    /// Errors on: out-of-range indices, non-finite numbers, array lengths that do not match,
+    /// degenerate UV triangles, non-manifold edges, invalid metrics or seams.
+    pub fn new(mesh: FieldMesh) -> Result<Domain> {
+        let nv = mesh.uv.len();
+        let nf = mesh.triangles.len();
+        if nf == 0 {
+            return Err(ToolpathError::InvalidMesh("no triangles".into()));
+        }
+        if nf >= NONE as usize || nv >= NONE as usize {
+            return Err(ToolpathError::InvalidMesh("too many elements".into()));
+        }
+        check_finite2("uv", &mesh.uv)?;
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            if t.iter().any(|&v| v as usize >= nv) {
+                return Err(ToolpathError::InvalidMesh(format!(
+                    "triangle {f} references a vertex beyond {nv}"
+                )));
+            }
+        }
+        let dirs = match mesh.directions {
+            Directions::Vectors(v) => {
+                check_finite2("directions", &v)?;
+                v
+            }
+            Directions::Angles(a) => {
+                if let Some(index) = a.iter().position(|x| !x.is_finite()) {
+                    return Err(ToolpathError::NonFinite { what: "directions", index });
+                }
+                a.iter().map(|t| [t.cos(), t.sin()]).collect()
+            }
+        };
+        if dirs.len() != nv {
+            return Err(ToolpathError::InvalidMesh(format!(
+                "{} directions for {nv} vertices",
+                dirs.len()
+            )));
+        }
+        for (what, arr) in [("positions", &mesh.positions), ("normals", &mesh.normals)] {
+            if let Some(a) = arr {
+                if a.len() != nv {
+                    return Err(ToolpathError::InvalidMesh(format!(
+                        "{} {what} for {nv} vertices",
+                        a.len()
+                    )));
+                }
+                check_finite3(what, a)?;
+            }
+        }
+        let uv = mesh.uv;
+        let tris = mesh.triangles;
+        let mut bbox = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+        for p in &uv {
+            for k in 0..2 {
+                bbox[0][k] = bbox[0][k].min(p[k]);
+                bbox[1][k] = bbox[1][k].max(p[k]);
+            }
+        }
+        let diag = ((bbox[1][0] - bbox[0][0]).powi(2) + (bbox[1][1] - bbox[0][1]).powi(2)).sqrt();
+        for (face, t) in tris.iter().enumerate() {
+            let [a, b, c] = t.map(|v| uv[v as usize]);
+            let area = 0.5 * cross(sub(b, a), sub(c, a));
+            if !(area.abs() > 1e-14 * diag * diag) {
+                return Err(ToolpathError::DegenerateTriangle { face, area });
+            }
+        }
+        let metric = build_metric(&uv, &tris, mesh.metric, mesh.positions.as_deref())?;
+        let min_stretch = metric.iter().map(|m| m.eigen_range().0.sqrt()).collect();
+        let neighbors = build_adjacency(&tris)?;
+        let seams = build_seams(&uv, &tris, &neighbors, &mesh.seams)?;
+        let grid = FaceGrid::new(&uv, &tris, bbox);
+        Ok(Domain {
+            uv,
+            tris,
+            dirs,
+            symmetry: mesh.symmetry,
+            positions: mesh.positions,
+            normals: mesh.normals,
+            metric,
+            min_stretch,
+            neighbors,
+            seams,
+            grid,
+            bbox,
+        })
+    }
+
+    /// Number of triangles.
+    pub fn face_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Axis-aligned UV bounding box `[min, max]`.
+    pub fn bbox(&self) -> [Vec2; 2] {
+        self.bbox
+    }
+
+    /// The field's symmetry.
+    pub fn symmetry(&self) -> Symmetry {
+        self.symmetry
+    }
+
+    /// Whether a 3D lift (positions) is available.
+    pub fn has_lift(&self) -> bool {
+        self.positions.is_some()
+    }
+
+    /// The metric of face `f`.
+    pub fn metric(&self, f: FaceId) -> Metric {
+        self.metric[f.0 as usize]
+    }
+
+    /// Surface area of the whole domain (mm²): `Σ area_uv · √(EG − F²)`.
+    pub fn surface_area(&self) -> f64 {
+        (0..self.tris.len()).map(|f| self.uv_area(f as u32) * self.metric[f].area_factor()).sum()
+    }
+
+    pub(crate) fn uv_area(&self, f: u32) -> f64 {
+        let [a, b, c] = self.corners(f);
+        0.5 * cross(sub(b, a), sub(c, a)).abs()
+    }
+
+    pub(crate) fn corners(&self, f: u32) -> [Vec2; 3] {
+        self.tris[f as usize].map(|v| self.uv[v as usize])
+    }
+
+    /// Boundary edges (no neighbour, seams included) as UV segments, in face order.
+    pub fn boundary_edges(&self) -> Vec<[Vec2; 2]> {
+        let mut out = Vec::new();
+        for (f, nb) in self.neighbors.iter().enumerate() {
+            let c = self.corners(f as u32);
+            for i in 0..3 {
+                if nb[i] == NONE {
+                    out.push([c[(i + 1) % 3], c[(i + 2) % 3]]);
+                }
+            }
+        }
+        out
+    }
+
+    /// 3D position of a UV point given its face and barycentric coordinates.
+    pub(crate) fn lift(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
+        let p = self.positions.as_ref()?;
+        let t = self.tris[f as usize];
+        Some([0, 1, 2].map(|k| (0..3).map(|i| bary[i] * p[t[i] as usize][k]).sum()))
+    }
+
+    /// Unit normal at a UV point (interpolated vertex normals, else the face normal).
+    pub(crate) fn normal(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
+        let t = self.tris[f as usize];
+        let n = if let Some(ns) = &self.normals {
+            [0, 1, 2].map(|k| (0..3).map(|i| bary[i] * ns[t[i] as usize][k]).sum::<f64>())
+        } else {
+            let p = self.positions.as_ref()?;
+            let [a, b, c] = t.map(|v| p[v as usize]);
+            crate::geom::cross3(crate::geom::sub3(b, a), crate::geom::sub3(c, a))
+        };
+        let l = crate::geom::norm3(n);
+        (l > 0.0).then(|| n.map(|x| x / l))
+    }
+}
+
+fn build_metric(
+    uv: &[Vec2],
+    tris: &[[u32; 3]],
+    given: Option<Vec<Metric>>,
+    positions: Option<&[Vec3]>,
+) -> Result<Vec<Metric>> {
+    let metric = match (given, positions) {
+        (Some(m), _) => {
+            if m.len() != tris.len() {
+                return Err(ToolpathError::InvalidMesh(format!(
+                    "{} metrics for {} triangles",
+                    m.len(),
+                    tris.len()
+                )));
+            }
+            m
+        }
+        (None, Some(p)) => tris
+            .iter()
+            .map(|t| {
+                Metric::from_triangle(t.map(|v| uv[v as usize]), t.map(|v| p[v as usize]))
+                    .unwrap_or(Metric { e: 0.0, f: 0.0, g: 0.0 })
+            })
+            .collect(),
+        (None, None) => vec![Metric::IDENTITY; tris.len()],
+    };
+    if let Some(f) = metric.iter().position(|m| !m.is_valid()) {
+        return Err(ToolpathError::InvalidMesh(format!(
+            "triangle {f}: first fundamental form is not positive definite (degenerate lift?)"
+        )));
+    }
+    Ok(metric)
+}
+
+/// Adjacency across edges by sorting (min, max) vertex keys: deterministic, O(n log n).
+fn build_adjacency(tris: &[[u32; 3]]) -> Result<Vec<[u32; 3]>> {
+    let mut edges: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(tris.len() * 3);
+    for (f, t) in tris.iter().enumerate() {
+        for i in 0..3 {
+            let (a, b) = (t[(i + 1) % 3], t[(i + 2) % 3]);
+            edges.push((a.min(b), a.max(b), f as u32, i as u8));
+        }
+    }
+    edges.sort_unstable();
+    let mut nb = vec![[NONE; 3]; tris.len()];
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
+            j += 1;
+        }
+        match j - i {
+            1 => {}
+            2 => {
+                let (e0, e1) = (edges[i], edges[i + 1]);
+                nb[e0.2 as usize][e0.3 as usize] = e1.2;
+                nb[e1.2 as usize][e1.3 as usize] = e0.2;
+            }
+            _ => {
+                return Err(ToolpathError::InvalidMesh(format!(
+                    "edge ({}, {}) is shared by {} triangles (non-manifold UV)",
+                    edges[i].0,
+                    edges[i].1,
+                    j - i
+                )))
+            }
+        }
+        i = j;
+    }
+    Ok(nb)
+}
+
+fn build_seams(
+    uv: &[Vec2],
+    tris: &[[u32; 3]],
+    nb: &[[u32; 3]],
+    seams: &[SeamPair],
+) -> Result<BTreeMap<(u32, u8), SeamLink>> {
+    let mut out = BTreeMap::new();
+    if seams.is_empty() {
+        return Ok(out);
+    }
+    let mut boundary: BTreeMap<(u32, u32), (u32, u8)> = BTreeMap::new();
+    for (f, t) in tris.iter().enumerate() {
+        for i in 0..3 {
+            if nb[f][i] == NONE {
+                let (a, b) = (t[(i + 1) % 3], t[(i + 2) % 3]);
+                boundary.insert((a.min(b), a.max(b)), (f as u32, i as u8));
+            }
+        }
+    }
+    let find = |e: [u32; 2]| {
+        boundary.get(&(e[0].min(e[1]), e[0].max(e[1]))).copied().ok_or_else(|| {
+            ToolpathError::InvalidMesh(format!("seam edge ({}, {}) is not a boundary edge", e[0], e[1]))
+        })
+    };
+    for s in seams {
+        let (fa, ia) = find(s.a)?;
+        let (fb, ib) = find(s.b)?;
+        let ua = s.a.map(|v| uv[v as usize]);
+        let ub = s.b.map(|v| uv[v as usize]);
+        out.insert((fa, ia), SeamLink { face: fb, from: ua, to: ub });
+        out.insert((fb, ib), SeamLink { face: fa, from: ub, to: ua });
+    }
+    Ok(out)
+}

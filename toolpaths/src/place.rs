@@ -1,0 +1,272 @@
+//! Evenly spaced streamline placement (Jobard & Lefer, *Creating evenly-spaced streamlines
+//! of arbitrary density*, 1997).
+//!
+//! * `d_sep = width · (1 − overlap)`: the distance between neighbouring strokes;
+//!   `d_test = ratio · d_sep` (default ratio ½): a stroke being traced stops when it comes
+//!   closer than `d_test` to an accepted stroke (§3).
+//! * Candidate seeds sit `d_sep` to either side of every sample of every accepted stroke,
+//!   in the order strokes were accepted (a FIFO queue, §3, "seed point selection"); a seed is
+//!   valid when it lies in the domain, outside every singularity's exclusion radius, and at
+//!   least `d_sep` from all strokes.
+//! * When the queue runs dry (another chart, a region cut off by singularities), a raster of
+//!   fallback seeds with pitch `d_sep` is scanned in row order. Everything is sequential and
+//!   deterministic.
+//!
+//! Distances use the surface metric unless [`Spacing::Uv`] is chosen; the sideways offset of
+//! a seed is `d_sep` along the metric normal of the stroke ([`Metric::unit_normal`]).
+
+use std::collections::VecDeque;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{in_range, non_negative, positive, Result, ToolpathError};
+use crate::field::{singularities, Singularity};
+use crate::geom::{add, scale, sub, Metric, Vec2};
+use crate::locate::{walk, Walk};
+use crate::mesh::Domain;
+use crate::spacing::{typical_stretch, Spacing, StrokeIndex};
+use crate::trace::{Stroke, TraceOptions, Tracer};
+
+/// Options of the even-spacing placement. Lengths in mm.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PlacementOptions {
+    /// Brush width, mm. Default 1.
+    pub width: f64,
+    /// Overlap of neighbouring passes as a fraction of the width, in [0, 1). Default 0.
+    pub overlap: f64,
+    /// `d_test / d_sep`, in (0, 1]. Default 0.5.
+    pub test_ratio: f64,
+    /// Where spacing is measured. Default [`Spacing::Surface`].
+    pub spacing: Spacing,
+    /// Strokes shorter than this (mm) are dropped. Default 0 (keep all).
+    pub min_length: f64,
+    /// Exclusion radius around singularities, mm; `None` means `d_sep`.
+    pub exclusion_radius: Option<f64>,
+    /// Seeds tried first, in order (UV). Default: the centre of the UV bounding box.
+    pub seeds: Vec<Vec2>,
+    /// Integration options. `max_step` is capped at `d_test / 2`; `exclusion_radius` is
+    /// replaced by the one above.
+    pub trace: TraceOptions,
+}
+
+impl Default for PlacementOptions {
+    fn default() -> Self {
+        PlacementOptions {
+            width: 1.0,
+            overlap: 0.0,
+            test_ratio: 0.5,
+            spacing: Spacing::Surface,
+            min_length: 0.0,
+            exclusion_radius: None,
+            seeds: Vec::new(),
+            trace: TraceOptions::default(),
+        }
+    }
+}
+
+impl PlacementOptions {
+    /// Options for a brush `width` mm wide with the given `overlap` fraction.
+    pub fn new(width: f64, overlap: f64) -> PlacementOptions {
+        PlacementOptions { width, overlap, ..Default::default() }
+    }
+
+    /// `d_sep = width · (1 − overlap)`.
+    pub fn d_sep(&self) -> f64 {
+        self.width * (1.0 - self.overlap)
+    }
+
+    /// `d_test = test_ratio · d_sep`.
+    pub fn d_test(&self) -> f64 {
+        self.test_ratio * self.d_sep()
+    }
+
+    /// Reject NaN and out-of-range values with a clear error.
+    pub fn validate(&self) -> Result<()> {
+        positive("width", self.width)?;
+        in_range("overlap", self.overlap, 0.0, 1.0)?;
+        positive("test_ratio", self.test_ratio)?;
+        if self.test_ratio > 1.0 {
+            return Err(ToolpathError::InvalidOption {
+                name: "test_ratio",
+                value: self.test_ratio,
+                reason: "must be in (0, 1]",
+            });
+        }
+        non_negative("min_length", self.min_length)?;
+        if let Some(r) = self.exclusion_radius {
+            non_negative("exclusion_radius", r)?;
+        }
+        for (i, s) in self.seeds.iter().enumerate() {
+            if !(s[0].is_finite() && s[1].is_finite()) {
+                return Err(ToolpathError::NonFinite { what: "seeds", index: i });
+            }
+        }
+        self.trace.validate()
+    }
+}
+
+/// The placed strokes and what happened on the way.
+#[derive(Clone, Debug)]
+pub struct Placement {
+    /// Accepted strokes, in acceptance order.
+    pub strokes: Vec<Stroke>,
+    /// Separating distance used, mm.
+    pub d_sep: f64,
+    /// Test distance used, mm.
+    pub d_test: f64,
+    /// Where spacing was measured.
+    pub spacing: Spacing,
+    /// Singularities of the field (exclusion zones).
+    pub singularities: Vec<Singularity>,
+    /// Exclusion radius used, mm.
+    pub exclusion_radius: f64,
+    /// Strokes traced but dropped for being shorter than `min_length`.
+    pub dropped_short: usize,
+    /// Seeds that passed the validity tests and were traced.
+    pub seeds_traced: usize,
+    /// Field evaluations (Runge–Kutta stages).
+    pub field_evaluations: u64,
+}
+
+/// Place evenly spaced strokes over the domain (see the module docs).
+pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement> {
+    opts.validate()?;
+    let d_sep = opts.d_sep();
+    let d_test = opts.d_test();
+    let exclusion = opts.exclusion_radius.unwrap_or(d_sep);
+    let mut topts = opts.trace.clone();
+    topts.max_step = topts.max_step.min(0.5 * d_test);
+    topts.min_step = topts.min_step.min(topts.max_step);
+    topts.exclusion_radius = exclusion;
+    let sing = singularities(dom);
+    let mut tracer = Tracer::new(dom, &sing, &topts);
+    let mut index = StrokeIndex::new(dom, d_sep, opts.spacing);
+    let mut strokes: Vec<Stroke> = Vec::new();
+    let mut queue: VecDeque<usize> = VecDeque::new();
+    let mut dropped_short = 0;
+    let mut seeds_traced = 0;
+    let seed_ok = 1.0 - 1e-6;
+
+    let mut try_seed = |p: Vec2,
+                        f: u32,
+                        tracer: &mut Tracer,
+                        index: &mut StrokeIndex,
+                        strokes: &mut Vec<Stroke>,
+                        queue: &mut VecDeque<usize>| {
+        if index.within(dom, p, f, d_sep * seed_ok) || tracer.near_singularity(p, f).is_some() {
+            return;
+        }
+        let idx = &*index;
+        let Some(s) = tracer.trace_both(p, f, |q, fq| idx.within(dom, q, fq, d_test)) else {
+            return;
+        };
+        seeds_traced += 1;
+        if s.length < opts.min_length || s.uv.len() < 2 {
+            dropped_short += 1;
+            return;
+        }
+        index.insert(&s);
+        queue.push_back(strokes.len());
+        strokes.push(s);
+    };
+
+    let drain = |tracer: &mut Tracer,
+                 index: &mut StrokeIndex,
+                 strokes: &mut Vec<Stroke>,
+                 queue: &mut VecDeque<usize>,
+                 try_seed: &mut dyn FnMut(
+        Vec2,
+        u32,
+        &mut Tracer,
+        &mut StrokeIndex,
+        &mut Vec<Stroke>,
+        &mut VecDeque<usize>,
+    )| {
+        while let Some(si) = queue.pop_front() {
+            let cands = side_seeds(dom, &strokes[si], index, d_sep);
+            for (p, f) in cands {
+                try_seed(p, f, tracer, index, strokes, queue);
+            }
+        }
+    };
+
+    let mut initial: Vec<Vec2> = opts.seeds.clone();
+    if initial.is_empty() {
+        let b = dom.bbox;
+        initial.push([(b[0][0] + b[1][0]) * 0.5, (b[0][1] + b[1][1]) * 0.5]);
+    }
+    for p in initial {
+        if let Some((f, _)) = dom.grid.locate(dom, p) {
+            try_seed(p, f, &mut tracer, &mut index, &mut strokes, &mut queue);
+            drain(&mut tracer, &mut index, &mut strokes, &mut queue, &mut try_seed);
+        }
+    }
+    // Fallback raster of seeds, row by row.
+    let pitch = d_sep / typical_stretch(dom, opts.spacing);
+    let b = dom.bbox;
+    let nx = (((b[1][0] - b[0][0]) / pitch).ceil() as usize).min(1 << 14) + 1;
+    let ny = (((b[1][1] - b[0][1]) / pitch).ceil() as usize).min(1 << 14) + 1;
+    let mut hint: Option<u32> = None;
+    for j in 0..ny {
+        for i in 0..nx {
+            let p = [b[0][0] + (i as f64 + 0.5) * pitch, b[0][1] + (j as f64 + 0.5) * pitch];
+            let located = match hint {
+                Some(h) => match walk(dom, h, dom_centroid(dom, h), p) {
+                    Walk::Inside { face, .. } => Some(face),
+                    Walk::Exit { .. } => dom.grid.locate(dom, p).map(|x| x.0),
+                },
+                None => dom.grid.locate(dom, p).map(|x| x.0),
+            };
+            let Some(f) = located else { continue };
+            hint = Some(f);
+            try_seed(p, f, &mut tracer, &mut index, &mut strokes, &mut queue);
+            drain(&mut tracer, &mut index, &mut strokes, &mut queue, &mut try_seed);
+        }
+    }
+    Ok(Placement {
+        strokes,
+        d_sep,
+        d_test,
+        spacing: opts.spacing,
+        singularities: sing.clone(),
+        exclusion_radius: exclusion,
+        dropped_short,
+        seeds_traced,
+        field_evaluations: tracer.evals,
+    })
+}
+
+fn dom_centroid(dom: &Domain, f: u32) -> Vec2 {
+    let c = dom.corners(f);
+    [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0]
+}
+
+/// Candidate seeds `d_sep` to the left and right of every sample of `s`, located.
+fn side_seeds(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<(Vec2, u32)> {
+    let mut out = Vec::with_capacity(2 * s.uv.len());
+    for piece in s.pieces() {
+        let pts = &s.uv[piece.clone()];
+        if pts.len() < 2 {
+            continue;
+        }
+        for i in 0..pts.len() {
+            let k = piece.start + i;
+            let f = s.faces[k];
+            let m: Metric = index.metric(dom, f);
+            let t = sub(pts[(i + 1).min(pts.len() - 1)], pts[i.saturating_sub(1)]);
+            let l = m.length(t);
+            if l <= 0.0 {
+                continue;
+            }
+            let n = m.unit_normal(scale(t, 1.0 / l));
+            for side in [1.0, -1.0] {
+                let q = add(pts[i], scale(n, side * d_sep));
+                if let Walk::Inside { face, .. } = walk(dom, f, pts[i], q) {
+                    out.push((q, face));
+                }
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,86 @@
+//! Test meshes and helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use grainline_toolpaths::{Directions, FieldMesh, Symmetry, Vec2};
+
+/// A `w × h` rectangle at the origin split into `nx × ny` quads of two triangles, the
+/// diagonal alternating so the mesh has no preferred direction.
+pub fn rect_mesh(w: f64, h: f64, nx: usize, ny: usize) -> (Vec<Vec2>, Vec<[u32; 3]>) {
+    let mut uv = Vec::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            uv.push([w * i as f64 / nx as f64, h * j as f64 / ny as f64]);
+        }
+    }
+    let mut tris = Vec::new();
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if (i + j) % 2 == 0 {
+                tris.push([a, b, c]);
+                tris.push([a, c, d]);
+            } else {
+                tris.push([a, b, d]);
+                tris.push([b, c, d]);
+            }
+        }
+    }
+    (uv, tris)
+}
+
+/// An annulus `r0 ≤ r ≤ r1` about the origin, `nr` rings by `nt` sectors.
+pub fn annulus_mesh(r0: f64, r1: f64, nr: usize, nt: usize) -> (Vec<Vec2>, Vec<[u32; 3]>) {
+    let mut uv = Vec::new();
+    for j in 0..=nr {
+        let r = r0 + (r1 - r0) * j as f64 / nr as f64;
+        for i in 0..nt {
+            let t = 2.0 * std::f64::consts::PI * i as f64 / nt as f64;
+            uv.push([r * t.cos(), r * t.sin()]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * nt + i % nt) as u32;
+    let mut tris = Vec::new();
+    for j in 0..nr {
+        for i in 0..nt {
+            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (uv, tris)
+}
+
+/// A field mesh with directions from `f(uv)`.
+pub fn field_mesh(
+    (uv, tris): (Vec<Vec2>, Vec<[u32; 3]>),
+    sym: Symmetry,
+    f: impl Fn(Vec2) -> Vec2,
+) -> FieldMesh {
+    let d = uv.iter().map(|&p| f(p)).collect();
+    FieldMesh::new(uv, tris, Directions::Vectors(d), sym)
+}
+
+/// `<workspace>/../shared/tools/NAME`, or `None` (with a skip message) when absent.
+pub fn shared_tool(name: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/tools").join(name);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("skipping: {} not found (../shared absent)", p.display());
+        None
+    }
+}
+
+/// A fresh scratch directory under the target dir.
+pub fn scratch(name: &str) -> PathBuf {
+    let base = std::env::var_os("CARGO_TARGET_TMPDIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir)
+        .join("grainline-toolpaths-tests")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&base);
+    std::fs::create_dir_all(&base).expect("create scratch dir");
+    base
+}
