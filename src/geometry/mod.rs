@@ -10,6 +10,7 @@ pub mod connection;
 pub mod curvature;
 pub mod frames;
 pub mod gradient;
+pub mod laplacian;
 pub mod normals;
 pub mod rings;
 
@@ -31,12 +32,29 @@ pub struct GeometryOptions {
     /// How many times the jet fit's linear term refines the normal before the final fit
     /// (math.md §2: one refinement, i.e. two fits, suffices). Ignored for file normals.
     pub normal_refinements: u32,
+    /// Turn every tangent frame about its normal by a pseudo-random angle drawn from this seed.
+    /// Every quantity grainline reports is independent of the frames; this exists to test
+    /// that, and to make frame-dependent bugs visible.
+    pub frame_twist_seed: Option<u64>,
 }
 
 impl Default for GeometryOptions {
     fn default() -> Self {
-        GeometryOptions { normals: NormalSource::AngleWeighted, normal_refinements: 1 }
+        GeometryOptions {
+            normals: NormalSource::AngleWeighted,
+            normal_refinements: 1,
+            frame_twist_seed: None,
+        }
     }
+}
+
+/// A pseudo-random angle in [0, 2π) for vertex `i` (SplitMix64 of seed and index).
+fn twist_angle(seed: u64, i: usize) -> f64 {
+    let mut z = seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    std::f64::consts::TAU * ((z >> 11) as f64 / (1u64 << 53) as f64)
 }
 
 /// Counts of vertices where a fallback was used, so degenerate input is visible, never silent.
@@ -100,6 +118,10 @@ impl Geometry {
                         }
                         let tilted = frame.n - frame.t * fit.slope[0] - frame.b * fit.slope[1];
                         frame = Frame::from_normal(normals::normalize_or(tilted, frame.n));
+                        fit = curvature::jet_fit(&mesh.positions, &adjacency, i, &frame, bufs);
+                    }
+                    if let Some(seed) = options.frame_twist_seed {
+                        frame = Frame::with_tangent(frame.n, frame.direction(twist_angle(seed, i)));
                         fit = curvature::jet_fit(&mesh.positions, &adjacency, i, &frame, bufs);
                     }
                     (frame, fit)

@@ -1,0 +1,201 @@
+//! Initial grain fields: from the UV layout, a world direction, principal curvature directions,
+//! the smoothest field, or per-vertex directions given by the user.
+//!
+//! Every result is an angle φ per vertex in the vertex frames ([`crate::geometry::Frame`]),
+//! finite everywhere; vertices where the chosen construction has no direction take a documented
+//! fallback and are listed in the result.
+
+use nalgebra::Vector3;
+
+use super::smoothest::{smoothest_field, SmoothestOptions};
+use super::Symmetry;
+use crate::geometry::normals::corner_angle;
+use crate::geometry::Geometry;
+use crate::mesh::Mesh;
+use crate::{Error, Result};
+
+/// How to build the initial field.
+#[derive(Clone, Debug, PartialEq)]
+pub enum InitialField {
+    /// ∂p/∂u of the UV layout, per vertex from the chart that covers most of its corner angle.
+    Uv,
+    /// The smoothest field (Knöppel et al. 2013) for the chosen symmetry.
+    Smooth,
+    /// The direction of minimum principal curvature (k2).
+    CurvatureMin,
+    /// The direction of maximum principal curvature (k1).
+    CurvatureMax,
+    /// A world direction projected onto each tangent plane.
+    World(Vector3<f64>),
+    /// One world direction per vertex, projected onto the tangent planes.
+    Directions(Vec<Vector3<f64>>),
+}
+
+impl std::str::FromStr for InitialField {
+    type Err = Error;
+    /// Parses `uv`, `smooth`, `curvature-min`, `curvature-max` or `world:X,Y,Z`.
+    fn from_str(s: &str) -> Result<Self> {
+        Ok(match s {
+            "uv" => InitialField::Uv,
+            "smooth" => InitialField::Smooth,
+            "curvature-min" => InitialField::CurvatureMin,
+            "curvature-max" => InitialField::CurvatureMax,
+            _ => match s.strip_prefix("world:") {
+                Some(v) => InitialField::World(crate::parse_vec3("init", v)?),
+                None => return Err(Error::invalid_arg(
+                    "init",
+                    format!(
+                        "{s:?}: expected uv, smooth, curvature-min, curvature-max or world:X,Y,Z"
+                    ),
+                )),
+            },
+        })
+    }
+}
+
+/// An initial field and where it needed a fallback.
+#[derive(Clone, Debug, Default)]
+pub struct InitialFieldResult {
+    /// φ per vertex.
+    pub phi: Vec<f64>,
+    /// Vertices where the construction had no direction and a fallback was used.
+    pub fallback_vertices: Vec<u32>,
+}
+
+/// Relative length under which a projected direction counts as vanishing.
+const VANISHING: f64 = 1e-6;
+
+/// Builds the initial field.
+///
+/// Fallbacks: for `World` and `Uv`, a vertex whose direction vanishes takes the sum of its
+/// neighbours' (non-fallback) directions projected onto its tangent plane, or, if that vanishes
+/// too, its frame's t axis. `Directions` errors instead, naming the vertex.
+pub fn initial_field(
+    mesh: &Mesh,
+    geom: &Geometry,
+    init: &InitialField,
+    symmetry: Symmetry,
+) -> Result<InitialFieldResult> {
+    let n = geom.num_vertices();
+    let dirs: Vec<Option<Vector3<f64>>> = match init {
+        InitialField::Smooth => {
+            let phi = smoothest_field(mesh, geom, symmetry, &SmoothestOptions::default())?.phi;
+            return Ok(InitialFieldResult { phi, fallback_vertices: Vec::new() });
+        }
+        InitialField::CurvatureMin | InitialField::CurvatureMax => {
+            let phi = geom
+                .principal
+                .iter()
+                .map(|p| {
+                    let d = if *init == InitialField::CurvatureMax { p.d1 } else { p.d2() };
+                    d[1].atan2(d[0])
+                })
+                .collect();
+            return Ok(InitialFieldResult { phi, fallback_vertices: Vec::new() });
+        }
+        InitialField::World(w) => (0..n).map(|i| project(geom, i, w)).collect(),
+        InitialField::Directions(d) => {
+            if d.len() != n {
+                return Err(Error::invalid_arg(
+                    "directions",
+                    format!("{} directions for {} vertices", d.len(), n),
+                ));
+            }
+            return d
+                .iter()
+                .enumerate()
+                .map(|(i, w)| {
+                    project(geom, i, w).map(|u| geom.frames[i].angle_of(&u)).ok_or_else(|| {
+                        Error::invalid_arg(
+                            "directions",
+                            format!(
+                                "vertex {i}: direction ({}, {}, {}) vanishes in the tangent plane",
+                                w.x, w.y, w.z
+                            ),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<f64>>>()
+                .map(|phi| InitialFieldResult { phi, fallback_vertices: Vec::new() });
+        }
+        InitialField::Uv => uv_directions(mesh, geom)?,
+    };
+    Ok(with_fallbacks(geom, dirs))
+}
+
+/// `w` projected onto the tangent plane of vertex `i` and normalized, unless it vanishes there.
+fn project(geom: &Geometry, i: usize, w: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let n = geom.frames[i].n;
+    let p = w - n * n.dot(w);
+    let len = p.norm();
+    (len > VANISHING * w.norm() && len.is_finite()).then(|| p / len)
+}
+
+fn with_fallbacks(geom: &Geometry, dirs: Vec<Option<Vector3<f64>>>) -> InitialFieldResult {
+    let mut fallback_vertices = Vec::new();
+    let phi = (0..dirs.len())
+        .map(|i| {
+            let f = &geom.frames[i];
+            if let Some(u) = dirs[i] {
+                return f.angle_of(&u);
+            }
+            fallback_vertices.push(i as u32);
+            let sum: Vector3<f64> =
+                geom.adjacency.neighbors(i).iter().filter_map(|&j| dirs[j as usize]).sum();
+            project(geom, i, &sum).map_or(0.0, |u| f.angle_of(&u))
+        })
+        .collect();
+    InitialFieldResult { phi, fallback_vertices }
+}
+
+/// Per vertex, ∂p/∂u averaged (by corner angle) over the faces of the UV chart that holds most
+/// of the vertex's corner angle. Faces are grouped by the UV index at the vertex's corner, so
+/// faces across a seam (other charts, unrelated UV orientation) never cancel each other. ∂p/∂u
+/// is the direction of increasing u on the surface whatever the chart's handedness, so
+/// mirrored charts need no special case; faces with a degenerate UV triangle are skipped.
+fn uv_directions(mesh: &Mesh, geom: &Geometry) -> Result<Vec<Option<Vector3<f64>>>> {
+    let uv = mesh.uv.as_ref().ok_or_else(|| {
+        Error::invalid_arg("init", "the mesh has no UV coordinates (vt); use another --init")
+    })?;
+    let dpdu: Vec<Option<Vector3<f64>>> = (0..mesh.num_faces())
+        .map(|f| {
+            let [p0, p1, p2] = mesh.face_positions(f);
+            let [t0, t1, t2] = uv.face(f);
+            let (e1, e2) = (p1 - p0, p2 - p0);
+            let (d1, d2) = (t1 - t0, t2 - t0);
+            let det = d1.x * d2.y - d2.x * d1.y;
+            let scale = d1.norm() * d2.norm();
+            if !(det.abs() > 1e-12 * scale && scale > 0.0) {
+                return None;
+            }
+            let g = (e1 * d2.y - e2 * d1.y) / det;
+            g.iter().all(|c| c.is_finite()).then_some(g)
+        })
+        .collect();
+    let vf = crate::geometry::VertexFaces::new(mesh);
+    Ok((0..mesh.num_vertices())
+        .map(|v| {
+            // (uv index, total corner angle, weighted direction) per chart around v.
+            let mut groups: Vec<(u32, f64, Vector3<f64>)> = Vec::new();
+            for &(f, c) in vf.of(v) {
+                let (f, c) = (f as usize, c as usize);
+                let tri = mesh.face_positions(f);
+                let angle = corner_angle(&tri[c], &tri[(c + 1) % 3], &tri[(c + 2) % 3]);
+                let key = uv.corners[f][c];
+                let idx = match groups.iter().position(|g| g.0 == key) {
+                    Some(k) => k,
+                    None => {
+                        groups.push((key, 0.0, Vector3::zeros()));
+                        groups.len() - 1
+                    }
+                };
+                groups[idx].1 += angle;
+                if let Some(d) = dpdu[f] {
+                    groups[idx].2 += d.normalize() * angle;
+                }
+            }
+            groups.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            groups.iter().find_map(|g| project(geom, v, &g.2))
+        })
+        .collect())
+}
