@@ -9,10 +9,12 @@
 //! `mesh` ← `geometry` ← `highlight`.
 
 pub mod error;
+pub mod field;
 pub mod generate;
 pub mod geometry;
 pub mod highlight;
 pub mod mesh;
+pub mod output;
 
 pub use error::{Error, Result};
 

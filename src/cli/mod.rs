@@ -1,7 +1,9 @@
 //! Command-line definitions and dispatch. No algorithm lives here.
 
+mod field;
 mod inspect;
 mod mesh_args;
+mod progress;
 
 use clap::{Parser, Subcommand};
 
@@ -25,11 +27,14 @@ pub struct Cli {
 enum Command {
     /// Counts, topology, UV charts and problems of a mesh.
     Inspect(inspect::InspectArgs),
+    /// Geometry, an initial grain field and its highlight field (Eq. 7), written as FIELD.json.
+    Field(field::FieldArgs),
 }
 
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
+        Command::Field(a) => field::run(a, cli.quiet),
     }
 }

@@ -58,7 +58,7 @@ fn twist_angle(seed: u64, i: usize) -> f64 {
 }
 
 /// Counts of vertices where a fallback was used, so degenerate input is visible, never silent.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct GeometryDiagnostics {
     /// Vertices with no usable normal (isolated or only zero-area faces): normal set to +Z.
     pub fallback_normals: usize,

@@ -1,0 +1,278 @@
+//! The `field` job: geometry, an initial grain field and its highlight field, and the FIELD.json
+//! file format (docs/formats.md).
+
+use std::path::Path;
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{Geometry, GeometryDiagnostics, GeometryOptions, GradientForm};
+use crate::highlight::critical::{critical_points, DEFAULT_CRITICAL_THRESHOLD};
+use crate::highlight::{
+    half_vectors, highlight_field, initial_field, HighlightField, InitialField, Lighting, Symmetry,
+    View,
+};
+use crate::mesh::Mesh;
+use crate::{Error, Result};
+
+/// Options of [`compute_field`].
+#[derive(Clone, Debug)]
+pub struct FieldOptions {
+    /// Light and view.
+    pub lighting: Lighting,
+    /// The initial grain field.
+    pub init: InitialField,
+    /// k = 1 or 2.
+    pub symmetry: Symmetry,
+    /// Which Eq. 10 regression.
+    pub gradient_form: GradientForm,
+    /// Geometry options.
+    pub geometry: GeometryOptions,
+    /// hᵀn above which a vertex is a critical point.
+    pub critical_threshold: f64,
+}
+
+impl FieldOptions {
+    /// Default options for a lighting.
+    pub fn new(lighting: Lighting) -> Self {
+        FieldOptions {
+            lighting,
+            init: InitialField::Smooth,
+            symmetry: Symmetry::Oriented,
+            gradient_form: GradientForm::Angle,
+            geometry: GeometryOptions::default(),
+            critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
+        }
+    }
+}
+
+/// Everything [`compute_field`] computes.
+#[derive(Clone, Debug)]
+pub struct FieldResult {
+    /// Per-vertex geometry.
+    pub geometry: Geometry,
+    /// The grain angle per vertex (in the geometry's frames).
+    pub phi: Vec<f64>,
+    /// Half vectors.
+    pub h: Vec<Vector3<f64>>,
+    /// ∇φ, m and ℓ.
+    pub highlight: HighlightField,
+    /// Critical points.
+    pub critical: Vec<bool>,
+    /// Vertices where the initial field needed a fallback.
+    pub fallback_vertices: Vec<u32>,
+}
+
+/// Computes geometry, the initial field, and its highlight field.
+pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult> {
+    if !(options.critical_threshold.is_finite() && options.critical_threshold <= 1.0) {
+        return Err(Error::invalid_arg("critical-threshold", "must be a finite number ≤ 1"));
+    }
+    let geometry = Geometry::compute(mesh, &options.geometry);
+    let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
+    let normals: Vec<Vector3<f64>> = geometry.frames.iter().map(|f| f.n).collect();
+    let h = half_vectors(&options.lighting, &mesh.positions, &normals);
+    let highlight =
+        highlight_field(&geometry, &init.phi, options.symmetry, options.gradient_form, &h);
+    let critical = critical_points(&h, normals.into_iter(), options.critical_threshold);
+    Ok(FieldResult {
+        geometry,
+        phi: init.phi,
+        h,
+        highlight,
+        critical,
+        fallback_vertices: init.fallback_vertices,
+    })
+}
+
+/// The `meta` object of FIELD.json.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FieldMeta {
+    /// The mesh file as given.
+    pub mesh: String,
+    /// Length unit of every position, area (unit²) and curvature (1/unit).
+    pub units: String,
+    /// Direction towards the light (unit).
+    pub light: [f64; 3],
+    /// Direction towards a distant viewer (unit), or null with an eye.
+    pub view: Option<[f64; 3]>,
+    /// Eye position, or null for a distant view.
+    pub eye: Option<[f64; 3]>,
+    /// True for a line field (k = 2).
+    pub symmetric: bool,
+    /// How the initial field was made.
+    pub init: String,
+    /// Vertices whose initial direction used the documented fallback.
+    pub fallback_vertices: Vec<u32>,
+    /// The critical-point threshold on hᵀn.
+    pub critical_threshold: f64,
+    /// Vertex count.
+    pub vertices: usize,
+    /// Geometry fallbacks.
+    pub diagnostics: GeometryDiagnostics,
+    /// The grainline version that wrote the file.
+    pub grainline_version: String,
+}
+
+/// FIELD.json: one array per quantity, one entry per vertex, world coordinates.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FieldFile {
+    /// Always `"grainline-field"`.
+    pub format: String,
+    /// Format version (1).
+    pub version: u32,
+    /// Where the data came from.
+    pub meta: FieldMeta,
+    /// Vertex positions.
+    pub position: Vec<[f64; 3]>,
+    /// Unit vertex normals (jet-refined).
+    pub normal: Vec<[f64; 3]>,
+    /// Unit grain directions.
+    pub u: Vec<[f64; 3]>,
+    /// The Eq. 7 highlight tangent (not normalized).
+    pub ell: Vec<[f64; 3]>,
+    /// Maximum principal curvature (positive on a sphere with outward normals).
+    pub k1: Vec<f64>,
+    /// Minimum principal curvature.
+    pub k2: Vec<f64>,
+    /// Mixed Voronoi areas.
+    pub area: Vec<f64>,
+    /// hᵀn above the threshold.
+    pub critical: Vec<bool>,
+}
+
+/// A short name for an initial field.
+pub fn init_name(init: &InitialField) -> String {
+    match init {
+        InitialField::Uv => "uv".into(),
+        InitialField::Smooth => "smooth".into(),
+        InitialField::CurvatureMin => "curvature-min".into(),
+        InitialField::CurvatureMax => "curvature-max".into(),
+        InitialField::World(w) => format!("world:{},{},{}", w.x, w.y, w.z),
+        InitialField::Directions(_) => "directions".into(),
+    }
+}
+
+fn arr(v: &Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+impl FieldFile {
+    /// Builds the file contents; fails (naming the quantity and vertex) if anything is not
+    /// finite, so no NaN or Inf is ever written.
+    pub fn new(
+        mesh: &Mesh,
+        mesh_name: &str,
+        options: &FieldOptions,
+        r: &FieldResult,
+    ) -> Result<Self> {
+        let g = &r.geometry;
+        let (view, eye) = match options.lighting.view {
+            View::Direction(d) => (Some(arr(&d)), None),
+            View::Eye(e) => (None, Some(arr(&e))),
+        };
+        let file = FieldFile {
+            format: "grainline-field".into(),
+            version: 1,
+            meta: FieldMeta {
+                mesh: mesh_name.into(),
+                units: mesh.units.as_str().into(),
+                light: arr(&options.lighting.light),
+                view,
+                eye,
+                symmetric: options.symmetry == Symmetry::Line,
+                init: init_name(&options.init),
+                fallback_vertices: r.fallback_vertices.clone(),
+                critical_threshold: options.critical_threshold,
+                vertices: mesh.num_vertices(),
+                diagnostics: g.diagnostics,
+                grainline_version: env!("CARGO_PKG_VERSION").into(),
+            },
+            position: mesh.positions.iter().map(arr).collect(),
+            normal: g.frames.iter().map(|f| arr(&f.n)).collect(),
+            u: g.directions_of(&r.phi).iter().map(arr).collect(),
+            ell: r.highlight.ell.iter().map(arr).collect(),
+            k1: g.principal.iter().map(|p| p.k1).collect(),
+            k2: g.principal.iter().map(|p| p.k2).collect(),
+            area: g.areas.clone(),
+            critical: r.critical.clone(),
+        };
+        file.check_finite()?;
+        Ok(file)
+    }
+
+    /// Errors on the first non-finite number, naming the quantity and the vertex.
+    pub fn check_finite(&self) -> Result<()> {
+        let vecs = [
+            ("position", &self.position),
+            ("normal", &self.normal),
+            ("u", &self.u),
+            ("ell", &self.ell),
+        ];
+        for (name, v) in vecs {
+            if let Some(i) = v.iter().position(|x| x.iter().any(|c| !c.is_finite())) {
+                return Err(Error::Numerical {
+                    stage: "field output",
+                    message: format!("{name} of vertex {i} is not finite"),
+                });
+            }
+        }
+        for (name, v) in [("k1", &self.k1), ("k2", &self.k2), ("area", &self.area)] {
+            if let Some(i) = v.iter().position(|c| !c.is_finite()) {
+                return Err(Error::Numerical {
+                    stage: "field output",
+                    message: format!("{name} of vertex {i} is not finite"),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads a FIELD.json, checking its format, its array lengths and that every number is finite.
+    pub fn read(path: &Path) -> Result<Self> {
+        let f: FieldFile = crate::output::read_json(path)?;
+        let bad = |message: String| Error::Parse { path: path.to_path_buf(), line: 0, message };
+        if f.format != "grainline-field" {
+            return Err(bad(format!("format is {:?}, expected \"grainline-field\"", f.format)));
+        }
+        let n = f.position.len();
+        let lens = [
+            ("normal", f.normal.len()),
+            ("u", f.u.len()),
+            ("ell", f.ell.len()),
+            ("k1", f.k1.len()),
+            ("k2", f.k2.len()),
+            ("area", f.area.len()),
+            ("critical", f.critical.len()),
+        ];
+        for (name, len) in lens {
+            if len != n {
+                return Err(bad(format!("{name} has {len} entries, position has {n}")));
+            }
+        }
+        f.check_finite().map_err(|e| bad(e.to_string()))?;
+        Ok(f)
+    }
+}
+
+/// Reads a `--directions` file: a JSON object whose `u` holds one [x, y, z] per vertex.
+pub fn read_directions(path: &Path, num_vertices: usize) -> Result<Vec<Vector3<f64>>> {
+    #[derive(Deserialize)]
+    struct Directions {
+        u: Vec<[f64; 3]>,
+    }
+    let d: Directions = crate::output::read_json(path)?;
+    if d.u.len() != num_vertices {
+        return Err(Error::Parse {
+            path: path.to_path_buf(),
+            line: 0,
+            message: format!(
+                "`u` has {} directions but the mesh has {num_vertices} vertices",
+                d.u.len()
+            ),
+        });
+    }
+    Ok(d.u.iter().map(|v| Vector3::new(v[0], v[1], v[2])).collect())
+}
