@@ -59,7 +59,9 @@ pub enum ToolpathError {
         stroke: Option<usize>,
     },
     /// The program would drive the tool below the Z floor.
-    #[error("Z = {z:.3} mm goes below the Z floor {floor:.3} mm by {by:.3} mm (stroke {stroke:?})")]
+    #[error(
+        "Z = {z:.3} mm goes below the Z floor {floor:.3} mm by {by:.3} mm (stroke {stroke:?})"
+    )]
     BelowFloor {
         /// Offending Z.
         z: f64,

@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use crate::geom::{cross, dot, norm, scale, Vec2};
+use crate::geom::{cross, norm, scale, Vec2};
 use crate::mesh::{Domain, Symmetry};
 
 /// Below this fraction of `Σ λᵢ |dᵢ|` the blended field counts as vanishing or incoherent.
@@ -116,12 +116,4 @@ fn zero_point(c: [Vec2; 3], d: [Vec2; 3], k: f64) -> Vec2 {
         return centroid;
     }
     [0, 1].map(|j| l[0] * c[0][j] + l[1] * c[1][j] + l[2] * c[2][j])
-}
-
-/// Whether `a` and `b` point the same way up to the field's symmetry.
-pub(crate) fn agrees(sym: Symmetry, a: Vec2, b: Vec2) -> bool {
-    match sym {
-        Symmetry::Vector => dot(a, b) > 0.0,
-        Symmetry::Line => true,
-    }
 }

@@ -11,7 +11,6 @@ const MAX_CELLS: f64 = 4.0e6;
 pub(crate) struct PointGrid {
     origin: Vec2,
     inv_cell: f64,
-    cell: f64,
     nx: usize,
     ny: usize,
     cells: Vec<Vec<u32>>,
@@ -27,7 +26,7 @@ impl PointGrid {
         let origin = [bbox[0][0] - cell, bbox[0][1] - cell];
         let nx = (w / cell).ceil() as usize + 3;
         let ny = (h / cell).ceil() as usize + 3;
-        PointGrid { origin, inv_cell: 1.0 / cell, cell, nx, ny, cells: vec![Vec::new(); nx * ny] }
+        PointGrid { origin, inv_cell: 1.0 / cell, nx, ny, cells: vec![Vec::new(); nx * ny] }
     }
 
     fn cell_of(&self, p: Vec2) -> (isize, isize) {
@@ -63,10 +62,5 @@ impl PointGrid {
                 }
             }
         }
-    }
-
-    /// Cell size in UV units.
-    pub(crate) fn cell(&self) -> f64 {
-        self.cell
     }
 }

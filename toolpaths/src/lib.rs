@@ -5,24 +5,58 @@
 //! the field.
 //!
 //! Pipeline: [`FieldMesh`] → [`Domain::new`] → [`place_strokes`] (Jobard–Lefer placement of
-//! streamlines traced with Dormand–Prince 5(4)) → [`plan_toolpath`] (simplify, orient,
-//! order, leads) → [`write_svg`], [`write_gcode`], [`strokes_json`]. [`generate`] runs all of
-//! it and fills a [`Report`].
+//! streamlines traced with Dormand–Prince 5(4) in surface arc length) → [`coverage()`] →
+//! [`plan_toolpath`] (orient, simplify/arcs, order, leads, Z) → [`write_svg`],
+//! [`write_gcode`], [`strokes_json`]. [`generate`] runs all of it and fills a [`Report`].
+//!
+//! ```
+//! use grainline_toolpaths::*;
+//! // A 4 × 2 mm sheet of two triangles with a constant field along +V.
+//! let uv = vec![[0.0, 0.0], [4.0, 0.0], [4.0, 2.0], [0.0, 2.0]];
+//! let tris = vec![[0, 1, 2], [0, 2, 3]];
+//! let mesh = FieldMesh::new(uv, tris, Directions::Angles(vec![1.5708; 4]), Symmetry::Line);
+//! let opts = JobOptions {
+//!     placement: PlacementOptions::new(1.0, 0.0),
+//!     gcode: Some(GcodeOptions::default()),
+//!     ..Default::default()
+//! };
+//! let out = generate(mesh, &opts).unwrap();
+//! assert_eq!(out.report.stroke_count, 4);
+//! assert!(out.gcode.unwrap().contains("G21 G90 G17"));
+//! ```
 
+mod coverage;
 mod error;
-pub mod field;
+mod field;
+mod gcode;
 mod geom;
 mod grid;
+mod job;
+mod json;
 mod locate;
 mod mesh;
-pub mod trace;
+mod order;
+mod place;
+mod plan;
+mod report;
+mod simplify;
+mod spacing;
+mod svg_out;
+mod trace;
 
+pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};
 pub use error::{Result, ToolpathError};
 pub use field::{singularities, Singularity};
+pub use gcode::{check_safety, write_gcode, Dialect, Envelope, GcodeOptions, Spindle};
 pub use geom::{Metric, Vec2, Vec3};
+pub use job::{generate, JobOptions, JobOutput};
+pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};
 pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
-pub use trace::{trace_streamline, StopReason, Stroke, TraceOptions};
-pub mod place;
-mod spacing;
+pub use order::{order_strokes, tour_length, Direction, Ends, OrderOptions, Ordering};
 pub use place::{place_strokes, Placement, PlacementOptions};
+pub use plan::{plan_toolpath, MoveKind, Pass, Plan, PlanOptions, TiltPolicy, ZMode};
+pub use report::{PhaseTime, Report};
+pub use simplify::{fit_moves, rdp_indices, Segment};
 pub use spacing::Spacing;
+pub use svg_out::{write_svg, SvgOptions};
+pub use trace::{trace_streamline, StopReason, Stroke, TraceOptions};

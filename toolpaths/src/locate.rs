@@ -134,7 +134,10 @@ impl FaceGrid {
     pub(crate) fn locate(&self, dom: &Domain, p: Vec2) -> Option<(u32, [f64; 3])> {
         let fx = (p[0] - self.origin[0]) * self.inv_cell;
         let fy = (p[1] - self.origin[1]) * self.inv_cell;
-        if !(fx >= -1e-9 && fy >= -1e-9 && fx <= self.nx as f64 + 1e-9 && fy <= self.ny as f64 + 1e-9)
+        if !(fx >= -1e-9
+            && fy >= -1e-9
+            && fx <= self.nx as f64 + 1e-9
+            && fy <= self.ny as f64 + 1e-9)
         {
             return None;
         }

@@ -433,7 +433,10 @@ fn build_seams(
     }
     let find = |e: [u32; 2]| {
         boundary.get(&(e[0].min(e[1]), e[0].max(e[1]))).copied().ok_or_else(|| {
-            ToolpathError::InvalidMesh(format!("seam edge ({}, {}) is not a boundary edge", e[0], e[1]))
+            ToolpathError::InvalidMesh(format!(
+                "seam edge ({}, {}) is not a boundary edge",
+                e[0], e[1]
+            ))
         })
     };
     for s in seams {

@@ -111,6 +111,8 @@ impl PlacementOptions {
 pub struct Placement {
     /// Accepted strokes, in acceptance order.
     pub strokes: Vec<Stroke>,
+    /// Brush width, mm.
+    pub width: f64,
     /// Separating distance used, mm.
     pub d_sep: f64,
     /// Test distance used, mm.
@@ -226,6 +228,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     }
     Ok(Placement {
         strokes,
+        width: opts.width,
         d_sep,
         d_test,
         spacing: opts.spacing,

@@ -285,10 +285,16 @@ impl<'a> Tracer<'a> {
         mut blocked: impl FnMut(Vec2, u32) -> bool,
     ) -> Half {
         let o = self.opts;
-        let mut half =
-            Half { uv: vec![p0], faces: vec![f0], breaks: Vec::new(), stop: StopReason::MaxLength, length: 0.0 };
+        let mut half = Half {
+            uv: vec![p0],
+            faces: vec![f0],
+            breaks: Vec::new(),
+            stop: StopReason::MaxLength,
+            length: 0.0,
+        };
         let (mut p, mut f) = (p0, f0);
-        let Some(mut k0) = sample(self.dom, f, barycentric(self.dom.corners(f), p), Some(h0)) else {
+        let Some(mut k0) = sample(self.dom, f, barycentric(self.dom.corners(f), p), Some(h0))
+        else {
             half.stop = StopReason::Singularity;
             return half;
         };
@@ -366,7 +372,8 @@ impl<'a> Tracer<'a> {
                         };
                         continue;
                     }
-                    let Some((d, bf, be)) = hit.or_else(|| self.boundary_along(p, f, k0, o.max_step))
+                    let Some((d, bf, be)) =
+                        hit.or_else(|| self.boundary_along(p, f, k0, o.max_step))
                     else {
                         half.stop = StopReason::Boundary;
                         return half;

@@ -84,3 +84,50 @@ pub fn scratch(name: &str) -> PathBuf {
     std::fs::create_dir_all(&base).expect("create scratch dir");
     base
 }
+
+/// Run a shared tool on files; returns (success, stdout).
+pub fn run_tool(tool: &std::path::Path, args: &[&std::path::Path]) -> (bool, String) {
+    let out = std::process::Command::new("bash")
+        .arg(tool)
+        .args(args)
+        .output()
+        .expect("run shared tool");
+    let text = String::from_utf8_lossy(&out.stdout).to_string()
+        + &String::from_utf8_lossy(&out.stderr);
+    (out.status.success(), text)
+}
+
+/// A canonical move read back from rs274's output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Canon {
+    /// G0 to (x, y, z).
+    Traverse([f64; 3]),
+    /// G1/G2/G3 ending at (x, y, z) with the feed rate in force.
+    Feed([f64; 3], f64),
+}
+
+/// Parse an rs274 `.canon` file into moves.
+pub fn parse_canon(text: &str) -> Vec<Canon> {
+    let mut feed = 0.0;
+    let mut out = Vec::new();
+    let args = |l: &str| -> Vec<f64> {
+        let a = &l[l.find('(').unwrap() + 1..l.rfind(')').unwrap()];
+        a.split(',').filter_map(|x| x.trim().parse().ok()).collect()
+    };
+    for line in text.lines() {
+        if line.contains("SET_FEED_RATE(") {
+            feed = args(line)[0];
+        } else if line.contains("STRAIGHT_TRAVERSE(") {
+            let a = args(line);
+            out.push(Canon::Traverse([a[0], a[1], a[2]]));
+        } else if line.contains("STRAIGHT_FEED(") {
+            let a = args(line);
+            out.push(Canon::Feed([a[0], a[1], a[2]], feed));
+        } else if line.contains("ARC_FEED(") {
+            // ARC_FEED(end1, end2, c1, c2, turn, end3, ...) in the XY plane.
+            let a = args(line);
+            out.push(Canon::Feed([a[0], a[1], a[5]], feed));
+        }
+    }
+    out
+}

@@ -1,0 +1,92 @@
+//! One call for the whole job: place, measure coverage, plan, and write the requested
+//! outputs, timing each phase.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::coverage::{coverage, Coverage, CoverageOptions};
+use crate::error::Result;
+use crate::gcode::{write_gcode, GcodeOptions};
+use crate::json::strokes_json;
+use crate::mesh::{Domain, FieldMesh};
+use crate::place::{place_strokes, Placement, PlacementOptions};
+use crate::plan::{plan_toolpath, Plan, PlanOptions};
+use crate::report::{PhaseTime, Report};
+use crate::svg_out::{write_svg, SvgOptions};
+
+/// Everything a job needs; `None` skips an output.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct JobOptions {
+    /// Even-spacing placement.
+    pub placement: PlacementOptions,
+    /// Orientation, ordering, leads, Z mode.
+    pub plan: PlanOptions,
+    /// Coverage measurement.
+    pub coverage: Option<CoverageOptions>,
+    /// SVG output.
+    pub svg: Option<SvgOptions>,
+    /// G-code output.
+    pub gcode: Option<GcodeOptions>,
+    /// Strokes JSON output.
+    pub strokes_json: bool,
+}
+
+/// Outputs of [`generate`].
+#[derive(Clone, Debug)]
+pub struct JobOutput {
+    /// The placed strokes.
+    pub placement: Placement,
+    /// The ordered passes.
+    pub plan: Plan,
+    /// Coverage (with the gap map), when requested.
+    pub coverage: Option<Coverage>,
+    /// SVG text.
+    pub svg: Option<String>,
+    /// G-code text.
+    pub gcode: Option<String>,
+    /// Strokes JSON text.
+    pub strokes_json: Option<String>,
+    /// The report.
+    pub report: Report,
+}
+
+fn timed<T>(t: &mut Vec<PhaseTime>, phase: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    let start = Instant::now();
+    let r = f()?;
+    t.push(PhaseTime { phase: phase.into(), seconds: start.elapsed().as_secs_f64() });
+    Ok(r)
+}
+
+/// Run the whole pipeline on a field mesh. Options are validated before any work.
+pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
+    o.placement.validate()?;
+    o.plan.validate()?;
+    if let Some(g) = &o.gcode {
+        g.validate()?;
+    }
+    let mut t = Vec::new();
+    let dom = timed(&mut t, "domain", || Domain::new(mesh))?;
+    let placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;
+    let cov = match &o.coverage {
+        Some(c) => Some(timed(&mut t, "coverage", || coverage(&dom, &placement, c))?),
+        None => None,
+    };
+    let plan = timed(&mut t, "plan", || plan_toolpath(&dom, &placement, &o.plan))?;
+    let svg = match &o.svg {
+        Some(s) => Some(timed(&mut t, "svg", || write_svg(&dom, &plan, s))?),
+        None => None,
+    };
+    let gcode = match &o.gcode {
+        Some(g) => Some(timed(&mut t, "gcode", || write_gcode(&plan, g))?),
+        None => None,
+    };
+    let json = if o.strokes_json {
+        Some(timed(&mut t, "json", || strokes_json(&placement, &plan))?)
+    } else {
+        None
+    };
+    let report = Report::new(&placement, &plan, cov.as_ref(), t);
+    Ok(JobOutput { placement, plan, coverage: cov, svg, gcode, strokes_json: json, report })
+}

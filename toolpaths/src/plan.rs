@@ -1,0 +1,468 @@
+//! From placed strokes to machine passes: orientation, machine coordinates (flat or
+//! surface-following), tilt checks, simplification/arcs, ordering, lead-in/out and
+//! overtravel.
+//!
+//! Machine coordinates:
+//! * **Flat** — `X = u`, `Y = v`, `Z = surface_z − contact_depth` (UV is the sheet, mm).
+//! * **Surface following** — `(X, Y, Z) = lift(u, v) − (0, 0, contact_depth)`: the part lies
+//!   on the table in its own 3D coordinates and Z follows it along each stroke (3-axis).
+//!   Strokes whose surface normal tilts more than `max_tilt_deg` from +Z are refused or
+//!   skipped ([`TiltPolicy`]).
+//!
+//! A pass is: (lead-in ramp) → (overtravel before, if the stroke starts on the chart
+//! boundary) → the stroke → (overtravel after) → (lead-out ramp). Leads are tangent
+//! extensions in XY of length `lead_in`/`lead_out`, rising `ramp_height` above the cutting
+//! Z at their free end, so the tool touches down while moving.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{non_negative, positive, finite, Result, ToolpathError};
+use crate::geom::{cross, Vec2, Vec3};
+use crate::locate::barycentric;
+use crate::mesh::{Domain, Symmetry};
+use crate::order::{order_strokes, Direction, Ends, OrderOptions};
+use crate::place::Placement;
+use crate::simplify::{fit_moves, Segment};
+use crate::trace::{StopReason, Stroke};
+
+/// What to do with a stroke whose surface tilts beyond the limit.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TiltPolicy {
+    /// Refuse the whole job with [`ToolpathError::TiltExceeded`].
+    #[default]
+    Error,
+    /// Leave the stroke out and list it in [`Plan::skipped_tilt`].
+    Skip,
+}
+
+/// How Z is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "mode")]
+pub enum ZMode {
+    /// A flat sheet at height `surface_z`; XY = UV.
+    Flat {
+        /// Z of the sheet's top surface, mm.
+        surface_z: f64,
+    },
+    /// Follow the 3D lift (needs positions in the input).
+    SurfaceFollowing {
+        /// Largest allowed angle between the surface normal and +Z, degrees.
+        max_tilt_deg: f64,
+        /// What to do beyond it.
+        on_tilt: TiltPolicy,
+    },
+}
+
+/// Options of [`plan_toolpath`]. Lengths in mm.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PlanOptions {
+    /// Global orientation. Default `along`.
+    pub direction: Direction,
+    /// Reference direction (UV) for orienting line-field strokes. Default +U.
+    pub reference: Vec2,
+    /// Simplification tolerance, mm (RDP and arc fitting). Default 0.01.
+    pub tolerance: f64,
+    /// Fit G2/G3 arcs (flat mode, or surface mode where Z is constant). Default false.
+    pub arcs: bool,
+    /// How far below the surface the brush presses, mm (≥ 0). Default 0.
+    pub contact_depth: f64,
+    /// Flat or surface-following Z. Default flat at Z = 0.
+    pub z_mode: ZMode,
+    /// Lead-in length, mm. Default 0.
+    pub lead_in: f64,
+    /// Lead-out length, mm. Default 0.
+    pub lead_out: f64,
+    /// Height of the lead ramps above the cutting Z at their free ends, mm. Default 0.
+    pub ramp_height: f64,
+    /// Extension past the part edge at strokes that end on a chart boundary, mm. Default 0.
+    pub overtravel: f64,
+    /// Ordering options.
+    pub order: OrderOptions,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        PlanOptions {
+            direction: Direction::Along,
+            reference: [1.0, 0.0],
+            tolerance: 0.01,
+            arcs: false,
+            contact_depth: 0.0,
+            z_mode: ZMode::Flat { surface_z: 0.0 },
+            lead_in: 0.0,
+            lead_out: 0.0,
+            ramp_height: 0.0,
+            overtravel: 0.0,
+            order: OrderOptions::default(),
+        }
+    }
+}
+
+impl PlanOptions {
+    /// Reject NaN and out-of-range values.
+    pub fn validate(&self) -> Result<()> {
+        finite("reference.u", self.reference[0])?;
+        finite("reference.v", self.reference[1])?;
+        if self.reference == [0.0, 0.0] {
+            return Err(ToolpathError::InvalidOption {
+                name: "reference",
+                value: 0.0,
+                reason: "must be a non-zero vector",
+            });
+        }
+        positive("tolerance", self.tolerance)?;
+        non_negative("contact_depth", self.contact_depth)?;
+        non_negative("lead_in", self.lead_in)?;
+        non_negative("lead_out", self.lead_out)?;
+        non_negative("ramp_height", self.ramp_height)?;
+        non_negative("overtravel", self.overtravel)?;
+        finite("home.x", self.order.home[0])?;
+        finite("home.y", self.order.home[1])?;
+        match self.z_mode {
+            ZMode::Flat { surface_z } => {
+                finite("surface_z", surface_z)?;
+            }
+            ZMode::SurfaceFollowing { max_tilt_deg, .. } => {
+                crate::error::in_range("max_tilt_deg", max_tilt_deg, 0.0, 180.0)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which part of a pass a move belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MoveKind {
+    /// Ramp down onto the stroke.
+    LeadIn,
+    /// Extension past the part edge.
+    Overtravel,
+    /// The stroke itself.
+    Cut,
+    /// Ramp up off the stroke.
+    LeadOut,
+}
+
+/// One pass of the tool: plunge at `start`, then `moves`, then retract.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pass {
+    /// Index of the stroke in [`Placement::strokes`].
+    pub stroke: usize,
+    /// Whether the stroke runs end → start relative to its traced order.
+    pub reversed: bool,
+    /// First point (machine coordinates): where the tool plunges to.
+    pub start: Vec3,
+    /// Moves in order, with their kind.
+    pub moves: Vec<(MoveKind, Segment)>,
+    /// UV polyline pieces in cutting order (split at seam jumps), simplified.
+    pub uv: Vec<Vec<Vec2>>,
+    /// 3D lift of the oriented stroke points (when the input has positions), simplified
+    /// like `uv` (one list per piece).
+    pub xyz: Option<Vec<Vec<Vec3>>>,
+    /// Stop reason at the first / last point of the pass (after orientation).
+    pub stops: [StopReason; 2],
+    /// Surface length of the stroke, mm.
+    pub length: f64,
+}
+
+/// The ordered passes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// Passes in cutting order.
+    pub passes: Vec<Pass>,
+    /// Strokes left out because the surface tilts too far (stroke index, tilt in degrees).
+    pub skipped_tilt: Vec<(usize, f64)>,
+    /// XY travel between passes (plus from home to the first), mm.
+    pub travel: f64,
+    /// XY travel between passes only, mm.
+    pub travel_between: f64,
+    /// Travel after greedy ordering, before 2-opt, mm.
+    pub travel_greedy: f64,
+    /// Brush width, mm (for SVG stroke width).
+    pub width: f64,
+    /// Tool home (machine XY).
+    pub home: Vec2,
+}
+
+/// An oriented stroke in machine space before ordering.
+struct Item {
+    stroke: usize,
+    reversed: bool,
+    uv: Vec<Vec<Vec2>>,
+    faces: Vec<Vec<u32>>,
+    machine: Vec<Vec3>,
+    stops: [StopReason; 2],
+    length: f64,
+}
+
+/// Whether a stroke should be reversed to satisfy `direction` (before ordering).
+fn wants_reverse(sym: Symmetry, dir: Direction, s: &Stroke, reference: Vec2) -> bool {
+    let along_reversed = match sym {
+        Symmetry::Vector => false,
+        Symmetry::Line => {
+            let a = s.uv[0];
+            let b = s.uv[s.uv.len() - 1];
+            let chord = [b[0] - a[0], b[1] - a[1]];
+            let len = (chord[0] * chord[0] + chord[1] * chord[1]).sqrt();
+            if s.is_closed() || len < 1e-9 {
+                signed_area(&s.uv) < 0.0
+            } else {
+                let dp = chord[0] * reference[0] + chord[1] * reference[1];
+                if dp.abs() > 1e-12 * len {
+                    dp < 0.0
+                } else {
+                    cross(reference, chord) < 0.0
+                }
+            }
+        }
+    };
+    match dir {
+        Direction::Along | Direction::Alternate => along_reversed,
+        Direction::Against => !along_reversed,
+    }
+}
+
+fn signed_area(p: &[Vec2]) -> f64 {
+    let n = p.len();
+    (0..n).map(|i| cross(p[i], p[(i + 1) % n])).sum::<f64>() * 0.5
+}
+
+/// Build the ordered passes from a placement (see the module docs).
+pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Plan> {
+    opts.validate()?;
+    let surface = matches!(opts.z_mode, ZMode::SurfaceFollowing { .. });
+    if surface && !dom.has_lift() {
+        return Err(ToolpathError::MissingInput(
+            "surface-following Z needs per-vertex 3D positions in the field mesh",
+        ));
+    }
+    let mut items = Vec::new();
+    let mut skipped_tilt = Vec::new();
+    for (si, s) in placement.strokes.iter().enumerate() {
+        let rev = wants_reverse(dom.symmetry, opts.direction, s, opts.reference);
+        if let ZMode::SurfaceFollowing { max_tilt_deg, on_tilt } = opts.z_mode {
+            let tilt = max_tilt(dom, s);
+            if tilt > max_tilt_deg {
+                match on_tilt {
+                    TiltPolicy::Error => {
+                        return Err(ToolpathError::TiltExceeded {
+                            stroke: si,
+                            angle_deg: tilt,
+                            limit_deg: max_tilt_deg,
+                            by_deg: tilt - max_tilt_deg,
+                        })
+                    }
+                    TiltPolicy::Skip => {
+                        skipped_tilt.push((si, tilt));
+                        continue;
+                    }
+                }
+            }
+        }
+        items.extend(make_items(dom, si, s, rev, surface, opts));
+    }
+    let ends: Vec<Ends> = items
+        .iter()
+        .map(|it| {
+            let a = it.machine[0];
+            let b = it.machine[it.machine.len() - 1];
+            Ends { start: [a[0], a[1]], end: [b[0], b[1]] }
+        })
+        .collect();
+    let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &opts.order);
+    let mut passes = Vec::with_capacity(items.len());
+    for &k in &ordering.order {
+        let it = &items[k];
+        let flip = ordering.flipped[k];
+        passes.push(make_pass(dom, it, flip, opts));
+    }
+    Ok(Plan {
+        passes,
+        skipped_tilt,
+        travel: ordering.travel,
+        travel_between: ordering.travel_between,
+        travel_greedy: ordering.travel_greedy,
+        width: placement.width,
+        home: opts.order.home,
+    })
+}
+
+/// Largest angle (degrees) between the surface normal and +Z along a stroke.
+fn max_tilt(dom: &Domain, s: &Stroke) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (p, &f) in s.uv.iter().zip(&s.faces) {
+        if let Some(n) = dom.normal(f, barycentric(dom.corners(f), *p)) {
+            worst = worst.max(n[2].clamp(-1.0, 1.0).acos().to_degrees());
+        }
+    }
+    worst
+}
+
+fn machine_point(dom: &Domain, p: Vec2, f: u32, surface: bool, opts: &PlanOptions) -> Vec3 {
+    match opts.z_mode {
+        ZMode::Flat { surface_z } => [p[0], p[1], surface_z - opts.contact_depth],
+        ZMode::SurfaceFollowing { .. } => {
+            let b = barycentric(dom.corners(f), p);
+            let x = dom.lift(f, b).unwrap_or([p[0], p[1], 0.0]);
+            debug_assert!(surface);
+            [x[0], x[1], x[2] - opts.contact_depth]
+        }
+    }
+}
+
+/// Oriented items: one per stroke in surface mode; one per seam piece in flat mode.
+fn make_items(
+    dom: &Domain,
+    si: usize,
+    s: &Stroke,
+    rev: bool,
+    surface: bool,
+    opts: &PlanOptions,
+) -> Vec<Item> {
+    let mut pieces: Vec<(Vec<Vec2>, Vec<u32>)> = s
+        .pieces()
+        .into_iter()
+        .map(|r| (s.uv[r.clone()].to_vec(), s.faces[r].to_vec()))
+        .filter(|(p, _)| p.len() >= 2)
+        .collect();
+    let mut stops = [s.start, s.end];
+    if rev {
+        pieces.reverse();
+        for (p, f) in &mut pieces {
+            p.reverse();
+            f.reverse();
+        }
+        stops.swap(0, 1);
+    }
+    let np = pieces.len();
+    let to_machine = |(p, f): &(Vec<Vec2>, Vec<u32>)| -> Vec<Vec3> {
+        p.iter().zip(f).map(|(q, &ff)| machine_point(dom, *q, ff, surface, opts)).collect()
+    };
+    if surface {
+        let machine: Vec<Vec3> = pieces.iter().flat_map(to_machine).collect();
+        let (uv, faces) = pieces.into_iter().unzip();
+        return vec![Item { stroke: si, reversed: rev, uv, faces, machine, stops, length: s.length }];
+    }
+    pieces
+        .into_iter()
+        .enumerate()
+        .map(|(k, piece)| {
+            let machine = to_machine(&piece);
+            let st = [
+                if k == 0 { stops[0] } else { StopReason::Boundary },
+                if k + 1 == np { stops[1] } else { StopReason::Boundary },
+            ];
+            Item {
+                stroke: si,
+                reversed: rev,
+                uv: vec![piece.0],
+                faces: vec![piece.1],
+                machine,
+                stops: st,
+                length: s.length,
+            }
+        })
+        .collect()
+}
+
+fn tangent_xy(a: Vec3, b: Vec3) -> Vec2 {
+    let t = [b[0] - a[0], b[1] - a[1]];
+    let l = (t[0] * t[0] + t[1] * t[1]).sqrt();
+    if l > 0.0 {
+        [t[0] / l, t[1] / l]
+    } else {
+        [1.0, 0.0]
+    }
+}
+
+/// First point at least `eps` away from `pts[0]` in XY, for a stable tangent.
+fn far_point(pts: &[Vec3], eps: f64) -> Vec3 {
+    for p in &pts[1..] {
+        if ((p[0] - pts[0][0]).powi(2) + (p[1] - pts[0][1]).powi(2)).sqrt() > eps {
+            return *p;
+        }
+    }
+    pts[pts.len() - 1]
+}
+
+fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) -> Pass {
+    let mut machine = it.machine.clone();
+    let mut uv = it.uv.clone();
+    let mut faces = it.faces.clone();
+    let mut stops = it.stops;
+    if flip {
+        machine.reverse();
+        uv.reverse();
+        faces.reverse();
+        for (p, f) in uv.iter_mut().zip(faces.iter_mut()) {
+            p.reverse();
+            f.reverse();
+        }
+        stops.swap(0, 1);
+    }
+    let eps = o.tolerance;
+    let first = machine[0];
+    let last = machine[machine.len() - 1];
+    let t0 = tangent_xy(first, far_point(&machine, eps));
+    let rev_m: Vec<Vec3> = machine.iter().rev().copied().collect();
+    let t1 = tangent_xy(far_point(&rev_m, eps), last);
+    let over_start = if stops[0] == StopReason::Boundary { o.overtravel } else { 0.0 };
+    let over_end = if stops[1] == StopReason::Boundary { o.overtravel } else { 0.0 };
+    let at = |p: Vec3, t: Vec2, s: f64, dz: f64| [p[0] + t[0] * s, p[1] + t[1] * s, p[2] + dz];
+    let mut moves = Vec::new();
+    let cut_begin = at(first, t0, -over_start, 0.0);
+    let start = if o.lead_in > 0.0 || o.ramp_height > 0.0 {
+        let s = at(cut_begin, t0, -o.lead_in, o.ramp_height);
+        moves.push((MoveKind::LeadIn, Segment::Line { to: cut_begin }));
+        s
+    } else {
+        cut_begin
+    };
+    if over_start > 0.0 {
+        moves.push((MoveKind::Overtravel, Segment::Line { to: first }));
+    }
+    for seg in fit_moves(&machine, o.tolerance, o.arcs) {
+        moves.push((MoveKind::Cut, seg));
+    }
+    let cut_end = at(last, t1, over_end, 0.0);
+    if over_end > 0.0 {
+        moves.push((MoveKind::Overtravel, Segment::Line { to: cut_end }));
+    }
+    if o.lead_out > 0.0 || o.ramp_height > 0.0 {
+        moves.push((MoveKind::LeadOut, Segment::Line { to: at(cut_end, t1, o.lead_out, o.ramp_height) }));
+    }
+    // Simplified UV / 3D for SVG and JSON (same RDP tolerance, in UV or 3D mm).
+    let uv_s: Vec<Vec<Vec2>> = uv
+        .iter()
+        .map(|p| {
+            let p3: Vec<Vec3> = p.iter().map(|q| [q[0], q[1], 0.0]).collect();
+            crate::simplify::rdp_indices(&p3, o.tolerance).into_iter().map(|k| p[k]).collect()
+        })
+        .collect();
+    let xyz = dom.has_lift().then(|| {
+        uv.iter()
+            .zip(&faces)
+            .map(|(p, f)| {
+                let p3: Vec<Vec3> = p
+                    .iter()
+                    .zip(f)
+                    .map(|(q, &ff)| dom.lift(ff, barycentric(dom.corners(ff), *q)).unwrap_or([0.0; 3]))
+                    .collect();
+                crate::simplify::rdp_indices(&p3, o.tolerance).into_iter().map(|k| p3[k]).collect()
+            })
+            .collect()
+    });
+    Pass {
+        stroke: it.stroke,
+        reversed: it.reversed != flip,
+        start,
+        moves,
+        uv: uv_s,
+        xyz,
+        stops,
+        length: it.length,
+    }
+}

@@ -1,0 +1,117 @@
+//! The job report: counts, lengths, coverage, stop reasons and time per phase.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::coverage::Coverage;
+use crate::place::Placement;
+use crate::plan::Plan;
+use crate::simplify::Segment;
+use crate::trace::StopReason;
+
+/// Wall time of one phase.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PhaseTime {
+    /// Phase name (`placement`, `coverage`, `plan`, `svg`, `gcode`, `json`).
+    pub phase: String,
+    /// Seconds.
+    pub seconds: f64,
+}
+
+/// Summary of a job. Times vary run to run; everything else is deterministic.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Strokes placed.
+    pub stroke_count: usize,
+    /// Passes in the program (strokes minus skipped, plus seam splits in flat mode).
+    pub pass_count: usize,
+    /// Stroke length on the surface, mm.
+    pub pen_down_length_mm: f64,
+    /// Machine-space length of cutting moves incl. leads and overtravel, mm.
+    pub cut_length_mm: f64,
+    /// XY travel from home through all passes, mm.
+    pub travel_length_mm: f64,
+    /// XY travel between passes only, mm (comparable with vpype's pen-up length).
+    pub travel_between_mm: f64,
+    /// Travel after the greedy phase only, mm.
+    pub travel_greedy_mm: f64,
+    /// Stroke spacing and test distance, mm.
+    pub d_sep: f64,
+    /// `d_test`, mm.
+    pub d_test: f64,
+    /// Coverage, if measured (the gap map is left out of the report).
+    pub coverage: Option<Coverage>,
+    /// How many stroke ends stopped for each reason (both ends counted; a closed loop once).
+    pub stop_reasons: BTreeMap<String, usize>,
+    /// Singularities found.
+    pub singularities: usize,
+    /// Strokes dropped as shorter than `min_length`.
+    pub dropped_short: usize,
+    /// Strokes skipped for tilt (stroke index, tilt in degrees).
+    pub skipped_tilt: Vec<(usize, f64)>,
+    /// Field evaluations during tracing.
+    pub field_evaluations: u64,
+    /// Time per phase.
+    pub timings: Vec<PhaseTime>,
+}
+
+fn seg_len(from: [f64; 3], s: &Segment) -> f64 {
+    let to = s.end();
+    match *s {
+        Segment::Line { .. } => crate::geom::norm3(crate::geom::sub3(to, from)),
+        Segment::Arc { center, ccw, .. } => {
+            let r = ((from[0] - center[0]).powi(2) + (from[1] - center[1]).powi(2)).sqrt();
+            let a0 = (from[1] - center[1]).atan2(from[0] - center[0]);
+            let a1 = (to[1] - center[1]).atan2(to[0] - center[0]);
+            let tau = std::f64::consts::TAU;
+            let sweep = if ccw { (a1 - a0).rem_euclid(tau) } else { (a0 - a1).rem_euclid(tau) };
+            ((r * sweep).powi(2) + (to[2] - from[2]).powi(2)).sqrt()
+        }
+    }
+}
+
+impl Report {
+    /// Build a report from the pieces of a job.
+    pub fn new(
+        placement: &Placement,
+        plan: &Plan,
+        coverage: Option<&Coverage>,
+        timings: Vec<PhaseTime>,
+    ) -> Report {
+        let mut stop_reasons: BTreeMap<String, usize> =
+            StopReason::ALL.iter().map(|r| (r.name().to_string(), 0)).collect();
+        for s in &placement.strokes {
+            *stop_reasons.entry(s.end.name().into()).or_default() += 1;
+            if !s.is_closed() {
+                *stop_reasons.entry(s.start.name().into()).or_default() += 1;
+            }
+        }
+        let mut cut = 0.0;
+        for p in &plan.passes {
+            let mut cur = p.start;
+            for (_, m) in &p.moves {
+                cut += seg_len(cur, m);
+                cur = m.end();
+            }
+        }
+        Report {
+            stroke_count: placement.strokes.len(),
+            pass_count: plan.passes.len(),
+            pen_down_length_mm: placement.strokes.iter().map(|s| s.length).sum(),
+            cut_length_mm: cut,
+            travel_length_mm: plan.travel,
+            travel_between_mm: plan.travel_between,
+            travel_greedy_mm: plan.travel_greedy,
+            d_sep: placement.d_sep,
+            d_test: placement.d_test,
+            coverage: coverage.map(|c| Coverage { map: None, ..c.clone() }),
+            stop_reasons,
+            singularities: placement.singularities.len(),
+            dropped_short: placement.dropped_short,
+            skipped_tilt: plan.skipped_tilt.clone(),
+            field_evaluations: placement.field_evaluations,
+            timings,
+        }
+    }
+}
