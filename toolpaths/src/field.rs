@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 
 use serde::{Deserialize, Serialize};
 
-use crate::geom::{cross, norm, scale, Vec2};
+use crate::geom::{cross, norm, scale, sub, Vec2};
 use crate::mesh::{Domain, Symmetry};
 
 /// Below this fraction of `Σ λᵢ |dᵢ|` the blended field counts as vanishing or incoherent.
@@ -69,51 +69,82 @@ fn wrap(a: f64) -> f64 {
     a
 }
 
-/// All singular triangles of the field, in face order.
+/// All singularities of the field, in face order.
+///
+/// A face is singular when its boundary turning is a non-zero multiple of 2π/k, or when the
+/// linear blend of the corners' k-fold representation `rᵢ = |dᵢ| (cos kθᵢ, sin kθᵢ)`
+/// vanishes inside the closed face (this catches zeros on edges and vertices, where the
+/// turning sum is ambiguous). The index is the turning number when it is unambiguous, else
+/// `sign(det ∂r/∂uv) / k`, the index of the linear blend's zero. Zeros shared by several
+/// faces (on an edge or vertex) are reported once.
 pub fn singularities(dom: &Domain) -> Vec<Singularity> {
     let k = match dom.symmetry {
         Symmetry::Vector => 1.0,
         Symmetry::Line => 2.0,
     };
     let mut out = Vec::new();
+    let b = dom.bbox;
+    let merge = 1e-9 * ((b[1][0] - b[0][0]).abs() + (b[1][1] - b[0][1]).abs());
     for (f, t) in dom.tris.iter().enumerate() {
         let d = t.map(|v| dom.dirs[v as usize]);
-        let vanishing = d.iter().any(|x| norm(*x) == 0.0);
+        let c = dom.corners(f as u32);
         let ang = d.map(|x| k * x[1].atan2(x[0]));
         let turn: f64 = (0..3).map(|i| wrap(ang[(i + 1) % 3] - ang[i])).sum();
-        // The sum is k · 2π · index, flipped by a mirrored (clockwise) UV triangle.
-        let c = dom.corners(f as u32);
-        let orient = cross(crate::geom::sub(c[1], c[0]), crate::geom::sub(c[2], c[0])).signum();
-        let index = (turn * orient / (2.0 * PI * k) * 2.0).round() / 2.0;
-        if vanishing || turn.abs() > PI {
-            out.push(Singularity { uv: zero_point(c, d, k), face: f as u32, index });
+        let orient = cross(sub(c[1], c[0]), sub(c[2], c[0])).signum();
+        let zero = zero_in_triangle(c, d, k);
+        let clear_turn = turn.abs() > PI + 1e-6;
+        if !clear_turn && zero.is_none() {
+            continue;
+        }
+        let (uv, index) = match zero {
+            Some((uv, det_sign)) if !clear_turn => (uv, det_sign / k),
+            _ => {
+                let uv = zero.map(|z| z.0).unwrap_or([
+                    (c[0][0] + c[1][0] + c[2][0]) / 3.0,
+                    (c[0][1] + c[1][1] + c[2][1]) / 3.0,
+                ]);
+                // The turning sum is k · 2π · index (mirrored UV triangles flip it).
+                (uv, (turn * orient / (2.0 * PI * k) * 2.0).round() / 2.0)
+            }
+        };
+        // A zero on an edge or vertex shows up in every incident face: keep the first.
+        let dup = out.iter().any(|s: &Singularity| {
+            (s.uv[0] - uv[0]).abs() <= merge && (s.uv[1] - uv[1]).abs() <= merge
+        });
+        if !dup {
+            out.push(Singularity { uv, face: f as u32, index });
         }
     }
     out
 }
 
 /// Where the blend of the corners' k-fold representation vanishes (solve
-/// `Σ λᵢ rᵢ = 0, Σ λᵢ = 1`), clamped to the triangle; the centroid if that fails.
-fn zero_point(c: [Vec2; 3], d: [Vec2; 3], k: f64) -> Vec2 {
+/// `Σ λᵢ rᵢ = 0, Σ λᵢ = 1`), if inside the closed triangle, with the sign of the blend's
+/// Jacobian determinant in UV.
+fn zero_in_triangle(c: [Vec2; 3], d: [Vec2; 3], k: f64) -> Option<(Vec2, f64)> {
     let r = d.map(|x| {
         let a = k * x[1].atan2(x[0]);
         let l = norm(x);
         [l * a.cos(), l * a.sin()]
     });
     // λ2 = 1 − λ0 − λ1: (r0 − r2) λ0 + (r1 − r2) λ1 = −r2.
-    let a = crate::geom::sub(r[0], r[2]);
-    let b = crate::geom::sub(r[1], r[2]);
+    let a = sub(r[0], r[2]);
+    let b = sub(r[1], r[2]);
     let det = cross(a, b);
-    let centroid = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0];
-    if det.abs() < 1e-300 {
-        return centroid;
+    let scale = norm(r[0]).max(norm(r[1])).max(norm(r[2]));
+    if !(det.abs() > 1e-12 * scale * scale) {
+        return None;
     }
     let rhs = [-r[2][0], -r[2][1]];
     let l0 = cross(rhs, b) / det;
     let l1 = cross(a, rhs) / det;
     let l = [l0, l1, 1.0 - l0 - l1];
     if l.iter().any(|x| !(-1e-9..=1.0 + 1e-9).contains(x)) {
-        return centroid;
+        return None;
     }
-    [0, 1].map(|j| l[0] * c[0][j] + l[1] * c[1][j] + l[2] * c[2][j])
+    // det ∂r/∂uv = cross(r1 − r0, r2 − r0) / cross(c1 − c0, c2 − c0).
+    let jr = cross(sub(r[1], r[0]), sub(r[2], r[0]));
+    let jc = cross(sub(c[1], c[0]), sub(c[2], c[0]));
+    let p = [0, 1].map(|j| l[0] * c[0][j] + l[1] * c[1][j] + l[2] * c[2][j]);
+    Some((p, (jr / jc).signum()))
 }

@@ -9,6 +9,10 @@
 //! `h · clamp(0.9 (tol/ε)^{1/5}, 0.2, 5)` (Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.4,
 //! eq. 4.13; coefficients from Dormand & Prince 1980, table 2). The scheme is FSAL: the last
 //! stage of an accepted step is the first stage of the next.
+//!
+//! Departure from a plain ODE solver: a step is also rejected when the sagitta of its chord
+//! (estimated from the turn between the first and last stage) exceeds the tolerance, so the
+//! *polyline* we output — not only its vertices — stays within tolerance of the streamline.
 
 use serde::{Deserialize, Serialize};
 
@@ -62,7 +66,9 @@ impl StopReason {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct TraceOptions {
-    /// Local error tolerance per step, mm on the surface. Default 1e-4.
+    /// Local error tolerance per step, mm on the surface: both the Dormand–Prince error
+    /// estimate and the sagitta of each chord (distance between the polyline and the
+    /// integrated curve) are kept below it. Default 1e-3.
     pub tolerance: f64,
     /// Largest step, mm. Placement caps it at `d_test / 2` so spacing tests see every
     /// approach. Default 1.
@@ -82,7 +88,7 @@ pub struct TraceOptions {
 impl Default for TraceOptions {
     fn default() -> Self {
         TraceOptions {
-            tolerance: 1e-4,
+            tolerance: 1e-3,
             max_step: 1.0,
             min_step: 1e-6,
             max_length: 1e4,
@@ -202,7 +208,7 @@ impl<'a> Tracer<'a> {
         for (i, s) in sing.iter().enumerate() {
             sing_grid.insert(s.uv, i as u32);
         }
-        Tracer { dom, opts, sing, sing_grid, closure: 0.5 * opts.max_step, evals: 0 }
+        Tracer { dom, opts, sing, sing_grid, closure: 0.25 * opts.max_step, evals: 0 }
     }
 
     /// Distance from `p` (in face `f`) to the nearest singularity if below the exclusion
@@ -314,6 +320,14 @@ impl<'a> Tracer<'a> {
                         h = (hs * (0.9 * (o.tolerance / err).powf(0.2)).max(0.2)).max(o.min_step);
                         continue;
                     }
+                    // The chord p → q must also stay within tolerance of the curve: for a
+                    // turn θ over arc length h the sagitta is (h/θ)(1 − cos θ/2) ≈ hθ/8.
+                    let turn = cross(k0, k6).atan2(dot(k0, k6)).abs();
+                    let sag = if turn > 1e-12 { hs / turn * (1.0 - (0.5 * turn).cos()) } else { 0.0 };
+                    if sag > o.tolerance && hs > o.min_step {
+                        h = (hs * 0.9 * (o.tolerance / sag).sqrt()).max(o.min_step);
+                        continue;
+                    }
                     // Accepted step.
                     if let Some(s) = self.near_singularity(q, fq) {
                         let m = &self.dom.metric[fq as usize];
@@ -333,7 +347,7 @@ impl<'a> Tracer<'a> {
                     let chord = m.length(sub(q, p));
                     if arc > 4.0 * self.closure
                         && half.breaks.is_empty()
-                        && crate::geom::point_segment_distance(m, p0, p, q) < self.closure
+                        && passes_by(m, p0, p, q, self.closure)
                         && dot(k6, h0) > 0.0
                     {
                         half.length += m.length(sub(p0, p));
@@ -439,6 +453,18 @@ impl<'a> Tracer<'a> {
         let back = self.trace_half(seed, face, [-d[0], -d[1]], &mut blocked);
         Some(join(back, fwd))
     }
+}
+
+/// Whether the segment `p → q` passes `s` (its foot lies within the segment) at a distance
+/// below `r`, under metric `m`.
+fn passes_by(m: &crate::geom::Metric, s: Vec2, p: Vec2, q: Vec2, r: f64) -> bool {
+    let d = sub(q, p);
+    let l2 = m.inner(d, d);
+    if l2 <= 0.0 {
+        return false;
+    }
+    let t = m.inner(sub(s, p), d) / l2;
+    (0.0..=1.0).contains(&t) && m.length(sub(sub(s, p), scale(d, t))) < r
 }
 
 /// Join a backward half (reversed) and a forward half sharing their first point.
