@@ -35,6 +35,68 @@ pub enum Error {
         /// What is wrong, naming the element (vertex, face, edge) and, where known, the line.
         message: String,
     },
+    /// A coordinate (`v`, `vt`, `vn`) that is NaN or infinite, with its 1-based line.
+    #[error("{path}:{line}: {message}")]
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A face refers to a vertex, texture coordinate or normal that does not exist.
+    #[error("{path}:{line}: {message}")]
+    IndexOutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number of the face.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The mesh has no faces left (an empty file, or every face dropped).
+    #[error("{path}: {message}")]
+    EmptyMesh {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// The object asked for is not in the file.
+    #[error("{path}: no object or group named {name:?}; available: {available}")]
+    ObjectNotFound {
+        /// The file.
+        path: PathBuf,
+        /// The name asked for.
+        name: String,
+        /// The names in the file, comma-separated.
+        available: String,
+    },
+    /// Zero-area faces refused by [`DegeneratePolicy::Error`](crate::mesh::load::DegeneratePolicy).
+    #[error("{path}: {message}")]
+    DegenerateFaces {
+        /// The file.
+        path: PathBuf,
+        /// Which faces (with their lines).
+        message: String,
+    },
+    /// Non-manifold edges (three or more faces) or vertices (several fans of faces).
+    #[error("{path}: {message}")]
+    NonManifold {
+        /// The file.
+        path: PathBuf,
+        /// Which elements.
+        message: String,
+    },
+    /// Two faces traverse a shared edge in the same direction (their normals disagree).
+    #[error("{path}: {message}")]
+    InconsistentOrientation {
+        /// The file.
+        path: PathBuf,
+        /// Which faces and edge.
+        message: String,
+    },
     /// An option or argument is out of its valid range.
     #[error("invalid {name}: {message}")]
     InvalidArgument {

@@ -1,6 +1,12 @@
-//! `grainline inspect`.
+//! `grainline inspect`: prints the library's [`InspectReport`] as text or JSON.
+//!
+//! Inspect is a diagnostic: it loads with every structural problem tolerated (non-manifold
+//! elements, inconsistent orientation) and reports them; only unreadable files fail.
 
 use clap::Args;
+use grainline::mesh::report::InspectReport;
+use grainline::mesh::topology::Topology;
+use grainline::mesh::uv_charts::UvCharts;
 
 use super::MeshArgs;
 
@@ -9,15 +15,105 @@ use super::MeshArgs;
 pub struct InspectArgs {
     #[command(flatten)]
     mesh: MeshArgs,
-    /// Print JSON instead of text.
+    /// Print JSON instead of text (fields in docs/formats.md, "inspect --json").
     #[arg(long)]
     json: bool,
 }
 
 /// Runs `grainline inspect`.
 pub fn run(args: InspectArgs, _quiet: bool) -> anyhow::Result<()> {
-    let loaded = grainline::mesh::load::load_obj(&args.mesh.mesh, &args.mesh.load_options())?;
-    let _ = args.json;
-    println!("{} vertices, {} faces", loaded.mesh.num_vertices(), loaded.mesh.num_faces());
+    let path = &args.mesh.mesh;
+    let loaded = grainline::mesh::load::load_obj(path, &args.mesh.load_options().tolerant())?;
+    let topo = Topology::new(&loaded.mesh)?;
+    let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
+    let report = InspectReport::new(path, &loaded, &topo, charts.as_ref());
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", text(&report));
+    }
     Ok(())
+}
+
+fn text(r: &InspectReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let u = r.units;
+    let p = &r.problems;
+    let b = &r.bounding_box;
+    let _ = writeln!(s, "{}", r.file);
+    let _ = writeln!(
+        s,
+        "  {} vertices ({} in the file), {} edges, {} triangles ({} polygons split)",
+        r.vertices, r.file_vertices, r.edges, r.faces, r.polygons_split
+    );
+    if r.objects.len() > 1 {
+        let _ = writeln!(s, "  objects: {}", r.objects.join(", "));
+    }
+    let _ = writeln!(
+        s,
+        "  bounding box: [{:.6}, {:.6}, {:.6}] to [{:.6}, {:.6}, {:.6}] {u} (size {:.6} x {:.6} x {:.6} {u})",
+        b.min[0], b.min[1], b.min[2], b.max[0], b.max[1], b.max[2], b.size[0], b.size[1], b.size[2]
+    );
+    let _ = writeln!(s, "  area: {:.6} {u}^2", r.area);
+    let genus = r.genus.map_or("undefined (non-manifold)".to_string(), |g| g.to_string());
+    let _ = writeln!(
+        s,
+        "  components: {}, Euler characteristic: {}, genus: {genus}",
+        r.components.len(),
+        r.euler_characteristic
+    );
+    let lens: Vec<String> = r.boundary_loops.iter().take(20).map(|l| l.edges.to_string()).collect();
+    let more = if r.boundary_loops.len() > 20 { ", ..." } else { "" };
+    if r.boundary_loops.is_empty() {
+        let _ = writeln!(s, "  boundary: none (closed)");
+    } else {
+        let _ = writeln!(
+            s,
+            "  boundary: {} loop(s) in {} connected piece(s), edges per loop: {}{more}; {} boundary vertices",
+            r.boundary_loops.len(),
+            r.boundary_components,
+            lens.join(", "),
+            r.boundary_vertices
+        );
+    }
+    match &r.uv {
+        None => {
+            let _ = writeln!(s, "  UVs: none");
+        }
+        Some(uv) => {
+            let mirrored: Vec<String> = uv
+                .mirrored_charts
+                .iter()
+                .map(|c| format!("#{} ({} faces)", c.chart, c.faces))
+                .collect();
+            let _ = writeln!(
+                s,
+                "  UVs: {} chart(s), {} seam edges, {} flipped triangles, {} degenerate, {} against their chart",
+                uv.charts, uv.seam_edges, uv.flipped_faces, uv.degenerate_faces, uv.faces_against_chart
+            );
+            let _ = writeln!(
+                s,
+                "  mirrored charts: {}",
+                if mirrored.is_empty() { "none".to_string() } else { mirrored.join(", ") }
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "  normals: {}",
+        if r.has_normals { "per corner, from the file" } else { "none" }
+    );
+    let _ = writeln!(
+        s,
+        "  problems: {} degenerate faces dropped, {} non-manifold edges, {} non-manifold vertices, \
+         {} inconsistently oriented edges, {} unreferenced vertices, {} welded vertices",
+        p.degenerate_faces,
+        p.nonmanifold_edges,
+        p.nonmanifold_vertices,
+        p.inconsistent_orientation_edges,
+        p.unreferenced_vertices,
+        p.welded_vertices
+    );
+    s
 }

@@ -45,6 +45,7 @@ impl MeshArgs {
             } else {
                 DegeneratePolicy::Drop
             },
+            ..LoadOptions::default()
         }
     }
 }

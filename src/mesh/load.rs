@@ -1,11 +1,44 @@
 //! Loading OBJ files (via tobj) into a validated [`Mesh`].
 //!
-//! (Being written: see the mesh issue. The types below are the agreed interface.)
+//! # What the loaded mesh is
+//!
+//! * **Vertices** are the file's `v` entries **in file order**, minus the ones no (kept) face
+//!   uses, minus the ones welded into an earlier one. [`LoadReport::source_vertex`] maps every
+//!   mesh vertex back to its 1-based `v` number, and
+//!   `file_vertices = vertices + unreferenced_vertices + welded_vertices`.
+//! * **Faces** are the file's `f` statements in file order, polygons split into the fan
+//!   `(c0, c1, c2), (c0, c2, c3), …` (as tobj does), minus dropped zero-area faces.
+//!   [`LoadReport::face_line`] gives the line of every face.
+//! * **UVs and normals** (`vt`, `vn`) are per-corner attributes ([`CornerAttribute`]). They are
+//!   kept only when every corner of every kept face has one. UV values are deduplicated by
+//!   exact value, so two corners share a UV index exactly when their UVs are equal.
+//! * **Welding** (`weld = Some(tol)`, file units) merges vertices whose distance is at most
+//!   `tol`, transitively; the cluster keeps the position and the place of its first vertex in
+//!   the file (see [`super::weld`]). Only vertices used by the kept object take part.
+//! * **Zero-area faces**: a face with a repeated vertex (after welding) or with
+//!   |(b − a) × (c − a)| ≤ 1e-12·ℓ², ℓ its longest edge (collinear up to rounding; slivers of
+//!   aspect up to ~1e11 are kept). Dropped and counted, or an error, by [`DegeneratePolicy`].
+//! * **Units**: positions are multiplied by `scale` and are then in `units`.
+//!
+//! tobj reads numbers as `f32`; the loader widens them to `f64`.
+//!
+//! # How
+//!
+//! Two passes run side by side on the bytes of the file: tobj (numbers, objects), and a
+//! scanner (`scan.rs`) that checks every statement with its line number and records the
+//! file index of every face corner (tobj renumbers positions per object by first use). The
+//! corners of the two agree one to one, which is checked.
 
 use std::path::Path;
 
-use super::{Mesh, Units};
-use crate::Result;
+use nalgebra::{Vector2, Vector3};
+use rayon::prelude::*;
+
+use super::halfedge::HalfEdges;
+use super::scan::{self, Kind, Scan, NONE};
+use super::validate::{self, FileNames};
+use super::{weld, CornerAttribute, Mesh, Units};
+use crate::{Error, Result};
 
 /// What to do with zero-area faces.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,6 +65,8 @@ pub struct LoadOptions {
     pub allow_nonmanifold: bool,
     /// What to do with zero-area faces.
     pub degenerate: DegeneratePolicy,
+    /// Accept faces oriented inconsistently with a neighbour instead of refusing the mesh.
+    pub allow_inconsistent_orientation: bool,
 }
 
 impl Default for LoadOptions {
@@ -43,7 +78,18 @@ impl Default for LoadOptions {
             scale: 1.0,
             allow_nonmanifold: false,
             degenerate: DegeneratePolicy::Drop,
+            allow_inconsistent_orientation: false,
         }
+    }
+}
+
+impl LoadOptions {
+    /// Options that accept every structural problem, to report it (what `inspect` uses).
+    pub fn tolerant(mut self) -> Self {
+        self.allow_nonmanifold = true;
+        self.allow_inconsistent_orientation = true;
+        self.degenerate = DegeneratePolicy::Drop;
+        self
     }
 }
 
@@ -58,6 +104,28 @@ pub struct LoadReport {
     pub welded_vertices: usize,
     /// Zero-area faces dropped.
     pub dropped_degenerate_faces: usize,
+    /// Triangles in the file (after splitting polygons, before dropping any).
+    pub file_triangles: usize,
+    /// Polygons with more than three corners that were split into triangles.
+    pub polygons_split: usize,
+    /// Object and group names in the file, in order, each once.
+    pub objects: Vec<String>,
+    /// Corners without a texture coordinate in a file with some (the UVs are then dropped).
+    pub corners_without_uv: usize,
+    /// Statements with an unknown keyword, ignored.
+    pub ignored_statements: usize,
+    /// Edges with three or more faces (only non-zero when accepted).
+    pub nonmanifold_edges: usize,
+    /// Vertices whose faces form several fans (only non-zero when accepted).
+    pub nonmanifold_vertices: usize,
+    /// Edges whose two faces are oriented inconsistently (only non-zero when accepted).
+    pub inconsistent_orientation_edges: usize,
+    /// 1-based file `v` number of every mesh vertex.
+    #[serde(skip)]
+    pub source_vertex: Vec<u32>,
+    /// 1-based line of the `f` statement of every mesh face.
+    #[serde(skip)]
+    pub face_line: Vec<u32>,
 }
 
 /// A loaded mesh and the report of what loading did.
@@ -69,8 +137,441 @@ pub struct LoadedMesh {
     pub report: LoadReport,
 }
 
-/// Loads and validates an OBJ file.
+/// One tobj model and the range of corners it covers in the file's corner list.
+struct Model {
+    name: String,
+    mesh: tobj::Mesh,
+    start: usize,
+}
+
+/// Loads and validates an OBJ file (see the module documentation for what the mesh is).
 pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
-    let _ = (path, options);
-    unimplemented!("load_obj is being written")
+    check_options(options)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
+    let (scanned, parsed) = rayon::join(|| scan::scan(path, &bytes), || run_tobj(&bytes));
+    let scanned = scanned?;
+    let models = parsed.map_err(|e| scan::locate_tobj_error(path, &bytes, e))?;
+    let models = align(path, &scanned, models)?;
+    Builder { path, bytes: &bytes, scan: &scanned, models: &models, options }.build()
+}
+
+fn check_options(o: &LoadOptions) -> Result<()> {
+    if !(o.scale.is_finite() && o.scale > 0.0) {
+        return Err(Error::invalid_arg("scale", format!("{} is not a positive number", o.scale)));
+    }
+    if let Some(t) = o.weld {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(Error::invalid_arg("weld", format!("{t} is not a distance ≥ 0")));
+        }
+    }
+    Ok(())
+}
+
+fn run_tobj(bytes: &[u8]) -> Result<Vec<tobj::Model>, tobj::LoadError> {
+    let opts = tobj::LoadOptions {
+        single_index: false,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let mut reader = std::io::Cursor::new(bytes);
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))?;
+    Ok(models)
+}
+
+/// Pairs tobj's models with the scanner's corners, checking that they agree.
+fn align(path: &Path, scan: &Scan, models: Vec<tobj::Model>) -> Result<Vec<Model>> {
+    let mut start = 0;
+    let mut out = Vec::with_capacity(models.len());
+    for m in models {
+        let n = m.mesh.indices.len();
+        let ok_vt = scan.corner_vt.is_empty() || m.mesh.texcoord_indices.len() == n;
+        let ok_vn = scan.corner_vn.is_empty() || m.mesh.normal_indices.len() == n;
+        if !ok_vt || !ok_vn {
+            return Err(internal(path, "tobj returned attribute indices of the wrong length"));
+        }
+        out.push(Model { name: m.name, mesh: m.mesh, start });
+        start += n;
+    }
+    if start != scan.corner_v.len() {
+        return Err(internal(
+            path,
+            &format!("tobj read {start} face corners, the scanner {}", scan.corner_v.len()),
+        ));
+    }
+    Ok(out)
+}
+
+fn internal(path: &Path, what: &str) -> Error {
+    Error::Parse { path: path.to_owned(), line: 0, message: format!("unsupported OBJ: {what}") }
+}
+
+struct Builder<'a> {
+    path: &'a Path,
+    bytes: &'a [u8],
+    scan: &'a Scan,
+    models: &'a [Model],
+    options: &'a LoadOptions,
+}
+
+impl Builder<'_> {
+    fn build(&self) -> Result<LoadedMesh> {
+        let mut report = LoadReport {
+            file_vertices: self.scan.num_v,
+            file_triangles: self.scan.face_line.len(),
+            ignored_statements: self.scan.ignored_statements,
+            objects: self.object_names(),
+            ..Default::default()
+        };
+        report.polygons_split = count_split_polygons(&self.scan.face_line);
+        let selected = self.select()?;
+        let positions = self.file_positions(&selected)?;
+        let used = used_vertices(self.scan.num_v, &self.scan.corner_v, self.models, &selected);
+        let rep = match self.options.weld {
+            Some(tol) => weld::weld_map(&positions, &used, tol),
+            None => (0..self.scan.num_v as u32).collect(),
+        };
+        let (tris, dropped) = self.triangles(&selected, &rep, &positions)?;
+        report.dropped_degenerate_faces = dropped;
+        if tris.is_empty() {
+            return Err(self.empty(dropped));
+        }
+        let (new_id, source) = compact_vertices(self.scan.num_v, &tris, &self.scan.corner_v, &rep);
+        report.welded_vertices =
+            (0..self.scan.num_v).filter(|&i| used[i] && rep[i] as usize != i).count();
+        report.unreferenced_vertices = self.scan.num_v - source.len() - report.welded_vertices;
+        let scale = self.options.scale;
+        let mut mesh = Mesh {
+            positions: source.iter().map(|&i| positions[i as usize] * scale).collect(),
+            faces: tris
+                .iter()
+                .map(|&t| {
+                    let c = |k: usize| {
+                        new_id[rep[self.scan.corner_v[3 * t as usize + k] as usize] as usize]
+                    };
+                    [c(0), c(1), c(2)]
+                })
+                .collect(),
+            units: self.options.units,
+            ..Default::default()
+        };
+        report.face_line = tris.iter().map(|&t| self.scan.face_line[t as usize]).collect();
+        report.source_vertex = source.iter().map(|&i| i + 1).collect();
+        (mesh.uv, report.corners_without_uv) = self.uvs(&tris)?;
+        mesh.normals = self.normals(&tris)?;
+        self.validate(&mesh, &mut report)?;
+        Ok(LoadedMesh { mesh, report })
+    }
+
+    fn object_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = Vec::new();
+        for m in self.models {
+            if !m.mesh.indices.is_empty() && !names.contains(&m.name) {
+                names.push(m.name.clone());
+            }
+        }
+        names
+    }
+
+    /// Indices of the selected models.
+    fn select(&self) -> Result<Vec<usize>> {
+        let Some(name) = &self.options.object else { return Ok((0..self.models.len()).collect()) };
+        let sel: Vec<usize> =
+            (0..self.models.len()).filter(|&m| &self.models[m].name == name).collect();
+        if sel.is_empty() {
+            let names = self.object_names();
+            let available = if names.is_empty() { "(none)".to_string() } else { names.join(", ") };
+            return Err(Error::ObjectNotFound {
+                path: self.path.to_owned(),
+                name: name.clone(),
+                available,
+            });
+        }
+        Ok(sel)
+    }
+
+    /// Positions by file index (NaN where unused), checked finite where used.
+    fn file_positions(&self, selected: &[usize]) -> Result<Vec<Vector3<f64>>> {
+        let mut pos = vec![Vector3::repeat(f64::NAN); self.scan.num_v];
+        for &m in selected {
+            let m = &self.models[m];
+            let p = &m.mesh.positions;
+            for (k, &local) in m.mesh.indices.iter().enumerate() {
+                let l = 3 * local as usize;
+                let v = Vector3::new(p[l] as f64, p[l + 1] as f64, p[l + 2] as f64);
+                if !v.iter().all(|x| x.is_finite()) {
+                    let i = self.scan.corner_v[m.start + k] as usize;
+                    return Err(self.non_finite(Kind::V, i, "vertex"));
+                }
+                pos[self.scan.corner_v[m.start + k] as usize] = v;
+            }
+        }
+        Ok(pos)
+    }
+
+    fn non_finite(&self, kind: Kind, index: usize, what: &str) -> Error {
+        Error::NonFinite {
+            path: self.path.to_owned(),
+            line: scan::line_of(self.bytes, kind, index),
+            message: format!("{what} {} has a non-finite (NaN or infinite) value", index + 1),
+        }
+    }
+
+    fn empty(&self, dropped: usize) -> Error {
+        let message = if dropped > 0 {
+            format!("no faces left: all {dropped} faces have zero area")
+        } else if self.options.object.is_some() {
+            "the selected object has no faces".to_string()
+        } else {
+            "no faces: empty mesh".to_string()
+        };
+        Error::EmptyMesh { path: self.path.to_owned(), message }
+    }
+
+    /// Kept triangles (indices into the file's triangles) and the number dropped.
+    fn triangles(
+        &self,
+        selected: &[usize],
+        rep: &[u32],
+        pos: &[Vector3<f64>],
+    ) -> Result<(Vec<u32>, usize)> {
+        let cv = &self.scan.corner_v;
+        let mut kept = Vec::with_capacity(self.scan.face_line.len());
+        let mut bad = Vec::new();
+        for &m in selected {
+            let m = &self.models[m];
+            let range = m.start / 3..(m.start + m.mesh.indices.len()) / 3;
+            let flags: Vec<bool> = range
+                .clone()
+                .into_par_iter()
+                .map(|t| {
+                    let v = [0, 1, 2].map(|k| rep[cv[3 * t + k] as usize]);
+                    is_degenerate(v, pos)
+                })
+                .collect();
+            for (t, d) in range.zip(flags) {
+                if d {
+                    bad.push(t as u32);
+                } else {
+                    kept.push(t as u32);
+                }
+            }
+        }
+        if !bad.is_empty() && self.options.degenerate == DegeneratePolicy::Error {
+            let lines: Vec<String> = bad
+                .iter()
+                .take(5)
+                .map(|&t| format!("line {}", self.scan.face_line[t as usize]))
+                .collect();
+            return Err(Error::DegenerateFaces {
+                path: self.path.to_owned(),
+                message: format!("{} zero-area face(s), at {}", bad.len(), lines.join(", ")),
+            });
+        }
+        Ok((kept, bad.len()))
+    }
+
+    /// Per-corner UVs if every kept corner has one, and the number of corners without.
+    fn uvs(&self, tris: &[u32]) -> Result<(Option<CornerAttribute<Vector2<f64>>>, usize)> {
+        let cvt = &self.scan.corner_vt;
+        if cvt.is_empty() {
+            return Ok((None, 0));
+        }
+        let missing =
+            tris.iter().map(|&t| (0..3).filter(|&k| cvt[3 * t as usize + k] == NONE).count()).sum();
+        if missing > 0 {
+            return Ok((None, missing));
+        }
+        let mut vals = vec![Vector2::repeat(f64::NAN); self.scan.num_vt];
+        for m in self.models {
+            let tc = &m.mesh.texcoords;
+            for (k, &local) in m.mesh.texcoord_indices.iter().enumerate() {
+                let i = cvt[m.start + k];
+                if i != NONE {
+                    let l = 2 * local as usize;
+                    vals[i as usize] = Vector2::new(tc[l] as f64, tc[l + 1] as f64);
+                }
+            }
+        }
+        for &t in tris {
+            for k in 0..3 {
+                let i = cvt[3 * t as usize + k] as usize;
+                if !vals[i].all_finite() {
+                    return Err(self.non_finite(Kind::Vt, i, "texture coordinate"));
+                }
+            }
+        }
+        let canon = dedup_by_value(&vals);
+        let attr =
+            self.corner_attribute(tris, cvt, &vals, Some(&canon), Kind::Vt, "texture coordinate")?;
+        Ok((Some(attr), 0))
+    }
+
+    fn normals(&self, tris: &[u32]) -> Result<Option<CornerAttribute<Vector3<f64>>>> {
+        let cvn = &self.scan.corner_vn;
+        if cvn.is_empty() || tris.iter().any(|&t| (0..3).any(|k| cvn[3 * t as usize + k] == NONE)) {
+            return Ok(None);
+        }
+        let mut vals = vec![Vector3::repeat(f64::NAN); self.scan.num_vn];
+        for m in self.models {
+            let n = &m.mesh.normals;
+            for (k, &local) in m.mesh.normal_indices.iter().enumerate() {
+                let i = cvn[m.start + k];
+                if i != NONE {
+                    let l = 3 * local as usize;
+                    vals[i as usize] = Vector3::new(n[l] as f64, n[l + 1] as f64, n[l + 2] as f64);
+                }
+            }
+        }
+        self.corner_attribute(tris, cvn, &vals, None, Kind::Vn, "normal").map(Some)
+    }
+
+    /// Builds a corner attribute from file-indexed values: the used values (after mapping
+    /// through `canon`) compacted in file order.
+    fn corner_attribute<T: Copy + AllFinite>(
+        &self,
+        tris: &[u32],
+        corner: &[u32],
+        vals: &[T],
+        canon: Option<&[u32]>,
+        kind: Kind,
+        what: &str,
+    ) -> Result<CornerAttribute<T>> {
+        let c = |i: u32| canon.map_or(i, |m| m[i as usize]);
+        let mut new_id = vec![NONE; vals.len()];
+        for &t in tris {
+            for k in 0..3 {
+                new_id[c(corner[3 * t as usize + k]) as usize] = 0;
+            }
+        }
+        let mut values = Vec::new();
+        for (i, id) in new_id.iter_mut().enumerate() {
+            if *id == 0 {
+                if !vals[i].all_finite() {
+                    return Err(self.non_finite(kind, i, what));
+                }
+                *id = values.len() as u32;
+                values.push(vals[i]);
+            }
+        }
+        let corners = tris
+            .iter()
+            .map(|&t| [0, 1, 2].map(|k| new_id[c(corner[3 * t as usize + k]) as usize]))
+            .collect();
+        Ok(CornerAttribute { values, corners })
+    }
+
+    fn validate(&self, mesh: &Mesh, report: &mut LoadReport) -> Result<()> {
+        let he = HalfEdges::new(mesh.num_vertices(), &mesh.faces)?;
+        let problems = validate::find_problems(&he);
+        report.nonmanifold_edges = problems.nonmanifold_edges.len();
+        report.nonmanifold_vertices = problems.nonmanifold_vertices.len();
+        report.inconsistent_orientation_edges = problems.inconsistent_edges.len();
+        let names =
+            FileNames { source_vertex: &report.source_vertex, face_line: &report.face_line };
+        validate::check(
+            self.path,
+            &he,
+            &problems,
+            &names,
+            self.options.allow_nonmanifold,
+            self.options.allow_inconsistent_orientation,
+        )
+    }
+}
+
+trait AllFinite {
+    fn all_finite(&self) -> bool;
+}
+
+impl<const D: usize> AllFinite for nalgebra::SVector<f64, D> {
+    fn all_finite(&self) -> bool {
+        self.iter().all(|x| x.is_finite())
+    }
+}
+
+/// Triangles whose face line equals the previous one come from one polygon.
+fn count_split_polygons(face_line: &[u32]) -> usize {
+    let mut n = 0;
+    for (k, w) in face_line.windows(2).enumerate() {
+        let starts_run = k == 0 || face_line[k - 1] != w[0];
+        if w[0] == w[1] && starts_run {
+            n += 1;
+        }
+    }
+    n
+}
+
+fn used_vertices(
+    num_v: usize,
+    corner_v: &[u32],
+    models: &[Model],
+    selected: &[usize],
+) -> Vec<bool> {
+    let mut used = vec![false; num_v];
+    for &m in selected {
+        let m = &models[m];
+        for &v in &corner_v[m.start..m.start + m.mesh.indices.len()] {
+            used[v as usize] = true;
+        }
+    }
+    used
+}
+
+/// Zero area: a repeated vertex, or |(b − a) × (c − a)| ≤ 1e-12·ℓ² with ℓ the longest edge.
+fn is_degenerate(v: [u32; 3], pos: &[Vector3<f64>]) -> bool {
+    if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+        return true;
+    }
+    let [a, b, c] = v.map(|i| pos[i as usize]);
+    let (e1, e2, e3) = (b - a, c - a, c - b);
+    let l2 = e1.norm_squared().max(e2.norm_squared()).max(e3.norm_squared());
+    e1.cross(&e2).norm() <= 1e-12 * l2
+}
+
+/// New index (file order) of every vertex used by a kept triangle, and the file index of each.
+fn compact_vertices(
+    num_v: usize,
+    tris: &[u32],
+    corner_v: &[u32],
+    rep: &[u32],
+) -> (Vec<u32>, Vec<u32>) {
+    let mut new_id = vec![NONE; num_v];
+    for &t in tris {
+        for k in 0..3 {
+            new_id[rep[corner_v[3 * t as usize + k] as usize] as usize] = 0;
+        }
+    }
+    let mut source = Vec::new();
+    for (i, id) in new_id.iter_mut().enumerate() {
+        if *id == 0 {
+            *id = source.len() as u32;
+            source.push(i as u32);
+        }
+    }
+    (new_id, source)
+}
+
+/// For every value, the first (smallest) index holding a bit-identical value.
+fn dedup_by_value(vals: &[Vector2<f64>]) -> Vec<u32> {
+    let mut keyed: Vec<(u64, u64, u32)> = vals
+        .par_iter()
+        .enumerate()
+        .map(|(i, v)| ((v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), i as u32))
+        .collect();
+    keyed.par_sort_unstable();
+    let mut canon = vec![0u32; vals.len()];
+    let mut k = 0;
+    while k < keyed.len() {
+        let first = keyed[k];
+        let mut j = k;
+        while j < keyed.len() && (keyed[j].0, keyed[j].1) == (first.0, first.1) {
+            canon[keyed[j].2 as usize] = first.2;
+            j += 1;
+        }
+        k = j;
+    }
+    canon
 }

@@ -6,7 +6,15 @@
 //! attributes *per face corner*, so seams and hard edges are represented exactly.
 
 pub mod adjacency;
+pub mod halfedge;
 pub mod load;
+pub mod report;
+mod scan;
+pub mod topology;
+mod union_find;
+pub mod uv_charts;
+mod validate;
+pub mod weld;
 
 pub use adjacency::Adjacency;
 

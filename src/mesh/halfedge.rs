@@ -1,0 +1,252 @@
+//! Half-edge connectivity of a triangle mesh, with every edge classified.
+//!
+//! Half-edge `h = 3f + c` runs from corner `c` of face `f` to corner `c + 1 (mod 3)`; the face
+//! lies on its left. The outgoing half-edges of every vertex are stored in CSR form, so the
+//! twin of `a → b` is found by scanning the (short) outgoing list of `b`: no hashing and no
+//! global sort, O(F) work, parallel and deterministic.
+//!
+//! An undirected edge is classified by the half-edges along it:
+//! one — [`EdgeKind::Boundary`]; two in opposite directions — [`EdgeKind::Manifold`] (they are
+//! twins); two in the same direction — [`EdgeKind::Inconsistent`] (the two faces are oriented
+//! inconsistently); three or more — [`EdgeKind::NonManifold`]. Only manifold half-edges have a
+//! twin.
+
+use rayon::prelude::*;
+
+use super::{FaceId, VertexId};
+use crate::{Error, Result};
+
+/// No half-edge (a missing twin).
+pub const NO_HALFEDGE: u32 = u32::MAX;
+
+/// The class of an undirected edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EdgeKind {
+    /// One face.
+    Boundary,
+    /// Two faces traversing it in opposite directions.
+    Manifold,
+    /// Two faces traversing it in the same direction.
+    Inconsistent,
+    /// Three or more faces.
+    NonManifold,
+}
+
+const REP_BIT: u8 = 0x80;
+
+/// Half-edge connectivity (see the module documentation).
+#[derive(Clone, Debug, Default)]
+pub struct HalfEdges {
+    faces: Vec<[u32; 3]>,
+    out_offsets: Vec<u32>,
+    out_edges: Vec<u32>,
+    out_dest: Vec<u32>,
+    twin: Vec<u32>,
+    /// `EdgeKind as u8`, with `REP_BIT` set on one half-edge per undirected edge.
+    kind: Vec<u8>,
+    num_edges: usize,
+}
+
+impl HalfEdges {
+    /// Builds the connectivity of `num_vertices` vertices and the triangles `faces`.
+    ///
+    /// Fails (instead of panicking) when a face refers to a vertex that does not exist or the
+    /// mesh has more half-edges than `u32` can index.
+    pub fn new(num_vertices: usize, faces: &[[u32; 3]]) -> Result<Self> {
+        let invalid = |m: String| Error::InvalidMesh { path: "<mesh>".into(), message: m };
+        if faces.len() >= (u32::MAX / 3) as usize || num_vertices >= u32::MAX as usize {
+            return Err(invalid(format!("too large: {} faces", faces.len())));
+        }
+        if let Some(f) = faces.iter().position(|f| f.iter().any(|&v| v as usize >= num_vertices)) {
+            return Err(invalid(format!("face {f} refers to a vertex ≥ {num_vertices}")));
+        }
+        let mut he = HalfEdges { faces: faces.to_vec(), ..Default::default() };
+        he.build_out_lists(num_vertices);
+        let classified: Vec<(u32, u8)> =
+            (0..3 * faces.len() as u32).into_par_iter().map(|h| he.classify(h)).collect();
+        (he.twin, he.kind) = classified.into_iter().unzip();
+        he.num_edges = he.kind.par_iter().filter(|&&k| k & REP_BIT != 0).count();
+        Ok(he)
+    }
+
+    fn build_out_lists(&mut self, nv: usize) {
+        let mut offsets = vec![0u32; nv + 1];
+        for f in &self.faces {
+            for &v in f {
+                offsets[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..nv {
+            offsets[v + 1] += offsets[v];
+        }
+        let nh = 3 * self.faces.len();
+        let mut cursor = offsets.clone();
+        let (mut edges, mut dest) = (vec![0u32; nh], vec![0u32; nh]);
+        for (f, tri) in self.faces.iter().enumerate() {
+            for c in 0..3 {
+                let slot = &mut cursor[tri[c] as usize];
+                edges[*slot as usize] = (3 * f + c) as u32;
+                dest[*slot as usize] = tri[(c + 1) % 3];
+                *slot += 1;
+            }
+        }
+        (self.out_offsets, self.out_edges, self.out_dest) = (offsets, edges, dest);
+    }
+
+    /// `(twin, kind | representative bit)` of half-edge `h`.
+    fn classify(&self, h: u32) -> (u32, u8) {
+        let (a, b) = (self.origin(h), self.dest(h));
+        let (mut same, mut opp, mut cand, mut min_id) = (0u32, 0u32, NO_HALFEDGE, h);
+        for (k, &d) in self.out_range(a).zip(&self.out_dest[self.out_range(a)]) {
+            if d == b {
+                same += 1;
+                min_id = min_id.min(self.out_edges[k]);
+            }
+        }
+        for (k, &d) in self.out_range(b).zip(&self.out_dest[self.out_range(b)]) {
+            if d == a {
+                opp += 1;
+                cand = self.out_edges[k];
+                min_id = min_id.min(cand);
+            }
+        }
+        let (twin, kind) = match (same, opp) {
+            (1, 0) => (NO_HALFEDGE, EdgeKind::Boundary),
+            (1, 1) => (cand, EdgeKind::Manifold),
+            (s, o) if s + o == 2 => (NO_HALFEDGE, EdgeKind::Inconsistent),
+            _ => (NO_HALFEDGE, EdgeKind::NonManifold),
+        };
+        let rep = if min_id == h { REP_BIT } else { 0 };
+        (twin, kind as u8 | rep)
+    }
+
+    fn out_range(&self, v: u32) -> std::ops::Range<usize> {
+        self.out_offsets[v as usize] as usize..self.out_offsets[v as usize + 1] as usize
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.out_offsets.len().saturating_sub(1)
+    }
+
+    /// Number of half-edges (three per face).
+    pub fn num_halfedges(&self) -> usize {
+        self.twin.len()
+    }
+
+    /// Number of undirected edges.
+    pub fn num_edges(&self) -> usize {
+        self.num_edges
+    }
+
+    /// The triangles the connectivity was built from.
+    pub fn faces(&self) -> &[[u32; 3]] {
+        &self.faces
+    }
+
+    /// Start vertex of `h`.
+    #[inline]
+    pub fn origin(&self, h: u32) -> u32 {
+        self.faces[(h / 3) as usize][(h % 3) as usize]
+    }
+
+    /// End vertex of `h`.
+    #[inline]
+    pub fn dest(&self, h: u32) -> u32 {
+        self.faces[(h / 3) as usize][((h % 3 + 1) % 3) as usize]
+    }
+
+    /// The face on the left of `h`.
+    #[inline]
+    pub fn face(h: u32) -> FaceId {
+        FaceId(h / 3)
+    }
+
+    /// The next half-edge around the same face.
+    #[inline]
+    pub fn next(h: u32) -> u32 {
+        h - h % 3 + (h % 3 + 1) % 3
+    }
+
+    /// The previous half-edge around the same face.
+    #[inline]
+    pub fn prev(h: u32) -> u32 {
+        h - h % 3 + (h % 3 + 2) % 3
+    }
+
+    /// The opposite half-edge of a manifold edge.
+    #[inline]
+    pub fn twin(&self, h: u32) -> Option<u32> {
+        let t = self.twin[h as usize];
+        (t != NO_HALFEDGE).then_some(t)
+    }
+
+    /// The class of the undirected edge of `h`.
+    #[inline]
+    pub fn kind(&self, h: u32) -> EdgeKind {
+        match self.kind[h as usize] & !REP_BIT {
+            0 => EdgeKind::Boundary,
+            1 => EdgeKind::Manifold,
+            2 => EdgeKind::Inconsistent,
+            _ => EdgeKind::NonManifold,
+        }
+    }
+
+    /// True for exactly one half-edge of every undirected edge (the smallest index).
+    #[inline]
+    pub fn is_representative(&self, h: u32) -> bool {
+        self.kind[h as usize] & REP_BIT != 0
+    }
+
+    /// The outgoing half-edges of vertex `v`, by increasing index.
+    #[inline]
+    pub fn outgoing(&self, v: u32) -> &[u32] {
+        &self.out_edges[self.out_range(v)]
+    }
+
+    /// One half-edge per undirected edge of the given kind, by increasing index.
+    pub fn edges_of_kind(&self, kind: EdgeKind) -> Vec<u32> {
+        (0..self.num_halfedges() as u32)
+            .into_par_iter()
+            .filter(|&h| self.is_representative(h) && self.kind(h) == kind)
+            .collect()
+    }
+
+    /// The faces along the undirected edge of `h`, by increasing index.
+    pub fn edge_faces(&self, h: u32) -> Vec<FaceId> {
+        let (a, b) = (self.origin(h), self.dest(h));
+        let mut out: Vec<FaceId> = self
+            .outgoing(a)
+            .iter()
+            .filter(|&&g| self.dest(g) == b)
+            .chain(self.outgoing(b).iter().filter(|&&g| self.dest(g) == a))
+            .map(|&g| Self::face(g))
+            .collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// The endpoints of `h`.
+    pub fn endpoints(&self, h: u32) -> (VertexId, VertexId) {
+        (VertexId(self.origin(h)), VertexId(self.dest(h)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classify_two_triangles_and_fin() {
+        let he = HalfEdges::new(4, &[[0, 1, 2], [0, 2, 3]]).unwrap();
+        assert_eq!(he.num_edges(), 5);
+        let h = 2; // 2 -> 0 in face 0
+        assert_eq!(he.kind(h), EdgeKind::Manifold);
+        assert_eq!(he.twin(h), Some(3)); // 0 -> 2 in face 1
+        let fin = HalfEdges::new(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
+        assert_eq!(fin.edges_of_kind(EdgeKind::NonManifold).len(), 1);
+        let flip = HalfEdges::new(4, &[[0, 1, 2], [0, 1, 3]]).unwrap();
+        assert_eq!(flip.edges_of_kind(EdgeKind::Inconsistent), vec![0]);
+        assert!(HalfEdges::new(2, &[[0, 1, 2]]).is_err());
+    }
+}

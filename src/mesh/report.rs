@@ -1,0 +1,188 @@
+//! The report of `grainline inspect`: counts, extent, topology, UV charts and problems of a
+//! loaded mesh. Serialized as the stable JSON object documented in `docs/formats.md`
+//! ("inspect --json").
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::load::LoadedMesh;
+use super::topology::{Component, Topology};
+use super::uv_charts::UvCharts;
+use super::VertexId;
+
+/// Version of the JSON layout; bumped when a field changes meaning or is removed.
+pub const INSPECT_FORMAT_VERSION: u32 = 1;
+
+/// Axis-aligned bounding box.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoundingBox {
+    /// Smallest coordinates.
+    pub min: [f64; 3],
+    /// Largest coordinates.
+    pub max: [f64; 3],
+    /// `max − min`.
+    pub size: [f64; 3],
+}
+
+/// One boundary loop.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoundaryLoop {
+    /// Number of edges (= vertices) of the loop.
+    pub edges: usize,
+    /// Length along the loop, in the mesh unit.
+    pub length: f64,
+    /// 1-based file `v` number of the loop's first vertex.
+    pub first_vertex: u32,
+}
+
+/// UV layout summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct UvReport {
+    /// Number of charts.
+    pub charts: usize,
+    /// Seam edges.
+    pub seam_edges: usize,
+    /// Faces with negative signed UV area.
+    pub flipped_faces: usize,
+    /// Faces with zero UV area.
+    pub degenerate_faces: usize,
+    /// Faces whose orientation disagrees with their chart's majority.
+    pub faces_against_chart: usize,
+    /// Charts whose majority of faces is flipped.
+    pub mirrored_charts: Vec<MirroredChart>,
+}
+
+/// A mirrored chart.
+#[derive(Clone, Debug, Serialize)]
+pub struct MirroredChart {
+    /// Chart index (charts are numbered by their first face).
+    pub chart: usize,
+    /// Faces in the chart.
+    pub faces: usize,
+    /// Of which flipped.
+    pub flipped: usize,
+}
+
+/// Problems found (and tolerated) while loading.
+#[derive(Clone, Debug, Serialize)]
+pub struct Problems {
+    /// Zero-area faces dropped.
+    pub degenerate_faces: usize,
+    /// Edges with three or more faces.
+    pub nonmanifold_edges: usize,
+    /// Vertices whose faces form several fans.
+    pub nonmanifold_vertices: usize,
+    /// Edges whose two faces are oriented inconsistently.
+    pub inconsistent_orientation_edges: usize,
+    /// File vertices used by no face.
+    pub unreferenced_vertices: usize,
+    /// File vertices welded into an earlier one.
+    pub welded_vertices: usize,
+}
+
+/// Everything `grainline inspect` reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct InspectReport {
+    /// Layout version ([`INSPECT_FORMAT_VERSION`]).
+    pub format_version: u32,
+    /// The mesh file.
+    pub file: String,
+    /// Unit of every length below.
+    pub units: &'static str,
+    /// Object and group names in the file.
+    pub objects: Vec<String>,
+    /// `v` entries in the file.
+    pub file_vertices: usize,
+    /// Vertices of the loaded mesh.
+    pub vertices: usize,
+    /// Undirected edges.
+    pub edges: usize,
+    /// Triangles of the loaded mesh.
+    pub faces: usize,
+    /// Polygons (more than three corners) split into triangles.
+    pub polygons_split: usize,
+    /// Bounding box.
+    pub bounding_box: BoundingBox,
+    /// Surface area (unit²).
+    pub area: f64,
+    /// χ = V − E + F.
+    pub euler_characteristic: i64,
+    /// Sum of the components' genera (`null` if a component has none).
+    pub genus: Option<u32>,
+    /// Connected components.
+    pub components: Vec<Component>,
+    /// Boundary loops, in the order found.
+    pub boundary_loops: Vec<BoundaryLoop>,
+    /// Connected components of the boundary edges (= loops unless loops touch at a vertex).
+    pub boundary_components: usize,
+    /// Boundary vertices.
+    pub boundary_vertices: usize,
+    /// UV layout (`null` without UVs).
+    pub uv: Option<UvReport>,
+    /// Whether the file has a normal for every corner.
+    pub has_normals: bool,
+    /// Problems found.
+    pub problems: Problems,
+}
+
+impl InspectReport {
+    /// Computes the report of a loaded mesh.
+    pub fn new(path: &Path, loaded: &LoadedMesh, topo: &Topology, uv: Option<&UvCharts>) -> Self {
+        let (mesh, r) = (&loaded.mesh, &loaded.report);
+        let (lo, hi) = mesh.bounding_box().unwrap_or_default();
+        let boundary_loops = (0..topo.num_boundary_loops())
+            .map(|l| {
+                let vs = topo.boundary_loop(l);
+                let p = |v: VertexId| mesh.positions[v.index()];
+                let length =
+                    (0..vs.len()).map(|k| (p(vs[(k + 1) % vs.len()]) - p(vs[k])).norm()).sum();
+                let first_vertex = r.source_vertex.get(vs[0].index()).copied().unwrap_or(0);
+                BoundaryLoop { edges: vs.len(), length, first_vertex }
+            })
+            .collect();
+        let uv = uv.map(|c| UvReport {
+            charts: c.charts().len(),
+            seam_edges: c.num_seam_edges(),
+            flipped_faces: c.num_flipped_faces(),
+            degenerate_faces: c.num_degenerate_faces(),
+            faces_against_chart: c.num_faces_against_chart(),
+            mirrored_charts: c
+                .charts()
+                .iter()
+                .enumerate()
+                .filter(|(_, ch)| ch.mirrored)
+                .map(|(chart, ch)| MirroredChart { chart, faces: ch.faces, flipped: ch.flipped })
+                .collect(),
+        });
+        InspectReport {
+            format_version: INSPECT_FORMAT_VERSION,
+            file: path.display().to_string(),
+            units: mesh.units.as_str(),
+            objects: r.objects.clone(),
+            file_vertices: r.file_vertices,
+            vertices: mesh.num_vertices(),
+            edges: topo.num_edges(),
+            faces: mesh.num_faces(),
+            polygons_split: r.polygons_split,
+            bounding_box: BoundingBox { min: lo.into(), max: hi.into(), size: (hi - lo).into() },
+            area: mesh.area(),
+            euler_characteristic: topo.euler_characteristic(),
+            genus: topo.genus(),
+            components: topo.components().to_vec(),
+            boundary_loops,
+            boundary_components: topo.num_boundary_components(),
+            boundary_vertices: topo.boundary_vertices().len(),
+            uv,
+            has_normals: mesh.normals.is_some(),
+            problems: Problems {
+                degenerate_faces: r.dropped_degenerate_faces,
+                nonmanifold_edges: r.nonmanifold_edges,
+                nonmanifold_vertices: r.nonmanifold_vertices,
+                inconsistent_orientation_edges: r.inconsistent_orientation_edges,
+                unreferenced_vertices: r.unreferenced_vertices,
+                welded_vertices: r.welded_vertices,
+            },
+        }
+    }
+}

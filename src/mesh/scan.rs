@@ -1,0 +1,382 @@
+//! A fast pass over the text of an OBJ file: statement syntax with line numbers, and the file
+//! indices of every face corner in file order.
+//!
+//! tobj parses the numbers but re-indexes positions per object in first-use order and reports
+//! errors without a line. This pass gives the loader what tobj does not: the 0-based file
+//! index (`v`, `vt`, `vn`) of every triangle corner after the same fan triangulation tobj does
+//! (`(c0, c1, c2), (c0, c2, c3), …`), the line of every face, and one-line errors naming the
+//! line. It runs beside tobj on another thread.
+
+use std::path::Path;
+
+use crate::{Error, Result};
+
+/// Marks a corner without a texture coordinate or normal.
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// What the pass found.
+#[derive(Debug, Default)]
+pub(crate) struct Scan {
+    /// Number of `v`, `vt` and `vn` statements.
+    pub num_v: usize,
+    pub num_vt: usize,
+    pub num_vn: usize,
+    /// File index of the position, texture coordinate and normal of every triangle corner.
+    pub corner_v: Vec<u32>,
+    pub corner_vt: Vec<u32>,
+    pub corner_vn: Vec<u32>,
+    /// 1-based line of the `f` statement of every triangle.
+    pub face_line: Vec<u32>,
+    /// Statements with an unknown keyword (ignored, as OBJ readers do).
+    pub ignored_statements: usize,
+}
+
+/// Which of the three index lists a face index refers to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kind {
+    V,
+    Vt,
+    Vn,
+}
+
+impl Kind {
+    fn keyword(self) -> &'static str {
+        match self {
+            Kind::V => "v",
+            Kind::Vt => "vt",
+            Kind::Vn => "vn",
+        }
+    }
+}
+
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | 0x0b | 0x0c)
+}
+
+fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
+    line.split(|&b| is_space(b)).filter(|t| !t.is_empty())
+}
+
+/// Checks that a line is text: no control characters, valid UTF-8.
+fn check_text(path: &Path, line_no: usize, line: &[u8]) -> Result<()> {
+    let mut non_ascii = false;
+    for &b in line {
+        if b < 0x20 && !is_space(b) {
+            return Err(parse_err(
+                path,
+                line_no,
+                format!("binary data (byte 0x{b:02x}); not an OBJ text file"),
+            ));
+        }
+        non_ascii |= b >= 0x80;
+    }
+    if non_ascii && std::str::from_utf8(line).is_err() {
+        return Err(parse_err(path, line_no, "invalid UTF-8; not an OBJ text file".into()));
+    }
+    Ok(())
+}
+
+pub(crate) fn parse_err(path: &Path, line: usize, message: String) -> Error {
+    Error::Parse { path: path.to_owned(), line, message }
+}
+
+fn show(t: &[u8]) -> String {
+    let s = String::from_utf8_lossy(t);
+    let s: String = s.chars().take(40).collect();
+    format!("{s:?}")
+}
+
+/// Iterates over `(1-based line number, line bytes without the newline)`.
+pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
+    let n = if bytes.last() == Some(&b'\n') { bytes.len() - 1 } else { bytes.len() };
+    bytes[..n].split(|&b| b == b'\n').enumerate().map(|(i, l)| (i + 1, l))
+}
+
+/// Keywords of the OBJ format that carry no data grainline uses.
+fn is_ignored_keyword(kw: &[u8]) -> bool {
+    kw.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+        && kw.first().is_some_and(|b| b.is_ascii_alphabetic())
+}
+
+/// A forward reference (index beyond the count so far), checked against the totals at the end.
+struct Forward {
+    line: u32,
+    kind: Kind,
+    index: u32,
+}
+
+struct Scanner<'a> {
+    path: &'a Path,
+    out: Scan,
+    corners: Vec<[u32; 3]>,
+    forward: Vec<Forward>,
+}
+
+/// Runs the pass over a whole file.
+pub(crate) fn scan(path: &Path, bytes: &[u8]) -> Result<Scan> {
+    let mut s = Scanner { path, out: Scan::default(), corners: Vec::new(), forward: Vec::new() };
+    s.out.corner_v.reserve(bytes.len() / 8);
+    for (line_no, line) in lines(bytes) {
+        s.statement(line_no, line)?;
+    }
+    s.check_forward()?;
+    let need_vt = s.out.corner_vt.iter().any(|&t| t != NONE);
+    let need_vn = s.out.corner_vn.iter().any(|&t| t != NONE);
+    if !need_vt {
+        s.out.corner_vt = Vec::new();
+    }
+    if !need_vn {
+        s.out.corner_vn = Vec::new();
+    }
+    Ok(s.out)
+}
+
+impl Scanner<'_> {
+    fn statement(&mut self, line_no: usize, line: &[u8]) -> Result<()> {
+        check_text(self.path, line_no, line)?;
+        let mut toks = tokens(line);
+        let Some(kw) = toks.next() else { return Ok(()) };
+        let n_args = || tokens(line).count() - 1;
+        match kw {
+            b"v" => {
+                let n = n_args();
+                if !matches!(n, 3 | 4 | 6) {
+                    return Err(self.truncated(line_no, "vertex", "3 coordinates", n));
+                }
+                self.out.num_v += 1;
+            }
+            b"vt" => {
+                let n = n_args();
+                if !(2..=3).contains(&n) {
+                    return Err(self.truncated(line_no, "texture coordinate", "2 values", n));
+                }
+                self.out.num_vt += 1;
+            }
+            b"vn" => {
+                let n = n_args();
+                if n != 3 {
+                    return Err(self.truncated(line_no, "normal", "3 components", n));
+                }
+                self.out.num_vn += 1;
+            }
+            b"f" => self.face(line_no, toks)?,
+            b"l" => {
+                self.corners_of(line_no, toks)?;
+                if self.corners.len() > 2 {
+                    return Err(parse_err(
+                        self.path,
+                        line_no,
+                        "polyline `l` with more than 2 vertices is not supported".into(),
+                    ));
+                }
+            }
+            b"usemtl" if toks.next().is_none() => {
+                return Err(parse_err(self.path, line_no, "usemtl without a name".into()));
+            }
+            _ if kw[0] == b'#' => {}
+            _ if is_ignored_keyword(kw) => {
+                if !matches!(kw, b"o" | b"g" | b"s" | b"usemtl" | b"mtllib") {
+                    self.out.ignored_statements += 1;
+                }
+            }
+            _ => {
+                return Err(parse_err(
+                    self.path,
+                    line_no,
+                    format!("unexpected text {}; not an OBJ statement", show(kw)),
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    fn truncated(&self, line_no: usize, what: &str, need: &str, n: usize) -> Error {
+        parse_err(self.path, line_no, format!("{what} needs {need}, found {n} (truncated line?)"))
+    }
+
+    fn face<'t>(&mut self, line_no: usize, toks: impl Iterator<Item = &'t [u8]>) -> Result<()> {
+        self.corners_of(line_no, toks)?;
+        let n = self.corners.len();
+        if n < 3 {
+            return Err(parse_err(
+                self.path,
+                line_no,
+                format!("face with {n} corners; a face needs at least 3 (truncated line?)"),
+            ));
+        }
+        let c0 = self.corners[0];
+        for k in 1..n - 1 {
+            for c in [c0, self.corners[k], self.corners[k + 1]] {
+                self.out.corner_v.push(c[0]);
+                self.out.corner_vt.push(c[1]);
+                self.out.corner_vn.push(c[2]);
+            }
+            self.out.face_line.push(line_no as u32);
+        }
+        Ok(())
+    }
+
+    fn corners_of<'t>(
+        &mut self,
+        line_no: usize,
+        toks: impl Iterator<Item = &'t [u8]>,
+    ) -> Result<()> {
+        self.corners.clear();
+        for tok in toks {
+            let c = self.corner(line_no, tok)?;
+            self.corners.push(c);
+        }
+        Ok(())
+    }
+
+    /// Parses `v`, `v/vt`, `v//vn` or `v/vt/vn` into 0-based file indices.
+    fn corner(&mut self, line_no: usize, tok: &[u8]) -> Result<[u32; 3]> {
+        let mut out = [NONE; 3];
+        let kinds = [Kind::V, Kind::Vt, Kind::Vn];
+        for (k, part) in tok.split(|&b| b == b'/').enumerate() {
+            if k >= 3 {
+                return Err(self.bad_corner(line_no, tok));
+            }
+            if part.is_empty() {
+                if k == 0 {
+                    return Err(self.bad_corner(line_no, tok));
+                }
+                continue;
+            }
+            let Some(x) = parse_int(part) else { return Err(self.bad_corner(line_no, tok)) };
+            out[k] = self.resolve(line_no, kinds[k], x)?;
+        }
+        Ok(out)
+    }
+
+    fn bad_corner(&self, line_no: usize, tok: &[u8]) -> Error {
+        parse_err(
+            self.path,
+            line_no,
+            format!("bad face corner {}; expected v, v/vt, v//vn or v/vt/vn", show(tok)),
+        )
+    }
+
+    fn count(&self, kind: Kind) -> usize {
+        match kind {
+            Kind::V => self.out.num_v,
+            Kind::Vt => self.out.num_vt,
+            Kind::Vn => self.out.num_vn,
+        }
+    }
+
+    /// Turns a 1-based (or negative, relative) OBJ index into a 0-based one.
+    fn resolve(&mut self, line_no: usize, kind: Kind, x: i64) -> Result<u32> {
+        let count = self.count(kind) as i64;
+        let idx = if x > 0 { x - 1 } else { count + x };
+        if x == 0 || idx < 0 || idx >= u32::MAX as i64 {
+            return Err(Error::IndexOutOfRange {
+                path: self.path.to_owned(),
+                line: line_no,
+                message: out_of_range_msg(kind, x, count as usize),
+            });
+        }
+        if idx >= count {
+            self.forward.push(Forward { line: line_no as u32, kind, index: idx as u32 });
+        }
+        Ok(idx as u32)
+    }
+
+    fn check_forward(&self) -> Result<()> {
+        for f in &self.forward {
+            let count = self.count(f.kind);
+            if f.index as usize >= count {
+                return Err(Error::IndexOutOfRange {
+                    path: self.path.to_owned(),
+                    line: f.line as usize,
+                    message: out_of_range_msg(f.kind, f.index as i64 + 1, count),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn out_of_range_msg(kind: Kind, x: i64, count: usize) -> String {
+    let kw = kind.keyword();
+    format!("face refers to {kw} {x}, but the file has {count} `{kw}` entries")
+}
+
+fn parse_int(s: &[u8]) -> Option<i64> {
+    let (neg, digits) = match s.first()? {
+        b'-' => (true, &s[1..]),
+        b'+' => (false, &s[1..]),
+        _ => (false, s),
+    };
+    if digits.is_empty() || digits.len() > 15 {
+        return None;
+    }
+    let mut v: i64 = 0;
+    for &d in digits {
+        if !d.is_ascii_digit() {
+            return None;
+        }
+        v = v * 10 + (d - b'0') as i64;
+    }
+    Some(if neg { -v } else { v })
+}
+
+/// The 1-based line of the `index`-th (0-based) statement of `kind`.
+pub(crate) fn line_of(bytes: &[u8], kind: Kind, index: usize) -> usize {
+    let kw = kind.keyword().as_bytes();
+    lines(bytes).filter(|(_, l)| tokens(l).next() == Some(kw)).nth(index).map_or(0, |(n, _)| n)
+}
+
+/// Finds the line behind an error tobj reported without one: the first number tobj cannot
+/// parse (as `f32`), or a `w` of zero.
+pub(crate) fn locate_tobj_error(path: &Path, bytes: &[u8], err: tobj::LoadError) -> Error {
+    for (line_no, line) in lines(bytes) {
+        let mut toks = tokens(line);
+        let need = match toks.next() {
+            Some(b"v") => 4,
+            Some(b"vt") => 2,
+            Some(b"vn") => 3,
+            _ => continue,
+        };
+        for (k, t) in toks.take(need).enumerate() {
+            let parsed = std::str::from_utf8(t).ok().and_then(|s| s.parse::<f32>().ok());
+            match parsed {
+                None => {
+                    return parse_err(path, line_no, format!("bad number {}", show(t)));
+                }
+                Some(w) if k == 3 && w == 0.0 => {
+                    return parse_err(path, line_no, "vertex weight w is zero".into());
+                }
+                _ => {}
+            }
+        }
+    }
+    parse_err(path, 0, format!("OBJ reader: {err}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(text: &str) -> Result<Scan> {
+        scan(Path::new("t.obj"), text.as_bytes())
+    }
+
+    #[test]
+    fn quad_fan_and_negative_indices() {
+        let s = run("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf -4 -3 -2 -1\n").unwrap();
+        assert_eq!(s.corner_v, vec![0, 1, 2, 0, 2, 3]);
+        assert_eq!(s.face_line, vec![5, 5]);
+        assert!(s.corner_vt.is_empty());
+    }
+
+    #[test]
+    fn errors_carry_lines() {
+        let e = run("v 0 0 0\nv 1 0\n").unwrap_err();
+        assert!(matches!(e, Error::Parse { line: 2, .. }), "{e}");
+        let e = run("v 0 0 0\nf 1 2 3\n").unwrap_err();
+        assert!(matches!(e, Error::IndexOutOfRange { line: 2, .. }), "{e}");
+        let e = run("v 0 0 0\n\u{1}\u{2}\n").unwrap_err();
+        assert!(matches!(e, Error::Parse { line: 2, .. }), "{e}");
+    }
+}

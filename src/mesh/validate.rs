@@ -1,0 +1,115 @@
+//! Structural checks of a loaded mesh: non-manifold edges and vertices, inconsistent face
+//! orientation. Each problem becomes a one-line typed error naming the elements by their file
+//! numbers (the 1-based `v` index and the line of the face).
+
+use std::path::Path;
+
+use rayon::prelude::*;
+
+use super::halfedge::{EdgeKind, HalfEdges};
+use super::topology::{nonmanifold_vertices_from_flags, vertex_flags};
+use super::VertexId;
+use crate::{Error, Result};
+
+/// The structural problems of a mesh.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Problems {
+    /// One half-edge per edge with three or more faces.
+    pub nonmanifold_edges: Vec<u32>,
+    /// One half-edge per edge whose two faces traverse it in the same direction.
+    pub inconsistent_edges: Vec<u32>,
+    /// Vertices whose faces form several fans (on otherwise manifold edges).
+    pub nonmanifold_vertices: Vec<VertexId>,
+}
+
+/// How to name mesh elements in messages: by their numbers in the file.
+pub(crate) struct FileNames<'a> {
+    /// 1-based file `v` index of every mesh vertex.
+    pub source_vertex: &'a [u32],
+    /// 1-based line of every mesh face.
+    pub face_line: &'a [u32],
+}
+
+impl FileNames<'_> {
+    fn vertex(&self, v: u32) -> u32 {
+        self.source_vertex.get(v as usize).copied().unwrap_or(v + 1)
+    }
+
+    fn face(&self, f: u32) -> String {
+        match self.face_line.get(f as usize) {
+            Some(l) => format!("line {l}"),
+            None => format!("face {f}"),
+        }
+    }
+}
+
+/// Finds every structural problem.
+pub(crate) fn find_problems(he: &HalfEdges) -> Problems {
+    let flags: Vec<u8> =
+        (0..he.num_vertices() as u32).into_par_iter().map(|v| vertex_flags(he, v)).collect();
+    Problems {
+        nonmanifold_edges: he.edges_of_kind(EdgeKind::NonManifold),
+        inconsistent_edges: he.edges_of_kind(EdgeKind::Inconsistent),
+        nonmanifold_vertices: nonmanifold_vertices_from_flags(&flags),
+    }
+}
+
+/// Refuses the mesh for the first problem found, unless allowed.
+pub(crate) fn check(
+    path: &Path,
+    he: &HalfEdges,
+    p: &Problems,
+    names: &FileNames<'_>,
+    allow_nonmanifold: bool,
+    allow_inconsistent: bool,
+) -> Result<()> {
+    if !allow_nonmanifold {
+        if let Some(&h) = p.nonmanifold_edges.first() {
+            let faces = he.edge_faces(h);
+            let lines: Vec<String> = faces.iter().map(|f| names.face(f.0)).collect();
+            return Err(Error::NonManifold {
+                path: path.to_owned(),
+                message: format!(
+                    "non-manifold edge between vertices {} and {} shared by {} faces ({}); {} \
+                     such edge(s) in all (--allow-nonmanifold accepts them)",
+                    names.vertex(he.origin(h)),
+                    names.vertex(he.dest(h)),
+                    faces.len(),
+                    lines.join(", "),
+                    p.nonmanifold_edges.len()
+                ),
+            });
+        }
+    }
+    if !allow_inconsistent {
+        if let Some(&h) = p.inconsistent_edges.first() {
+            let faces = he.edge_faces(h);
+            let lines: Vec<String> = faces.iter().map(|f| names.face(f.0)).collect();
+            return Err(Error::InconsistentOrientation {
+                path: path.to_owned(),
+                message: format!(
+                    "inconsistent face orientation: faces at {} both run from vertex {} to \
+                     vertex {}; {} such edge(s) in all",
+                    lines.join(" and "),
+                    names.vertex(he.origin(h)),
+                    names.vertex(he.dest(h)),
+                    p.inconsistent_edges.len()
+                ),
+            });
+        }
+    }
+    if !allow_nonmanifold {
+        if let Some(&v) = p.nonmanifold_vertices.first() {
+            return Err(Error::NonManifold {
+                path: path.to_owned(),
+                message: format!(
+                    "non-manifold vertex {}: its faces form separate fans that touch only at \
+                     it; {} such vertex(es) in all (--allow-nonmanifold accepts them)",
+                    names.vertex(v.0),
+                    p.nonmanifold_vertices.len()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
