@@ -60,30 +60,32 @@ impl GradientStencil {
     ) -> Self {
         let per_vertex: Vec<StencilEntries> = (0..positions.len())
             .into_par_iter()
-            .map_init(
-                || (Vec::new(), Vec::new()),
-                |bufs, i| stencil_at(positions, adj, frames, transport, i, bufs),
-            )
+            .map_init(Scratch::default, |scratch, i| {
+                stencil_at(positions, adj, frames, transport, i, scratch)
+            })
             .collect();
-        let mut st = GradientStencil {
-            offsets: Vec::with_capacity(positions.len() + 1),
-            ..Default::default()
-        };
-        st.offsets.push(0);
-        for (entries, depth) in per_vertex {
+        let mut offsets = Vec::with_capacity(positions.len() + 1);
+        offsets.push(0u32);
+        let (mut extended, mut empty) = (0, 0);
+        for (entries, depth) in &per_vertex {
             match depth {
-                0 => st.empty += 1,
+                0 => empty += 1,
                 1 => {}
-                _ => st.extended += 1,
+                _ => extended += 1,
             }
-            for (j, rho, col) in entries {
-                st.neighbor.push(j);
-                st.rho.push(rho);
-                st.pinv.push(col);
-            }
-            st.offsets.push(st.neighbor.len() as u32);
+            offsets.push(offsets.last().copied().unwrap_or(0) + entries.len() as u32);
         }
-        st
+        let total = *offsets.last().unwrap_or(&0) as usize;
+        let (mut neighbor, mut rho, mut pinv) =
+            (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
+        for (entries, _) in per_vertex {
+            for (j, r, col) in entries {
+                neighbor.push(j);
+                rho.push(r);
+                pinv.push(col);
+            }
+        }
+        GradientStencil { offsets, neighbor, rho, pinv, extended, empty }
     }
 
     /// Entry range of vertex `i`.
@@ -124,56 +126,70 @@ impl GradientStencil {
 
 type StencilEntries = (Vec<(u32, f64, [f64; 2])>, u8);
 
+#[derive(Default)]
+struct Scratch {
+    ring: Vec<u32>,
+    grow: Vec<u32>,
+    rows: Vec<Vector2<f64>>,
+}
+
 fn stencil_at(
     positions: &[Vector3<f64>],
     adj: &Adjacency,
     frames: &[Frame],
     transport: &[f64],
     i: usize,
-    bufs: &mut (Vec<u32>, Vec<u32>),
+    scratch: &mut Scratch,
 ) -> StencilEntries {
     let f = &frames[i];
     for depth in 1..=3usize {
-        let ring: Vec<u32> = if depth == 1 {
-            adj.neighbors(i).to_vec()
+        if depth == 1 {
+            scratch.ring.clear();
+            scratch.ring.extend_from_slice(adj.neighbors(i));
         } else {
-            gather_ring(adj, i, depth, &mut bufs.0, &mut bufs.1);
-            bufs.0.clone()
-        };
-        if let Some(cols) = pseudo_inverse(positions, f, i, &ring) {
-            let entries = ring
-                .iter()
-                .zip(cols)
-                .map(|(&j, col)| {
-                    let rho = if depth == 1 {
-                        transport[adj.slot(i, j).expect("1-ring neighbour")]
-                    } else {
-                        transport_angle(f, &frames[j as usize])
-                    };
-                    (j, rho, col)
-                })
-                .collect();
-            return (entries, depth as u8);
+            gather_ring(adj, i, depth, &mut scratch.ring, &mut scratch.grow);
         }
+        let Some(inv) = normal_matrix_inverse(positions, f, i, &scratch.ring, &mut scratch.rows)
+        else {
+            continue;
+        };
+        let slots = adj.slots(i);
+        let entries = scratch
+            .ring
+            .iter()
+            .zip(&scratch.rows)
+            .enumerate()
+            .map(|(k, (&j, r))| {
+                let rho = if depth == 1 {
+                    transport[slots.start + k]
+                } else {
+                    transport_angle(f, &frames[j as usize])
+                };
+                let c = inv * r;
+                (j, rho, [c.x, c.y])
+            })
+            .collect();
+        return (entries, depth as u8);
     }
     (Vec::new(), 0)
 }
 
-/// Columns of (PᵀP)⁻¹Pᵀ for the projected neighbour positions, or `None` when PᵀP is singular
-/// relative to its scale (fewer than two neighbours, or all on one line through pᵢ).
-fn pseudo_inverse(
+/// (PᵀP)⁻¹ for the projected neighbour positions (left in `rows`), or `None` when PᵀP is
+/// singular relative to its scale (fewer than two neighbours, or all on one line through pᵢ).
+fn normal_matrix_inverse(
     positions: &[Vector3<f64>],
     f: &Frame,
     i: usize,
     ring: &[u32],
-) -> Option<Vec<[f64; 2]>> {
+    rows: &mut Vec<Vector2<f64>>,
+) -> Option<Matrix2<f64>> {
+    rows.clear();
     if ring.len() < 2 {
         return None;
     }
-    let rows: Vec<Vector2<f64>> =
-        ring.iter().map(|&j| f.to_local(&(positions[j as usize] - positions[i]))).collect();
+    rows.extend(ring.iter().map(|&j| f.to_local(&(positions[j as usize] - positions[i]))));
     let mut ptp = Matrix2::zeros();
-    for r in &rows {
+    for r in rows.iter() {
         ptp += r * r.transpose();
     }
     let tr = ptp.trace();
@@ -181,13 +197,5 @@ fn pseudo_inverse(
     if !(tr > 0.0 && tr.is_finite()) || det <= 1e-10 * tr * tr {
         return None;
     }
-    let inv = ptp.try_inverse()?;
-    Some(
-        rows.iter()
-            .map(|r| {
-                let c = inv * r;
-                [c.x, c.y]
-            })
-            .collect(),
-    )
+    ptp.try_inverse()
 }

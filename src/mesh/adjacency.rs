@@ -23,52 +23,83 @@ pub struct Adjacency {
 impl Adjacency {
     /// Builds the adjacency of `num_vertices` vertices from triangles.
     ///
-    /// Runs in O(F log F) with a parallel sort; deterministic whatever the thread count.
+    /// Linear time: a counting sort gives each vertex its faces, and each vertex then sorts its
+    /// own few neighbours (in parallel). Deterministic whatever the thread count.
     pub fn from_faces(num_vertices: usize, faces: &[[u32; 3]]) -> Self {
-        let mut keys: Vec<u64> = faces
-            .par_iter()
-            .flat_map_iter(|f| {
-                (0..3).flat_map(move |c| {
-                    let (a, b) = (f[c] as u64, f[(c + 1) % 3] as u64);
-                    [(a << 32) | b, (b << 32) | a]
+        // Vertex → incident faces (counting sort).
+        let mut vf_off = vec![0u32; num_vertices + 1];
+        for f in faces {
+            for &v in f {
+                vf_off[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..num_vertices {
+            vf_off[v + 1] += vf_off[v];
+        }
+        let mut fill = vf_off.clone();
+        let mut vf = vec![0u32; faces.len() * 3];
+        for (fi, f) in faces.iter().enumerate() {
+            for &v in f {
+                vf[fill[v as usize] as usize] = fi as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        drop(fill);
+        // Each vertex's sorted neighbours with multiplicity (= faces sharing the edge).
+        let ring = |v: usize, buf: &mut Vec<u32>| {
+            buf.clear();
+            for &f in &vf[vf_off[v] as usize..vf_off[v + 1] as usize] {
+                for &w in &faces[f as usize] {
+                    if w as usize != v {
+                        buf.push(w);
+                    }
+                }
+            }
+            buf.sort_unstable();
+        };
+        let valence: Vec<u32> = (0..num_vertices)
+            .into_par_iter()
+            .map_init(Vec::new, |buf, v| {
+                ring(v, buf);
+                let mut n = buf.len() as u32;
+                for k in 1..buf.len() {
+                    n -= (buf[k] == buf[k - 1]) as u32;
+                }
+                n
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(num_vertices + 1);
+        offsets.push(0u32);
+        for v in 0..num_vertices {
+            offsets.push(offsets[v] + valence[v]);
+        }
+        let entries: Vec<(u32, u16)> = (0..num_vertices)
+            .into_par_iter()
+            .map_init(Vec::new, |buf, v| {
+                ring(v, buf);
+                let mut out: Vec<(u32, u16)> = Vec::with_capacity(valence[v] as usize);
+                for &w in buf.iter() {
+                    match out.last_mut() {
+                        Some(last) if last.0 == w => last.1 = last.1.saturating_add(1),
+                        _ => out.push((w, 1)),
+                    }
+                }
+                out
+            })
+            .flatten_iter()
+            .collect();
+        let (neighbors, edge_faces): (Vec<u32>, Vec<u16>) = entries.into_iter().unzip();
+        let mut adj = Adjacency { offsets, neighbors, edge_faces, reverse: Vec::new() };
+        adj.reverse = (0..num_vertices)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let adj = &adj;
+                adj.slots(i).map(move |s| {
+                    adj.slot(adj.target(s), i as u32).expect("adjacency is symmetric") as u32
                 })
             })
             .collect();
-        keys.par_sort_unstable();
-        let mut offsets = vec![0u32; num_vertices + 1];
-        let mut neighbors = Vec::with_capacity(keys.len() / 2 + 16);
-        let mut edge_faces = Vec::with_capacity(keys.len() / 2 + 16);
-        let mut k = 0;
-        while k < keys.len() {
-            let key = keys[k];
-            let mut n = 1;
-            while k + n < keys.len() && keys[k + n] == key {
-                n += 1;
-            }
-            let (a, b) = ((key >> 32) as usize, (key & 0xffff_ffff) as u32);
-            offsets[a + 1] += 1;
-            neighbors.push(b);
-            edge_faces.push(n.min(u16::MAX as usize) as u16);
-            k += n;
-        }
-        for v in 0..num_vertices {
-            offsets[v + 1] += offsets[v];
-        }
-        let mut adj = Adjacency { offsets, neighbors, edge_faces, reverse: Vec::new() };
-        adj.reverse = (0..adj.neighbors.len())
-            .into_par_iter()
-            .map(|s| {
-                let j = adj.neighbors[s] as usize;
-                let i = adj.source_of_slot_hint(s);
-                adj.slot(j, i).expect("adjacency is symmetric") as u32
-            })
-            .collect();
         adj
-    }
-
-    fn source_of_slot_hint(&self, s: usize) -> u32 {
-        // partition_point finds the vertex whose range contains slot s.
-        (self.offsets.partition_point(|&o| o as usize <= s) - 1) as u32
     }
 
     /// Number of vertices.

@@ -1,0 +1,96 @@
+//! Benchmark of the core: load + all geometry + ℓ for a generated 1M-vertex mesh, and peak memory.
+//!
+//! ```text
+//! cargo run --release --example bench_core [-- N]
+//! ```
+//!
+//! Generates an N×N-vertex height field (default N = 1000: 1M vertices, 2M triangles) as an OBJ
+//! in a child process (so its memory is not counted), then times, in this process: loading the
+//! OBJ, the geometry (adjacency, normals, jet fit, areas, connection, Eq. 10 stencils), and the
+//! highlight field ℓ of a world-direction initial field. Peak memory is the process's VmHWM.
+
+use std::io::Write;
+use std::time::Instant;
+
+use grainline::field::{compute_field, FieldOptions};
+use grainline::highlight::{InitialField, Lighting, View};
+use grainline::mesh::load::{load_obj, LoadOptions};
+use nalgebra::Vector3;
+
+fn write_heightfield(path: &std::path::Path, n: usize) {
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path).expect("create OBJ"));
+    let h = 100.0 / (n - 1) as f64;
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (i as f64 * h, j as f64 * h);
+            let z = 5.0 * (0.07 * x).sin() * (0.05 * y).cos();
+            writeln!(out, "v {x:.6} {y:.6} {z:.6}").unwrap();
+        }
+    }
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = j * n + i + 1;
+            let (b, c, d) = (a + 1, a + n + 1, a + n);
+            writeln!(out, "f {a} {b} {c}\nf {a} {c} {d}").unwrap();
+        }
+    }
+}
+
+fn peak_rss_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .map(|l| l.split_whitespace().nth(1).unwrap_or("0").parse().unwrap_or(0))
+        })
+        .unwrap_or(0)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if args.len() == 4 && args[1] == "generate" {
+        write_heightfield(std::path::Path::new(&args[2]), args[3].parse().unwrap());
+        return;
+    }
+    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1000);
+    let dir = std::env::temp_dir().join(format!("grainline-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("heightfield.obj");
+    let status = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["generate", path.to_str().unwrap(), &n.to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let size = std::fs::metadata(&path).unwrap().len();
+
+    let t0 = Instant::now();
+    let loaded = load_obj(&path, &LoadOptions::default()).expect("load");
+    let t_load = t0.elapsed().as_secs_f64();
+    let mesh = loaded.mesh;
+    let lighting =
+        Lighting::new(Vector3::new(0.3, 0.2, 1.0), View::Direction(Vector3::new(-0.2, 0.1, 1.0)))
+            .unwrap();
+    let mut options = FieldOptions::new(lighting);
+    options.init = InitialField::World(Vector3::new(1.0, 0.3, 0.0));
+    let t1 = Instant::now();
+    let result = compute_field(&mesh, &options).expect("field");
+    let t_field = t1.elapsed().as_secs_f64();
+    let total = t0.elapsed().as_secs_f64();
+    let finite = result.highlight.ell.iter().all(|l| l.iter().all(|c| c.is_finite()));
+    let peak = peak_rss_kb();
+    println!("vertices            {}", mesh.num_vertices());
+    println!("faces               {}", mesh.num_faces());
+    println!("OBJ size            {:.1} MB", size as f64 / 1e6);
+    println!("threads             {}", rayon::current_num_threads());
+    println!("load_obj            {:.3} s", t_load);
+    println!("geometry + init + ℓ {:.3} s", t_field);
+    println!("total               {:.3} s", total);
+    println!(
+        "peak memory         {:.0} MB ({:.0} bytes/vertex)",
+        peak as f64 / 1024.0,
+        peak as f64 * 1024.0 / mesh.num_vertices() as f64
+    );
+    println!("all ℓ finite        {finite}");
+    std::fs::remove_dir_all(&dir).ok();
+}
