@@ -71,7 +71,7 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
     let res = positive("coverage.resolution", o.resolution.unwrap_or(d_sep / 4.0))?;
     let mut index = StrokeIndex::new(dom, d_sep, placement.spacing);
     for s in &placement.strokes {
-        index.insert(s);
+        index.insert(dom, s);
     }
     let b = dom.bbox();
     let (w, h) = (b[1][0] - b[0][0], b[1][1] - b[0][1]);
@@ -96,7 +96,15 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
             };
             let Some(f) = face else { continue };
             hint = Some((f, p));
-            let d = index.nearest(dom, p, f, cap);
+            // Expanding search: most pixels have a stroke within d_sep / 2.
+            let mut r = 0.5 * d_sep;
+            let d = loop {
+                let d = index.nearest(dom, p, f, r);
+                if d < r || r >= cap {
+                    break d;
+                }
+                r = (2.0 * r).min(cap);
+            };
             dist[j * nx + i] = d as f32;
             let wgt = dom.metric[f as usize].area_factor();
             total += wgt;
@@ -112,6 +120,12 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
         fraction: if total > 0.0 { covered / total } else { 0.0 },
         largest_gap: 2.0 * worst.0,
         largest_gap_at: worst.1,
-        map: o.keep_map.then_some(GapMap { origin: b[0], pixel, width: nx, height: ny, distance: dist }),
+        map: o.keep_map.then_some(GapMap {
+            origin: b[0],
+            pixel,
+            width: nx,
+            height: ny,
+            distance: dist,
+        }),
     })
 }

@@ -21,7 +21,8 @@
 //!     ..Default::default()
 //! };
 //! let out = generate(mesh, &opts).unwrap();
-//! assert_eq!(out.report.stroke_count, 4);
+//! // Strokes at u = 0, 1, 2, 3, 4 (the first seed is the centre of the sheet).
+//! assert_eq!(out.report.stroke_count, 5);
 //! assert!(out.gcode.unwrap().contains("G21 G90 G17"));
 //! ```
 

@@ -15,6 +15,7 @@ use crate::mesh::{Domain, NONE};
 const INSIDE_EPS: f64 = 1e-12;
 
 /// Barycentric coordinates of `p` in face `f` (they sum to 1; all ≥ 0 inside).
+#[inline]
 pub(crate) fn barycentric(corners: [Vec2; 3], p: Vec2) -> [f64; 3] {
     let [a, b, c] = corners;
     let area = cross(sub(b, a), sub(c, a));

@@ -300,8 +300,10 @@ impl Domain {
         0.5 * cross(sub(b, a), sub(c, a)).abs()
     }
 
+    #[inline]
     pub(crate) fn corners(&self, f: u32) -> [Vec2; 3] {
-        self.tris[f as usize].map(|v| self.uv[v as usize])
+        let t = self.tris[f as usize];
+        [self.uv[t[0] as usize], self.uv[t[1] as usize], self.uv[t[2] as usize]]
     }
 
     /// Boundary edges (no neighbour, seams included) as UV segments, in face order.

@@ -159,8 +159,7 @@ fn greedy(e: &[Ends], flip: bool, home: Vec2) -> (Vec<usize>, Vec<bool>) {
             grid.visit(pos, r, |id| {
                 if !used[id as usize / 2] {
                     let dd = d(pos, pts(id as usize));
-                    if dd <= r && best.map_or(true, |(bd, bid)| dd < bd || (dd == bd && id < bid))
-                    {
+                    if dd <= r && best.map_or(true, |(bd, bid)| dd < bd || (dd == bd && id < bid)) {
                         best = Some((dd, id));
                     }
                 }
@@ -244,16 +243,17 @@ fn two_opt(e: &[Ends], order: &mut [usize], flipped: &mut [bool], flip: bool, o:
     // fwd[k] = Σ_{m<k} d(exit_m, entry_{m+1}); bwd[k] = Σ_{m<k} d(exit_{m+1}, entry_m).
     let mut fwd = vec![0.0; n];
     let mut bwd = vec![0.0; n];
-    let rebuild = |order: &[usize], flipped: &[bool], pos: &mut [usize], fwd: &mut [f64], bwd: &mut [f64]| {
-        for (k, &s) in order.iter().enumerate() {
-            pos[s] = k;
-        }
-        for k in 1..order.len() {
-            let (a, b) = (order[k - 1], order[k]);
-            fwd[k] = fwd[k - 1] + d(exit(e, a, flipped), entry(e, b, flipped));
-            bwd[k] = bwd[k - 1] + d(exit(e, b, flipped), entry(e, a, flipped));
-        }
-    };
+    let rebuild =
+        |order: &[usize], flipped: &[bool], pos: &mut [usize], fwd: &mut [f64], bwd: &mut [f64]| {
+            for (k, &s) in order.iter().enumerate() {
+                pos[s] = k;
+            }
+            for k in 1..order.len() {
+                let (a, b) = (order[k - 1], order[k]);
+                fwd[k] = fwd[k - 1] + d(exit(e, a, flipped), entry(e, b, flipped));
+                bwd[k] = bwd[k - 1] + d(exit(e, b, flipped), entry(e, a, flipped));
+            }
+        };
     rebuild(order, flipped, &mut pos, &mut fwd, &mut bwd);
     for _ in 0..o.two_opt_passes {
         let mut improved = false;
@@ -265,7 +265,9 @@ fn two_opt(e: &[Ends], order: &mut [usize], flipped: &mut [bool], flip: bool, o:
                     let end_id = if flipped[s] { 2 * s } else { 2 * s + 1 };
                     nb[end_id].clone()
                 }
-                None => (0..n.min(o.neighbours.max(1)) as u32).map(|k| order[k as usize] as u32).collect(),
+                None => (0..n.min(o.neighbours.max(1)) as u32)
+                    .map(|k| order[k as usize] as u32)
+                    .collect(),
             };
             let mut best: Option<(f64, usize)> = None;
             for c in lists {
@@ -275,15 +277,27 @@ fn two_opt(e: &[Ends], order: &mut [usize], flipped: &mut [bool], flip: bool, o:
                 }
                 let (si, sj) = (order[i], order[j]);
                 let old_in = d(prev_exit, entry(e, si, flipped));
-                let old_out = if j + 1 < n { d(exit(e, sj, flipped), entry(e, order[j + 1], flipped)) } else { 0.0 };
+                let old_out = if j + 1 < n {
+                    d(exit(e, sj, flipped), entry(e, order[j + 1], flipped))
+                } else {
+                    0.0
+                };
                 let (new_in, new_out, inner) = if flip {
                     // The run is reversed and every stroke in it flipped: inner travel is kept.
                     let ni = d(prev_exit, exit(e, sj, flipped));
-                    let no = if j + 1 < n { d(entry(e, si, flipped), entry(e, order[j + 1], flipped)) } else { 0.0 };
+                    let no = if j + 1 < n {
+                        d(entry(e, si, flipped), entry(e, order[j + 1], flipped))
+                    } else {
+                        0.0
+                    };
                     (ni, no, 0.0)
                 } else {
                     let ni = d(prev_exit, entry(e, sj, flipped));
-                    let no = if j + 1 < n { d(exit(e, si, flipped), entry(e, order[j + 1], flipped)) } else { 0.0 };
+                    let no = if j + 1 < n {
+                        d(exit(e, si, flipped), entry(e, order[j + 1], flipped))
+                    } else {
+                        0.0
+                    };
                     (ni, no, (bwd[j] - bwd[i]) - (fwd[j] - fwd[i]))
                 };
                 let gain = old_in + old_out - new_in - new_out - inner;

@@ -143,7 +143,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     topts.exclusion_radius = exclusion;
     let sing = singularities(dom);
     let mut tracer = Tracer::new(dom, &sing, &topts);
-    let mut index = StrokeIndex::new(dom, d_sep, opts.spacing);
+    let mut index = StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing);
     let mut strokes: Vec<Stroke> = Vec::new();
     let mut queue: VecDeque<usize> = VecDeque::new();
     let mut dropped_short = 0;
@@ -168,7 +168,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
             dropped_short += 1;
             return;
         }
-        index.insert(&s);
+        index.insert(dom, &s);
         queue.push_back(strokes.len());
         strokes.push(s);
     };
@@ -253,8 +253,18 @@ fn side_seeds(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<
         if pts.len() < 2 {
             continue;
         }
+        // Candidates every d_sep / 2 of arc length (plus both ends): a seed anywhere in a
+        // gap grows both ways, so denser candidates only repeat the same tests.
+        let mut since = f64::INFINITY;
         for i in 0..pts.len() {
             let k = piece.start + i;
+            if i > 0 {
+                since += index.metric(dom, s.faces[k]).length(sub(pts[i], pts[i - 1]));
+            }
+            if since < 0.5 * d_sep && i + 1 < pts.len() {
+                continue;
+            }
+            since = 0.0;
             let f = s.faces[k];
             let m: Metric = index.metric(dom, f);
             let t = sub(pts[(i + 1).min(pts.len() - 1)], pts[i.saturating_sub(1)]);

@@ -16,7 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{non_negative, positive, finite, Result, ToolpathError};
+use crate::error::{finite, non_negative, positive, Result, ToolpathError};
 use crate::geom::{cross, Vec2, Vec3};
 use crate::locate::barycentric;
 use crate::mesh::{Domain, Symmetry};
@@ -344,7 +344,15 @@ fn make_items(
     if surface {
         let machine: Vec<Vec3> = pieces.iter().flat_map(to_machine).collect();
         let (uv, faces) = pieces.into_iter().unzip();
-        return vec![Item { stroke: si, reversed: rev, uv, faces, machine, stops, length: s.length }];
+        return vec![Item {
+            stroke: si,
+            reversed: rev,
+            uv,
+            faces,
+            machine,
+            stops,
+            length: s.length,
+        }];
     }
     pieces
         .into_iter()
@@ -432,7 +440,10 @@ fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) -> Pass {
         moves.push((MoveKind::Overtravel, Segment::Line { to: cut_end }));
     }
     if o.lead_out > 0.0 || o.ramp_height > 0.0 {
-        moves.push((MoveKind::LeadOut, Segment::Line { to: at(cut_end, t1, o.lead_out, o.ramp_height) }));
+        moves.push((
+            MoveKind::LeadOut,
+            Segment::Line { to: at(cut_end, t1, o.lead_out, o.ramp_height) },
+        ));
     }
     // Simplified UV / 3D for SVG and JSON (same RDP tolerance, in UV or 3D mm).
     let uv_s: Vec<Vec<Vec2>> = uv
@@ -449,7 +460,9 @@ fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) -> Pass {
                 let p3: Vec<Vec3> = p
                     .iter()
                     .zip(f)
-                    .map(|(q, &ff)| dom.lift(ff, barycentric(dom.corners(ff), *q)).unwrap_or([0.0; 3]))
+                    .map(|(q, &ff)| {
+                        dom.lift(ff, barycentric(dom.corners(ff), *q)).unwrap_or([0.0; 3])
+                    })
                     .collect();
                 crate::simplify::rdp_indices(&p3, o.tolerance).into_iter().map(|k| p3[k]).collect()
             })

@@ -32,10 +32,13 @@ pub(crate) struct StrokeIndex {
     pos: Vec<Vec2>,
     link: Vec<u8>,
     spacing: Spacing,
+    /// Longest segment inserted so far (in the spacing metric).
+    max_seg: f64,
 }
 
 impl StrokeIndex {
-    /// An empty index over the domain with cells of about `d` surface mm.
+    /// An empty index over the domain with cells of about `d` surface mm (`d_test` is a
+    /// good choice: the frequent test then visits 3 × 3 small cells).
     pub fn new(dom: &Domain, d: f64, spacing: Spacing) -> StrokeIndex {
         let stretch = typical_stretch(dom, spacing);
         StrokeIndex {
@@ -43,7 +46,12 @@ impl StrokeIndex {
             pos: Vec::new(),
             link: Vec::new(),
             spacing,
+            max_seg: 0.0,
         }
+    }
+
+    fn metric_at(&self, dom: &Domain, f: u32) -> Metric {
+        self.metric(dom, f)
     }
 
     /// The metric distances are measured with at face `f`.
@@ -63,7 +71,7 @@ impl StrokeIndex {
     }
 
     /// Add a stroke's points.
-    pub fn insert(&mut self, s: &Stroke) {
+    pub fn insert(&mut self, dom: &Domain, s: &Stroke) {
         let n = s.uv.len();
         let mut bi = 0;
         for (i, &p) in s.uv.iter().enumerate() {
@@ -79,6 +87,10 @@ impl StrokeIndex {
             if i + 1 < n && !jump_after {
                 l |= LINK_NEXT;
             }
+            if l & LINK_PREV != 0 {
+                let m = self.metric_at(dom, s.faces[i]);
+                self.max_seg = self.max_seg.max(m.length(crate::geom::sub(p, s.uv[i - 1])));
+            }
             let id = self.pos.len() as u32;
             self.pos.push(p);
             self.link.push(l);
@@ -86,9 +98,15 @@ impl StrokeIndex {
         }
     }
 
-    fn sample_distance(&self, m: &Metric, p: Vec2, i: usize) -> f64 {
+    /// Distance from `p` to the polyline around sample `i`; `r` lets far samples skip the
+    /// segment tests (a segment next to `q` is at most `max_seg` long, so it cannot come
+    /// within `r` of `p` when `|p − q| ≥ r + max_seg`).
+    fn sample_distance(&self, m: &Metric, p: Vec2, i: usize, r: f64) -> f64 {
         let q = self.pos[i];
         let mut d = m.length(crate::geom::sub(q, p));
+        if d >= r + self.max_seg {
+            return d;
+        }
         if self.link[i] & LINK_NEXT != 0 {
             d = d.min(point_segment_distance(m, p, q, self.pos[i + 1]));
         }
@@ -102,10 +120,9 @@ impl StrokeIndex {
     pub fn within(&self, dom: &Domain, p: Vec2, f: u32, r: f64) -> bool {
         let m = self.metric(dom, f);
         let mut hit = false;
-        // Samples are at most r apart, so searching r + max segment is enough; the grid
-        // visit covers whole cells, which already pads by one cell.
-        self.grid.visit(p, self.uv_radius(dom, f, r), |i| {
-            if self.sample_distance(&m, p, i as usize) < r {
+        // A segment within r of p has an end within r + max_seg / 2.
+        self.grid.visit(p, self.uv_radius(dom, f, r + 0.5 * self.max_seg), |i| {
+            if self.sample_distance(&m, p, i as usize, r) < r {
                 hit = true;
                 false
             } else {
@@ -120,8 +137,8 @@ impl StrokeIndex {
     pub fn nearest(&self, dom: &Domain, p: Vec2, f: u32, r: f64) -> f64 {
         let m = self.metric(dom, f);
         let mut best = r;
-        self.grid.visit(p, self.uv_radius(dom, f, r), |i| {
-            best = best.min(self.sample_distance(&m, p, i as usize));
+        self.grid.visit(p, self.uv_radius(dom, f, r + 0.5 * self.max_seg), |i| {
+            best = best.min(self.sample_distance(&m, p, i as usize, best));
             true
         });
         best

@@ -323,7 +323,8 @@ impl<'a> Tracer<'a> {
                     // The chord p → q must also stay within tolerance of the curve: for a
                     // turn θ over arc length h the sagitta is (h/θ)(1 − cos θ/2) ≈ hθ/8.
                     let turn = cross(k0, k6).atan2(dot(k0, k6)).abs();
-                    let sag = if turn > 1e-12 { hs / turn * (1.0 - (0.5 * turn).cos()) } else { 0.0 };
+                    let sag =
+                        if turn > 1e-12 { hs / turn * (1.0 - (0.5 * turn).cos()) } else { 0.0 };
                     if sag > o.tolerance && hs > o.min_step {
                         h = (hs * 0.9 * (o.tolerance / sag).sqrt()).max(o.min_step);
                         continue;

@@ -3,7 +3,9 @@
 
 mod common;
 
-use common::{annulus_mesh, field_mesh, parse_canon, rect_mesh, run_tool, scratch, shared_tool, Canon};
+use common::{
+    annulus_mesh, field_mesh, parse_canon, rect_mesh, run_tool, scratch, shared_tool, Canon,
+};
 use grainline_toolpaths::*;
 
 fn job(arcs: bool, dialect: Dialect) -> JobOptions {
@@ -116,7 +118,11 @@ fn svg_read_by_vpype_and_resvg() {
         .find_map(|w| w.strip_prefix("pen_down_mm="))
         .and_then(|v| v.parse().ok())
         .unwrap();
-    assert!(down >= 0.99 * out.report.pen_down_length_mm, "{down} vs {}", out.report.pen_down_length_mm);
+    assert!(
+        down >= 0.99 * out.report.pen_down_length_mm,
+        "{down} vs {}",
+        out.report.pen_down_length_mm
+    );
 }
 
 #[test]

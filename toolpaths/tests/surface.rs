@@ -37,7 +37,11 @@ fn dist_point_segment(p: Vec3, a: Vec3, b: Vec3) -> f64 {
     let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
     let ap = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
     let l2 = ab.iter().map(|x| x * x).sum::<f64>();
-    let t = if l2 > 0.0 { (ap.iter().zip(&ab).map(|(x, y)| x * y).sum::<f64>() / l2).clamp(0.0, 1.0) } else { 0.0 };
+    let t = if l2 > 0.0 {
+        (ap.iter().zip(&ab).map(|(x, y)| x * y).sum::<f64>() / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     (0..3).map(|k| (ap[k] - t * ab[k]).powi(2)).sum::<f64>().sqrt()
 }
 
@@ -70,7 +74,9 @@ fn spacing_statistics_on_a_sphere_patch() {
                 }
             }
             let seg = |a: usize, b: usize| dist_point_segment(s[a], s[b], s[b]);
-            let wgt = 0.5 * (if k > 0 { seg(k, k - 1) } else { 0.0 } + if k + 1 < s.len() { seg(k, k + 1) } else { 0.0 });
+            let wgt = 0.5
+                * (if k > 0 { seg(k, k - 1) } else { 0.0 }
+                    + if k + 1 < s.len() { seg(k, k + 1) } else { 0.0 });
             total_len += wgt;
             if d <= 1.5 * d_sep {
                 ok_len += wgt;
@@ -81,8 +87,16 @@ fn spacing_statistics_on_a_sphere_patch() {
     // 3D chords are shorter than surface distances by < d²/(24R²) relative: ~1e-4 here.
     assert!(min_d >= d_test * (1.0 - 1e-3), "closest approach {min_d} < d_test {d_test}");
     let frac = ok_len / total_len;
-    eprintln!("{} strokes, min distance {min_d:.4} (d_test {d_test}), {:.2}% within 1.5 d_sep", pl.strokes.len(), 100.0 * frac);
-    assert!(frac >= 0.95, "only {:.1}% of the length has a neighbour within 1.5 d_sep", 100.0 * frac);
+    eprintln!(
+        "{} strokes, min distance {min_d:.4} (d_test {d_test}), {:.2}% within 1.5 d_sep",
+        pl.strokes.len(),
+        100.0 * frac
+    );
+    assert!(
+        frac >= 0.95,
+        "only {:.1}% of the length has a neighbour within 1.5 d_sep",
+        100.0 * frac
+    );
 }
 
 /// Surface-following Z is the lifted height minus the contact depth; tilt beyond the limit

@@ -50,7 +50,8 @@ fn line_field_with_flipped_corners_is_smooth() {
     let d: Vec<Vec2> = (0..uv.len())
         .map(|i| if (i * 7 + i / 3) % 3 == 0 { [-dir[0], -dir[1]] } else { dir })
         .collect();
-    let dom = Domain::new(FieldMesh::new(uv, tris, Directions::Vectors(d), Symmetry::Line)).unwrap();
+    let dom =
+        Domain::new(FieldMesh::new(uv, tris, Directions::Vectors(d), Symmetry::Line)).unwrap();
     let s = trace_streamline(&dom, [5.0, 3.0], &TraceOptions::default()).unwrap().unwrap();
     assert_eq!((s.start, s.end), (StopReason::Boundary, StopReason::Boundary));
     let first = [s.uv[1][0] - s.uv[0][0], s.uv[1][1] - s.uv[0][1]];
@@ -85,10 +86,8 @@ fn singularities_stop_strokes_at_exclusion_radius() {
         assert_eq!(sing[0].index, index, "{name}");
         assert!(sing[0].uv[0].hypot(sing[0].uv[1]) < 0.35, "{name}: at {:?}", sing[0].uv);
         let c = sing[0].uv;
-        let opts = PlacementOptions {
-            exclusion_radius: Some(r_ex),
-            ..PlacementOptions::new(0.7, 0.0)
-        };
+        let opts =
+            PlacementOptions { exclusion_radius: Some(r_ex), ..PlacementOptions::new(0.7, 0.0) };
         let pl = place_strokes(&dom, &opts).unwrap();
         assert!(pl.strokes.len() > 10, "{name}");
         let mut stopped = 0;

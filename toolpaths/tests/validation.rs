@@ -40,7 +40,8 @@ fn zero_negative_or_nan_numbers_are_errors() {
     let mut o = JobOptions::default();
     o.placement.overlap = 1.0;
     option_error(generate(mesh(), &o), "overlap");
-    let msg = ToolpathError::InvalidOption { name: "feed", value: 0.0, reason: "must be finite and > 0" };
+    let msg =
+        ToolpathError::InvalidOption { name: "feed", value: 0.0, reason: "must be finite and > 0" };
     assert_eq!(msg.to_string(), "invalid option `feed` = 0: must be finite and > 0");
 }
 
@@ -95,5 +96,10 @@ fn envelope_and_floor_violations_are_refused_with_the_amount() {
     }
     // Within limits: accepted.
     let env = Envelope { min: [-1.0, -1.0, -1.0], max: [11.0, 6.0, 6.0] };
-    assert!(program(GcodeOptions { envelope: Some(env), z_floor: Some(-0.5), ..Default::default() }).is_ok());
+    assert!(program(GcodeOptions {
+        envelope: Some(env),
+        z_floor: Some(-0.5),
+        ..Default::default()
+    })
+    .is_ok());
 }

@@ -87,13 +87,10 @@ pub fn scratch(name: &str) -> PathBuf {
 
 /// Run a shared tool on files; returns (success, stdout).
 pub fn run_tool(tool: &std::path::Path, args: &[&std::path::Path]) -> (bool, String) {
-    let out = std::process::Command::new("bash")
-        .arg(tool)
-        .args(args)
-        .output()
-        .expect("run shared tool");
-    let text = String::from_utf8_lossy(&out.stdout).to_string()
-        + &String::from_utf8_lossy(&out.stderr);
+    let out =
+        std::process::Command::new("bash").arg(tool).args(args).output().expect("run shared tool");
+    let text =
+        String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
     (out.status.success(), text)
 }
 
