@@ -9,7 +9,11 @@ fn geom(mesh: &grainline::mesh::Mesh) -> Geometry {
 }
 
 /// Max and RMS relative error of k1 over the vertices selected by `keep`.
-fn errors(g: &Geometry, truth: impl Fn(usize) -> (f64, f64), keep: impl Fn(usize) -> bool) -> (f64, f64, f64) {
+fn errors(
+    g: &Geometry,
+    truth: impl Fn(usize) -> (f64, f64),
+    keep: impl Fn(usize) -> bool,
+) -> (f64, f64, f64) {
     let (mut max1, mut max2, mut sum, mut n) = (0.0f64, 0.0f64, 0.0, 0.0);
     for i in (0..g.num_vertices()).filter(|&i| keep(i)) {
         let (k1, k2) = truth(i);
@@ -30,7 +34,8 @@ fn torus_128x32_k1_error_is_well_under_libigl() {
     let (big_r, r) = (2.0, 0.5);
     let mesh = generate::torus(big_r, r, 128, 32);
     let g = geom(&mesh);
-    let (max1, max2, rms) = errors(&g, |i| generate::torus_curvatures(big_r, r, &mesh.positions[i]), |_| true);
+    let (max1, max2, rms) =
+        errors(&g, |i| generate::torus_curvatures(big_r, r, &mesh.positions[i]), |_| true);
     eprintln!("torus 128x32: k1 max rel err {max1:.4}, k2 max {max2:.4}, k1 rms {rms:.5}");
     assert!(max1 < 0.0175, "k1 max relative error {max1}");
 }
@@ -91,7 +96,11 @@ fn quadric_principal(c: [f64; 3], x: f64, y: f64) -> (f64, f64) {
 #[test]
 fn quadric_patches_converge_on_every_pattern() {
     let c = [0.8, 0.3, -0.5];
-    for pattern in [GridPattern::Regular, GridPattern::CrissCross, GridPattern::Jittered { amount: 0.25, seed: 7 }] {
+    for pattern in [
+        GridPattern::Regular,
+        GridPattern::CrissCross,
+        GridPattern::Jittered { amount: 0.25, seed: 7 },
+    ] {
         let mut errs = Vec::new();
         for n in [16, 32, 64] {
             let mesh = generate::quadric_patch(c, 1.0, Grid { pattern, ..Grid::new(n, n) });
@@ -113,7 +122,11 @@ fn quadric_patches_converge_on_every_pattern() {
 
 #[test]
 fn weingarten_is_symmetric_and_areas_sum_to_the_surface_area() {
-    for mesh in [generate::torus(2.0, 0.5, 64, 16), generate::icosphere(1.0, 3), generate::cylinder(1.0, 1.0, 32, 8)] {
+    for mesh in [
+        generate::torus(2.0, 0.5, 64, 16),
+        generate::icosphere(1.0, 3),
+        generate::cylinder(1.0, 1.0, 32, 8),
+    ] {
         let g = geom(&mesh);
         for w in &g.weingarten {
             assert_eq!(w[(0, 1)], w[(1, 0)]);

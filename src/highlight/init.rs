@@ -42,12 +42,14 @@ impl std::str::FromStr for InitialField {
             "curvature-max" => InitialField::CurvatureMax,
             _ => match s.strip_prefix("world:") {
                 Some(v) => InitialField::World(crate::parse_vec3("init", v)?),
-                None => return Err(Error::invalid_arg(
-                    "init",
-                    format!(
+                None => {
+                    return Err(Error::invalid_arg(
+                        "init",
+                        format!(
                         "{s:?}: expected uv, smooth, curvature-min, curvature-max or world:X,Y,Z"
                     ),
-                )),
+                    ))
+                }
             },
         })
     }
