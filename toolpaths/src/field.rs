@@ -132,7 +132,7 @@ fn zero_in_triangle(c: [Vec2; 3], d: [Vec2; 3], k: f64) -> Option<(Vec2, f64)> {
     let b = sub(r[1], r[2]);
     let det = cross(a, b);
     let scale = norm(r[0]).max(norm(r[1])).max(norm(r[2]));
-    if !(det.abs() > 1e-12 * scale * scale) {
+    if det.abs().is_nan() || det.abs() <= 1e-12 * scale * scale {
         return None;
     }
     let rhs = [-r[2][0], -r[2][1]];

@@ -48,7 +48,7 @@ pub(crate) fn walk(dom: &Domain, mut face: u32, q: Vec2, p: Vec2) -> Walk {
         for i in 0..3 {
             if lp[i] < -INSIDE_EPS && lq[i] > lp[i] {
                 let t = lq[i] / (lq[i] - lp[i]);
-                if best.map_or(true, |(bt, _)| t < bt) {
+                if best.is_none_or(|(bt, _)| t < bt) {
                     best = Some((t, i));
                 }
             }
@@ -149,7 +149,7 @@ impl FaceGrid {
         for &f in &self.faces[self.start[c] as usize..self.start[c + 1] as usize] {
             let b = barycentric(dom.corners(f), p);
             let m = b[0].min(b[1]).min(b[2]);
-            if m >= -INSIDE_EPS && best.map_or(true, |(_, _, bm)| m > bm + 1e-15) {
+            if m >= -INSIDE_EPS && best.is_none_or(|(_, _, bm)| m > bm + 1e-15) {
                 best = Some((f, b, m));
                 if m > 1e-9 {
                     break;

@@ -240,7 +240,7 @@ impl Domain {
         for (face, t) in tris.iter().enumerate() {
             let [a, b, c] = t.map(|v| uv[v as usize]);
             let area = 0.5 * cross(sub(b, a), sub(c, a));
-            if !(area.abs() > 1e-14 * diag * diag) {
+            if area.is_nan() || area.abs() <= 1e-14 * diag * diag {
                 return Err(ToolpathError::DegenerateTriangle { face, area });
             }
         }

@@ -140,11 +140,11 @@ fn greedy(e: &[Ends], flip: bool, home: Vec2) -> (Vec<usize>, Vec<bool>) {
     let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
     let cell = (area / n as f64).sqrt().max(1e-9);
     let mut grid = PointGrid::new(b, cell);
-    let pts = |id: usize| if id % 2 == 0 { e[id / 2].start } else { e[id / 2].end };
-    for s in 0..n {
-        grid.insert(e[s].start, (2 * s) as u32);
+    let pts = |id: usize| if id.is_multiple_of(2) { e[id / 2].start } else { e[id / 2].end };
+    for (s, x) in e.iter().enumerate() {
+        grid.insert(x.start, (2 * s) as u32);
         if flip {
-            grid.insert(e[s].end, (2 * s + 1) as u32);
+            grid.insert(x.end, (2 * s + 1) as u32);
         }
     }
     let mut used = vec![false; n];
@@ -159,7 +159,7 @@ fn greedy(e: &[Ends], flip: bool, home: Vec2) -> (Vec<usize>, Vec<bool>) {
             grid.visit(pos, r, |id| {
                 if !used[id as usize / 2] {
                     let dd = d(pos, pts(id as usize));
-                    if dd <= r && best.map_or(true, |(bd, bid)| dd < bd || (dd == bd && id < bid)) {
+                    if dd <= r && best.is_none_or(|(bd, bid)| dd < bd || (dd == bd && id < bid)) {
                         best = Some((dd, id));
                     }
                 }
@@ -195,7 +195,7 @@ fn neighbour_lists(e: &[Ends], k: usize) -> Vec<Vec<u32>> {
         grid.insert(x.start, (2 * s) as u32);
         grid.insert(x.end, (2 * s + 1) as u32);
     }
-    let pts = |id: usize| if id % 2 == 0 { e[id / 2].start } else { e[id / 2].end };
+    let pts = |id: usize| if id.is_multiple_of(2) { e[id / 2].start } else { e[id / 2].end };
     let mut out = Vec::with_capacity(2 * n);
     for id in 0..2 * n {
         let p = pts(id);
@@ -301,7 +301,7 @@ fn two_opt(e: &[Ends], order: &mut [usize], flipped: &mut [bool], flip: bool, o:
                     (ni, no, (bwd[j] - bwd[i]) - (fwd[j] - fwd[i]))
                 };
                 let gain = old_in + old_out - new_in - new_out - inner;
-                if gain > 1e-9 && best.map_or(true, |(g, _)| gain > g) {
+                if gain > 1e-9 && best.is_none_or(|(g, _)| gain > g) {
                     best = Some((gain, j));
                 }
             }

@@ -142,57 +142,18 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     topts.min_step = topts.min_step.min(topts.max_step);
     topts.exclusion_radius = exclusion;
     let sing = singularities(dom);
-    let mut tracer = Tracer::new(dom, &sing, &topts);
-    let mut index = StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing);
-    let mut strokes: Vec<Stroke> = Vec::new();
-    let mut queue: VecDeque<usize> = VecDeque::new();
-    let mut dropped_short = 0;
-    let mut seeds_traced = 0;
-    let seed_ok = 1.0 - 1e-6;
-
-    let mut try_seed = |p: Vec2,
-                        f: u32,
-                        tracer: &mut Tracer,
-                        index: &mut StrokeIndex,
-                        strokes: &mut Vec<Stroke>,
-                        queue: &mut VecDeque<usize>| {
-        if index.within(dom, p, f, d_sep * seed_ok) || tracer.near_singularity(p, f).is_some() {
-            return;
-        }
-        let idx = &*index;
-        let Some(s) = tracer.trace_both(p, f, |q, fq| idx.within(dom, q, fq, d_test)) else {
-            return;
-        };
-        seeds_traced += 1;
-        if s.length < opts.min_length || s.uv.len() < 2 {
-            dropped_short += 1;
-            return;
-        }
-        index.insert(dom, &s);
-        queue.push_back(strokes.len());
-        strokes.push(s);
+    let mut st = State {
+        dom,
+        tracer: Tracer::new(dom, &sing, &topts),
+        index: StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing),
+        strokes: Vec::new(),
+        queue: VecDeque::new(),
+        d_sep,
+        d_test,
+        min_length: opts.min_length,
+        dropped_short: 0,
+        seeds_traced: 0,
     };
-
-    let drain = |tracer: &mut Tracer,
-                 index: &mut StrokeIndex,
-                 strokes: &mut Vec<Stroke>,
-                 queue: &mut VecDeque<usize>,
-                 try_seed: &mut dyn FnMut(
-        Vec2,
-        u32,
-        &mut Tracer,
-        &mut StrokeIndex,
-        &mut Vec<Stroke>,
-        &mut VecDeque<usize>,
-    )| {
-        while let Some(si) = queue.pop_front() {
-            let cands = side_seeds(dom, &strokes[si], index, d_sep);
-            for (p, f) in cands {
-                try_seed(p, f, tracer, index, strokes, queue);
-            }
-        }
-    };
-
     let mut initial: Vec<Vec2> = opts.seeds.clone();
     if initial.is_empty() {
         let b = dom.bbox;
@@ -200,8 +161,8 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     }
     for p in initial {
         if let Some((f, _)) = dom.grid.locate(dom, p) {
-            try_seed(p, f, &mut tracer, &mut index, &mut strokes, &mut queue);
-            drain(&mut tracer, &mut index, &mut strokes, &mut queue, &mut try_seed);
+            st.try_seed(p, f);
+            st.drain();
         }
     }
     // Fallback raster of seeds, row by row.
@@ -222,23 +183,73 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
             };
             let Some(f) = located else { continue };
             hint = Some(f);
-            try_seed(p, f, &mut tracer, &mut index, &mut strokes, &mut queue);
-            drain(&mut tracer, &mut index, &mut strokes, &mut queue, &mut try_seed);
+            st.try_seed(p, f);
+            st.drain();
         }
     }
     Ok(Placement {
-        strokes,
         width: opts.width,
         d_sep,
         d_test,
         spacing: opts.spacing,
-        singularities: sing.clone(),
         exclusion_radius: exclusion,
-        dropped_short,
-        seeds_traced,
-        field_evaluations: tracer.evals,
+        dropped_short: st.dropped_short,
+        seeds_traced: st.seeds_traced,
+        field_evaluations: st.tracer.evals,
+        strokes: st.strokes,
+        singularities: sing.clone(),
     })
 }
+
+/// Working state of the placement loop.
+struct State<'a> {
+    dom: &'a Domain,
+    tracer: Tracer<'a>,
+    index: StrokeIndex,
+    strokes: Vec<Stroke>,
+    queue: VecDeque<usize>,
+    d_sep: f64,
+    d_test: f64,
+    min_length: f64,
+    dropped_short: usize,
+    seeds_traced: usize,
+}
+
+impl State<'_> {
+    /// Trace from `p` (in face `f`) if it is a valid seed; accept the stroke if long enough.
+    fn try_seed(&mut self, p: Vec2, f: u32) {
+        let (dom, d_test) = (self.dom, self.d_test);
+        if self.index.within(dom, p, f, self.d_sep * SEED_SLACK)
+            || self.tracer.near_singularity(p, f).is_some()
+        {
+            return;
+        }
+        let idx = &self.index;
+        let Some(s) = self.tracer.trace_both(p, f, |q, fq| idx.within(dom, q, fq, d_test)) else {
+            return;
+        };
+        self.seeds_traced += 1;
+        if s.length < self.min_length || s.uv.len() < 2 {
+            self.dropped_short += 1;
+            return;
+        }
+        self.index.insert(dom, &s);
+        self.queue.push_back(self.strokes.len());
+        self.strokes.push(s);
+    }
+
+    /// Seed beside every queued stroke until the queue is empty.
+    fn drain(&mut self) {
+        while let Some(si) = self.queue.pop_front() {
+            for (p, f) in side_seeds(self.dom, &self.strokes[si], &self.index, self.d_sep) {
+                self.try_seed(p, f);
+            }
+        }
+    }
+}
+
+/// A seed counts as `d_sep` away when at least `d_sep · SEED_SLACK` away (round-off).
+const SEED_SLACK: f64 = 1.0 - 1e-6;
 
 fn dom_centroid(dom: &Domain, f: u32) -> Vec2 {
     let c = dom.corners(f);

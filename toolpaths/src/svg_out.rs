@@ -73,9 +73,7 @@ pub(crate) fn boundary_loops(dom: &Domain) -> Vec<Vec<Vec2>> {
     while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
         let mut pts = vec![dom.uv[start as usize]];
         let mut cur = start;
-        loop {
-            let Some(list) = next.get_mut(&cur) else { break };
-            let Some(n) = list.pop() else { break };
+        while let Some(n) = next.get_mut(&cur).and_then(|l| l.pop()) {
             pts.push(dom.uv[n as usize]);
             cur = n;
             if cur == start {

@@ -64,6 +64,8 @@ fn line_field_with_flipped_corners_is_smooth() {
     }
 }
 
+type Field = Box<dyn Fn(Vec2) -> Vec2>;
+
 /// Vortex (+1), saddle (−1) and trisector (−½, line field): each is found with its index,
 /// placement terminates, no stroke enters the exclusion radius, and strokes that stop at the
 /// singularity stop on the exclusion circle.
@@ -73,7 +75,7 @@ fn singularities_stop_strokes_at_exclusion_radius() {
         let a = -0.5 * p[1].atan2(p[0]);
         [a.cos(), a.sin()]
     };
-    let cases: [(&str, Symmetry, f64, Box<dyn Fn(Vec2) -> Vec2>); 3] = [
+    let cases: [(&str, Symmetry, f64, Field); 3] = [
         ("vortex", Symmetry::Vector, 1.0, Box::new(|p: Vec2| [-p[1], p[0]])),
         ("saddle", Symmetry::Vector, -1.0, Box::new(|p: Vec2| [p[0], -p[1]])),
         ("trisector", Symmetry::Line, -0.5, Box::new(trisector)),
