@@ -15,6 +15,7 @@ mod union_find;
 pub mod uv_charts;
 mod validate;
 pub mod weld;
+pub mod write;
 
 pub use adjacency::Adjacency;
 
