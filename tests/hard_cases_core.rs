@@ -253,9 +253,9 @@ fn spot_mirrored_uv_chart() {
     let uv = mesh.uv.as_ref().unwrap();
     let mut vertex_uv: Vec<Option<u32>> = vec![None; mesh.num_vertices()];
     let mut on_seam = vec![false; mesh.num_vertices()];
-    for (f, tri) in mesh.faces.iter().enumerate() {
-        for k in 0..3 {
-            let (v, t) = (tri[k] as usize, uv.corners[f][k]);
+    for (tri, corners) in mesh.faces.iter().zip(&uv.corners) {
+        for (&v, &t) in tri.iter().zip(corners) {
+            let v = v as usize;
             match vertex_uv[v] {
                 None => vertex_uv[v] = Some(t),
                 Some(x) if x != t => on_seam[v] = true,

@@ -74,8 +74,8 @@ pub fn smoothest_field(
     let sigma = 1e-8 * (trace_a / total_mass.max(f64::MIN_POSITIVE)).max(1e-300);
 
     let mut triplets = Vec::with_capacity(adj.num_slots() + n);
-    for i in 0..n {
-        let mut diag = sigma * mass[i];
+    for (i, &m) in mass.iter().enumerate() {
+        let mut diag = sigma * m;
         for s in adj.slots(i) {
             let j = adj.target(s);
             diag += w[s];
@@ -126,7 +126,7 @@ pub fn smoothest_field(
         }
     }
     let phi = z.iter().map(|c| c.im.atan2(c.re) / k).collect();
-    Ok(SmoothestResult { phi, eigenvalue: lambda / 1.0, iterations })
+    Ok(SmoothestResult { phi, eigenvalue: lambda, iterations })
 }
 
 fn normalize(z: &mut [c64], mass: &[f64]) {
