@@ -62,9 +62,9 @@ impl HalfEdges {
         }
         let mut he = HalfEdges { faces: faces.to_vec(), ..Default::default() };
         he.build_out_lists(num_vertices);
-        let classified: Vec<(u32, u8)> =
-            (0..3 * faces.len() as u32).into_par_iter().map(|h| he.classify(h)).collect();
-        (he.twin, he.kind) = classified.into_iter().unzip();
+        let (twin, kind): (Vec<u32>, Vec<u8>) =
+            (0..3 * faces.len() as u32).into_par_iter().map(|h| he.classify(h)).unzip();
+        (he.twin, he.kind) = (twin, kind);
         he.num_edges = he.kind.par_iter().filter(|&&k| k & REP_BIT != 0).count();
         Ok(he)
     }

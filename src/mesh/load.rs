@@ -168,6 +168,8 @@ fn check_options(o: &LoadOptions) -> Result<()> {
 }
 
 fn run_tobj(bytes: &[u8]) -> Result<Vec<tobj::Model>, tobj::LoadError> {
+    // tobj's optional features (merging, reordering) add fields; they stay off.
+    #[allow(clippy::needless_update)]
     let opts = tobj::LoadOptions {
         single_index: false,
         triangulate: true,
