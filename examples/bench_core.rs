@@ -93,4 +93,33 @@ fn main() {
     );
     println!("all ℓ finite        {finite}");
     std::fs::remove_dir_all(&dir).ok();
+    drop(result);
+    drop(mesh);
+    curvature_anchor();
+}
+
+/// The curvature anchor: libigl's principal_curvature (radius 2) takes 2.1 s on a
+/// 134k-vertex closed scan and has a 3.5 % k1 error on a 128×32 torus (R = 2, r = 0.5).
+fn curvature_anchor() {
+    use grainline::geometry::{Geometry, GeometryOptions};
+    let big = grainline::generate::torus(2.0, 0.5, 524, 256); // 134,144 vertices, closed
+    let t = Instant::now();
+    let g = Geometry::compute(&big, &GeometryOptions::default());
+    let secs = t.elapsed().as_secs_f64();
+    println!(
+        "curvature (all geometry) on a closed {}-vertex torus: {:.3} s ({:.1}x faster than 2.1 s)",
+        big.num_vertices(),
+        secs,
+        2.1 / secs
+    );
+    let (big_r, r) = (2.0, 0.5);
+    let torus = grainline::generate::torus(big_r, r, 128, 32);
+    let g2 = Geometry::compute(&torus, &GeometryOptions::default());
+    let mut worst: f64 = 0.0;
+    for (i, p) in torus.positions.iter().enumerate() {
+        let (k1, _) = grainline::generate::torus_curvatures(big_r, r, p);
+        worst = worst.max((g2.principal[i].k1 - k1).abs() / k1.abs());
+    }
+    println!("k1 max relative error on the 128x32 torus: {:.2} % (libigl: 3.5 %)", 100.0 * worst);
+    drop(g);
 }
