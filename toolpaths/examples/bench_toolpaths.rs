@@ -1,7 +1,8 @@
 //! Benchmarks for grainline-toolpaths (run with `--release`):
 //!
 //! 1. Tracing + even spacing: ~10k strokes on a 1M-triangle UV mesh (a 100 × 100 mm sheet
-//!    carrying a 40 × 40 lattice of Taylor–Green vortex cells, d_sep = 0.2 mm).
+//!    carrying a 40 × 40 lattice of Taylor–Green vortex cells, d_sep = 0.25 mm, or
+//!    `BENCH_DSEP`).
 //! 2. Ordering those strokes (greedy + 2-opt), and travel compared with vpype's
 //!    `linesort --no-flip` through `../shared/tools/check-svg` when it is present.
 //! 3. Integration tolerance vs streamline error vs time on the annulus (circles known).
@@ -36,6 +37,21 @@ fn secs(t: Instant) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
+/// CPU time of this process (user + system, 10 ms resolution) from /proc, so figures stay
+/// meaningful when other jobs share the two cores; 0 where /proc is missing.
+fn cpu() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<f64> = rest.split_whitespace().filter_map(|x| x.parse().ok()).collect();
+    // Numbers after the command (the state letter is skipped): ppid pgrp session tty_nr
+    // tpgid flags minflt cminflt majflt cmajflt utime stime.
+    if f.len() > 11 {
+        (f[10] + f[11]) / 100.0
+    } else {
+        0.0
+    }
+}
+
 fn check_svg(svg: &str, name: &str) -> Option<String> {
     let tool = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/tools/check-svg");
     if !tool.exists() {
@@ -64,11 +80,11 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
             Ends { start: a[0], end: b[b.len() - 1] }
         })
         .collect();
-    let t = Instant::now();
+    let (t, c) = (Instant::now(), cpu());
     let o = order_strokes(&ends, direction == Direction::Alternate, &OrderOptions::default());
-    let t_order = secs(t);
+    let (t_order, c_order) = (secs(t), cpu() - c);
     println!(
-        "{label}: {} strokes; plan {t_plan:.3} s (ordering alone {t_order:.3} s); travel between \
+        "{label}: {} strokes; plan {t_plan:.3} s (ordering alone {t_order:.3} s wall, {c_order:.2} s CPU); travel between \
          strokes: greedy {:.1} mm -> greedy+2-opt {:.1} mm (as planned {:.1} mm)",
         ends.len(),
         o.travel_greedy - o.travel + o.travel_between,
@@ -90,7 +106,11 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
 }
 
 fn bench_cells(quick: bool, place_only: bool) {
-    let (n, cells, d_sep) = if quick { (200, 10.0, 0.5) } else { (707, 40.0, 0.2) };
+    let (n, cells) = if quick { (200, 10.0) } else { (707, 40.0) };
+    let d_sep: f64 = std::env::var("BENCH_DSEP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(if quick { 0.5 } else { 0.25 });
     let side = 100.0;
     let c = side / cells;
     let t = Instant::now();
@@ -109,9 +129,9 @@ fn bench_cells(quick: bool, place_only: bool) {
     let dom = Domain::new(mesh).unwrap();
     let t_dom = secs(t);
     let opts = PlacementOptions::new(d_sep, 0.0);
-    let t = Instant::now();
+    let (t, c) = (Instant::now(), cpu());
     let pl = place_strokes(&dom, &opts).unwrap();
-    let t_place = secs(t);
+    let (t_place, c_place) = (secs(t), cpu() - c);
     let pts: usize = pl.strokes.iter().map(|s| s.uv.len()).sum();
     let len: f64 = pl.strokes.iter().map(|s| s.length).sum();
     println!(
@@ -119,7 +139,7 @@ fn bench_cells(quick: bool, place_only: bool) {
         pl.singularities.len()
     );
     println!(
-        "cells: tracing + spacing {t_place:.3} s -> {} strokes, {pts} points, {len:.0} mm, \
+        "cells: tracing + spacing {t_place:.3} s wall ({c_place:.2} s CPU) -> {} strokes, {pts} points, {len:.0} mm, \
          {} field evaluations",
         pl.strokes.len(),
         pl.field_evaluations
@@ -205,6 +225,10 @@ fn bench_annulus() {
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
+    if std::env::args().any(|a| a == "--annulus-only") {
+        bench_annulus();
+        return;
+    }
     let place_only = std::env::args().any(|a| a == "--place-only");
     bench_cells(quick, place_only);
     if place_only {

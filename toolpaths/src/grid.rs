@@ -44,6 +44,14 @@ impl PointGrid {
         self.cells[y * self.nx + x].push(id);
     }
 
+    /// Empty the cell that holds `p` (the inverse of every `insert` at points of that cell).
+    pub(crate) fn clear_at(&mut self, p: Vec2) {
+        let (x, y) = self.cell_of(p);
+        let x = x.clamp(0, self.nx as isize - 1) as usize;
+        let y = y.clamp(0, self.ny as isize - 1) as usize;
+        self.cells[y * self.nx + x].clear();
+    }
+
     /// Call `f(id)` for every item in cells within UV distance `r` of `p` (a superset of the
     /// items within `r`), in a fixed order. Stops early when `f` returns `false`.
     pub(crate) fn visit(&self, p: Vec2, r: f64, mut f: impl FnMut(u32) -> bool) {

@@ -22,6 +22,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{in_range, non_negative, positive, Result, ToolpathError};
 use crate::field::{singularities, Singularity};
 use crate::geom::{add, scale, sub, Metric, Vec2};
+use crate::grid::PointGrid;
 use crate::locate::{walk, Walk};
 use crate::mesh::Domain;
 use crate::spacing::{typical_stretch, Spacing, StrokeIndex};
@@ -153,6 +154,10 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         min_length: opts.min_length,
         dropped_short: 0,
         seeds_traced: 0,
+        own: OwnPoints {
+            grid: PointGrid::new(dom.bbox, 3.0 * d_test / typical_stretch(dom, opts.spacing)),
+            pts: Vec::new(),
+        },
     };
     let mut initial: Vec<Vec2> = opts.seeds.clone();
     if initial.is_empty() {
@@ -213,6 +218,43 @@ struct State<'a> {
     min_length: f64,
     dropped_short: usize,
     seeds_traced: usize,
+    own: OwnPoints,
+}
+
+/// The points of the stroke being traced, for the self-approach test: a stroke stops when
+/// it comes within `d_test` of its own points more than `π · d_test` away along it (a
+/// spiral, or a loop that does not close exactly).
+struct OwnPoints {
+    grid: PointGrid,
+    pts: Vec<(Vec2, f64)>,
+}
+
+impl OwnPoints {
+    /// Forget the previous stroke in time proportional to its size.
+    fn clear(&mut self) {
+        for &(p, _) in &self.pts {
+            self.grid.clear_at(p);
+        }
+        self.pts.clear();
+    }
+
+    /// Whether `p` (at arc length `arc`) is within `r` (UV radius `r_uv`) of an own point
+    /// far along the stroke; then records `p`.
+    fn approaches(&mut self, m: &Metric, p: Vec2, arc: f64, r: f64, r_uv: f64) -> bool {
+        let skip = std::f64::consts::PI * r;
+        let pts = &self.pts;
+        let mut hit = false;
+        self.grid.visit(p, r_uv, |i| {
+            let (q, s) = pts[i as usize];
+            hit = (s - arc).abs() > skip && m.length(sub(q, p)) < r;
+            !hit
+        });
+        if !hit {
+            self.grid.insert(p, self.pts.len() as u32);
+            self.pts.push((p, arc));
+        }
+        hit
+    }
 }
 
 impl State<'_> {
@@ -225,7 +267,15 @@ impl State<'_> {
             return;
         }
         let idx = &self.index;
-        let Some(s) = self.tracer.trace_both(p, f, |q, fq| idx.within(dom, q, fq, d_test)) else {
+        let own = &mut self.own;
+        own.clear();
+        let Some(s) = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
+            idx.within(dom, q, fq, d_test)
+                || vertex && {
+                    let m = idx.metric(dom, fq);
+                    own.approaches(&m, q, arc, d_test, idx.uv_radius(dom, fq, d_test))
+                }
+        }) else {
             return;
         };
         self.seeds_traced += 1;

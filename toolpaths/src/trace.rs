@@ -282,13 +282,17 @@ impl<'a> Tracer<'a> {
     }
 
     /// Trace from `p0` (in face `f0`) with initial heading `h0` until a stop.
-    /// `blocked(p, f)` is the spacing test (true when `p` is too close to other strokes).
+    /// `blocked(p, f, s, vertex)` is the spacing test (true when `p` is too close to other
+    /// strokes or to this stroke's own points far away along it); `s` is the signed arc
+    /// length from the seed (`sign` is −1 on the backward half); `vertex` is false for the
+    /// extra test at the middle of each step.
     pub fn trace_half(
         &mut self,
         p0: Vec2,
         f0: u32,
         h0: Vec2,
-        mut blocked: impl FnMut(Vec2, u32) -> bool,
+        sign: f64,
+        mut blocked: impl FnMut(Vec2, u32, f64, bool) -> bool,
     ) -> Half {
         let o = self.opts;
         let mut half = Half {
@@ -339,11 +343,6 @@ impl<'a> Tracer<'a> {
                         half.stop = StopReason::Singularity;
                         return half;
                     }
-                    let mid = scale(add(p, q), 0.5);
-                    if blocked(mid, fq) || blocked(q, fq) {
-                        half.stop = StopReason::TooClose;
-                        return half;
-                    }
                     let m = &self.dom.metric[fq as usize];
                     let chord = m.length(sub(q, p));
                     if arc > 4.0 * self.closure
@@ -357,6 +356,13 @@ impl<'a> Tracer<'a> {
                         half.stop = StopReason::ClosedLoop;
                         return half;
                     }
+                    let mid = scale(add(p, q), 0.5);
+                    if blocked(mid, fq, sign * (arc + 0.5 * hs), false)
+                        || blocked(q, fq, sign * (arc + hs), true)
+                    {
+                        half.stop = StopReason::TooClose;
+                        return half;
+                    }
                     half.length += chord;
                     arc += hs;
                     half.uv.push(q);
@@ -364,7 +370,12 @@ impl<'a> Tracer<'a> {
                     p = q;
                     f = fq;
                     k0 = k6;
-                    let grow = if err > 0.0 { 0.9 * (o.tolerance / err).powf(0.2) } else { 5.0 };
+                    let mut grow =
+                        if err > 0.0 { 0.9 * (o.tolerance / err).powf(0.2) } else { 5.0 };
+                    // Sagitta grows with h²: do not grow into a step that will be rejected.
+                    if sag > 0.0 {
+                        grow = grow.min(0.9 * (o.tolerance / sag).sqrt());
+                    }
                     h = (hs * grow.clamp(0.2, 5.0)).clamp(o.min_step, o.max_step);
                 }
                 Err(StepFail::Field) => {
@@ -433,14 +444,14 @@ impl<'a> Tracer<'a> {
         &mut self,
         seed: Vec2,
         face: u32,
-        mut blocked: impl FnMut(Vec2, u32) -> bool,
+        mut blocked: impl FnMut(Vec2, u32, f64, bool) -> bool,
     ) -> Option<Stroke> {
         if self.near_singularity(seed, face).is_some() {
             return None;
         }
         let bary = barycentric(self.dom.corners(face), seed);
         let d = sample(self.dom, face, bary, None)?;
-        let fwd = self.trace_half(seed, face, d, &mut blocked);
+        let fwd = self.trace_half(seed, face, d, 1.0, &mut blocked);
         if fwd.stop == StopReason::ClosedLoop {
             return Some(Stroke {
                 uv: fwd.uv,
@@ -451,7 +462,7 @@ impl<'a> Tracer<'a> {
                 length: fwd.length,
             });
         }
-        let back = self.trace_half(seed, face, [-d[0], -d[1]], &mut blocked);
+        let back = self.trace_half(seed, face, [-d[0], -d[1]], -1.0, &mut blocked);
         Some(join(back, fwd))
     }
 }
@@ -536,5 +547,5 @@ pub fn trace_streamline(dom: &Domain, seed: Vec2, opts: &TraceOptions) -> Result
     let Some((face, _)) = dom.grid.locate(dom, seed) else {
         return Ok(None);
     };
-    Ok(tracer.trace_both(seed, face, |_, _| false))
+    Ok(tracer.trace_both(seed, face, |_, _, _, _| false))
 }
