@@ -302,7 +302,7 @@ impl Builder<'_> {
             let p = &m.mesh.positions;
             for (k, &local) in m.mesh.indices.iter().enumerate() {
                 let l = 3 * local as usize;
-                let v = Vector3::new(p[l] as f64, p[l + 1] as f64, p[l + 2] as f64);
+                let v = Vector3::new(p[l], p[l + 1], p[l + 2]);
                 if !v.iter().all(|x| x.is_finite()) {
                     let i = self.scan.corner_v[m.start + k] as usize;
                     return Err(self.non_finite(Kind::V, i, "vertex"));
@@ -393,7 +393,7 @@ impl Builder<'_> {
                 let i = cvt[m.start + k];
                 if i != NONE {
                     let l = 2 * local as usize;
-                    vals[i as usize] = Vector2::new(tc[l] as f64, tc[l + 1] as f64);
+                    vals[i as usize] = Vector2::new(tc[l], tc[l + 1]);
                 }
             }
         }
@@ -423,7 +423,7 @@ impl Builder<'_> {
                 let i = cvn[m.start + k];
                 if i != NONE {
                     let l = 3 * local as usize;
-                    vals[i as usize] = Vector3::new(n[l] as f64, n[l + 1] as f64, n[l + 2] as f64);
+                    vals[i as usize] = Vector3::new(n[l], n[l + 1], n[l + 2]);
                 }
             }
         }
