@@ -21,7 +21,7 @@ use crate::field::{sample, Singularity};
 use crate::geom::{add, cross, dot, scale, sub, Vec2};
 use crate::grid::PointGrid;
 use crate::locate::{barycentric, walk, Walk};
-use crate::mesh::Domain;
+use crate::mesh::{Domain, Symmetry};
 
 /// Why one end of a stroke stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -195,6 +195,8 @@ pub(crate) struct Tracer<'a> {
     closure: f64,
     /// Counts of field evaluations (for the report).
     pub evals: u64,
+    /// +1 on the forward half, −1 on the backward half.
+    sign: f64,
 }
 
 enum StepFail {
@@ -208,7 +210,7 @@ impl<'a> Tracer<'a> {
         for (i, s) in sing.iter().enumerate() {
             sing_grid.insert(s.uv, i as u32);
         }
-        Tracer { dom, opts, sing, sing_grid, closure: 0.25 * opts.max_step, evals: 0 }
+        Tracer { dom, opts, sing, sing_grid, closure: 0.25 * opts.max_step, evals: 0, sign: 1.0 }
     }
 
     /// Distance from `p` (in face `f`) to the nearest singularity if below the exclusion
@@ -233,9 +235,18 @@ impl<'a> Tracer<'a> {
         hit
     }
 
+    /// Vector fields are integrated backwards on the backward half (`sign = −1`); line
+    /// fields follow the heading instead, so the sign is not needed there.
+    fn oriented(&self, d: Option<Vec2>) -> Option<Vec2> {
+        match (self.dom.symmetry, d) {
+            (Symmetry::Vector, Some(v)) if self.sign < 0.0 => Some([-v[0], -v[1]]),
+            _ => d,
+        }
+    }
+
     fn eval(&mut self, f: u32, bary: [f64; 3], heading: Vec2) -> Option<Vec2> {
         self.evals += 1;
-        sample(self.dom, f, bary, Some(heading))
+        self.oriented(sample(self.dom, f, bary, Some(heading)))
     }
 
     /// One Dormand–Prince step of size `h` from `p` in face `f` with first stage `k0`.
@@ -303,7 +314,9 @@ impl<'a> Tracer<'a> {
             length: 0.0,
         };
         let (mut p, mut f) = (p0, f0);
-        let Some(mut k0) = sample(self.dom, f, barycentric(self.dom.corners(f), p), Some(h0))
+        self.sign = sign;
+        let Some(mut k0) =
+            self.oriented(sample(self.dom, f, barycentric(self.dom.corners(f), p), Some(h0)))
         else {
             half.stop = StopReason::Singularity;
             return half;
@@ -415,7 +428,7 @@ impl<'a> Tracer<'a> {
                             let (q, hq) = cross_seam(self.dom, bf, &link, end, k0);
                             let fq = link.face;
                             let bq = barycentric(self.dom.corners(fq), q);
-                            let Some(kq) = sample(self.dom, fq, bq, Some(hq)) else {
+                            let Some(kq) = self.oriented(sample(self.dom, fq, bq, Some(hq))) else {
                                 half.stop = StopReason::Singularity;
                                 return half;
                             };
@@ -451,6 +464,8 @@ impl<'a> Tracer<'a> {
         }
         let bary = barycentric(self.dom.corners(face), seed);
         let d = sample(self.dom, face, bary, None)?;
+        // Let the spacing test record the seed itself (it was already found clear).
+        let _ = blocked(seed, face, 0.0, true);
         let fwd = self.trace_half(seed, face, d, 1.0, &mut blocked);
         if fwd.stop == StopReason::ClosedLoop {
             return Some(Stroke {

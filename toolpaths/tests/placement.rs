@@ -36,3 +36,35 @@ fn constant_field_gives_parallel_strokes_d_sep_apart() {
     // Covering: the strips left at the sides are narrower than d_sep.
     assert!(xs[0] < d_sep && w - xs[xs.len() - 1] < d_sep, "xs = {xs:?}");
 }
+
+/// A spiral (a focus with slight outflow) never closes: strokes must stop before running
+/// into their own earlier turns rather than winding on to the length limit.
+#[test]
+fn spirals_stop_before_meeting_themselves() {
+    let (uv, tris) = common::rect_mesh(20.3, 20.0, 41, 40);
+    let uv: Vec<_> = uv.into_iter().map(|p| [p[0] - 10.0, p[1] - 10.0]).collect();
+    let mesh =
+        field_mesh((uv, tris), Symmetry::Vector, |p| [-p[1] + 0.005 * p[0], p[0] + 0.005 * p[1]]);
+    let dom = Domain::new(mesh).unwrap();
+    let opts = PlacementOptions::new(1.0, 0.0);
+    let (d_sep, d_test) = (opts.d_sep(), opts.d_test());
+    let pl = place_strokes(&dom, &opts).unwrap();
+    let total: f64 = pl.strokes.iter().map(|s| s.length).sum();
+    // Evenly spaced strokes cover the 406 mm² square with about area / d_sep of length.
+    assert!(total < 2.0 * 406.0 / d_sep, "total length {total}");
+    for s in &pl.strokes {
+        assert_ne!(s.end, StopReason::MaxLength);
+        let mut arc = vec![0.0];
+        for w in s.uv.windows(2) {
+            arc.push(arc.last().unwrap() + (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]));
+        }
+        for i in 0..s.uv.len() {
+            for j in i + 1..s.uv.len() {
+                if arc[j] - arc[i] > 1.2 * std::f64::consts::PI * d_test {
+                    let d = (s.uv[i][0] - s.uv[j][0]).hypot(s.uv[i][1] - s.uv[j][1]);
+                    assert!(d >= d_test * 0.999, "stroke comes back to itself at {d}");
+                }
+            }
+        }
+    }
+}

@@ -111,3 +111,15 @@ fn singularities_stop_strokes_at_exclusion_radius() {
         }
     }
 }
+
+/// Regression: on a vector field the backward half runs against the arrows, so a stroke
+/// through the middle spans the whole rectangle and follows the field from start to end.
+#[test]
+fn vector_field_traces_both_ways_from_the_seed() {
+    let dom = Domain::new(field_mesh(rect_mesh(8.0, 4.0, 16, 8), Symmetry::Vector, |_| [1.0, 0.0]))
+        .unwrap();
+    let s = trace_streamline(&dom, [4.0, 2.1], &TraceOptions::default()).unwrap().unwrap();
+    assert!(s.uv[0][0].abs() < 1e-9 && (s.uv[s.uv.len() - 1][0] - 8.0).abs() < 1e-9);
+    assert!(s.uv.windows(2).all(|w| w[1][0] > w[0][0]), "stroke does not follow the field");
+    assert!((s.length - 8.0).abs() < 1e-9);
+}
