@@ -101,12 +101,11 @@ fn residual_energy_is_the_tensor_distance() {
         weight: vec![1.0; n],
     };
     let (mut e_res, mut e_tensor) = (0.0, 0.0);
-    for i in 0..n {
+    for (i, t) in targets.iter().enumerate() {
         let r = term.residual(&phi, i);
         e_res += r[0] * r[0] + r[1] * r[1];
         let l = term.ell_bar(&phi, i);
         let big_l = l * l.transpose() / l.norm_squared();
-        let t = targets[i];
         e_tensor += g.areas[i] * (big_l - t * t.transpose()).norm_squared();
     }
     assert!((e_res - e_tensor).abs() < 1e-10 * e_tensor, "{e_res} vs {e_tensor}");
