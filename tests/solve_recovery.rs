@@ -1,0 +1,72 @@
+//! Levenberg–Marquardt recovers a known field from its own highlight targets (math.md §3).
+
+use grainline::generate::{self, Grid};
+use grainline::geometry::connection::wrap_angle;
+use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
+use grainline::highlight::tensor::q;
+use grainline::highlight::Symmetry;
+use grainline::mesh::Mesh;
+use grainline::solve::{solve, HighlightTerm, LmOptions};
+use nalgebra::Vector3;
+
+/// A smooth true field in each frame: a world direction turning slowly with position.
+fn true_field(mesh: &Mesh, g: &Geometry) -> Vec<f64> {
+    (0..mesh.num_vertices())
+        .map(|i| {
+            let p = mesh.positions[i];
+            let w = Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1);
+            g.frames[i].angle_of(&w)
+        })
+        .collect()
+}
+
+fn recover(mesh: &Mesh, symmetry: Symmetry, centre: Vector3<f64>, radius: f64) {
+    let g = Geometry::compute(mesh, &GeometryOptions::default());
+    let n = mesh.num_vertices();
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); n];
+    let phi_true = true_field(mesh, &g);
+    let mut term = HighlightTerm {
+        geometry: &g,
+        h: &h,
+        symmetry,
+        form: GradientForm::Angle,
+        epsilon: 0.0,
+        target_q: vec![None; n],
+        weight: vec![1.0; n],
+    };
+    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
+    term.epsilon = grainline::highlight::tensor::default_epsilon(&ms);
+    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+    let brush: Vec<u32> =
+        (0..n as u32).filter(|&i| (mesh.positions[i as usize] - centre).norm() < radius).collect();
+    assert!(brush.len() > 20);
+    let mut phi = phi_true.clone();
+    for &i in &brush {
+        let d = (mesh.positions[i as usize] - centre).norm() / radius;
+        phi[i as usize] += 0.3 * (1.0 - d * d).powi(2);
+    }
+    let opts = LmOptions { smoothness: 1e-4, ..Default::default() };
+    let r = solve(mesh, &term, &phi, &brush, &opts).unwrap();
+    let k = symmetry.k() as f64;
+    let worst = brush
+        .iter()
+        .map(|&i| (wrap_angle(k * (r.phi[i as usize] - phi_true[i as usize])) / k).abs())
+        .fold(0.0, f64::max);
+    let energies: Vec<f64> =
+        r.iterations.iter().map(|it| it.highlight_energy + it.smoothness_energy).collect();
+    eprintln!("{symmetry:?}: {} free, {} iterations, stop {:?}, worst error {worst:.2e} rad, energies {:?} -> {:?}", brush.len(), r.iterations.len(), r.stop, r.initial_energy, energies);
+    for w in energies.windows(2) {
+        assert!(w[1] <= w[0], "accepted steps never increase the energy");
+    }
+    let to_1e3 = r.iterations.len();
+    assert!(worst < 1e-3, "worst error {worst}");
+    assert!(to_1e3 <= 10, "{to_1e3} iterations");
+}
+
+#[test]
+fn recovers_a_perturbed_field_on_a_quadric_patch() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(30, 30));
+    for sym in [Symmetry::Oriented, Symmetry::Line] {
+        recover(&mesh, sym, Vector3::new(0.1, -0.1, 0.0), 0.45);
+    }
+}
