@@ -9,15 +9,23 @@ use grainline::mesh::Mesh;
 use grainline::solve::{solve, HighlightTerm, LmOptions};
 use nalgebra::Vector3;
 
-/// A smooth true field in each frame: a world direction turning slowly with position.
+/// The true field's world direction: turning slowly with position.
+fn world(p: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1)
+}
+
+/// The true field in each frame: [`world`] projected onto the tangent planes. It is smooth
+/// only where the projection keeps a good part of its length; where `world` is normal to the
+/// surface it is singular and recovery is ill-posed, so brushes are kept away from there.
 fn true_field(mesh: &Mesh, g: &Geometry) -> Vec<f64> {
-    (0..mesh.num_vertices())
-        .map(|i| {
-            let p = mesh.positions[i];
-            let w = Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1);
-            g.frames[i].angle_of(&w)
-        })
-        .collect()
+    (0..mesh.num_vertices()).map(|i| g.frames[i].angle_of(&world(&mesh.positions[i]))).collect()
+}
+
+/// Fraction of `world`'s length left after projection onto the tangent plane of vertex `i`.
+fn tangential_fraction(mesh: &Mesh, g: &Geometry, i: usize) -> f64 {
+    let w = world(&mesh.positions[i]);
+    let n = g.frames[i].n;
+    (w - n * n.dot(&w)).norm() / w.norm()
 }
 
 fn recover(mesh: &Mesh, symmetry: Symmetry, centre: Vector3<f64>, radius: f64) {
@@ -68,5 +76,31 @@ fn recovers_a_perturbed_field_on_a_quadric_patch() {
     let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(30, 30));
     for sym in [Symmetry::Oriented, Symmetry::Line] {
         recover(&mesh, sym, Vector3::new(0.1, -0.1, 0.0), 0.45);
+    }
+}
+
+/// A brush of `radius` whose ball of 1.5 × radius keeps the true field farthest from singular.
+fn smooth_brush_centre(mesh: &Mesh, radius: f64) -> Vector3<f64> {
+    let g = Geometry::compute(mesh, &GeometryOptions::default());
+    let best = (0..mesh.num_vertices())
+        .step_by(37)
+        .map(|c| {
+            let worst = (0..mesh.num_vertices())
+                .filter(|&i| (mesh.positions[i] - mesh.positions[c]).norm() < 1.5 * radius)
+                .map(|i| tangential_fraction(mesh, &g, i))
+                .fold(1.0, f64::min);
+            (worst, c)
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)))
+        .unwrap();
+    mesh.positions[best.1]
+}
+
+#[test]
+fn recovers_on_a_sphere() {
+    let mesh = generate::icosphere(1.0, 4);
+    let centre = smooth_brush_centre(&mesh, 0.3);
+    for sym in [Symmetry::Oriented, Symmetry::Line] {
+        recover(&mesh, sym, centre, 0.3);
     }
 }
