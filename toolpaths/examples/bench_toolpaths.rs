@@ -77,7 +77,11 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
         .map(|p| {
             let a = &p.uv[0];
             let b = p.uv.last().unwrap();
-            Ends { start: a[0], end: b[b.len() - 1] }
+            if p.stops[0] == StopReason::ClosedLoop && a.len() > 3 {
+                Ends::ring(a[..a.len() - 1].to_vec())
+            } else {
+                Ends::open(a[0], b[b.len() - 1])
+            }
         })
         .collect();
     let (t, c) = (Instant::now(), cpu());
@@ -144,6 +148,12 @@ fn bench_cells(quick: bool, place_only: bool) {
         pl.strokes.len(),
         pl.field_evaluations
     );
+    let mut stops = std::collections::BTreeMap::new();
+    for s in &pl.strokes {
+        *stops.entry(s.start.name()).or_insert(0) += 1;
+        *stops.entry(s.end.name()).or_insert(0) += 1;
+    }
+    println!("cells: stroke ends by stop reason: {stops:?}");
     if place_only {
         return;
     }

@@ -7,6 +7,10 @@
 //! run, so the 2-opt gain uses prefix sums of forward (`exit_k → entry_{k+1}`) and backward
 //! (`exit_{k+1} → entry_k`) travel, making every candidate move O(1). Only `alternate` lets
 //! the orderer flip strokes. No randomness: the result depends only on the input order.
+//!
+//! Closed loops may be entered at any of their vertices (they exit where they entered):
+//! greedy picks the nearest vertex, and after 2-opt each loop's entry is re-chosen to
+//! minimize `d(previous exit, x) + d(x, next entry)`. This is a rotation, not a flip.
 
 use serde::{Deserialize, Serialize};
 
@@ -45,13 +49,28 @@ impl Default for OrderOptions {
     }
 }
 
-/// A stroke as the orderer sees it: entry and exit in machine XY.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A stroke as the orderer sees it: entry and exit in machine XY, or for a closed loop the
+/// vertices where it may be entered.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Ends {
     /// First point.
     pub start: Vec2,
     /// Last point.
     pub end: Vec2,
+    /// For closed loops: candidate entry points (empty for open strokes).
+    pub ring: Vec<Vec2>,
+}
+
+impl Ends {
+    /// An open stroke from `start` to `end`.
+    pub fn open(start: Vec2, end: Vec2) -> Ends {
+        Ends { start, end, ring: Vec::new() }
+    }
+
+    /// A closed loop that may be entered at any of `ring` (non-empty).
+    pub fn ring(ring: Vec<Vec2>) -> Ends {
+        Ends { start: ring[0], end: ring[0], ring }
+    }
 }
 
 /// Result of ordering.
@@ -61,6 +80,8 @@ pub struct Ordering {
     pub order: Vec<usize>,
     /// Whether each stroke (by input index) is run end → start.
     pub flipped: Vec<bool>,
+    /// For closed loops: the ring vertex where each is entered (by input index).
+    pub entry: Vec<Option<usize>>,
     /// Travel from home through all strokes, mm (XY).
     pub travel: f64,
     /// Travel between strokes only (excluding the first move from home), mm.
@@ -73,57 +94,101 @@ fn d(a: Vec2, b: Vec2) -> f64 {
     norm(sub(a, b))
 }
 
-/// Order strokes; `flip` allows running strokes backwards.
+/// Current entry/exit of every stroke.
+struct Tour<'a> {
+    e: &'a [Ends],
+    ent: Vec<Vec2>,
+    ext: Vec<Vec2>,
+    flipped: Vec<bool>,
+    vertex: Vec<Option<usize>>,
+}
+
+impl<'a> Tour<'a> {
+    fn new(e: &'a [Ends]) -> Tour<'a> {
+        Tour {
+            e,
+            ent: e.iter().map(|x| x.start).collect(),
+            ext: e.iter().map(|x| x.end).collect(),
+            flipped: vec![false; e.len()],
+            vertex: e.iter().map(|x| (!x.ring.is_empty()).then_some(0)).collect(),
+        }
+    }
+
+    fn is_ring(&self, s: usize) -> bool {
+        !self.e[s].ring.is_empty()
+    }
+
+    fn set_flip(&mut self, s: usize, f: bool) {
+        if self.is_ring(s) {
+            return;
+        }
+        self.flipped[s] = f;
+        let (a, b) = (self.e[s].start, self.e[s].end);
+        (self.ent[s], self.ext[s]) = if f { (b, a) } else { (a, b) };
+    }
+
+    fn set_vertex(&mut self, s: usize, k: usize) {
+        self.vertex[s] = Some(k);
+        self.ent[s] = self.e[s].ring[k];
+        self.ext[s] = self.e[s].ring[k];
+    }
+
+    fn length(&self, order: &[usize], home: Vec2) -> f64 {
+        let mut pos = home;
+        let mut t = 0.0;
+        for &s in order {
+            t += d(pos, self.ent[s]);
+            pos = self.ext[s];
+        }
+        t
+    }
+}
+
+/// Order strokes; `flip` allows running open strokes backwards.
 pub fn order_strokes(ends: &[Ends], flip: bool, opts: &OrderOptions) -> Ordering {
     let n = ends.len();
     if n == 0 {
         return Ordering {
             order: vec![],
             flipped: vec![],
+            entry: vec![],
             travel: 0.0,
             travel_between: 0.0,
             travel_greedy: 0.0,
         };
     }
-    let (mut order, mut flipped) = greedy(ends, flip, opts.home);
-    let travel_greedy = tour_length(ends, &order, &flipped, opts.home);
-    two_opt(ends, &mut order, &mut flipped, flip, opts);
-    let travel = tour_length(ends, &order, &flipped, opts.home);
-    let first = entry(ends, order[0], &flipped);
-    Ordering { travel_between: travel - d(opts.home, first), order, flipped, travel, travel_greedy }
-}
-
-fn entry(e: &[Ends], s: usize, flipped: &[bool]) -> Vec2 {
-    if flipped[s] {
-        e[s].end
-    } else {
-        e[s].start
+    let mut tour = Tour::new(ends);
+    let mut order = greedy(&mut tour, flip, opts.home);
+    let travel_greedy = tour.length(&order, opts.home);
+    for _ in 0..2 {
+        two_opt(&mut tour, &mut order, flip, opts);
+        rotate_rings(&mut tour, &order, opts.home);
+    }
+    let travel = tour.length(&order, opts.home);
+    let first = tour.ent[order[0]];
+    Ordering {
+        travel_between: travel - d(opts.home, first),
+        order,
+        flipped: tour.flipped,
+        entry: tour.vertex,
+        travel,
+        travel_greedy,
     }
 }
 
-fn exit(e: &[Ends], s: usize, flipped: &[bool]) -> Vec2 {
-    if flipped[s] {
-        e[s].start
-    } else {
-        e[s].end
-    }
-}
-
-/// Travel of a tour from `home`.
+/// Travel of a tour of open strokes from `home` (rings entered at their first vertex).
 pub fn tour_length(e: &[Ends], order: &[usize], flipped: &[bool], home: Vec2) -> f64 {
-    let mut pos = home;
-    let mut t = 0.0;
-    for &s in order {
-        t += d(pos, entry(e, s, flipped));
-        pos = exit(e, s, flipped);
+    let mut tour = Tour::new(e);
+    for (s, &f) in flipped.iter().enumerate() {
+        tour.set_flip(s, f);
     }
-    t
+    tour.length(order, home)
 }
 
 fn bbox(e: &[Ends], home: Vec2) -> [Vec2; 2] {
     let mut b = [home, home];
     for x in e {
-        for p in [x.start, x.end] {
+        for p in [x.start, x.end].iter().chain(&x.ring) {
             for k in 0..2 {
                 b[0][k] = b[0][k].min(p[k]);
                 b[1][k] = b[1][k].max(p[k]);
@@ -133,23 +198,36 @@ fn bbox(e: &[Ends], home: Vec2) -> [Vec2; 2] {
     b
 }
 
+const START: u32 = u32::MAX;
+const END: u32 = u32::MAX - 1;
+
 /// Greedy nearest neighbour with a grid of unvisited entry points (ties: lowest id).
-fn greedy(e: &[Ends], flip: bool, home: Vec2) -> (Vec<usize>, Vec<bool>) {
+fn greedy(tour: &mut Tour, flip: bool, home: Vec2) -> Vec<usize> {
+    let e = tour.e;
     let n = e.len();
     let b = bbox(e, home);
-    let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
-    let cell = (area / n as f64).sqrt().max(1e-9);
-    let mut grid = PointGrid::new(b, cell);
-    let pts = |id: usize| if id.is_multiple_of(2) { e[id / 2].start } else { e[id / 2].end };
+    // Entry candidates: (stroke, START | END | ring vertex).
+    let mut cand: Vec<(u32, u32, Vec2)> = Vec::new();
     for (s, x) in e.iter().enumerate() {
-        grid.insert(x.start, (2 * s) as u32);
-        if flip {
-            grid.insert(x.end, (2 * s + 1) as u32);
+        if x.ring.is_empty() {
+            cand.push((s as u32, START, x.start));
+            if flip {
+                cand.push((s as u32, END, x.end));
+            }
+        } else {
+            for (k, p) in x.ring.iter().enumerate() {
+                cand.push((s as u32, k as u32, *p));
+            }
         }
+    }
+    let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
+    let cell = (area / cand.len() as f64).sqrt().max(1e-9);
+    let mut grid = PointGrid::new(b, cell);
+    for (id, c) in cand.iter().enumerate() {
+        grid.insert(c.2, id as u32);
     }
     let mut used = vec![false; n];
     let mut order = Vec::with_capacity(n);
-    let mut flipped = vec![false; n];
     let mut pos = home;
     let span = (b[1][0] - b[0][0]).max(b[1][1] - b[0][1]) + 2.0 * cell;
     for _ in 0..n {
@@ -157,8 +235,9 @@ fn greedy(e: &[Ends], flip: bool, home: Vec2) -> (Vec<usize>, Vec<bool>) {
         let mut best: Option<(f64, u32)> = None;
         loop {
             grid.visit(pos, r, |id| {
-                if !used[id as usize / 2] {
-                    let dd = d(pos, pts(id as usize));
+                let (s, _, p) = cand[id as usize];
+                if !used[s as usize] {
+                    let dd = d(pos, p);
                     if dd <= r && best.is_none_or(|(bd, bid)| dd < bd || (dd == bd && id < bid)) {
                         best = Some((dd, id));
                     }
@@ -170,32 +249,84 @@ fn greedy(e: &[Ends], flip: bool, home: Vec2) -> (Vec<usize>, Vec<bool>) {
             }
             r *= 2.0;
         }
-        let (_, id) = best.unwrap_or_else(|| {
-            // Unreachable in practice: fall back to a scan.
-            let s = (0..n).find(|&s| !used[s]).unwrap_or(0);
-            (0.0, 2 * s as u32)
-        });
-        let s = id as usize / 2;
+        let id = match best {
+            Some((_, id)) => id as usize,
+            None => cand.iter().position(|c| !used[c.0 as usize]).unwrap_or(0),
+        };
+        let (s, code, _) = cand[id];
+        let s = s as usize;
         used[s] = true;
-        flipped[s] = id % 2 == 1;
+        match code {
+            START => tour.set_flip(s, false),
+            END => tour.set_flip(s, true),
+            k => tour.set_vertex(s, k as usize),
+        }
         order.push(s);
-        pos = exit(e, s, &flipped);
+        pos = tour.ext[s];
     }
-    (order, flipped)
+    order
 }
 
-/// K nearest stroke endpoints (by stroke id) of every endpoint, via the grid.
-fn neighbour_lists(e: &[Ends], k: usize) -> Vec<Vec<u32>> {
-    let n = e.len();
-    let b = bbox(e, e[0].start);
+/// Re-choose each loop's entry vertex given its neighbours in the tour.
+fn rotate_rings(tour: &mut Tour, order: &[usize], home: Vec2) {
+    for k in 0..order.len() {
+        let s = order[k];
+        if !tour.is_ring(s) {
+            continue;
+        }
+        let prev = if k == 0 { home } else { tour.ext[order[k - 1]] };
+        let next = order.get(k + 1).map(|&t| tour.ent[t]);
+        let cost = |p: Vec2| d(prev, p) + next.map_or(0.0, |q| d(p, q));
+        let ring = &tour.e[s].ring;
+        let mut best = (cost(ring[0]), 0);
+        for (i, p) in ring.iter().enumerate().skip(1) {
+            let c = cost(*p);
+            if c < best.0 {
+                best = (c, i);
+            }
+        }
+        tour.set_vertex(s, best.1);
+    }
+}
+
+/// Endpoint `id` of the neighbour lists: `2s` is the start (a loop's current vertex),
+/// `2s + 1` the end of stroke `s`.
+fn endpoint(tour: &Tour, id: usize) -> Vec2 {
+    let s = id / 2;
+    match (tour.is_ring(s), id % 2) {
+        (true, _) => tour.ent[s],
+        (false, 0) => tour.e[s].start,
+        (false, _) => tour.e[s].end,
+    }
+}
+
+/// The neighbour-list id of the point where stroke `s` currently exits.
+fn exit_id(tour: &Tour, s: usize) -> usize {
+    if tour.is_ring(s) || tour.flipped[s] {
+        2 * s
+    } else {
+        2 * s + 1
+    }
+}
+
+/// K nearest strokes (by either endpoint) of every stroke endpoint.
+fn neighbour_lists(tour: &Tour, k: usize) -> Vec<Vec<u32>> {
+    let n = tour.ent.len();
+    let pts = |id: usize| endpoint(tour, id);
+    let mut b = [pts(0), pts(0)];
+    for id in 0..2 * n {
+        let p = pts(id);
+        for j in 0..2 {
+            b[0][j] = b[0][j].min(p[j]);
+            b[1][j] = b[1][j].max(p[j]);
+        }
+    }
     let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
     let cell = (area / n as f64).sqrt().max(1e-9);
     let mut grid = PointGrid::new(b, cell);
-    for (s, x) in e.iter().enumerate() {
-        grid.insert(x.start, (2 * s) as u32);
-        grid.insert(x.end, (2 * s + 1) as u32);
+    for id in 0..2 * n {
+        grid.insert(pts(id), id as u32);
     }
-    let pts = |id: usize| if id.is_multiple_of(2) { e[id / 2].start } else { e[id / 2].end };
     let mut out = Vec::with_capacity(2 * n);
     for id in 0..2 * n {
         let p = pts(id);
@@ -232,73 +363,56 @@ fn neighbour_lists(e: &[Ends], k: usize) -> Vec<Vec<u32>> {
     out
 }
 
+/// Prefix sums of forward (`exit_m → entry_{m+1}`) and backward (`exit_{m+1} → entry_m`)
+/// travel, and positions.
+fn prefix(tour: &Tour, order: &[usize], pos: &mut [usize], fwd: &mut [f64], bwd: &mut [f64]) {
+    for (k, &s) in order.iter().enumerate() {
+        pos[s] = k;
+    }
+    for k in 1..order.len() {
+        let (a, b) = (order[k - 1], order[k]);
+        fwd[k] = fwd[k - 1] + d(tour.ext[a], tour.ent[b]);
+        bwd[k] = bwd[k - 1] + d(tour.ext[b], tour.ent[a]);
+    }
+}
+
 /// 2-opt on the open tour: reverse `order[i..=j]` when it shortens travel.
-fn two_opt(e: &[Ends], order: &mut [usize], flipped: &mut [bool], flip: bool, o: &OrderOptions) {
+fn two_opt(tour: &mut Tour, order: &mut [usize], flip: bool, o: &OrderOptions) {
     let n = order.len();
     if n < 3 || o.two_opt_passes == 0 {
         return;
     }
-    let nb = neighbour_lists(e, o.neighbours.max(1));
+    let nb = neighbour_lists(tour, o.neighbours.max(1));
     let mut pos = vec![0usize; n];
-    // fwd[k] = Σ_{m<k} d(exit_m, entry_{m+1}); bwd[k] = Σ_{m<k} d(exit_{m+1}, entry_m).
     let mut fwd = vec![0.0; n];
     let mut bwd = vec![0.0; n];
-    let rebuild =
-        |order: &[usize], flipped: &[bool], pos: &mut [usize], fwd: &mut [f64], bwd: &mut [f64]| {
-            for (k, &s) in order.iter().enumerate() {
-                pos[s] = k;
-            }
-            for k in 1..order.len() {
-                let (a, b) = (order[k - 1], order[k]);
-                fwd[k] = fwd[k - 1] + d(exit(e, a, flipped), entry(e, b, flipped));
-                bwd[k] = bwd[k - 1] + d(exit(e, b, flipped), entry(e, a, flipped));
-            }
-        };
-    rebuild(order, flipped, &mut pos, &mut fwd, &mut bwd);
+    prefix(tour, order, &mut pos, &mut fwd, &mut bwd);
     for _ in 0..o.two_opt_passes {
         let mut improved = false;
         for i in 0..n {
-            let prev_exit = if i == 0 { o.home } else { exit(e, order[i - 1], flipped) };
-            let key = if i == 0 { None } else { Some(order[i - 1]) };
-            let lists: Vec<u32> = match key {
-                Some(s) => {
-                    let end_id = if flipped[s] { 2 * s } else { 2 * s + 1 };
-                    nb[end_id].clone()
-                }
-                None => (0..n.min(o.neighbours.max(1)) as u32)
-                    .map(|k| order[k as usize] as u32)
-                    .collect(),
-            };
+            let prev_exit = if i == 0 { o.home } else { tour.ext[order[i - 1]] };
+            let list: &[u32] =
+                if i == 0 { &nb[2 * order[0]] } else { &nb[exit_id(tour, order[i - 1])] };
             let mut best: Option<(f64, usize)> = None;
-            for c in lists {
+            for &c in list {
                 let j = pos[c as usize];
                 if j <= i {
                     continue;
                 }
                 let (si, sj) = (order[i], order[j]);
-                let old_in = d(prev_exit, entry(e, si, flipped));
-                let old_out = if j + 1 < n {
-                    d(exit(e, sj, flipped), entry(e, order[j + 1], flipped))
-                } else {
-                    0.0
-                };
+                let after = order.get(j + 1).map(|&t| tour.ent[t]);
+                let old_in = d(prev_exit, tour.ent[si]);
+                let old_out = after.map_or(0.0, |q| d(tour.ext[sj], q));
                 let (new_in, new_out, inner) = if flip {
-                    // The run is reversed and every stroke in it flipped: inner travel is kept.
-                    let ni = d(prev_exit, exit(e, sj, flipped));
-                    let no = if j + 1 < n {
-                        d(entry(e, si, flipped), entry(e, order[j + 1], flipped))
-                    } else {
-                        0.0
-                    };
-                    (ni, no, 0.0)
+                    // The run is reversed and every stroke in it flipped: inner travel is
+                    // kept (loops exit where they enter, so they need no flip).
+                    (d(prev_exit, tour.ext[sj]), after.map_or(0.0, |q| d(tour.ent[si], q)), 0.0)
                 } else {
-                    let ni = d(prev_exit, entry(e, sj, flipped));
-                    let no = if j + 1 < n {
-                        d(exit(e, si, flipped), entry(e, order[j + 1], flipped))
-                    } else {
-                        0.0
-                    };
-                    (ni, no, (bwd[j] - bwd[i]) - (fwd[j] - fwd[i]))
+                    (
+                        d(prev_exit, tour.ent[sj]),
+                        after.map_or(0.0, |q| d(tour.ext[si], q)),
+                        (bwd[j] - bwd[i]) - (fwd[j] - fwd[i]),
+                    )
                 };
                 let gain = old_in + old_out - new_in - new_out - inner;
                 if gain > 1e-9 && best.is_none_or(|(g, _)| gain > g) {
@@ -309,10 +423,11 @@ fn two_opt(e: &[Ends], order: &mut [usize], flipped: &mut [bool], flip: bool, o:
                 order[i..=j].reverse();
                 if flip {
                     for &s in &order[i..=j] {
-                        flipped[s] = !flipped[s];
+                        let f = !tour.flipped[s];
+                        tour.set_flip(s, f);
                     }
                 }
-                rebuild(order, flipped, &mut pos, &mut fwd, &mut bwd);
+                prefix(tour, order, &mut pos, &mut fwd, &mut bwd);
                 improved = true;
             }
         }

@@ -157,6 +157,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         own: OwnPoints {
             grid: PointGrid::new(dom.bbox, 3.0 * d_test / typical_stretch(dom, opts.spacing)),
             pts: Vec::new(),
+            closure: crate::trace::closure_radius(&topts),
         },
     };
     let mut initial: Vec<Vec2> = opts.seeds.clone();
@@ -223,10 +224,13 @@ struct State<'a> {
 
 /// The points of the stroke being traced, for the self-approach test: a stroke stops when
 /// it comes within `d_test` of its own points more than `π · d_test` away along it (a
-/// spiral, or a loop that does not close exactly).
+/// spiral, or a loop that does not close exactly), except on the final approach to its
+/// start, where the tracer closes the loop.
 struct OwnPoints {
     grid: PointGrid,
     pts: Vec<(Vec2, f64)>,
+    /// The tracer's loop-closure radius.
+    closure: f64,
 }
 
 impl OwnPoints {
@@ -239,15 +243,31 @@ impl OwnPoints {
     }
 
     /// Whether `p` (at arc length `arc`) is within `r` (UV radius `r_uv`) of an own point
-    /// far along the stroke; then records `p`.
+    /// far along the stroke; then records `p`. Own points within `2r` of the seed that lie
+    /// ahead of `p` within `closure` of its track are exempt: the stroke is about to close.
     fn approaches(&mut self, m: &Metric, p: Vec2, arc: f64, r: f64, r_uv: f64) -> bool {
         let skip = std::f64::consts::PI * r;
-        let pts = &self.pts;
+        let heading = self.pts.last().map(|&(q, _)| sub(p, q));
+        let (pts, closure) = (&self.pts, self.closure);
         let mut hit = false;
         self.grid.visit(p, r_uv, |i| {
             let (q, s) = pts[i as usize];
-            hit = (s - arc).abs() > skip && m.length(sub(q, p)) < r;
-            !hit
+            let v = sub(q, p);
+            let dist = m.length(v);
+            if (s - arc).abs() <= skip || dist >= r {
+                return true;
+            }
+            if s.abs() <= 2.0 * r {
+                if let Some(h) = heading.filter(|h| m.length(*h) > 0.0) {
+                    let along = m.inner(v, h) / m.length(h);
+                    let across = (dist * dist - along * along).max(0.0).sqrt();
+                    if along > 0.0 && across < closure {
+                        return true;
+                    }
+                }
+            }
+            hit = true;
+            false
         });
         if !hit {
             self.grid.insert(p, self.pts.len() as u32);

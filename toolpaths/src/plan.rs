@@ -187,7 +187,45 @@ pub struct Plan {
     pub home: Vec2,
 }
 
+/// Most entry candidates offered to the orderer per closed loop.
+const RING_POINTS: usize = 64;
+
+/// Machine-point index of ring vertex `v` of a loop with `n` points (last = first).
+fn ring_index(n: usize, v: usize) -> usize {
+    let step = (n - 1).div_ceil(RING_POINTS).max(1);
+    v * step
+}
+
+/// The orderer's view of an item: closed single-piece loops may be entered anywhere.
+fn ends_of(it: &Item) -> Ends {
+    let m = &it.machine;
+    let xy = |p: &Vec3| [p[0], p[1]];
+    let closed = it.stops[0] == StopReason::ClosedLoop && it.uv.len() == 1 && m.len() > 3;
+    if closed {
+        let step = (m.len() - 1).div_ceil(RING_POINTS).max(1);
+        Ends::ring(m[..m.len() - 1].iter().step_by(step).map(xy).collect())
+    } else {
+        Ends::open(xy(&m[0]), xy(&m[m.len() - 1]))
+    }
+}
+
+/// Start a closed loop at point `k` (the loop's last point repeats its first).
+fn rotate_loop(it: &mut Item, k: usize) {
+    if k == 0 || it.uv.len() != 1 {
+        return;
+    }
+    fn rot<T: Copy>(v: &mut Vec<T>, k: usize) {
+        v.pop();
+        v.rotate_left(k);
+        v.push(v[0]);
+    }
+    rot(&mut it.machine, k);
+    rot(&mut it.uv[0], k);
+    rot(&mut it.faces[0], k);
+}
+
 /// An oriented stroke in machine space before ordering.
+#[derive(Clone)]
 struct Item {
     stroke: usize,
     reversed: bool,
@@ -264,20 +302,17 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
         }
         items.extend(make_items(dom, si, s, rev, surface, opts));
     }
-    let ends: Vec<Ends> = items
-        .iter()
-        .map(|it| {
-            let a = it.machine[0];
-            let b = it.machine[it.machine.len() - 1];
-            Ends { start: [a[0], a[1]], end: [b[0], b[1]] }
-        })
-        .collect();
+    let ends: Vec<Ends> = items.iter().map(ends_of).collect();
     let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &opts.order);
     let mut passes = Vec::with_capacity(items.len());
     for &k in &ordering.order {
-        let it = &items[k];
+        let mut it = items[k].clone();
+        if let Some(v) = ordering.entry[k] {
+            let at = ring_index(it.machine.len(), v);
+            rotate_loop(&mut it, at);
+        }
         let flip = ordering.flipped[k];
-        passes.push(make_pass(dom, it, flip, opts));
+        passes.push(make_pass(dom, &it, flip, opts));
     }
     Ok(Plan {
         passes,

@@ -210,7 +210,7 @@ impl<'a> Tracer<'a> {
         for (i, s) in sing.iter().enumerate() {
             sing_grid.insert(s.uv, i as u32);
         }
-        Tracer { dom, opts, sing, sing_grid, closure: 0.25 * opts.max_step, evals: 0, sign: 1.0 }
+        Tracer { dom, opts, sing, sing_grid, closure: closure_radius(opts), evals: 0, sign: 1.0 }
     }
 
     /// Distance from `p` (in face `f`) to the nearest singularity if below the exclusion
@@ -480,6 +480,12 @@ impl<'a> Tracer<'a> {
         let back = self.trace_half(seed, face, [-d[0], -d[1]], -1.0, &mut blocked);
         Some(join(back, fwd))
     }
+}
+
+/// Radius within which a stroke passing its start is closed into a loop: half the
+/// largest step.
+pub(crate) fn closure_radius(opts: &TraceOptions) -> f64 {
+    0.5 * opts.max_step
 }
 
 /// Whether the segment `p → q` passes `s` (its foot lies within the segment) at a distance
