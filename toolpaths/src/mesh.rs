@@ -2,10 +2,12 @@
 //! [`Domain`] with adjacency, per-triangle metric and point location.
 
 use std::collections::BTreeMap;
+use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, ToolpathError};
+use crate::field::Singularity;
 use crate::geom::{cross, sub, Metric, Vec2, Vec3};
 use crate::locate::FaceGrid;
 
@@ -160,6 +162,8 @@ pub struct Domain {
     pub(crate) seams: BTreeMap<(u32, u8), SeamLink>,
     pub(crate) grid: FaceGrid,
     pub(crate) bbox: [Vec2; 2],
+    /// Singularities, found on first use.
+    sing: OnceLock<Vec<Singularity>>,
 }
 
 fn check_finite2(what: &'static str, v: &[Vec2]) -> Result<()> {
@@ -262,7 +266,13 @@ impl Domain {
             seams,
             grid,
             bbox,
+            sing: OnceLock::new(),
         })
+    }
+
+    /// The field's singularities ([`crate::singularities`]), computed once and cached.
+    pub fn singularities(&self) -> &[Singularity] {
+        self.sing.get_or_init(|| crate::field::singularities(self))
     }
 
     /// Number of triangles.

@@ -20,7 +20,7 @@ use std::collections::VecDeque;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{in_range, non_negative, positive, Result, ToolpathError};
-use crate::field::{singularities, Singularity};
+use crate::field::Singularity;
 use crate::geom::{add, scale, sub, Metric, Vec2};
 use crate::grid::PointGrid;
 use crate::locate::{walk, Walk};
@@ -142,10 +142,10 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     topts.max_step = topts.max_step.min(0.5 * d_test);
     topts.min_step = topts.min_step.min(topts.max_step);
     topts.exclusion_radius = exclusion;
-    let sing = singularities(dom);
+    let sing = dom.singularities();
     let mut st = State {
         dom,
-        tracer: Tracer::new(dom, &sing, &topts),
+        tracer: Tracer::new(dom, sing, &topts),
         index: StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing),
         strokes: Vec::new(),
         queue: VecDeque::new(),
@@ -203,7 +203,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         seeds_traced: st.seeds_traced,
         field_evaluations: st.tracer.evals,
         strokes: st.strokes,
-        singularities: sing.clone(),
+        singularities: sing.to_vec(),
     })
 }
 

@@ -563,8 +563,7 @@ pub fn trace_streamline(dom: &Domain, seed: Vec2, opts: &TraceOptions) -> Result
     if !(seed[0].is_finite() && seed[1].is_finite()) {
         return Err(ToolpathError::NonFinite { what: "seed", index: 0 });
     }
-    let sing = crate::field::singularities(dom);
-    let mut tracer = Tracer::new(dom, &sing, opts);
+    let mut tracer = Tracer::new(dom, dom.singularities(), opts);
     let Some((face, _)) = dom.grid.locate(dom, seed) else {
         return Ok(None);
     };
