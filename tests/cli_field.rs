@@ -60,11 +60,11 @@ fn writes_a_complete_field_file() {
 
 #[test]
 fn same_input_same_bytes_whatever_the_thread_count() {
-    let (a, b) = (tmp("t1.json"), tmp("t2.json"));
-    let mesh = data("cube_uv.obj");
-    for (out, threads) in [(&a, "1"), (&b, "2")] {
-        let o = Command::new(env!("CARGO_BIN_EXE_grainline"))
-            .args([
+    let kettle = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/data/kettle.obj");
+    for (mesh, init) in [(data("cube_uv.obj"), "uv"), (kettle, "smooth")] {
+        let (a, b) = (tmp(&format!("t1-{init}.json")), tmp(&format!("t2-{init}.json")));
+        for (out, threads) in [(&a, "1"), (&b, "2")] {
+            let args = [
                 "--threads",
                 threads,
                 "field",
@@ -73,17 +73,18 @@ fn same_input_same_bytes_whatever_the_thread_count() {
                 "--light",
                 "1,1,1",
                 "--eye",
-                "3,2,5",
+                "300,200,500",
                 "--init",
-                "uv",
+                init,
+                "--symmetric",
                 "--out",
                 out.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            ];
+            let o = Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        }
+        assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "{init}");
     }
-    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
 }
 
 #[test]
