@@ -1,7 +1,7 @@
 //! Benchmarks for grainline-toolpaths (run with `--release`):
 //!
 //! 1. Tracing + even spacing: ~10k strokes on a 1M-triangle UV mesh (a 100 × 100 mm sheet
-//!    carrying a 40 × 40 lattice of Taylor–Green vortex cells, d_sep = 0.25 mm, or
+//!    carrying a 40 × 40 lattice of Taylor–Green vortex cells, d_sep = 0.23 mm, or
 //!    `BENCH_DSEP`).
 //! 2. Ordering those strokes (greedy + 2-opt), and travel compared with vpype's
 //!    `linesort --no-flip` through `../shared/tools/check-svg` when it is present.
@@ -114,7 +114,7 @@ fn bench_cells(quick: bool, place_only: bool) {
     let d_sep: f64 = std::env::var("BENCH_DSEP")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(if quick { 0.5 } else { 0.25 });
+        .unwrap_or(if quick { 0.5 } else { 0.23 });
     let side = 100.0;
     let c = side / cells;
     let t = Instant::now();

@@ -368,12 +368,19 @@ fn neighbour_lists(tour: &Tour, k: usize) -> Vec<Vec<u32>> {
 }
 
 /// Prefix sums of forward (`exit_m → entry_{m+1}`) and backward (`exit_{m+1} → entry_m`)
-/// travel, and positions.
-fn prefix(tour: &Tour, order: &[usize], pos: &mut [usize], fwd: &mut [f64], bwd: &mut [f64]) {
-    for (k, &s) in order.iter().enumerate() {
+/// travel, and positions, recomputed from index `from` on (earlier entries are unchanged).
+fn prefix(
+    tour: &Tour,
+    order: &[usize],
+    from: usize,
+    pos: &mut [usize],
+    fwd: &mut [f64],
+    bwd: &mut [f64],
+) {
+    for (k, &s) in order.iter().enumerate().skip(from) {
         pos[s] = k;
     }
-    for k in 1..order.len() {
+    for k in from.max(1)..order.len() {
         let (a, b) = (order[k - 1], order[k]);
         fwd[k] = fwd[k - 1] + d(tour.ext[a], tour.ent[b]);
         bwd[k] = bwd[k - 1] + d(tour.ext[b], tour.ent[a]);
@@ -390,7 +397,7 @@ fn two_opt(tour: &mut Tour, order: &mut [usize], flip: bool, o: &OrderOptions) {
     let mut pos = vec![0usize; n];
     let mut fwd = vec![0.0; n];
     let mut bwd = vec![0.0; n];
-    prefix(tour, order, &mut pos, &mut fwd, &mut bwd);
+    prefix(tour, order, 0, &mut pos, &mut fwd, &mut bwd);
     for _ in 0..o.two_opt_passes {
         let mut improved = false;
         for i in 0..n {
@@ -431,7 +438,7 @@ fn two_opt(tour: &mut Tour, order: &mut [usize], flip: bool, o: &OrderOptions) {
                         tour.set_flip(s, f);
                     }
                 }
-                prefix(tour, order, &mut pos, &mut fwd, &mut bwd);
+                prefix(tour, order, i, &mut pos, &mut fwd, &mut bwd);
                 improved = true;
             }
         }
@@ -450,12 +457,12 @@ fn or_opt(tour: &mut Tour, order: &mut Vec<usize>, o: &OrderOptions) {
     }
     let nb = neighbour_lists(tour, o.neighbours.max(1));
     let mut pos = vec![0usize; n];
-    let reindex = |order: &[usize], pos: &mut [usize]| {
-        for (k, &s) in order.iter().enumerate() {
+    let reindex = |order: &[usize], pos: &mut [usize], a: usize, b: usize| {
+        for (k, &s) in order.iter().enumerate().take(b + 1).skip(a) {
             pos[s] = k;
         }
     };
-    reindex(order, &mut pos);
+    reindex(order, &mut pos, 0, n - 1);
     let x = |tour: &Tour, order: &[usize], k: usize| {
         if k == usize::MAX {
             o.home
@@ -499,7 +506,7 @@ fn or_opt(tour: &mut Tour, order: &mut Vec<usize>, o: &OrderOptions) {
                     let run: Vec<usize> = order.drain(i..=last).collect();
                     let at = if j > last { j - len + 1 } else { j + 1 };
                     order.splice(at..at, run);
-                    reindex(order, &mut pos);
+                    reindex(order, &mut pos, i.min(at), (last).max(at + len - 1));
                     improved = true;
                 }
                 i += 1;
