@@ -133,7 +133,38 @@ fn outputs_are_byte_identical_across_runs() {
     assert_eq!(a.svg, b.svg);
     assert_eq!(a.gcode, b.gcode);
     assert_eq!(a.strokes_json, b.strokes_json);
+    let report = serde_json::to_string(&a.report).unwrap();
+    assert!(report.contains("\"stroke_count\"") && !report.contains("NaN"));
     let json: serde_json::Value = serde_json::from_str(a.strokes_json.as_ref().unwrap()).unwrap();
     assert_eq!(json["format"], "grainline-strokes");
     assert_eq!(json["strokes"].as_array().unwrap().len(), a.plan.passes.len());
+}
+
+/// Dialect details: grbl ends with M30, plain has no spindle commands, a snippet replaces
+/// M3/M5, and every number has the configured fixed precision.
+#[test]
+fn dialects_and_number_format() {
+    let run = |dialect, spindle| {
+        let mut o = job(false, dialect);
+        o.gcode.as_mut().unwrap().spindle = spindle;
+        generate(rectangle(), &o).unwrap().gcode.unwrap()
+    };
+    let grbl = run(Dialect::Grbl, Spindle::Speed(12000.0));
+    assert!(grbl.contains("M3 S12000\n") && grbl.contains("M5\n") && grbl.ends_with("M30\n"));
+    assert!(!grbl.contains("G64"));
+    let plain = run(Dialect::Plain, Spindle::Speed(12000.0));
+    assert!(!plain.contains("M3") && !plain.contains("M5") && plain.ends_with("M2\n"));
+    let lcnc =
+        run(Dialect::LinuxCnc, Spindle::Snippet { on: "M64 P0".into(), off: "M65 P0".into() });
+    assert!(lcnc.contains("G64 P") && lcnc.contains("M64 P0\n") && lcnc.contains("M65 P0\n"));
+    assert!(
+        lcnc.starts_with("(grainline-toolpaths job: grainline)\nG21 G90 G17 G94")
+            || lcnc.contains("G21 G90 G17 G94\n")
+    );
+    // Every X/Y/Z word has exactly three decimals.
+    for w in lcnc.split_whitespace().filter(|w| w.starts_with(['X', 'Y', 'Z'])) {
+        let frac = w.split('.').nth(1).unwrap_or("");
+        assert_eq!(frac.len(), 3, "{w}");
+        assert!(!w.contains("-0.000"), "{w}");
+    }
 }
