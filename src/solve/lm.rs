@@ -130,7 +130,8 @@ impl System<'_> {
         (eh, es)
     }
 
-    /// JᵀJ as triplets (upper and lower) and Jᵀr.
+    /// The lower triangle of JᵀJ as triplets (in an order that depends only on the mesh and the
+    /// free set, so the pattern is fixed across iterations) and Jᵀr.
     fn normal_equations(&self, phi: &[f64]) -> (Vec<Triplet<usize, usize, f64>>, Vec<f64>) {
         let n = self.free.len();
         let mut g = vec![0.0; n];
@@ -143,7 +144,9 @@ impl System<'_> {
             for &(a, da) in block {
                 g[a] += da[0] * r[0] + da[1] * r[1];
                 for &(b, db) in block {
-                    trip.push(Triplet::new(a, b, da[0] * db[0] + da[1] * db[1]));
+                    if a >= b {
+                        trip.push(Triplet::new(a, b, da[0] * db[0] + da[1] * db[1]));
+                    }
                 }
             }
         };
@@ -225,14 +228,14 @@ pub fn solve(
     }
     let numerical = |m: String| Error::Numerical { stage: "Levenberg–Marquardt", message: m };
     let mut energy = initial_energy.0 + initial_energy.1;
-    let mut symbolic: Option<SymbolicLlt<usize>> = None;
+    let mut pattern: Option<FixedPattern> = None;
     let mut lambda = f64::NAN;
     let mut nu = 2.0;
     let mut iterations = Vec::new();
     let mut stop = StopReason::IterationCap;
     'outer: for _ in 0..options.max_iterations {
         let t0 = Instant::now();
-        let (mut trip, grad) = sys.normal_equations(&phi);
+        let (trip, grad) = sys.normal_equations(&phi);
         let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         if gmax < options.gradient_tolerance {
             stop = StopReason::Gradient;
@@ -249,24 +252,17 @@ pub fn solve(
         if lambda.is_nan() {
             lambda = options.initial_damping;
         }
-        let base_len = trip.len();
+        if pattern.is_none() {
+            pattern = Some(FixedPattern::new(n, &trip).map_err(numerical)?);
+        }
+        let pat = pattern.as_mut().expect("just built");
+        pat.fill(&trip);
         let assembly = t0.elapsed().as_secs_f64();
         loop {
             let t1 = Instant::now();
-            trip.truncate(base_len);
-            trip.extend((0..n).map(|c| Triplet::new(c, c, lambda * dscale[c])));
-            let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
-                .map_err(|e| numerical(format!("{e:?}")))?;
-            let sym = match &symbolic {
-                Some(s) => s.clone(),
-                None => {
-                    let s = SymbolicLlt::try_new(a.symbolic(), Side::Lower)
-                        .map_err(|e| numerical(format!("{e:?}")))?;
-                    symbolic = Some(s.clone());
-                    s
-                }
-            };
-            let llt = Llt::try_new_with_symbolic(sym, a.as_ref(), Side::Lower)
+            let symbolic = pat.symbolic.clone();
+            let a = pat.damped(lambda, &dscale);
+            let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower)
                 .map_err(|e| numerical(format!("{e:?}")))?;
             let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
             llt.solve_in_place(rhs.as_mut());
@@ -312,4 +308,54 @@ pub fn solve(
         }
     }
     Ok(LmResult { phi, iterations, stop, initial_energy })
+}
+
+/// The lower triangle of JᵀJ in a sparsity pattern fixed for the whole solve: the matrix and its
+/// symbolic Cholesky analysis are built once, and each iteration refills the values in place
+/// (each triplet's value slot is found once).
+struct FixedPattern {
+    matrix: SparseColMat<usize, f64>,
+    slot: Vec<usize>,
+    diag: Vec<usize>,
+    base: Vec<f64>,
+    symbolic: SymbolicLlt<usize>,
+}
+
+impl FixedPattern {
+    fn new(n: usize, trip: &[Triplet<usize, usize, f64>]) -> std::result::Result<Self, String> {
+        let mut all = trip.to_vec();
+        all.extend((0..n).map(|c| Triplet::new(c, c, 0.0)));
+        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &all)
+            .map_err(|e| format!("{e:?}"))?;
+        let find = |r: usize, c: usize| -> usize {
+            let sym = matrix.symbolic();
+            let (start, end) = (sym.col_ptr()[c], sym.col_ptr()[c + 1]);
+            start + sym.row_idx()[start..end].binary_search(&r).expect("entry in the pattern")
+        };
+        let slot = trip.iter().map(|t| find(t.row, t.col)).collect();
+        let diag = (0..n).map(|c| find(c, c)).collect();
+        let symbolic =
+            SymbolicLlt::try_new(matrix.symbolic(), Side::Lower).map_err(|e| format!("{e:?}"))?;
+        let base = vec![0.0; matrix.val().len()];
+        Ok(FixedPattern { matrix, slot, diag, base, symbolic })
+    }
+
+    /// Refills JᵀJ from triplets in the same order as the ones the pattern was built from.
+    fn fill(&mut self, trip: &[Triplet<usize, usize, f64>]) {
+        debug_assert_eq!(trip.len(), self.slot.len());
+        self.base.iter_mut().for_each(|v| *v = 0.0);
+        for (t, &s) in trip.iter().zip(&self.slot) {
+            self.base[s] += t.val;
+        }
+    }
+
+    /// JᵀJ + λ diag(scale).
+    fn damped(&mut self, lambda: f64, scale: &[f64]) -> &SparseColMat<usize, f64> {
+        let vals = self.matrix.val_mut();
+        vals.copy_from_slice(&self.base);
+        for (c, &d) in self.diag.iter().enumerate() {
+            vals[d] += lambda * scale[c];
+        }
+        &self.matrix
+    }
 }
