@@ -32,6 +32,7 @@ mod field;
 mod gcode;
 mod geom;
 mod grid;
+mod improve;
 mod job;
 mod json;
 mod locate;
