@@ -38,12 +38,15 @@ mod json;
 mod locate;
 mod mesh;
 mod order;
+mod passes;
 mod place;
 mod plan;
 mod report;
 mod simplify;
 mod spacing;
+mod stroke;
 mod svg_out;
+mod topology;
 mod trace;
 
 pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};

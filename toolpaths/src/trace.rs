@@ -22,45 +22,8 @@ use crate::geom::{add, cross, dot, scale, sub, Vec2};
 use crate::grid::PointGrid;
 use crate::locate::{barycentric, walk, Walk};
 use crate::mesh::{Domain, Symmetry};
-
-/// Why one end of a stroke stopped.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum StopReason {
-    /// Reached a chart boundary (or a seam, when seams are not crossed).
-    Boundary,
-    /// Came within the exclusion radius of a singularity, or the field vanished or became
-    /// incoherent.
-    Singularity,
-    /// Returned to its start: the stroke is a closed loop.
-    ClosedLoop,
-    /// Reached the maximum stroke length (or the step limit).
-    MaxLength,
-    /// Came within `d_test` of another stroke (even-spacing placement only).
-    TooClose,
-}
-
-impl StopReason {
-    /// All reasons, in report order.
-    pub const ALL: [StopReason; 5] = [
-        StopReason::Boundary,
-        StopReason::Singularity,
-        StopReason::ClosedLoop,
-        StopReason::MaxLength,
-        StopReason::TooClose,
-    ];
-
-    /// Snake-case name used in JSON and reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            StopReason::Boundary => "boundary",
-            StopReason::Singularity => "singularity",
-            StopReason::ClosedLoop => "closed_loop",
-            StopReason::MaxLength => "max_length",
-            StopReason::TooClose => "too_close",
-        }
-    }
-}
+use crate::stroke::{join, Half};
+pub use crate::stroke::{StopReason, Stroke};
 
 /// Options of the streamline integrator. Lengths are surface millimetres.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -116,51 +79,6 @@ impl TraceOptions {
         }
         Ok(())
     }
-}
-
-/// One traced stroke: a polyline in UV with its faces and why each end stopped.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Stroke {
-    /// UV points, in tracing order (the heading never reverses along them).
-    pub uv: Vec<Vec2>,
-    /// Face of each point.
-    pub(crate) faces: Vec<u32>,
-    /// Indices `i` where the segment `i−1 → i` is a jump across a UV seam (not drawn).
-    pub breaks: Vec<usize>,
-    /// Why the stroke stopped at its first point.
-    pub start: StopReason,
-    /// Why the stroke stopped at its last point.
-    pub end: StopReason,
-    /// Length on the surface, mm (seam jumps excluded).
-    pub length: f64,
-}
-
-impl Stroke {
-    /// Whether the stroke is a closed loop.
-    pub fn is_closed(&self) -> bool {
-        self.end == StopReason::ClosedLoop
-    }
-
-    /// The drawable pieces (split at seam jumps) as index ranges.
-    pub fn pieces(&self) -> Vec<std::ops::Range<usize>> {
-        let mut out = Vec::new();
-        let mut s = 0;
-        for &b in &self.breaks {
-            out.push(s..b);
-            s = b;
-        }
-        out.push(s..self.uv.len());
-        out
-    }
-}
-
-/// A traced half streamline (one direction from the seed).
-pub(crate) struct Half {
-    pub uv: Vec<Vec2>,
-    pub faces: Vec<u32>,
-    pub breaks: Vec<usize>,
-    pub stop: StopReason,
-    pub length: f64,
 }
 
 /// Dormand–Prince 5(4) tableau.
@@ -498,18 +416,6 @@ fn passes_by(m: &crate::geom::Metric, s: Vec2, p: Vec2, q: Vec2, r: f64) -> bool
     }
     let t = m.inner(sub(s, p), d) / l2;
     (0.0..=1.0).contains(&t) && m.length(sub(sub(s, p), scale(d, t))) < r
-}
-
-/// Join a backward half (reversed) and a forward half sharing their first point.
-fn join(back: Half, fwd: Half) -> Stroke {
-    let nb = back.uv.len();
-    let mut uv: Vec<Vec2> = back.uv.iter().rev().copied().collect();
-    let mut faces: Vec<u32> = back.faces.iter().rev().copied().collect();
-    let mut breaks: Vec<usize> = back.breaks.iter().rev().map(|&j| nb - j).collect();
-    uv.extend_from_slice(&fwd.uv[1..]);
-    faces.extend_from_slice(&fwd.faces[1..]);
-    breaks.extend(fwd.breaks.iter().map(|&j| j + nb - 1));
-    Stroke { uv, faces, breaks, start: back.stop, end: fwd.stop, length: back.length + fwd.length }
 }
 
 /// Where the chord `p → q` (p outside, q inside) enters the circle of surface radius `r`

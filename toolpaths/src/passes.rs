@@ -1,0 +1,114 @@
+//! Building one pass from an oriented, ordered stroke: lead-in ramp, overtravel past the
+//! part edge, the simplified (or arc-fitted) stroke, lead-out ramp; plus the simplified UV
+//! and 3D polylines for SVG and JSON. See [`crate::plan`] for the geometry.
+
+use crate::geom::{Vec2, Vec3};
+use crate::locate::barycentric;
+use crate::mesh::Domain;
+use crate::plan::{Item, MoveKind, Pass, PlanOptions};
+use crate::simplify::{fit_moves, Segment};
+use crate::trace::StopReason;
+
+fn tangent_xy(a: Vec3, b: Vec3) -> Vec2 {
+    let t = [b[0] - a[0], b[1] - a[1]];
+    let l = (t[0] * t[0] + t[1] * t[1]).sqrt();
+    if l > 0.0 {
+        [t[0] / l, t[1] / l]
+    } else {
+        [1.0, 0.0]
+    }
+}
+
+/// First point at least `eps` away from `pts[0]` in XY, for a stable tangent.
+fn far_point(pts: &[Vec3], eps: f64) -> Vec3 {
+    for p in &pts[1..] {
+        if ((p[0] - pts[0][0]).powi(2) + (p[1] - pts[0][1]).powi(2)).sqrt() > eps {
+            return *p;
+        }
+    }
+    pts[pts.len() - 1]
+}
+
+pub(crate) fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) -> Pass {
+    let mut machine = it.machine.clone();
+    let mut uv = it.uv.clone();
+    let mut faces = it.faces.clone();
+    let mut stops = it.stops;
+    if flip {
+        machine.reverse();
+        uv.reverse();
+        faces.reverse();
+        for (p, f) in uv.iter_mut().zip(faces.iter_mut()) {
+            p.reverse();
+            f.reverse();
+        }
+        stops.swap(0, 1);
+    }
+    let eps = o.tolerance;
+    let first = machine[0];
+    let last = machine[machine.len() - 1];
+    let t0 = tangent_xy(first, far_point(&machine, eps));
+    let rev_m: Vec<Vec3> = machine.iter().rev().copied().collect();
+    let t1 = tangent_xy(far_point(&rev_m, eps), last);
+    let over_start = if stops[0] == StopReason::Boundary { o.overtravel } else { 0.0 };
+    let over_end = if stops[1] == StopReason::Boundary { o.overtravel } else { 0.0 };
+    let at = |p: Vec3, t: Vec2, s: f64, dz: f64| [p[0] + t[0] * s, p[1] + t[1] * s, p[2] + dz];
+    let mut moves = Vec::new();
+    let cut_begin = at(first, t0, -over_start, 0.0);
+    let start = if o.lead_in > 0.0 || o.ramp_height > 0.0 {
+        let s = at(cut_begin, t0, -o.lead_in, o.ramp_height);
+        moves.push((MoveKind::LeadIn, Segment::Line { to: cut_begin }));
+        s
+    } else {
+        cut_begin
+    };
+    if over_start > 0.0 {
+        moves.push((MoveKind::Overtravel, Segment::Line { to: first }));
+    }
+    for seg in fit_moves(&machine, o.tolerance, o.arcs) {
+        moves.push((MoveKind::Cut, seg));
+    }
+    let cut_end = at(last, t1, over_end, 0.0);
+    if over_end > 0.0 {
+        moves.push((MoveKind::Overtravel, Segment::Line { to: cut_end }));
+    }
+    if o.lead_out > 0.0 || o.ramp_height > 0.0 {
+        moves.push((
+            MoveKind::LeadOut,
+            Segment::Line { to: at(cut_end, t1, o.lead_out, o.ramp_height) },
+        ));
+    }
+    // Simplified UV / 3D for SVG and JSON (same RDP tolerance, in UV or 3D mm).
+    let uv_s: Vec<Vec<Vec2>> = uv
+        .iter()
+        .map(|p| {
+            let p3: Vec<Vec3> = p.iter().map(|q| [q[0], q[1], 0.0]).collect();
+            crate::simplify::rdp_indices(&p3, o.tolerance).into_iter().map(|k| p[k]).collect()
+        })
+        .collect();
+    let xyz = dom.has_lift().then(|| {
+        uv.iter()
+            .zip(&faces)
+            .map(|(p, f)| {
+                let p3: Vec<Vec3> = p
+                    .iter()
+                    .zip(f)
+                    .map(|(q, &ff)| {
+                        dom.lift(ff, barycentric(dom.corners(ff), *q)).unwrap_or([0.0; 3])
+                    })
+                    .collect();
+                crate::simplify::rdp_indices(&p3, o.tolerance).into_iter().map(|k| p3[k]).collect()
+            })
+            .collect()
+    });
+    Pass {
+        stroke: it.stroke,
+        reversed: it.reversed != flip,
+        start,
+        moves,
+        uv: uv_s,
+        xyz,
+        stops,
+        length: it.length,
+    }
+}
