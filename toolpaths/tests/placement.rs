@@ -68,3 +68,26 @@ fn spirals_stop_before_meeting_themselves() {
         }
     }
 }
+
+/// A mirrored UV chart (every triangle clockwise) places the same strokes, mirrored.
+#[test]
+fn mirrored_chart_gives_mirrored_strokes() {
+    let (uv, tris) = common::rect_mesh(10.3, 6.0, 23, 17);
+    let mirrored: Vec<_> = uv.iter().map(|p| [-p[0], p[1]]).collect();
+    let place = |uv: Vec<[f64; 2]>, d: [f64; 2]| {
+        let dom = Domain::new(field_mesh((uv, tris.clone()), Symmetry::Line, |_| d)).unwrap();
+        place_strokes(&dom, &PlacementOptions::new(1.0, 0.0)).unwrap()
+    };
+    let a = place(uv, [0.3, 1.0]);
+    let b = place(mirrored, [-0.3, 1.0]);
+    assert_eq!(a.strokes.len(), b.strokes.len());
+    let total =
+        |p: &grainline_toolpaths::Placement| p.strokes.iter().map(|s| s.length).sum::<f64>();
+    assert!((total(&a) - total(&b)).abs() < 1e-6 * total(&a));
+    assert!(b.singularities.is_empty());
+    for (sa, sb) in a.strokes.iter().zip(&b.strokes) {
+        for (p, q) in sa.uv.iter().zip(&sb.uv) {
+            assert!((p[0] + q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9);
+        }
+    }
+}
