@@ -151,7 +151,18 @@ fn surface_following_gcode_accepted() {
         gcode: Some(GcodeOptions { safe_z: 30.0, ..Default::default() }),
         ..Default::default()
     };
+    let opts = JobOptions { strokes_json: true, ..opts };
     let out = generate(mesh, &opts).unwrap();
+    // The strokes JSON carries the 3D lift: points on the sphere of radius R.
+    let json: serde_json::Value = serde_json::from_str(out.strokes_json.as_ref().unwrap()).unwrap();
+    for s in json["strokes"].as_array().unwrap() {
+        for piece in s["xyz"].as_array().expect("xyz present") {
+            for p in piece.as_array().unwrap() {
+                let r = (0..3).map(|k| p[k].as_f64().unwrap().powi(2)).sum::<f64>().sqrt();
+                assert!((r - R).abs() < 0.1, "|p| = {r}");
+            }
+        }
+    }
     let dir = common::scratch("surface-gcode");
     let path = dir.join("sphere.ngc");
     std::fs::write(&path, out.gcode.unwrap()).unwrap();
