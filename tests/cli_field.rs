@@ -137,34 +137,18 @@ fn directions_file_errors_name_the_vertex_and_line() {
     let mesh = data("quad.obj");
     let dir = tmp("dirs.json");
     let out = tmp("dirs-out.json");
+    let run = |contents: &str| {
+        std::fs::write(&dir, contents).unwrap();
+        let (m, d, o) = (mesh.to_str().unwrap(), dir.to_str().unwrap(), out.to_str().unwrap());
+        let args = [m, "--light", "0,0,1", "--view", "0,0,1", "--directions", d, "--out", o];
+        let o = field(&args);
+        assert!(!o.status.success());
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
     // quad.obj: 4 vertices in the z = 0 plane; vertex 2's direction is along the normal.
-    std::fs::write(&dir, "{\"u\": [[1,0,0],[1,0,0],\n[0,0,1],[1,0,0]]}").unwrap();
-    let o = field(&[
-        mesh.to_str().unwrap(),
-        "--light",
-        "0,0,1",
-        "--view",
-        "0,0,1",
-        "--directions",
-        dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("vertex 2"), "{err}");
-    std::fs::write(&dir, "{\"u\": [[1,0,0],\n[1,0,0],\n[1,0 0]]}").unwrap();
-    let o = field(&[
-        mesh.to_str().unwrap(),
-        "--light",
-        "0,0,1",
-        "--view",
-        "0,0,1",
-        "--directions",
-        dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("dirs.json:3"), "{err}");
+    let err = run("{\"u\": [[1,0,0],[1,0,0],\n[0,0,1],[1,0,0]]}");
+    assert!(err.contains("vertex 2"), "{err}");
+    let err = run("{\"u\": [[1,0,0],\n[1,0,0],\n[1,0 0]]}");
+    assert!(err.contains("dirs.json:3"), "{err}");
     assert!(!out.exists());
 }

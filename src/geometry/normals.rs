@@ -9,6 +9,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::mesh::Mesh;
+pub use crate::mesh::VertexFaces;
 
 /// How the initial vertex normals are computed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -117,44 +118,5 @@ pub fn normalize_or(v: Vector3<f64>, fallback: Vector3<f64>) -> Vector3<f64> {
         v / n
     } else {
         fallback
-    }
-}
-
-/// For each vertex, the faces around it as `(face, corner)` pairs, in face order.
-#[derive(Clone, Debug, Default)]
-pub struct VertexFaces {
-    offsets: Vec<u32>,
-    entries: Vec<(u32, u8)>,
-}
-
-impl VertexFaces {
-    /// Builds the vertex-to-face incidence of `mesh` (counting sort: linear time).
-    pub fn new(mesh: &Mesh) -> Self {
-        let nv = mesh.num_vertices();
-        let mut offsets = vec![0u32; nv + 1];
-        for f in &mesh.faces {
-            for &v in f {
-                offsets[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..nv {
-            offsets[v + 1] += offsets[v];
-        }
-        let mut fill = offsets.clone();
-        let mut entries = vec![(0u32, 0u8); mesh.faces.len() * 3];
-        for (fi, f) in mesh.faces.iter().enumerate() {
-            for (c, &v) in f.iter().enumerate() {
-                let slot = &mut fill[v as usize];
-                entries[*slot as usize] = (fi as u32, c as u8);
-                *slot += 1;
-            }
-        }
-        VertexFaces { offsets, entries }
-    }
-
-    /// The `(face, corner)` pairs of vertex `v`.
-    #[inline]
-    pub fn of(&self, v: usize) -> &[(u32, u8)] {
-        &self.entries[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 }

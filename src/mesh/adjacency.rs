@@ -26,29 +26,11 @@ impl Adjacency {
     /// Linear time: a counting sort gives each vertex its faces, and each vertex then sorts its
     /// own few neighbours (in parallel). Deterministic whatever the thread count.
     pub fn from_faces(num_vertices: usize, faces: &[[u32; 3]]) -> Self {
-        // Vertex → incident faces (counting sort).
-        let mut vf_off = vec![0u32; num_vertices + 1];
-        for f in faces {
-            for &v in f {
-                vf_off[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..num_vertices {
-            vf_off[v + 1] += vf_off[v];
-        }
-        let mut fill = vf_off.clone();
-        let mut vf = vec![0u32; faces.len() * 3];
-        for (fi, f) in faces.iter().enumerate() {
-            for &v in f {
-                vf[fill[v as usize] as usize] = fi as u32;
-                fill[v as usize] += 1;
-            }
-        }
-        drop(fill);
+        let vf = super::VertexFaces::from_faces(num_vertices, faces);
         // Each vertex's sorted neighbours with multiplicity (= faces sharing the edge).
         let ring = |v: usize, buf: &mut Vec<u32>| {
             buf.clear();
-            for &f in &vf[vf_off[v] as usize..vf_off[v + 1] as usize] {
+            for &(f, _) in vf.of(v) {
                 for &w in &faces[f as usize] {
                     if w as usize != v {
                         buf.push(w);

@@ -70,27 +70,15 @@ impl HalfEdges {
     }
 
     fn build_out_lists(&mut self, nv: usize) {
-        let mut offsets = vec![0u32; nv + 1];
-        for f in &self.faces {
-            for &v in f {
-                offsets[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..nv {
-            offsets[v + 1] += offsets[v];
-        }
-        let nh = 3 * self.faces.len();
-        let mut cursor = offsets.clone();
-        let (mut edges, mut dest) = (vec![0u32; nh], vec![0u32; nh]);
-        for (f, tri) in self.faces.iter().enumerate() {
-            for c in 0..3 {
-                let slot = &mut cursor[tri[c] as usize];
-                edges[*slot as usize] = (3 * f + c) as u32;
-                dest[*slot as usize] = tri[(c + 1) % 3];
-                *slot += 1;
-            }
-        }
-        (self.out_offsets, self.out_edges, self.out_dest) = (offsets, edges, dest);
+        // The outgoing half-edge of corner c of face f is 3f + c, towards the next corner.
+        let vf = super::VertexFaces::from_faces(nv, &self.faces);
+        let edges = vf.entries().iter().map(|&(f, c)| 3 * f + c as u32).collect();
+        let dest = vf
+            .entries()
+            .iter()
+            .map(|&(f, c)| self.faces[f as usize][(c as usize + 1) % 3])
+            .collect();
+        (self.out_offsets, self.out_edges, self.out_dest) = (vf.offsets().to_vec(), edges, dest);
     }
 
     /// `(twin, kind | representative bit)` of half-edge `h`.

@@ -14,10 +14,12 @@ pub mod topology;
 mod union_find;
 pub mod uv_charts;
 mod validate;
+pub mod vertex_faces;
 pub mod weld;
 pub mod write;
 
 pub use adjacency::Adjacency;
+pub use vertex_faces::VertexFaces;
 
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
