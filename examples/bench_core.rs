@@ -80,6 +80,9 @@ fn main() {
         let t0 = Instant::now();
         let loaded = load_obj(&path, &LoadOptions::default()).expect("load");
         let t_load = t0.elapsed().as_secs_f64();
+        if run == 0 && std::env::var_os("BENCH_PEAK_AFTER_LOAD").is_some() {
+            println!("peak after load     {:.0} MB", peak_rss_kb() as f64 / 1024.0);
+        }
         let t1 = Instant::now();
         let result = compute_field(&loaded.mesh, &options).expect("field");
         let t_field = t1.elapsed().as_secs_f64();
