@@ -1,7 +1,8 @@
 //! Hard cases for the core: degenerate geometry must give finite outputs and typed errors,
 //! never NaN, Inf or a panic.
 
-use std::path::PathBuf;
+mod common;
+use common::shared_mesh;
 
 use grainline::field::{compute_field, FieldFile, FieldOptions};
 use grainline::generate::{self, Grid};
@@ -11,16 +12,6 @@ use grainline::highlight::{InitialField, Lighting, Symmetry, View};
 use grainline::mesh::load::{load_obj, LoadOptions};
 use grainline::mesh::Mesh;
 use nalgebra::{Vector2, Vector3};
-
-fn shared_mesh(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes").join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} not found (../shared is absent)", p.display());
-        None
-    }
-}
 
 fn lighting() -> Lighting {
     Lighting::new(Vector3::new(0.4, 0.3, 1.0), View::Direction(Vector3::new(-0.3, 0.2, 1.0)))

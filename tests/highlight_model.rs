@@ -11,6 +11,19 @@ fn geom(mesh: &Mesh) -> Geometry {
     Geometry::compute(mesh, &GeometryOptions::default())
 }
 
+/// Eq. 7 for per-vertex world directions `dirs` (k = 1) under one half vector `h`.
+fn field_of(
+    mesh: &Mesh,
+    g: &Geometry,
+    dirs: &[Vector3<f64>],
+    h: Vector3<f64>,
+) -> highlight::HighlightField {
+    let init = InitialField::Directions(dirs.to_vec());
+    let phi = initial_field(mesh, g, &init, Symmetry::Oriented).unwrap().phi;
+    let hs = vec![h; mesh.num_vertices()];
+    highlight::highlight_field(g, &phi, Symmetry::Oriented, GradientForm::Angle, &hs)
+}
+
 /// Quadric height z = ½(c20 x² + 2 c11 xy + c02 y²) and its first derivatives.
 fn quadric(c: [f64; 3], x: f64, y: f64) -> (f64, f64, f64) {
     (
@@ -53,11 +66,8 @@ fn ell_on_patch(
 ) -> (Mesh, Geometry, Vec<Vector3<f64>>) {
     let mesh = generate::quadric_patch(c, 0.5, Grid { pattern, ..Grid::new(n, n) });
     let g = geom(&mesh);
-    let dirs = mesh.positions.iter().map(|p| grain(c, ab, p.x, p.y)).collect();
-    let phi =
-        initial_field(&mesh, &g, &InitialField::Directions(dirs), Symmetry::Oriented).unwrap().phi;
-    let hs = vec![h; mesh.num_vertices()];
-    let f = highlight::highlight_field(&g, &phi, Symmetry::Oriented, GradientForm::Angle, &hs);
+    let dirs: Vec<Vector3<f64>> = mesh.positions.iter().map(|p| grain(c, ab, p.x, p.y)).collect();
+    let f = field_of(&mesh, &g, &dirs, h);
     (mesh, g, f.ell)
 }
 
@@ -157,17 +167,7 @@ fn gradient_is_frame_independent_and_ell_too() {
             &mesh,
             &GeometryOptions { frame_twist_seed: seed, ..Default::default() },
         );
-        let phi =
-            initial_field(&mesh, &g, &InitialField::Directions(dirs.clone()), Symmetry::Oriented)
-                .unwrap()
-                .phi;
-        let f = highlight::highlight_field(
-            &g,
-            &phi,
-            Symmetry::Oriented,
-            GradientForm::Angle,
-            &vec![h; mesh.num_vertices()],
-        );
+        let f = field_of(&mesh, &g, &dirs, h);
         ells.push(f.ell);
     }
     for e in &ells[1..] {
@@ -187,17 +187,7 @@ fn scaling_scales_w_and_gradient_and_keeps_ell_direction() {
         let mut m = base.clone();
         m.scale(s);
         let g = geom(&m);
-        let phi =
-            initial_field(&m, &g, &InitialField::Directions(dirs.clone()), Symmetry::Oriented)
-                .unwrap()
-                .phi;
-        let f = highlight::highlight_field(
-            &g,
-            &phi,
-            Symmetry::Oriented,
-            GradientForm::Angle,
-            &vec![h; m.num_vertices()],
-        );
+        let f = field_of(&m, &g, &dirs, h);
         (g, f)
     };
     let (g1, f1) = run(1.0);

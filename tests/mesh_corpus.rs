@@ -1,25 +1,16 @@
 //! The shared test meshes (../shared/meshes, see its MANIFEST.md for where the expected counts
 //! come from). Each test prints a skip message and passes when the corpus is absent.
 
-use std::path::PathBuf;
+mod common;
+use common::shared_mesh;
 
 use grainline::mesh::load::{load_obj, LoadOptions, LoadedMesh};
 use grainline::mesh::report::InspectReport;
 use grainline::mesh::topology::Topology;
 use grainline::mesh::uv_charts::UvCharts;
 
-fn corpus(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes").join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} not found", p.display());
-        None
-    }
-}
-
 fn inspect(name: &str, options: LoadOptions) -> Option<(LoadedMesh, InspectReport)> {
-    let path = corpus(name)?;
+    let path = shared_mesh(name)?;
     let loaded = load_obj(&path, &options).unwrap();
     let topo = Topology::new(&loaded.mesh).unwrap();
     let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
