@@ -105,6 +105,25 @@ pub enum Error {
         /// What is wrong with it.
         message: String,
     },
+    /// A setting (of a scene file or an options struct) is missing, out of range or
+    /// inconsistent. `key` is its path in the scene, e.g. `edits[2].radius`.
+    #[error("{key}: {message}")]
+    Setting {
+        /// The key path, as the user wrote it in the scene.
+        key: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A scene file could not be read: a syntax error (with its line) or a bad setting.
+    #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Scene {
+        /// The scene file.
+        path: PathBuf,
+        /// The line of a syntax error, when known.
+        line: Option<usize>,
+        /// What is wrong, starting with the key path.
+        message: String,
+    },
     /// A numerical procedure failed on valid input.
     #[error("numerical failure in {stage}: {message}")]
     Numerical {
@@ -122,5 +141,10 @@ impl Error {
     /// An [`Error::InvalidArgument`].
     pub fn invalid_arg(name: impl Into<String>, message: impl Into<String>) -> Self {
         Error::InvalidArgument { name: name.into(), message: message.into() }
+    }
+
+    /// An [`Error::Setting`].
+    pub fn setting(key: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Setting { key: key.into(), message: message.into() }
     }
 }
