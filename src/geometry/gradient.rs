@@ -23,7 +23,17 @@ use super::rings::gather_ring;
 use crate::mesh::Adjacency;
 
 /// Which regression of Eq. 10 to use.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum GradientForm {
     /// Regress the wrapped angle difference (exact for linear φ; the default).

@@ -12,7 +12,17 @@ use crate::mesh::Mesh;
 pub use crate::mesh::VertexFaces;
 
 /// How the initial vertex normals are computed.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum NormalSource {
     /// Face normals weighted by the corner angle (the default).

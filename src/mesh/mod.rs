@@ -49,7 +49,9 @@ impl FaceId {
 }
 
 /// Length unit of a mesh and of every length grainline writes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Units {
     /// Millimetres (the default: what CNC machines and sheet-metal drawings use).

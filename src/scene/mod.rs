@@ -1,0 +1,168 @@
+//! The scene file: one JSON document that says the mesh, units, material, lights and view, the
+//! initial field, the edits, the solver settings, and the toolpath and render requests
+//! (docs/scene.md; the JSON Schema is `grainline schema`, published as docs/scene.schema.json).
+//!
+//! Scenes are written by hand, so reading one is strict and explains itself:
+//! - an unknown key is an error naming its path (`edits[2].radious: unknown field ...`);
+//! - a syntax or type error names the line and the key path;
+//! - every number is range-checked by the section's `validate`, with the key path;
+//! - relative paths are relative to the scene file.
+
+mod sections;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+pub use sections::{
+    FieldSection, InitKind, MeshSection, OutlineSection, SymmetryKind, ViewModel, ViewSection,
+};
+
+use crate::{Error, Result};
+
+/// A scene, as written in the file (paths not yet resolved; see [`LoadedScene`]).
+#[derive(Clone, Debug, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// The part: an OBJ file with UVs (a path, or an object with load options). Exactly one of
+    /// `mesh` and `outline` must be given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<MeshSection>,
+    /// A flat sheet-metal blank: a closed outline (and holes) in an SVG file, meshed by
+    /// constrained Delaunay triangulation with UV = XY in millimetres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outline: Option<OutlineSection>,
+    /// Length unit of the mesh coordinates and of every length in the scene (default `mm`).
+    #[serde(default)]
+    pub units: crate::mesh::Units,
+    /// The brushed material (BRDF and its parameters) used by the preview.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<serde_json::Value>,
+    /// The lights. The highlight model uses the key light: the first directional light marked
+    /// `"key": true`, else the first directional light.
+    #[serde(default)]
+    pub lights: Vec<serde_json::Value>,
+    /// The viewer: the eye of the highlight model and the preview's camera.
+    pub view: ViewSection,
+    /// The initial grain field and the highlight model's settings.
+    #[serde(default)]
+    pub field: FieldSection,
+    /// Highlight edits, applied in order.
+    #[serde(default)]
+    pub edits: Vec<serde_json::Value>,
+    /// The optimizer.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<serde_json::Value>,
+    /// Brush strokes and their exports (SVG, G-code); absent: no tracing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub toolpaths: Option<serde_json::Value>,
+    /// The preview image; absent: no rendering.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub render: Option<serde_json::Value>,
+}
+
+impl Scene {
+    /// Parses a scene from JSON text. `path` is only used in messages.
+    pub fn from_str(text: &str, path: &Path) -> Result<Scene> {
+        let mut de = serde_json::Deserializer::from_str(text);
+        let scene: Scene = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let key = e.path().to_string();
+            let inner = e.into_inner();
+            let line = (inner.line() > 0).then_some(inner.line());
+            let message = strip_position(&inner.to_string());
+            let message =
+                if key.is_empty() || key == "." { message } else { format!("{key}: {message}") };
+            Error::Scene { path: path.to_path_buf(), line, message }
+        })?;
+        // Trailing characters are reported by serde_json above; check the settings.
+        scene.validate().map_err(|e| Error::Scene {
+            path: path.to_path_buf(),
+            line: None,
+            message: e.to_string(),
+        })?;
+        Ok(scene)
+    }
+
+    /// Range and consistency checks of every section, naming the key path.
+    pub fn validate(&self) -> Result<()> {
+        match (&self.mesh, &self.outline) {
+            (Some(m), None) => m.validate().map_err(|e| prefix("mesh", e))?,
+            (None, Some(o)) => o.validate().map_err(|e| prefix("outline", e))?,
+            (Some(_), Some(_)) => {
+                return Err(Error::setting("outline", "give either `mesh` or `outline`, not both"))
+            }
+            (None, None) => {
+                return Err(Error::setting(
+                    "mesh",
+                    "missing: give `mesh` (an OBJ file) or `outline` (an SVG outline)",
+                ))
+            }
+        }
+        self.view.validate().map_err(|e| prefix("view", e))?;
+        self.field.validate().map_err(|e| prefix("field", e))?;
+        Ok(())
+    }
+}
+
+/// Prefixes a setting error's key path with its section.
+pub fn prefix(section: &str, e: Error) -> Error {
+    match e {
+        Error::Setting { key, message } => {
+            let key = if key.is_empty() {
+                section.to_string()
+            } else if key.starts_with('[') {
+                format!("{section}{key}")
+            } else {
+                format!("{section}.{key}")
+            };
+            Error::Setting { key, message }
+        }
+        other => other,
+    }
+}
+
+/// serde_json appends " at line L column C"; the scene error carries the line itself.
+fn strip_position(s: &str) -> String {
+    match s.rfind(" at line ") {
+        Some(i) => s[..i].to_string(),
+        None => s.to_string(),
+    }
+}
+
+/// A scene read from a file, with the directory its relative paths are relative to.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    /// The scene file.
+    pub path: PathBuf,
+    /// The scene.
+    pub scene: Scene,
+    /// The scene file's directory.
+    pub base: PathBuf,
+}
+
+impl LoadedScene {
+    /// Reads and checks a scene file.
+    pub fn read(path: &Path) -> Result<LoadedScene> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let scene = Scene::from_str(&text, path)?;
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Ok(LoadedScene { path: path.to_path_buf(), scene, base })
+    }
+
+    /// A path of the scene resolved against the scene file's directory.
+    pub fn input(&self, p: &str) -> PathBuf {
+        let p = Path::new(p);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.base.join(p)
+        }
+    }
+}
+
+/// The JSON Schema of the scene file (draft 2020-12), for editors' completion and checking.
+pub fn json_schema() -> serde_json::Value {
+    let schema = schemars::schema_for!(Scene);
+    serde_json::to_value(&schema).unwrap_or(serde_json::Value::Null)
+}

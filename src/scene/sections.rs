@@ -1,0 +1,386 @@
+//! The scene sections owned by the core: `mesh`, `outline`, `view` and `field`.
+
+use std::borrow::Cow;
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{GradientForm, NormalSource};
+use crate::highlight::critical::DEFAULT_CRITICAL_THRESHOLD;
+use crate::highlight::{InitialField, Symmetry, View};
+use crate::mesh::load::{DegeneratePolicy, LoadOptions};
+use crate::{Error, Result};
+
+/// `mesh`: an OBJ file, written as a path (`"mesh": "kettle.obj"`) or as an object with load
+/// options.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFull {
+    /// The OBJ file, relative to the scene file.
+    pub path: String,
+    /// Load only the object or group with this name (default: merge all).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub object: Option<String>,
+    /// Weld vertices closer than this (file units) before anything else.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weld: Option<f64>,
+    /// Uniform scale applied after loading (default 1).
+    #[serde(default = "one")]
+    pub scale: f64,
+    /// Accept non-manifold edges and vertices (default false).
+    #[serde(default)]
+    pub allow_nonmanifold: bool,
+    /// Refuse zero-area faces instead of dropping them (default false).
+    #[serde(default)]
+    pub strict_degenerate: bool,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The `mesh` section (see [`MeshFull`]; a bare string is its `path`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[serde(transparent)]
+pub struct MeshSection(pub MeshFull);
+
+impl<'de> Deserialize<'de> for MeshSection {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = MeshSection;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a path to an OBJ file, or an object with `path` and load options")
+            }
+            fn visit_str<E: serde::de::Error>(
+                self,
+                s: &str,
+            ) -> std::result::Result<Self::Value, E> {
+                Ok(MeshSection(MeshFull { path: s.into(), scale: 1.0, ..MeshFull::default() }))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<Self::Value, A::Error> {
+                MeshFull::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(MeshSection)
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+impl schemars::JsonSchema for MeshSection {
+    fn schema_name() -> Cow<'static, str> {
+        "MeshSection".into()
+    }
+    fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let full = generator.subschema_for::<MeshFull>();
+        schemars::json_schema!({
+            "description": "An OBJ file: a path relative to the scene, or an object with load options.",
+            "anyOf": [{ "type": "string" }, full]
+        })
+    }
+}
+
+impl MeshSection {
+    /// Range checks.
+    pub fn validate(&self) -> Result<()> {
+        let m = &self.0;
+        if m.path.trim().is_empty() {
+            return Err(Error::setting("path", "is empty"));
+        }
+        if let Some(w) = m.weld {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(Error::setting(
+                    "weld",
+                    format!("must be a finite number ≥ 0, got {w}"),
+                ));
+            }
+        }
+        if !(m.scale.is_finite() && m.scale > 0.0) {
+            return Err(Error::setting(
+                "scale",
+                format!("must be a finite number > 0, got {}", m.scale),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The loader's options for this section and the scene's units.
+    pub fn load_options(&self, units: crate::mesh::Units) -> LoadOptions {
+        let m = &self.0;
+        LoadOptions {
+            object: m.object.clone(),
+            weld: m.weld,
+            units,
+            scale: m.scale,
+            allow_nonmanifold: m.allow_nonmanifold,
+            degenerate: if m.strict_degenerate {
+                DegeneratePolicy::Error
+            } else {
+                DegeneratePolicy::Drop
+            },
+            ..LoadOptions::default()
+        }
+    }
+}
+
+/// `outline`: a flat blank from an SVG outline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OutlineSection {
+    /// The SVG file whose paths are the closed outline and its holes.
+    pub path: String,
+    /// Longest triangle edge in millimetres (default: 1/20 of the outline's diagonal).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_edge: Option<f64>,
+    /// Smallest triangle angle in degrees sought by the refinement (default 25, at most 30).
+    #[serde(default = "default_min_angle")]
+    pub min_angle: f64,
+}
+
+fn default_min_angle() -> f64 {
+    25.0
+}
+
+impl OutlineSection {
+    /// Range checks.
+    pub fn validate(&self) -> Result<()> {
+        if self.path.trim().is_empty() {
+            return Err(Error::setting("path", "is empty"));
+        }
+        if let Some(e) = self.max_edge {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(Error::setting("max_edge", format!("must be > 0, got {e}")));
+            }
+        }
+        if !(self.min_angle.is_finite() && (0.0..=30.0).contains(&self.min_angle)) {
+            return Err(Error::setting(
+                "min_angle",
+                format!("must be in [0, 30] degrees, got {}", self.min_angle),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// How the highlight model sees the viewer.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ViewModel {
+    /// A point eye at `eye`: each vertex sees its own view direction (the default; it matches
+    /// the preview's perspective camera).
+    #[default]
+    Point,
+    /// A distant viewer in the direction `eye − target` (the paper's setting).
+    Distant,
+}
+
+/// `view`: the viewer of the highlight model and the preview's camera.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ViewSection {
+    /// Eye position (scene units).
+    pub eye: [f64; 3],
+    /// The point looked at (default the origin).
+    #[serde(default)]
+    pub target: [f64; 3],
+    /// The camera's up direction (default +Z).
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Vertical field of view of the preview camera, degrees (default 35).
+    #[serde(default = "default_fov")]
+    pub fov_deg: f64,
+    /// `point` (default) or `distant`.
+    #[serde(default)]
+    pub model: ViewModel,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+fn default_fov() -> f64 {
+    35.0
+}
+
+fn finite3(key: &str, v: &[f64; 3]) -> Result<Vector3<f64>> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(Vector3::new(v[0], v[1], v[2]))
+    } else {
+        Err(Error::setting(key, format!("must be three finite numbers, got {v:?}")))
+    }
+}
+
+impl ViewSection {
+    /// Range checks.
+    pub fn validate(&self) -> Result<()> {
+        let eye = finite3("eye", &self.eye)?;
+        let target = finite3("target", &self.target)?;
+        let up = finite3("up", &self.up)?;
+        let d = target - eye;
+        if d.norm() <= 0.0 {
+            return Err(Error::setting("target", "must differ from `eye`"));
+        }
+        if up.norm() <= 0.0 || d.cross(&up).norm() <= 1e-9 * d.norm() * up.norm() {
+            return Err(Error::setting("up", "must be non-zero and not parallel to the view"));
+        }
+        if !(self.fov_deg.is_finite() && self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+            return Err(Error::setting(
+                "fov_deg",
+                format!("must be in (0, 180) degrees, got {}", self.fov_deg),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The highlight model's view.
+    pub fn view(&self) -> View {
+        let eye = Vector3::from(self.eye);
+        match self.model {
+            ViewModel::Point => View::Eye(eye),
+            ViewModel::Distant => View::Direction(eye - Vector3::from(self.target)),
+        }
+    }
+}
+
+/// The initial field's kind (`field.init`).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum InitKind {
+    /// The direction of increasing u of the UV map (needs UVs).
+    Uv,
+    /// The smoothest field (Knöppel et al. 2013), the default.
+    #[default]
+    Smooth,
+    /// Minimum principal curvature directions.
+    CurvatureMin,
+    /// Maximum principal curvature directions.
+    CurvatureMax,
+    /// A world direction (`field.world`) projected into each tangent plane.
+    World,
+    /// Per-vertex directions read from `field.directions` (a JSON object whose `u` holds one
+    /// [x, y, z] per vertex).
+    Directions,
+}
+
+/// The field's symmetry (`field.symmetry`).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum SymmetryKind {
+    /// k = 2: u and −u are the same grain (every BRDF grainline renders is centrally
+    /// symmetric; the default).
+    #[default]
+    Line,
+    /// k = 1: an oriented field.
+    Oriented,
+}
+
+impl SymmetryKind {
+    /// The model's symmetry.
+    pub fn symmetry(self) -> Symmetry {
+        match self {
+            SymmetryKind::Line => Symmetry::Line,
+            SymmetryKind::Oriented => Symmetry::Oriented,
+        }
+    }
+}
+
+/// `field`: the initial grain field and the highlight model's settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct FieldSection {
+    /// The initial field (default `smooth`).
+    pub init: InitKind,
+    /// The world direction for `init: "world"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub world: Option<[f64; 3]>,
+    /// The directions file for `init: "directions"`, relative to the scene.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub directions: Option<String>,
+    /// `line` (k = 2, default) or `oriented` (k = 1).
+    pub symmetry: SymmetryKind,
+    /// Which regression of Eq. 10 estimates ∇φ (default `angle`).
+    pub gradient_form: GradientForm,
+    /// Initial vertex normals (default `angle-weighted`).
+    pub normals: NormalSource,
+    /// hᵀn above which a vertex is a critical point (default 0.9995).
+    pub critical_threshold: f64,
+    /// Where `grainline run` writes FIELD.json (none by default).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output: Option<String>,
+}
+
+impl Default for FieldSection {
+    fn default() -> Self {
+        FieldSection {
+            init: InitKind::Smooth,
+            world: None,
+            directions: None,
+            symmetry: SymmetryKind::Line,
+            gradient_form: GradientForm::default(),
+            normals: NormalSource::default(),
+            critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
+            output: None,
+        }
+    }
+}
+
+impl FieldSection {
+    /// Range and consistency checks.
+    pub fn validate(&self) -> Result<()> {
+        match self.init {
+            InitKind::World => {
+                let w = finite3(
+                    "world",
+                    &self.world.ok_or_else(|| {
+                        Error::setting("world", "is required by `init: \"world\"`")
+                    })?,
+                )?;
+                if w.norm() <= 0.0 {
+                    return Err(Error::setting("world", "must be non-zero"));
+                }
+            }
+            InitKind::Directions if self.directions.is_none() => {
+                return Err(Error::setting("directions", "is required by `init: \"directions\"`"));
+            }
+            _ => {}
+        }
+        if self.world.is_some() && self.init != InitKind::World {
+            return Err(Error::setting("world", "is only used with `init: \"world\"`"));
+        }
+        if self.directions.is_some() && self.init != InitKind::Directions {
+            return Err(Error::setting("directions", "is only used with `init: \"directions\"`"));
+        }
+        let t = self.critical_threshold;
+        if !(t.is_finite() && t > 0.0 && t <= 1.0) {
+            return Err(Error::setting(
+                "critical_threshold",
+                format!("must be in (0, 1], got {t}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The initial field; `directions` are the already-read per-vertex directions when
+    /// `init` is `directions`.
+    pub fn initial_field(&self, directions: Option<Vec<Vector3<f64>>>) -> InitialField {
+        match self.init {
+            InitKind::Uv => InitialField::Uv,
+            InitKind::Smooth => InitialField::Smooth,
+            InitKind::CurvatureMin => InitialField::CurvatureMin,
+            InitKind::CurvatureMax => InitialField::CurvatureMax,
+            InitKind::World => {
+                InitialField::World(Vector3::from(self.world.unwrap_or([1.0, 0.0, 0.0])))
+            }
+            InitKind::Directions => InitialField::Directions(directions.unwrap_or_default()),
+        }
+    }
+}
