@@ -141,6 +141,18 @@ pub struct FieldFile {
     pub area: Vec<f64>,
     /// hᵀn above the threshold.
     pub critical: Vec<bool>,
+    /// `grainline optimize`: the grain directions before the solve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u_before: Option<Vec<[f64; 3]>>,
+    /// `grainline optimize`: the grain angles before the solve (radians, in the tangent frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi_before: Option<Vec<f64>>,
+    /// `grainline optimize`: the grain angles after the solve (radians, in the tangent frames).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi: Option<Vec<f64>>,
+    /// `grainline optimize`: the target highlight tangent ℓ* per vertex (null where none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_ell: Option<Vec<Option<[f64; 3]>>>,
 }
 
 /// A short name for an initial field.
@@ -198,6 +210,10 @@ impl FieldFile {
             k2: g.principal.iter().map(|p| p.k2).collect(),
             area: g.areas.clone(),
             critical: r.critical.clone(),
+            u_before: None,
+            phi_before: None,
+            phi: None,
+            target_ell: None,
         };
         file.check_finite()?;
         Ok(file)
@@ -213,6 +229,33 @@ impl FieldFile {
         ];
         for (name, v) in vecs {
             if let Some(i) = v.iter().position(|x| x.iter().any(|c| !c.is_finite())) {
+                return Err(Error::Numerical {
+                    stage: "field output",
+                    message: format!("{name} of vertex {i} is not finite"),
+                });
+            }
+        }
+        let extras = [
+            (
+                "u_before",
+                self.u_before
+                    .as_ref()
+                    .and_then(|v| v.iter().position(|x| x.iter().any(|c| !c.is_finite()))),
+            ),
+            (
+                "phi_before",
+                self.phi_before.as_ref().and_then(|v| v.iter().position(|c| !c.is_finite())),
+            ),
+            ("phi", self.phi.as_ref().and_then(|v| v.iter().position(|c| !c.is_finite()))),
+            (
+                "target_ell",
+                self.target_ell.as_ref().and_then(|v| {
+                    v.iter().position(|x| x.is_some_and(|x| x.iter().any(|c| !c.is_finite())))
+                }),
+            ),
+        ];
+        for (name, bad) in extras {
+            if let Some(i) = bad {
                 return Err(Error::Numerical {
                     stage: "field output",
                     message: format!("{name} of vertex {i} is not finite"),

@@ -107,3 +107,19 @@ fn schema_lists_every_top_level_key() {
     }
     assert_eq!(schema["additionalProperties"], serde_json::Value::Bool(false));
 }
+
+#[test]
+fn published_schema_is_current() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene.schema.json");
+    let published = std::fs::read_to_string(&path).unwrap_or_default();
+    let current = grainline::scene::json_schema_text();
+    if std::env::var_os("GRAINLINE_BLESS").is_some() {
+        std::fs::write(&path, &current).unwrap();
+        return;
+    }
+    assert!(
+        published == current,
+        "docs/scene.schema.json is stale: run `grainline schema --out docs/scene.schema.json` \
+         (or GRAINLINE_BLESS=1 cargo test --test scene_file)"
+    );
+}

@@ -4,6 +4,7 @@ mod field;
 mod inspect;
 mod mesh_args;
 mod progress;
+mod schema;
 
 use clap::{Parser, Subcommand};
 
@@ -29,6 +30,8 @@ enum Command {
     Inspect(inspect::InspectArgs),
     /// Geometry, an initial grain field and its highlight field (Eq. 7), written as FIELD.json.
     Field(field::FieldArgs),
+    /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
+    Schema(schema::SchemaArgs),
 }
 
 /// Runs the parsed command.
@@ -36,5 +39,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Field(a) => field::run(a, cli.quiet),
+        Command::Schema(a) => schema::run(a),
     }
 }

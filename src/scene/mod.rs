@@ -166,3 +166,10 @@ pub fn json_schema() -> serde_json::Value {
     let schema = schemars::schema_for!(Scene);
     serde_json::to_value(&schema).unwrap_or(serde_json::Value::Null)
 }
+
+/// The schema as pretty JSON text ending in a newline (what docs/scene.schema.json holds).
+pub fn json_schema_text() -> String {
+    let mut s = serde_json::to_string_pretty(&json_schema()).unwrap_or_default();
+    s.push('\n');
+    s
+}

@@ -1,0 +1,181 @@
+//! The scene job: the stages a scene's outputs need, and nothing else.
+//!
+//! `prepare` (load the part, geometry, initial field, ℓ) always runs; the solve runs only when
+//! the scene has edits; the strokes are traced only when a toolpath output or a strokes /
+//! as-brushed render effect asks for them; the preview renders only when the scene has a
+//! `render` section. Every stage is timed, and the times add up to the run's wall time.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use crate::field::{compute_field, read_directions, FieldOptions, FieldResult};
+use crate::highlight::{InitialField, Lighting};
+use crate::mesh::Mesh;
+use crate::scene::{InitKind, LoadedScene};
+use crate::{Error, Result};
+
+/// One timed stage.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct StageTime {
+    /// The stage's name (`load`, `field`, `edits`, `solve`, `toolpaths`, `render`, `write`).
+    pub stage: String,
+    /// Wall seconds.
+    pub seconds: f64,
+}
+
+/// Receives the name of each stage as it starts (the CLI shows it on a spinner).
+pub trait Observer {
+    /// A stage starts.
+    fn stage(&self, name: &str);
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+
+impl Observer for Silent {
+    fn stage(&self, _name: &str) {}
+}
+
+/// Times stages back to back, so their sum is the elapsed time.
+pub struct Stages<'a> {
+    observer: &'a dyn Observer,
+    times: Vec<StageTime>,
+    current: Option<(String, Instant)>,
+}
+
+impl<'a> Stages<'a> {
+    /// No stage running yet.
+    pub fn new(observer: &'a dyn Observer) -> Self {
+        Stages { observer, times: Vec::new(), current: None }
+    }
+
+    /// Ends the running stage (if any) and starts `name`.
+    pub fn start(&mut self, name: &str) {
+        self.finish();
+        self.observer.stage(name);
+        self.current = Some((name.to_string(), Instant::now()));
+    }
+
+    /// Ends the running stage.
+    pub fn finish(&mut self) {
+        if let Some((stage, t)) = self.current.take() {
+            self.times.push(StageTime { stage, seconds: t.elapsed().as_secs_f64() });
+        }
+    }
+
+    /// The finished stages.
+    pub fn into_times(mut self) -> Vec<StageTime> {
+        self.finish();
+        self.times
+    }
+}
+
+/// The part, its geometry and the initial field with its highlights.
+pub struct Prepared {
+    /// The mesh (loaded from OBJ or meshed from an outline).
+    pub mesh: Mesh,
+    /// The mesh's source as written in the scene.
+    pub mesh_name: String,
+    /// The options the field was computed with.
+    pub field_options: FieldOptions,
+    /// Geometry, φ, h, ℓ, critical points.
+    pub field: FieldResult,
+}
+
+/// The highlight model's light: the first directional light marked `"key": true`, else the
+/// first directional light.
+pub fn key_light(scene: &crate::scene::Scene) -> Result<Vector3<f64>> {
+    let directional: Vec<(usize, &serde_json::Value)> = scene
+        .lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.get("type").and_then(|t| t.as_str()) == Some("directional"))
+        .collect();
+    let chosen = directional
+        .iter()
+        .find(|(_, l)| l.get("key").and_then(|k| k.as_bool()) == Some(true))
+        .or_else(|| directional.first())
+        .ok_or_else(|| {
+            Error::setting("lights", "needs a directional light (the highlight model's key light)")
+        })?;
+    let (i, l) = chosen;
+    let d: Option<Vec<f64>> = l
+        .get("direction")
+        .and_then(|d| d.as_array())
+        .map(|a| a.iter().filter_map(|x| x.as_f64()).collect());
+    match d {
+        Some(d) if d.len() == 3 && d.iter().all(|c| c.is_finite()) => {
+            let v = Vector3::new(d[0], d[1], d[2]);
+            if v.norm() > 0.0 {
+                Ok(v)
+            } else {
+                Err(Error::setting(format!("lights[{i}].direction"), "must be non-zero"))
+            }
+        }
+        _ => Err(Error::setting(format!("lights[{i}].direction"), "must be three finite numbers")),
+    }
+}
+
+/// Loads the part and computes the geometry, the initial field and its highlights.
+pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
+    let scene = &s.scene;
+    let in_scene = |e: Error| match e {
+        Error::Setting { key, message } => {
+            Error::Scene { path: s.path.clone(), line: None, message: format!("{key}: {message}") }
+        }
+        other => other,
+    };
+    let lighting = Lighting::new(key_light(scene).map_err(in_scene)?, scene.view.view())?;
+    stages.start("load");
+    let (mesh, mesh_name) = load_part(s)?;
+    stages.start("field");
+    let directions = match (&scene.field.init, &scene.field.directions) {
+        (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),
+        _ => None,
+    };
+    let mut field_options = FieldOptions::new(lighting);
+    field_options.init = scene.field.initial_field(directions);
+    if matches!(field_options.init, InitialField::Uv) && mesh.uv.is_none() {
+        return Err(in_scene(Error::setting(
+            "field.init",
+            format!("\"uv\" needs UVs, and {mesh_name} has none"),
+        )));
+    }
+    field_options.symmetry = scene.field.symmetry.symmetry();
+    field_options.gradient_form = scene.field.gradient_form;
+    field_options.geometry.normals = scene.field.normals;
+    field_options.critical_threshold = scene.field.critical_threshold;
+    let field = compute_field(&mesh, &field_options)?;
+    Ok(Prepared { mesh, mesh_name, field_options, field })
+}
+
+/// Loads the scene's mesh (or meshes its outline).
+pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
+    let scene = &s.scene;
+    if let Some(m) = &scene.mesh {
+        let path = s.input(&m.0.path);
+        let loaded = crate::mesh::load::load_obj(&path, &m.load_options(scene.units))?;
+        return Ok((loaded.mesh, m.0.path.clone()));
+    }
+    Err(Error::Scene {
+        path: s.path.clone(),
+        line: None,
+        message: "outline: flat panels from an SVG outline are not available in this build".into(),
+    })
+}
+
+/// Where an output of the scene goes: under `out_dir` when given, else relative to the scene
+/// file.
+pub fn output_path(s: &LoadedScene, out_dir: Option<&Path>, p: &str) -> PathBuf {
+    let p = Path::new(p);
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    match out_dir {
+        Some(d) => d.join(p),
+        None => s.base.join(p),
+    }
+}
