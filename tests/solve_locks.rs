@@ -121,7 +121,11 @@ fn boundary_loop_parallel_and_perpendicular() {
 
 #[test]
 fn conflicting_locks_are_reported_and_averaged() {
-    let (mesh, g, h, phi) = setup(10);
+    // On a plane, so the projected x and y axes stay exactly perpendicular.
+    let mesh = generate::plane(1.0, Grid::new(10, 10));
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let phi: Vec<f64> = mesh.positions.iter().map(|p| 0.3 * p.x + 0.2 * p.y).collect();
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi.len()];
     // Vertex 5: x-axis vs y-axis (90° apart) and, for k = 1, opposite directions (the mean is
     // undefined: the first is kept).
     let specs = vec![
