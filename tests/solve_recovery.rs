@@ -60,9 +60,10 @@ fn recover(mesh: &Mesh, symmetry: Symmetry, centre: Vector3<f64>, radius: f64) {
         .iter()
         .map(|&i| (wrap_angle(k * (r.phi[i as usize] - phi_true[i as usize])) / k).abs())
         .fold(0.0, f64::max);
-    let energies: Vec<f64> =
-        r.iterations.iter().map(|it| it.highlight_energy + it.smoothness_energy).collect();
-    eprintln!("{symmetry:?}: {} free, {} iterations, stop {:?}, worst error {worst:.2e} rad, energies {:?} -> {:?}", brush.len(), r.iterations.len(), r.stop, r.initial_energy, energies);
+    let energies: Vec<f64> = std::iter::once(r.initial_energy.total())
+        .chain(r.iterations.iter().map(|it| it.energies.total()))
+        .collect();
+    eprintln!("{symmetry:?}: {} free, {} iterations, stop {:?}, worst error {worst:.2e} rad, energies {:?}", brush.len(), r.iterations.len(), r.stop, energies);
     for w in energies.windows(2) {
         assert!(w[1] <= w[0], "accepted steps never increase the energy");
     }

@@ -3,15 +3,22 @@
 //! The unknowns are the angles of a chosen set of *free* vertices; all others stay fixed
 //! (math.md §3: the data term alone is ill-posed, so the free set is an edit's support plus a
 //! margin, and a weak smoothness term picks one solution). Each iteration assembles the stacked
-//! residual r = [r_ℓ; r_s] and its analytic Jacobian J, solves
+//! residual r = [r_ℓ; r_s; r_κ; r_σ; r_lock] (math.md §4) and its analytic Jacobian J through one
+//! residual-block abstraction ([`Block`]), solves
 //!
 //! ```text
 //! (JᵀJ + λ D) δ = −Jᵀr,        D = diag(JᵀJ) (Marquardt scaling, floored)
 //! ```
 //!
 //! by a sparse Cholesky factorization whose symbolic analysis (ordering, elimination tree) is
-//! computed once and reused, and updates λ by the gain ratio (Nielsen's rule). An accepted step
-//! never increases the energy.
+//! computed once and reused — every block writes its Jacobian entries in an order that depends
+//! only on the mesh and the free set (hinges write zeros where inactive), so JᵀJ's pattern is
+//! fixed — and updates λ by the gain ratio (Nielsen's rule). An accepted step never increases
+//! the total energy.
+//!
+//! Optionally, each accepted step is followed by the paper's Laplacian smoothing pass on the
+//! free vertices (math.md §5.9: φᵢ += (τ/k)·arg Σⱼ wᵢⱼ e^{ikΔᵢⱼ}, applied to all free vertices
+//! at once), tried at τ = ½, ¼, ⅛ and kept only if it does not raise the total energy.
 
 use std::time::Instant;
 
@@ -21,25 +28,45 @@ use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Side;
 
+use super::fabrication::{lock_residual, GradientHinge, HingeKind};
 use super::highlight_term::HighlightTerm;
 use super::smoothness::edge_residual;
 use crate::geometry::laplacian::cotan_weights;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 
-/// Options of [`solve`].
+/// A hinge constraint for [`LmOptions`]: |x| ≤ bound with weight λ (see
+/// [`super::fabrication`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HingeOptions {
+    /// The bound b > 0 (1/R for a turning radius R; s_max for splay).
+    pub bound: f64,
+    /// The weight λ ≥ 0.
+    pub weight: f64,
+}
+
+/// Options of [`solve`]. All weights are absolute here; [`super::optimize`] derives them from
+/// the scene's relative settings.
 #[derive(Clone, Debug)]
 pub struct LmOptions {
-    /// Weight λ_s of the smoothness energy.
+    /// Weight λ_s of the smoothness energy (multiplies the cotangent weights).
     pub smoothness: f64,
     /// Iteration cap.
     pub max_iterations: usize,
     /// Stop when an accepted step lowers the energy by less than this fraction.
     pub relative_decrease: f64,
-    /// Stop when ‖Jᵀr‖∞ falls below this.
+    /// Stop when ‖Jᵀr‖∞ falls to or below this.
     pub gradient_tolerance: f64,
-    /// Initial damping λ, relative to max diag(JᵀJ).
+    /// Initial damping λ, relative to diag(JᵀJ).
     pub initial_damping: f64,
+    /// Turning-radius hinge on ūᵀ∇φ.
+    pub turning: Option<HingeOptions>,
+    /// Splay hinge on v̄ᵀ∇φ.
+    pub splay: Option<HingeOptions>,
+    /// Soft locks: (vertex, angle in its frame, weight λ_L); the residual is scaled by √(λ_L Aᵢ).
+    pub soft_locks: Vec<(u32, f64, f64)>,
+    /// Run the interleaved Laplacian smoothing pass after each accepted step.
+    pub interleaved_smoothing: bool,
 }
 
 impl Default for LmOptions {
@@ -50,6 +77,10 @@ impl Default for LmOptions {
             relative_decrease: 1e-12,
             gradient_tolerance: 1e-12,
             initial_damping: 1e-4,
+            turning: None,
+            splay: None,
+            soft_locks: Vec::new(),
+            interleaved_smoothing: false,
         }
     }
 }
@@ -70,20 +101,52 @@ pub enum StopReason {
     NothingToSolve,
 }
 
+/// The energy of each stacked term.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Energies {
+    /// E_ℓ, the highlight energy (Eq. 8 repaired).
+    pub highlight: f64,
+    /// E_s, the smoothness energy.
+    pub smoothness: f64,
+    /// The turning-radius hinge.
+    pub turning: f64,
+    /// The splay hinge.
+    pub splay: f64,
+    /// The soft locks.
+    pub locks: f64,
+}
+
+impl Energies {
+    /// The sum of all terms.
+    pub fn total(&self) -> f64 {
+        self.highlight + self.smoothness + self.turning + self.splay + self.locks
+    }
+
+    fn add(&mut self, term: Term, e: f64) {
+        match term {
+            Term::Highlight => self.highlight += e,
+            Term::Smoothness => self.smoothness += e,
+            Term::Turning => self.turning += e,
+            Term::Splay => self.splay += e,
+            Term::Locks => self.locks += e,
+        }
+    }
+}
+
 /// One iteration's record.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Iteration {
-    /// Highlight energy after the iteration.
-    pub highlight_energy: f64,
-    /// Smoothness energy after the iteration.
-    pub smoothness_energy: f64,
+    /// Every term's energy after the iteration (after its smoothing pass, if any).
+    pub energies: Energies,
     /// Damping λ used for the accepted step.
     pub damping: f64,
     /// ‖δ‖∞ of the accepted step.
     pub step_norm: f64,
+    /// Whether an interleaved smoothing pass was kept after the step.
+    pub smoothed: bool,
     /// Seconds spent assembling residuals, Jacobian and normal equations.
     pub assembly_seconds: f64,
-    /// Seconds spent in the factorization and solve.
+    /// Seconds spent in the factorization, solve and trial energy (all tries of the step).
     pub solve_seconds: f64,
 }
 
@@ -96,86 +159,224 @@ pub struct LmResult {
     pub iterations: Vec<Iteration>,
     /// Why it stopped.
     pub stop: StopReason,
-    /// Energies (highlight, smoothness) before the first iteration.
-    pub initial_energy: (f64, f64),
+    /// Energies before the first iteration.
+    pub initial_energy: Energies,
 }
 
-struct System<'a> {
+#[derive(Clone, Copy, Debug)]
+enum Term {
+    Highlight,
+    Smoothness,
+    Turning,
+    Splay,
+    Locks,
+}
+
+/// Accumulates Jᵀr and the lower triangle of JᵀJ from rows of up to two residual components.
+struct Assembler<'a> {
+    col_of: &'a [Option<u32>],
+    g: Vec<f64>,
+    trip: Vec<Triplet<usize, usize, f64>>,
+    block: Vec<(usize, [f64; 2])>,
+}
+
+impl Assembler<'_> {
+    /// Adds one row block: residual `r` and its entries `(vertex, ∂r/∂φ_vertex)`; entries of
+    /// fixed vertices are dropped.
+    #[inline]
+    fn push(&mut self, entries: impl Iterator<Item = (u32, [f64; 2])>, r: [f64; 2]) {
+        self.block.clear();
+        let col_of = self.col_of;
+        self.block
+            .extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
+        for &(a, da) in &self.block {
+            self.g[a] += da[0] * r[0] + da[1] * r[1];
+            for &(b, db) in &self.block {
+                if a >= b {
+                    self.trip.push(Triplet::new(a, b, da[0] * db[0] + da[1] * db[1]));
+                }
+            }
+        }
+    }
+}
+
+/// One block of the stacked residual: its energy, and its rows assembled into the normal
+/// equations. Rows must be pushed in an order and with entries that do not depend on φ.
+trait Block {
+    fn term(&self) -> Term;
+    fn energy(&self, phi: &[f64]) -> f64;
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler);
+}
+
+struct HighlightBlock<'a> {
     term: &'a HighlightTerm<'a>,
-    col_of: Vec<Option<u32>>,
-    free: Vec<u32>,
     rows: Vec<u32>,
-    edges: Vec<(u32, u32, f64, f64)>, // (i, j, ρ_ij, λ_s w_ij), i < j, at least one free
-    k: u32,
 }
 
-impl System<'_> {
-    fn energy(&self, phi: &[f64]) -> (f64, f64) {
-        let eh: f64 = self
-            .rows
+impl Block for HighlightBlock<'_> {
+    fn term(&self) -> Term {
+        Term::Highlight
+    }
+    fn energy(&self, phi: &[f64]) -> f64 {
+        self.rows
             .iter()
             .map(|&i| {
                 let r = self.term.residual(phi, i as usize);
                 r[0] * r[0] + r[1] * r[1]
             })
-            .sum();
-        let es: f64 = self
-            .edges
+            .sum()
+    }
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+        for &i in &self.rows {
+            let jac = self.term.jacobian(phi, i as usize);
+            acc.push(jac.entries.iter().copied(), jac.residual);
+        }
+    }
+}
+
+struct SmoothnessBlock {
+    edges: Vec<(u32, u32, f64, f64)>, // (i, j, ρ_ij, λ_s w_ij), i < j, at least one free
+    k: u32,
+}
+
+impl Block for SmoothnessBlock {
+    fn term(&self) -> Term {
+        Term::Smoothness
+    }
+    fn energy(&self, phi: &[f64]) -> f64 {
+        self.edges
             .iter()
             .map(|&(i, j, rho, w)| {
                 let r = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k).0;
                 r * r
             })
-            .sum();
-        (eh, es)
+            .sum()
+    }
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+        for &(i, j, rho, w) in &self.edges {
+            let (r, di, dj) = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k);
+            acc.push([(i, [di, 0.0]), (j, [dj, 0.0])].into_iter(), [r, 0.0]);
+        }
+    }
+}
+
+struct HingeBlock<'a> {
+    hinge: GradientHinge<'a>,
+    rows: Vec<u32>,
+}
+
+impl Block for HingeBlock<'_> {
+    fn term(&self) -> Term {
+        match self.hinge.kind {
+            HingeKind::Turning => Term::Turning,
+            HingeKind::Splay => Term::Splay,
+        }
+    }
+    fn energy(&self, phi: &[f64]) -> f64 {
+        self.rows
+            .iter()
+            .map(|&i| {
+                let r = self.hinge.residual(phi, i as usize);
+                r * r
+            })
+            .sum()
+    }
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+        let mut entries = Vec::new();
+        for &i in &self.rows {
+            let r = self.hinge.jacobian(phi, i as usize, &mut entries);
+            acc.push(entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
+        }
+    }
+}
+
+struct LockBlock {
+    locks: Vec<(u32, f64, f64)>, // (vertex, angle, √(λ A))
+    k: u32,
+}
+
+impl Block for LockBlock {
+    fn term(&self) -> Term {
+        Term::Locks
+    }
+    fn energy(&self, phi: &[f64]) -> f64 {
+        self.locks
+            .iter()
+            .map(|&(i, a, s)| {
+                let r = lock_residual(phi[i as usize], a, s, self.k).0;
+                r * r
+            })
+            .sum()
+    }
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+        for &(i, a, s) in &self.locks {
+            let (r, d) = lock_residual(phi[i as usize], a, s, self.k);
+            acc.push(std::iter::once((i, [d, 0.0])), [r, 0.0]);
+        }
+    }
+}
+
+struct System<'a> {
+    col_of: Vec<Option<u32>>,
+    free: Vec<u32>,
+    blocks: Vec<Box<dyn Block + 'a>>,
+}
+
+impl System<'_> {
+    fn energy(&self, phi: &[f64]) -> Energies {
+        let mut e = Energies::default();
+        for b in &self.blocks {
+            e.add(b.term(), b.energy(phi));
+        }
+        e
     }
 
     /// The lower triangle of JᵀJ as triplets (in an order that depends only on the mesh and the
     /// free set, so the pattern is fixed across iterations) and Jᵀr.
     fn normal_equations(&self, phi: &[f64]) -> (Vec<Triplet<usize, usize, f64>>, Vec<f64>) {
-        let n = self.free.len();
-        let mut g = vec![0.0; n];
-        let mut trip = Vec::new();
-        let mut block: Vec<(usize, [f64; 2])> = Vec::new();
-        let push_block = |block: &[(usize, [f64; 2])],
-                          r: [f64; 2],
-                          g: &mut Vec<f64>,
-                          trip: &mut Vec<Triplet<usize, usize, f64>>| {
-            for &(a, da) in block {
-                g[a] += da[0] * r[0] + da[1] * r[1];
-                for &(b, db) in block {
-                    if a >= b {
-                        trip.push(Triplet::new(a, b, da[0] * db[0] + da[1] * db[1]));
-                    }
-                }
-            }
+        let mut acc = Assembler {
+            col_of: &self.col_of,
+            g: vec![0.0; self.free.len()],
+            trip: Vec::new(),
+            block: Vec::new(),
         };
-        for &i in &self.rows {
-            let jac = self.term.jacobian(phi, i as usize);
-            block.clear();
-            block.extend(
-                jac.entries
-                    .iter()
-                    .filter_map(|&(v, d)| self.col_of[v as usize].map(|c| (c as usize, d))),
-            );
-            push_block(&block, jac.residual, &mut g, &mut trip);
+        for b in &self.blocks {
+            b.assemble(phi, &mut acc);
         }
-        for &(i, j, rho, w) in &self.edges {
-            let (r, di, dj) = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k);
-            block.clear();
-            if let Some(c) = self.col_of[i as usize] {
-                block.push((c as usize, [di, 0.0]));
-            }
-            if let Some(c) = self.col_of[j as usize] {
-                block.push((c as usize, [dj, 0.0]));
-            }
-            push_block(&block, [r, 0.0], &mut g, &mut trip);
-        }
-        (trip, g)
+        (acc.trip, acc.g)
     }
 }
 
-/// Minimizes E_ℓ + E_s over the angles of the `free` vertices, starting from `phi`.
+/// The free-vertex part of the paper's smoothing pass: φᵢ += (τ/k)·arg Σⱼ wᵢⱼ e^{ikΔᵢⱼ} for
+/// every free i, all computed from the same φ (so the pass is order-independent).
+fn smoothing_pass(
+    phi: &[f64],
+    free: &[u32],
+    term: &HighlightTerm,
+    w: &[f64],
+    tau: f64,
+) -> Vec<f64> {
+    let g = term.geometry;
+    let kf = term.symmetry.k() as f64;
+    let mut out = phi.to_vec();
+    for &i in free {
+        let i = i as usize;
+        let (mut c, mut s, mut wsum) = (0.0, 0.0, 0.0);
+        for slot in g.adjacency.slots(i) {
+            let j = g.adjacency.target(slot);
+            let a = kf * (phi[j] + g.transport[slot] - phi[i]);
+            c += w[slot] * a.cos();
+            s += w[slot] * a.sin();
+            wsum += w[slot];
+        }
+        if c.hypot(s) > 1e-12 * wsum {
+            out[i] += tau * s.atan2(c) / kf;
+        }
+    }
+    out
+}
+
+/// Minimizes the stacked energy over the angles of the `free` vertices, starting from `phi`.
 pub fn solve(
     mesh: &Mesh,
     term: &HighlightTerm,
@@ -185,26 +386,33 @@ pub fn solve(
 ) -> Result<LmResult> {
     let g = term.geometry;
     let nv = g.num_vertices();
+    if phi.len() != nv || term.target_q.len() != nv || term.weight.len() != nv {
+        return Err(Error::invalid_arg(
+            "phi",
+            format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
+        ));
+    }
     let mut col_of = vec![None; nv];
-    let mut free_sorted = free.to_vec();
+    let mut free_sorted: Vec<u32> = free.iter().copied().filter(|&v| (v as usize) < nv).collect();
     free_sorted.sort_unstable();
     free_sorted.dedup();
     for (c, &v) in free_sorted.iter().enumerate() {
         col_of[v as usize] = Some(c as u32);
     }
-    // Rows: vertices whose residual depends on a free angle (itself or a stencil neighbour).
-    let rows: Vec<u32> = (0..nv as u32)
+    // Vertices whose Eq. 10 stencil touches a free angle (itself or a neighbour).
+    let touched: Vec<u32> = (0..nv as u32)
         .filter(|&i| {
-            term.target_q[i as usize].is_some()
-                && (col_of[i as usize].is_some()
-                    || g.stencil
-                        .range(i as usize)
-                        .any(|e| col_of[g.stencil.neighbor[e] as usize].is_some()))
+            col_of[i as usize].is_some()
+                || g.stencil.range(i as usize).any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
         })
         .collect();
+    let k = term.symmetry.k();
     let w = cotan_weights(mesh, &g.adjacency);
-    let mut edges = Vec::new();
+    let mut blocks: Vec<Box<dyn Block>> = Vec::new();
+    let rows = touched.iter().copied().filter(|&i| term.target_q[i as usize].is_some()).collect();
+    blocks.push(Box::new(HighlightBlock { term, rows }));
     if options.smoothness > 0.0 {
+        let mut edges = Vec::new();
         for i in 0..nv {
             for s in g.adjacency.slots(i) {
                 let j = g.adjacency.target(s);
@@ -213,10 +421,39 @@ pub fn solve(
                 }
             }
         }
+        blocks.push(Box::new(SmoothnessBlock { edges, k }));
     }
-    let sys = System { term, col_of, free: free_sorted, rows, edges, k: term.symmetry.k() };
+    for (opt, kind) in [(options.turning, HingeKind::Turning), (options.splay, HingeKind::Splay)] {
+        if let Some(h) = opt {
+            if h.weight > 0.0 && h.bound > 0.0 && h.bound.is_finite() {
+                let hinge = GradientHinge {
+                    geometry: g,
+                    symmetry: term.symmetry,
+                    form: term.form,
+                    kind,
+                    bound: h.bound,
+                    weight: h.weight,
+                };
+                blocks.push(Box::new(HingeBlock { hinge, rows: touched.clone() }));
+            }
+        }
+    }
+    let locks: Vec<(u32, f64, f64)> = options
+        .soft_locks
+        .iter()
+        .filter(|l| (l.0 as usize) < nv && col_of[l.0 as usize].is_some() && l.2 > 0.0)
+        .map(|&(v, a, wl)| (v, a, (wl * g.areas[v as usize]).max(0.0).sqrt()))
+        .collect();
+    if !locks.is_empty() {
+        blocks.push(Box::new(LockBlock { locks, k }));
+    }
+    let sys = System { col_of, free: free_sorted, blocks };
     let mut phi = phi.to_vec();
     let initial_energy = sys.energy(&phi);
+    let numerical = |m: String| Error::Numerical { stage: "Levenberg–Marquardt", message: m };
+    if !initial_energy.total().is_finite() {
+        return Err(numerical(format!("the initial energy is not finite: {initial_energy:?}")));
+    }
     let n = sys.free.len();
     if n == 0 {
         return Ok(LmResult {
@@ -226,10 +463,9 @@ pub fn solve(
             initial_energy,
         });
     }
-    let numerical = |m: String| Error::Numerical { stage: "Levenberg–Marquardt", message: m };
-    let mut energy = initial_energy.0 + initial_energy.1;
+    let mut energy = initial_energy.total();
     let mut pattern: Option<FixedPattern> = None;
-    let mut lambda = f64::NAN;
+    let mut lambda = options.initial_damping;
     let mut nu = 2.0;
     let mut iterations = Vec::new();
     let mut stop = StopReason::IterationCap;
@@ -237,29 +473,21 @@ pub fn solve(
         let t0 = Instant::now();
         let (trip, grad) = sys.normal_equations(&phi);
         let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        if gmax < options.gradient_tolerance {
+        if !(gmax > options.gradient_tolerance) {
             stop = StopReason::Gradient;
             break;
-        }
-        let mut diag = vec![0.0; n];
-        for t in &trip {
-            if t.row == t.col {
-                diag[t.row] += t.val;
-            }
-        }
-        let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(f64::MIN_POSITIVE);
-        let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
-        if lambda.is_nan() {
-            lambda = options.initial_damping;
         }
         if pattern.is_none() {
             pattern = Some(FixedPattern::new(n, &trip).map_err(numerical)?);
         }
         let pat = pattern.as_mut().expect("just built");
         pat.fill(&trip);
+        let diag = pat.diagonal();
+        let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
+        let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
         let assembly = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
         loop {
-            let t1 = Instant::now();
             let symbolic = pat.symbolic.clone();
             let a = pat.damped(lambda, &dscale);
             let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower)
@@ -267,29 +495,43 @@ pub fn solve(
             let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
             llt.solve_in_place(rhs.as_mut());
             let delta: Vec<f64> = (0..n).map(|c| rhs[(c, 0)]).collect();
-            let solve_seconds = t1.elapsed().as_secs_f64();
             let mut trial = phi.clone();
             for (c, &v) in sys.free.iter().enumerate() {
                 trial[v as usize] += delta[c];
             }
-            let (eh, es) = sys.energy(&trial);
-            let new_energy = eh + es;
+            let mut new = sys.energy(&trial);
+            let new_energy = new.total();
             // Predicted decrease of the quadratic model: ½δᵀ(λDδ − g).
             let predicted: f64 = 0.5
                 * (0..n).map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c])).sum::<f64>();
             let rho = if predicted > 0.0 { (energy - new_energy) / predicted } else { -1.0 };
             if new_energy.is_finite() && new_energy < energy && rho > 0.0 {
                 let step_norm = delta.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                let decrease = (energy - new_energy) / energy.max(f64::MIN_POSITIVE);
+                let mut after = new_energy;
                 phi = trial;
-                energy = new_energy;
+                let mut smoothed = false;
+                if options.interleaved_smoothing {
+                    for tau in [0.5, 0.25, 0.125] {
+                        let s = smoothing_pass(&phi, &sys.free, term, &w, tau);
+                        let es = sys.energy(&s);
+                        if es.total().is_finite() && es.total() <= after {
+                            phi = s;
+                            new = es;
+                            after = es.total();
+                            smoothed = true;
+                            break;
+                        }
+                    }
+                }
+                let decrease = (energy - after) / energy.max(f64::MIN_POSITIVE);
+                energy = after;
                 iterations.push(Iteration {
-                    highlight_energy: eh,
-                    smoothness_energy: es,
+                    energies: new,
                     damping: lambda,
                     step_norm,
+                    smoothed,
                     assembly_seconds: assembly,
-                    solve_seconds,
+                    solve_seconds: t1.elapsed().as_secs_f64(),
                 });
                 lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
@@ -347,6 +589,11 @@ impl FixedPattern {
         for (t, &s) in trip.iter().zip(&self.slot) {
             self.base[s] += t.val;
         }
+    }
+
+    /// diag(JᵀJ) of the last fill.
+    fn diagonal(&self) -> Vec<f64> {
+        self.diag.iter().map(|&d| self.base[d]).collect()
     }
 
     /// JᵀJ + λ diag(scale).

@@ -1,9 +1,20 @@
 //! Inverting the highlight model: residuals and analytic Jacobians of the energies of the
-//! optimizer (the paper's §4.3, math.md §3–4), and the sparse Levenberg–Marquardt driver.
+//! optimizer (the paper's §4.3, math.md §3–4), the sparse Levenberg–Marquardt driver, the
+//! fabrication constraints, and the entry point [`optimize`].
 
+pub mod fabrication;
 pub mod highlight_term;
 pub mod lm;
+pub mod locks;
+pub mod optimize;
+pub mod settings;
+pub mod singularities;
 pub mod smoothness;
 
+pub use fabrication::{GradientHinge, HingeKind};
 pub use highlight_term::{HighlightTerm, VertexJacobian};
-pub use lm::{solve, LmOptions, LmResult, StopReason};
+pub use lm::{solve, Energies, HingeOptions, Iteration, LmOptions, LmResult, StopReason};
+pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
+pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult};
+pub use settings::{Constraints, SolverSettings, Splay, TurningRadius};
+pub use singularities::{singularities, Singularity};

@@ -1,0 +1,225 @@
+//! The optimizer's entry point: [`optimize`] turns a highlight term, a start field and an edit
+//! support into an optimized field and a report (the paper's §4.3 with the fabrication energies
+//! of math.md §4).
+//!
+//! 1. Locks are resolved ([`super::locks`]); hard-locked angles are set exactly and leave the
+//!    unknowns.
+//! 2. The free set is the support dilated by `margin_rings` rings (or every vertex with
+//!    `whole_mesh`), minus the hard-locked vertices.
+//! 3. The relative smoothness weight becomes absolute: λ_s × the surface area (the Dirichlet
+//!    energy is scale-free, the highlight energy scales like an area).
+//! 4. Levenberg–Marquardt ([`super::lm`]) runs on the stacked energy.
+//! 5. The report lists the iterations, the constraint violations, the lock conflicts and the
+//!    singularities of the result.
+
+use serde::Serialize;
+
+use super::fabrication::{GradientHinge, HingeKind};
+use super::highlight_term::HighlightTerm;
+use super::lm::{solve, Energies, HingeOptions, Iteration, LmOptions, StopReason};
+use super::locks::{angle_difference, resolve_locks, LockConflict};
+use super::settings::SolverSettings;
+use super::singularities::{singularities, Singularity};
+use crate::geometry::connection::wrap_angle;
+use crate::mesh::Mesh;
+use crate::{Error, Result};
+
+/// A vertex violates a hinge when |x| exceeds its bound by more than this fraction.
+pub const VIOLATION_TOLERANCE: f64 = 0.01;
+
+/// How far the result is from the fabrication constraints.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct ConstraintViolations {
+    /// Fraction of the surface area whose |ūᵀ∇φ| exceeds 1/R by more than 1 % (null without a
+    /// turning-radius constraint).
+    pub turning_area_fraction: Option<f64>,
+    /// max R·|ūᵀ∇φ| over the surface (≤ 1 when the constraint holds everywhere).
+    pub turning_max_ratio: Option<f64>,
+    /// Fraction of the surface area whose |v̄ᵀ∇φ| exceeds s_max by more than 1 %.
+    pub splay_area_fraction: Option<f64>,
+    /// max |v̄ᵀ∇φ|/s_max over the surface.
+    pub splay_max_ratio: Option<f64>,
+    /// Largest deviation of a locked vertex from its lock angle (rad, modulo 2π/k; 0 without
+    /// locks).
+    pub max_lock_error: f64,
+}
+
+/// What [`optimize`] did.
+#[derive(Clone, Debug, Serialize)]
+pub struct OptimizeReport {
+    /// Accepted iterations, each with every term's energy, λ, step norm and timings.
+    pub iterations: Vec<Iteration>,
+    /// Energies of the start field (after applying the hard locks).
+    pub initial_energy: Energies,
+    /// Why the solver stopped.
+    pub stop: StopReason,
+    /// Vertices in the edit support.
+    pub edited: usize,
+    /// Unknowns (free angles).
+    pub unknowns: usize,
+    /// Hard-locked vertices.
+    pub hard_locked: usize,
+    /// Soft-locked vertices.
+    pub soft_locked: usize,
+    /// The absolute smoothness weight used (λ_s × surface area).
+    pub smoothness_weight: f64,
+    /// Whether the interleaved smoothing pass ran.
+    pub interleaved_smoothing: bool,
+    /// Constraint violations of the result.
+    pub violations: ConstraintViolations,
+    /// Vertices where locks disagree, with the angles asked for and the one used.
+    pub conflicting_locks: Vec<LockConflict>,
+    /// Vertices where a lock's direction has no tangential part (lock skipped).
+    pub degenerate_lock_vertices: Vec<u32>,
+    /// Singular faces of the result.
+    pub singularities: Vec<Singularity>,
+}
+
+/// The optimized field and its report.
+#[derive(Clone, Debug)]
+pub struct OptimizeResult {
+    /// φ per vertex (in the geometry's frames, wrapped to (−π, π]).
+    pub phi: Vec<f64>,
+    /// What happened.
+    pub report: OptimizeReport,
+}
+
+/// The vertices within `rings` graph steps of a `true` entry of `support`.
+pub fn dilate(term: &HighlightTerm, support: &[bool], rings: u32) -> Vec<bool> {
+    let adj = &term.geometry.adjacency;
+    let mut inside = support.to_vec();
+    let mut frontier: Vec<u32> =
+        (0..support.len() as u32).filter(|&v| support[v as usize]).collect();
+    for _ in 0..rings {
+        let mut next = Vec::new();
+        for &v in &frontier {
+            for &j in adj.neighbors(v as usize) {
+                if !inside[j as usize] {
+                    inside[j as usize] = true;
+                    next.push(j);
+                }
+            }
+        }
+        next.sort_unstable();
+        frontier = next;
+    }
+    inside
+}
+
+/// Optimizes the field `phi` (angles in `term.geometry`'s frames) against `term`, freeing the
+/// edit `support` (one flag per vertex) dilated by the settings' margin.
+pub fn optimize(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    support: &[bool],
+    settings: &SolverSettings,
+) -> Result<OptimizeResult> {
+    settings.validate()?;
+    let g = term.geometry;
+    let nv = g.num_vertices();
+    if mesh.num_vertices() != nv {
+        return Err(Error::invalid_arg(
+            "mesh",
+            format!("{} vertices, the geometry has {nv}", mesh.num_vertices()),
+        ));
+    }
+    if phi.len() != nv || support.len() != nv {
+        return Err(Error::invalid_arg(
+            "phi",
+            format!("{} angles and {} support flags for {nv} vertices", phi.len(), support.len()),
+        ));
+    }
+    if let Some(i) = phi.iter().position(|p| !p.is_finite()) {
+        return Err(Error::invalid_arg("phi", format!("angle of vertex {i} is not finite")));
+    }
+    let k = term.symmetry.k();
+    let c = &settings.constraints;
+    let locks = resolve_locks(mesh, g, &c.locks, k, c.conflict_tolerance, "constraints.locks")?;
+    let mut start = phi.to_vec();
+    let mut free = if settings.whole_mesh {
+        vec![true; nv]
+    } else {
+        dilate(term, support, settings.margin_rings)
+    };
+    for &(v, a) in &locks.hard {
+        start[v as usize] = a;
+        free[v as usize] = false;
+    }
+    let free_list: Vec<u32> = (0..nv as u32).filter(|&v| free[v as usize]).collect();
+    let area: f64 = g.areas.iter().filter(|a| a.is_finite() && **a > 0.0).sum();
+    let options = LmOptions {
+        smoothness: settings.smoothness * area,
+        max_iterations: settings.max_iterations,
+        relative_decrease: settings.relative_decrease,
+        gradient_tolerance: settings.gradient_tolerance,
+        initial_damping: settings.initial_damping,
+        turning: c
+            .turning_radius
+            .as_ref()
+            .map(|t| HingeOptions { bound: 1.0 / t.radius, weight: t.weight }),
+        splay: c.splay.as_ref().map(|s| HingeOptions { bound: s.max, weight: s.weight }),
+        soft_locks: locks.soft.clone(),
+        interleaved_smoothing: settings.smoothing_pass(),
+    };
+    let lm = solve(mesh, term, &start, &free_list, &options)?;
+    let mut out = lm.phi;
+    for p in out.iter_mut() {
+        *p = wrap_angle(*p);
+    }
+    let violation = |kind: HingeKind, bound: f64| {
+        let hinge = GradientHinge {
+            geometry: g,
+            symmetry: term.symmetry,
+            form: term.form,
+            kind,
+            bound,
+            weight: 0.0,
+        };
+        let (mut bad, mut total, mut worst) = (0.0, 0.0, 0.0f64);
+        for i in 0..nv {
+            let ratio = hinge.value(&out, i).abs() / bound;
+            let a = g.areas[i].max(0.0);
+            total += a;
+            if ratio > 1.0 + VIOLATION_TOLERANCE {
+                bad += a;
+            }
+            worst = worst.max(ratio);
+        }
+        (if total > 0.0 { bad / total } else { 0.0 }, worst)
+    };
+    let mut violations = ConstraintViolations::default();
+    if let Some(t) = &c.turning_radius {
+        let (f, m) = violation(HingeKind::Turning, 1.0 / t.radius);
+        violations.turning_area_fraction = Some(f);
+        violations.turning_max_ratio = Some(m);
+    }
+    if let Some(s) = &c.splay {
+        let (f, m) = violation(HingeKind::Splay, s.max);
+        violations.splay_area_fraction = Some(f);
+        violations.splay_max_ratio = Some(m);
+    }
+    violations.max_lock_error = locks
+        .hard
+        .iter()
+        .map(|&(v, a)| (v, a))
+        .chain(locks.soft.iter().map(|&(v, a, _)| (v, a)))
+        .map(|(v, a)| angle_difference(out[v as usize], a, k).abs())
+        .fold(0.0, f64::max);
+    let report = OptimizeReport {
+        iterations: lm.iterations,
+        initial_energy: lm.initial_energy,
+        stop: lm.stop,
+        edited: support.iter().filter(|&&s| s).count(),
+        unknowns: free_list.len(),
+        hard_locked: locks.hard.len(),
+        soft_locked: locks.soft.len(),
+        smoothness_weight: options.smoothness,
+        interleaved_smoothing: options.interleaved_smoothing,
+        violations,
+        conflicting_locks: locks.conflicts,
+        degenerate_lock_vertices: locks.degenerate,
+        singularities: singularities(mesh, g, &out, k),
+    };
+    Ok(OptimizeResult { phi: out, report })
+}

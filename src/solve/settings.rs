@@ -1,0 +1,172 @@
+//! The scene's `solver` section: [`SolverSettings`].
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::locks::LockSpec;
+use crate::{Error, Result};
+
+/// The tool's minimum turning radius: |ūᵀ∇φ| ≤ 1/radius (math.md §4).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TurningRadius {
+    /// Minimum radius of curvature of the strokes along the surface (> 0, scene units).
+    pub radius: f64,
+    /// Hinge weight λ_κ (> 0, dimensionless; default 10: a vertex whose streamline curvature
+    /// is twice the bound costs ten 45° highlight errors).
+    #[serde(default = "default_constraint_weight")]
+    pub weight: f64,
+}
+
+/// Bounded splay of neighbouring strokes: |v̄ᵀ∇φ| = |div u| ≤ max (math.md §4).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Splay {
+    /// Bound s_max on |d ln(spacing)/ds| (> 0, per scene unit); ln(δ_max/δ_min)/L_stroke.
+    pub max: f64,
+    /// Hinge weight λ_σ (> 0, dimensionless; default 10).
+    #[serde(default = "default_constraint_weight")]
+    pub weight: f64,
+}
+
+fn default_constraint_weight() -> f64 {
+    10.0
+}
+
+/// Fabrication constraints of the `solver` section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Constraints {
+    /// Minimum tool turning radius (default: none).
+    pub turning_radius: Option<TurningRadius>,
+    /// Bounded splay (default: none).
+    pub splay: Option<Splay>,
+    /// Locked directions (default: none).
+    pub locks: Vec<LockSpec>,
+    /// Two locks on one vertex conflict when they differ by more than this (radians, modulo
+    /// 2π/k; default 0.01). Conflicts are reported and resolved by their circular mean.
+    pub conflict_tolerance: f64,
+}
+
+impl Default for Constraints {
+    fn default() -> Self {
+        Constraints {
+            turning_radius: None,
+            splay: None,
+            locks: Vec::new(),
+            conflict_tolerance: 0.01,
+        }
+    }
+}
+
+/// The `solver` section of a scene: how the grain field is optimized (the paper's §4.3).
+///
+/// Every field has a default; `{}` is a valid section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSettings {
+    /// Smoothness weight λ_s (≥ 0; default 1e-4). **Relative**: the connection Dirichlet energy
+    /// Σ wᵢⱼ|…|² (scale-free) is multiplied by λ_s × the surface area, so that it scales like
+    /// the highlight energy Σ Aᵢ‖Lᵢ − Lᵢ*‖² and λ_s means the same on a part in mm or in m.
+    pub smoothness: f64,
+    /// Iteration cap (≥ 1; default 50).
+    pub max_iterations: usize,
+    /// Stop when an accepted step lowers the total energy by less than this fraction (≥ 0;
+    /// default 1e-10).
+    pub relative_decrease: f64,
+    /// Stop when ‖Jᵀr‖∞ falls below this (≥ 0; default 1e-12).
+    pub gradient_tolerance: f64,
+    /// Initial Levenberg–Marquardt damping λ, relative to diag(JᵀJ) (> 0; default 1e-4).
+    pub initial_damping: f64,
+    /// Interleave the paper's Laplacian smoothing pass with the iterations (default: on when
+    /// `smoothness` is 0, off otherwise). A pass is kept only if it does not raise the energy.
+    pub interleaved_smoothing: Option<bool>,
+    /// Free every vertex instead of the edits' support (default false).
+    pub whole_mesh: bool,
+    /// The free set is the edits' support dilated by this many rings of neighbours (default 2).
+    pub margin_rings: u32,
+    /// Weight of the "keep the current ℓ" targets of vertices outside every edit (≥ 0, default
+    /// 1.0; used by the edit module when it builds the targets).
+    pub outside_weight: f64,
+    /// Fabrication constraints.
+    pub constraints: Constraints,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            smoothness: 1e-4,
+            max_iterations: 50,
+            relative_decrease: 1e-10,
+            gradient_tolerance: 1e-12,
+            initial_damping: 1e-4,
+            interleaved_smoothing: None,
+            whole_mesh: false,
+            margin_rings: 2,
+            outside_weight: 1.0,
+            constraints: Constraints::default(),
+        }
+    }
+}
+
+fn check(key: &str, value: f64, ok: bool, what: &str) -> Result<()> {
+    if value.is_finite() && ok {
+        Ok(())
+    } else {
+        Err(Error::setting(key, format!("must be a finite number {what}, got {value}")))
+    }
+}
+
+impl SolverSettings {
+    /// Range-checks every number; errors name the key relative to the section.
+    pub fn validate(&self) -> Result<()> {
+        check("smoothness", self.smoothness, self.smoothness >= 0.0, "≥ 0")?;
+        if self.max_iterations == 0 {
+            return Err(Error::setting("max_iterations", "must be ≥ 1, got 0"));
+        }
+        check(
+            "relative_decrease",
+            self.relative_decrease,
+            self.relative_decrease >= 0.0,
+            "≥ 0",
+        )?;
+        check(
+            "gradient_tolerance",
+            self.gradient_tolerance,
+            self.gradient_tolerance >= 0.0,
+            "≥ 0",
+        )?;
+        check("initial_damping", self.initial_damping, self.initial_damping > 0.0, "> 0")?;
+        check("outside_weight", self.outside_weight, self.outside_weight >= 0.0, "≥ 0")?;
+        if self.margin_rings > 64 {
+            return Err(Error::setting(
+                "margin_rings",
+                format!("must be ≤ 64, got {}", self.margin_rings),
+            ));
+        }
+        let c = &self.constraints;
+        if let Some(t) = &c.turning_radius {
+            check("constraints.turning_radius.radius", t.radius, t.radius > 0.0, "> 0")?;
+            check("constraints.turning_radius.weight", t.weight, t.weight > 0.0, "> 0")?;
+        }
+        if let Some(s) = &c.splay {
+            check("constraints.splay.max", s.max, s.max > 0.0, "> 0")?;
+            check("constraints.splay.weight", s.weight, s.weight > 0.0, "> 0")?;
+        }
+        check(
+            "constraints.conflict_tolerance",
+            c.conflict_tolerance,
+            c.conflict_tolerance >= 0.0,
+            "≥ 0",
+        )?;
+        for (i, l) in c.locks.iter().enumerate() {
+            l.validate_at(&format!("constraints.locks[{i}]"))?;
+        }
+        Ok(())
+    }
+
+    /// Whether the interleaved smoothing pass runs (explicit setting, else `smoothness == 0`).
+    pub fn smoothing_pass(&self) -> bool {
+        self.interleaved_smoothing.unwrap_or(self.smoothness == 0.0)
+    }
+}

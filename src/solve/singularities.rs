@@ -1,0 +1,65 @@
+//! Singularities of a vertex-based direction field: faces whose index is not 0.
+//!
+//! Around triangle (a, b, c), each edge i → j contributes the transported angle difference
+//! wrapped to (−π/k, π/k], wrap_k(φⱼ + ρᵢⱼ − φᵢ). Their sum minus the sum of the ρ's is an exact
+//! multiple of 2π/k (the φ's telescope); the sum of the ρ's is the face's holonomy plus 2π times
+//! the index of the *frame* field there, so the holonomy is wrap(Σρ) (the parallel-transport
+//! rotation, small on a fine mesh). The field's index is
+//!
+//! ```text
+//! index_f = (Σ_edges wrap_k(Δᵢⱼ) − wrap(Σ_edges ρᵢⱼ)) / 2π,   a multiple of 1/k,
+//! ```
+//!
+//! +1 for u = (x, y)/r, −1 for (x, −y)/r, ±1/2 for half-turn line fields. On a closed surface
+//! the indices add up to the Euler characteristic (Poincaré–Hopf).
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use crate::geometry::connection::wrap_angle;
+use crate::geometry::Geometry;
+use crate::mesh::Mesh;
+
+/// One singular face.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Singularity {
+    /// The face.
+    pub face: u32,
+    /// Its centroid (the reported position).
+    pub position: [f64; 3],
+    /// The index, a non-zero multiple of 1/k.
+    pub index: f64,
+}
+
+/// The singular faces of the field `phi` (angles in the geometry's frames) of symmetry `k`,
+/// by increasing face.
+pub fn singularities(mesh: &Mesh, geometry: &Geometry, phi: &[f64], k: u32) -> Vec<Singularity> {
+    let kf = k as f64;
+    let adj = &geometry.adjacency;
+    let mut out = Vec::new();
+    for (f, tri) in mesh.faces.iter().enumerate() {
+        let (mut sum_d, mut sum_rho) = (0.0, 0.0);
+        let mut ok = true;
+        for e in 0..3 {
+            let (i, j) = (tri[e] as usize, tri[(e + 1) % 3]);
+            let Some(s) = adj.slot(i, j) else {
+                ok = false;
+                break;
+            };
+            let rho = geometry.transport[s];
+            sum_rho += rho;
+            sum_d += wrap_angle(kf * (phi[j as usize] + rho - phi[i])) / kf;
+        }
+        if !ok {
+            continue;
+        }
+        let turns = (sum_d - wrap_angle(sum_rho)) / std::f64::consts::TAU;
+        let n = (turns * kf).round();
+        if n != 0.0 && n.is_finite() {
+            let p = mesh.face_positions(f);
+            let c: Vector3<f64> = (p[0] + p[1] + p[2]) / 3.0;
+            out.push(Singularity { face: f as u32, position: [c.x, c.y, c.z], index: n / kf });
+        }
+    }
+    out
+}

@@ -1,0 +1,195 @@
+//! Degenerate inputs of the optimizer: no targets, nothing to solve, an all-critical region
+//! (h = n, where ℓ no longer depends on ∇φ), a k = 2 field stored with raw jumps of π, and
+//! the interleaved smoothing pass with λ_s = 0.
+
+use std::f64::consts::PI;
+
+use grainline::generate::{self, Grid};
+use grainline::geometry::connection::wrap_angle;
+use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
+use grainline::highlight::tensor::{default_epsilon, q};
+use grainline::highlight::Symmetry;
+use grainline::mesh::Mesh;
+use grainline::solve::{optimize, HighlightTerm, OptimizeReport, SolverSettings, StopReason};
+use nalgebra::Vector3;
+
+fn smooth_field(mesh: &Mesh, g: &Geometry) -> Vec<f64> {
+    mesh.positions
+        .iter()
+        .zip(&g.frames)
+        .map(|(p, f)| f.angle_of(&Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1)))
+        .collect()
+}
+
+fn targets<'a>(g: &'a Geometry, h: &'a [Vector3<f64>], phi: &[f64], s: Symmetry) -> HighlightTerm<'a> {
+    let n = phi.len();
+    let mut t = HighlightTerm {
+        geometry: g,
+        h,
+        symmetry: s,
+        form: GradientForm::Angle,
+        epsilon: 0.0,
+        target_q: vec![None; n],
+        weight: vec![1.0; n],
+    };
+    let ms: Vec<f64> = (0..n).map(|i| t.ell_bar(phi, i).norm()).collect();
+    t.epsilon = default_epsilon(&ms);
+    t.target_q = (0..n).map(|i| Some(q(&t.ell_bar(phi, i), t.epsilon))).collect();
+    t
+}
+
+fn sane(phi: &[f64], report: &OptimizeReport) {
+    assert!(phi.iter().all(|p| p.is_finite()));
+    serde_json::to_string(report).unwrap();
+    let mut e = report.initial_energy.total();
+    assert!(e.is_finite());
+    for it in &report.iterations {
+        assert!(it.energies.total().is_finite() && it.energies.total() <= e);
+        e = it.energies.total();
+    }
+}
+
+fn brush(mesh: &Mesh, centre: Vector3<f64>, radius: f64) -> Vec<bool> {
+    mesh.positions.iter().map(|p| (p - centre).norm() < radius).collect()
+}
+
+#[test]
+fn zero_targets() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(12, 12));
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let phi = smooth_field(&mesh, &g);
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi.len()];
+    let mut t = targets(&g, &h, &phi, Symmetry::Oriented);
+    t.target_q = vec![None; phi.len()];
+    let support = brush(&mesh, Vector3::zeros(), 0.5);
+    // No energy at all: the gradient vanishes at once.
+    let s0 = SolverSettings { smoothness: 0.0, interleaved_smoothing: Some(false), ..Default::default() };
+    let r = optimize(&mesh, &t, &phi, &support, &s0).unwrap();
+    sane(&r.phi, &r.report);
+    assert_eq!(r.report.stop, StopReason::Gradient);
+    for (a, b) in r.phi.iter().zip(&phi) {
+        assert_eq!(*a, wrap_angle(*b));
+    }
+    // Smoothness only: it may only lower the Dirichlet energy.
+    let r = optimize(&mesh, &t, &phi, &support, &SolverSettings::default()).unwrap();
+    sane(&r.phi, &r.report);
+    assert_eq!(r.report.initial_energy.highlight, 0.0);
+}
+
+#[test]
+fn nothing_to_solve() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(8, 8));
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let phi = smooth_field(&mesh, &g);
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi.len()];
+    let t = targets(&g, &h, &phi, Symmetry::Line);
+    let r = optimize(&mesh, &t, &phi, &vec![false; phi.len()], &SolverSettings::default()).unwrap();
+    sane(&r.phi, &r.report);
+    assert_eq!((r.report.stop, r.report.unknowns, r.report.edited), (StopReason::NothingToSolve, 0, 0));
+    assert!(r.report.iterations.is_empty());
+    // Every vertex hard-locked: nothing left either, and the locks hold.
+    let s = SolverSettings {
+        whole_mesh: true,
+        constraints: grainline::solve::Constraints {
+            locks: vec![grainline::solve::LockSpec {
+                vertices: (0..phi.len() as u32).collect(),
+                direction: Some([1.0, 0.0, 0.0]),
+                ..Default::default()
+            }],
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let r = optimize(&mesh, &t, &phi, &vec![true; phi.len()], &s).unwrap();
+    sane(&r.phi, &r.report);
+    assert_eq!(r.report.stop, StopReason::NothingToSolve);
+    assert!(r.report.violations.max_lock_error < 1e-12);
+    // Bad input is an error, not a panic.
+    assert!(optimize(&mesh, &t, &phi[1..], &vec![false; phi.len()], &s).is_err());
+    let mut nan = phi.clone();
+    nan[3] = f64::NAN;
+    assert!(optimize(&mesh, &t, &nan, &vec![false; phi.len()], &s).is_err());
+}
+
+#[test]
+fn all_critical_region() {
+    // h = n at every vertex: hᵀv = 0, ℓ = R W ū depends on φ pointwise only (math.md §3), and on
+    // a plane ℓ ≡ 0.
+    for mesh in [
+        generate::plane(1.0, Grid::new(10, 10)),
+        generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(12, 12)),
+    ] {
+        let g = Geometry::compute(&mesh, &GeometryOptions::default());
+        let phi = smooth_field(&mesh, &g);
+        let h: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
+        for sym in [Symmetry::Oriented, Symmetry::Line] {
+            let t = targets(&g, &h, &phi, sym);
+            let mut start = phi.clone();
+            let support = brush(&mesh, Vector3::zeros(), 0.5);
+            for (i, s) in support.iter().enumerate() {
+                if *s {
+                    start[i] += 0.3;
+                }
+            }
+            for smoothness in [0.0, 1e-4] {
+                let s = SolverSettings { smoothness, ..Default::default() };
+                let r = optimize(&mesh, &t, &start, &support, &s).unwrap();
+                sane(&r.phi, &r.report);
+            }
+        }
+    }
+}
+
+#[test]
+fn k2_field_with_raw_jumps_of_pi_recovers() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(30, 30));
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    // A line field around the ±π/2 wrap, stored with a raw jump of π at every other vertex.
+    let phi_true: Vec<f64> = smooth_field(&mesh, &g)
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p + PI / 2.0 + if i % 2 == 0 { PI } else { 0.0 })
+        .collect();
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi_true.len()];
+    let t = targets(&g, &h, &phi_true, Symmetry::Line);
+    let centre = Vector3::new(0.1, -0.1, 0.0);
+    let support = brush(&mesh, centre, 0.45);
+    let mut phi = phi_true.clone();
+    for (i, s) in support.iter().enumerate() {
+        if *s {
+            let d = (mesh.positions[i] - centre).norm() / 0.45;
+            phi[i] += 0.3 * (1.0 - d * d).powi(2);
+        }
+    }
+    let s = SolverSettings { margin_rings: 0, ..Default::default() };
+    let r = optimize(&mesh, &t, &phi, &support, &s).unwrap();
+    sane(&r.phi, &r.report);
+    let worst = (0..phi.len())
+        .filter(|&i| support[i])
+        .map(|i| (wrap_angle(2.0 * (r.phi[i] - phi_true[i])) / 2.0).abs())
+        .fold(0.0, f64::max);
+    eprintln!("k = 2 with raw π jumps: {} iterations, worst {worst:.2e} rad", r.report.iterations.len());
+    assert!(worst < 1e-3 && r.report.iterations.len() <= 10, "{worst}");
+}
+
+#[test]
+fn interleaved_smoothing_keeps_the_energy_monotone() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(20, 20));
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let phi_true = smooth_field(&mesh, &g);
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi_true.len()];
+    let t = targets(&g, &h, &phi_true, Symmetry::Oriented);
+    let support = brush(&mesh, Vector3::zeros(), 0.6);
+    let phi: Vec<f64> = phi_true
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p + if support[i] { 0.4 * (7.0 * mesh.positions[i].x).sin() } else { 0.0 })
+        .collect();
+    let s = SolverSettings { smoothness: 0.0, ..Default::default() };
+    let r = optimize(&mesh, &t, &phi, &support, &s).unwrap();
+    assert!(r.report.interleaved_smoothing);
+    sane(&r.phi, &r.report);
+    let kept = r.report.iterations.iter().filter(|i| i.smoothed).count();
+    eprintln!("smoothing passes kept: {kept} of {}", r.report.iterations.len());
+    assert!(r.report.iterations.last().unwrap().energies.total() < 0.1 * r.report.initial_energy.total());
+}

@@ -1,0 +1,115 @@
+//! Recovery on spot (../shared/meshes/spot_triangulated.obj): a smooth field's own highlights as
+//! targets, the field perturbed in a brush, the brush solved with a weak smoothness term.
+
+mod common;
+
+use grainline::geometry::connection::wrap_angle;
+use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
+use grainline::highlight::smoothest::{smoothest_field, SmoothestOptions};
+use grainline::highlight::tensor::{default_epsilon, q};
+use grainline::highlight::Symmetry;
+use grainline::mesh::load::{load_obj, LoadOptions};
+use grainline::mesh::Mesh;
+use grainline::solve::{optimize, HighlightTerm, SolverSettings};
+use nalgebra::Vector3;
+
+fn env_f64(name: &str, default: f64) -> f64 {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+struct Case {
+    mesh: Mesh,
+    g: Geometry,
+    h: Vec<Vector3<f64>>,
+}
+
+fn load() -> Option<Case> {
+    let path = common::shared_mesh("spot_triangulated.obj")?;
+    let mesh = load_obj(&path, &LoadOptions::default()).unwrap().mesh;
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); mesh.num_vertices()];
+    Some(Case { mesh, g, h })
+}
+
+fn term<'a>(c: &'a Case, phi: &[f64], sym: Symmetry) -> HighlightTerm<'a> {
+    let n = phi.len();
+    let mut t = HighlightTerm {
+        geometry: &c.g,
+        h: &c.h,
+        symmetry: sym,
+        form: GradientForm::Angle,
+        epsilon: 0.0,
+        target_q: vec![None; n],
+        weight: vec![1.0; n],
+    };
+    let ms: Vec<f64> = (0..n).map(|i| t.ell_bar(phi, i).norm()).collect();
+    t.epsilon = default_epsilon(&ms);
+    t.target_q = (0..n).map(|i| Some(q(&t.ell_bar(phi, i), t.epsilon))).collect();
+    t
+}
+
+/// |hᵀv| at vertex i for the field φ.
+fn htv(c: &Case, phi: &[f64], i: usize) -> f64 {
+    let f = &c.g.frames[i];
+    let u = f.direction(phi[i]);
+    c.h[i].dot(&f.n.cross(&u)).abs()
+}
+
+#[test]
+fn brushes_recover_the_true_field() {
+    let Some(c) = load() else { return };
+    let n = c.mesh.num_vertices();
+    let (lo, hi) = c.mesh.positions.iter().fold(
+        (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+    );
+    let radius = env_f64("SPOT_RADIUS", 0.1) * (hi - lo).norm();
+    let smoothness = env_f64("SPOT_SMOOTHNESS", SolverSettings::default().smoothness);
+    let centres: Vec<usize> = std::env::var("SPOT_CENTRES")
+        .ok()
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or(vec![250, 500, 750, 1000, 1250, 1500, 1750, 2000, 2250, 2500, 2750]);
+    let mut failures = Vec::new();
+    for sym in [Symmetry::Oriented, Symmetry::Line] {
+        let phi_true =
+            smoothest_field(&c.mesh, &c.g, sym, &SmoothestOptions::default()).unwrap().phi;
+        let t = term(&c, &phi_true, sym);
+        let k = sym.k() as f64;
+        for &centre in &centres {
+            let p0 = c.mesh.positions[centre];
+            let support: Vec<bool> =
+                c.mesh.positions.iter().map(|p| (p - p0).norm() < radius).collect();
+            let mut phi = phi_true.clone();
+            for i in 0..n {
+                if support[i] {
+                    let d = (c.mesh.positions[i] - p0).norm() / radius;
+                    phi[i] += 0.3 * (1.0 - d * d).powi(2);
+                }
+            }
+            let s = SolverSettings { smoothness, margin_rings: 0, ..Default::default() };
+            let r = optimize(&c.mesh, &t, &phi, &support, &s).unwrap();
+            let (mut worst, mut at) = (0.0f64, 0);
+            for i in (0..n).filter(|&i| support[i]) {
+                let e = (wrap_angle(k * (r.phi[i] - phi_true[i])) / k).abs();
+                if e > worst {
+                    (worst, at) = (e, i);
+                }
+            }
+            let min_htv = (0..n).filter(|&i| support[i]).map(|i| htv(&c, &phi_true, i)).fold(1.0, f64::min);
+            let its = r.report.iterations.len();
+            eprintln!(
+                "{sym:?} centre {centre}: {} free, {its} it, stop {:?}, worst {worst:.2e} at {at} (|hᵀv| there {:.3}, min in brush {min_htv:.3}), E {:.2e} -> {:.2e}",
+                r.report.unknowns,
+                r.report.stop,
+                htv(&c, &phi_true, at),
+                r.report.initial_energy.total(),
+                r.report.iterations.last().map_or(f64::NAN, |i| i.energies.total()),
+            );
+            if !(worst < 1e-3 && its <= 10) {
+                failures.push((sym, centre, worst, its));
+            }
+        }
+    }
+    eprintln!("failures: {failures:?}");
+    assert!(failures.is_empty(), "{failures:?}");
+}
