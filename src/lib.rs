@@ -8,6 +8,7 @@
 //! (Eq. 4/7), and its inversion. The layers depend on each other in one direction:
 //! `mesh` ← `geometry` ← `highlight`.
 
+pub mod edit;
 pub mod error;
 pub mod field;
 pub mod generate;

@@ -1,0 +1,522 @@
+//! The curve tool (beyond the paper): highlight curves drawn by the designer.
+//!
+//! The curves are polylines either in UV space — given inline (`uv`) or as the paths of an SVG
+//! file (`svg`) drawn over the UV square — or in space (`points`, 3D points near the surface).
+//! Each vertex closer than the radius r to a curve gets the curve's tangent at the closest point
+//! as its target ℓ*, with weight w·(1 − d²/r²)²; the other vertices keep their current ℓ.
+//!
+//! **UV curves.** A vertex has one UV position per chart around it (a seam vertex has several);
+//! each chart has a Jacobian Jᵢ = ∂p/∂(u, v) (3×2), the corner-angle-weighted mean of the
+//! per-face Jacobians [e₁ e₂][d₁ d₂]⁻¹ (e the 3D edges, d the UV edges). Distances are measured
+//! in the metric G = JᵀJ (the first fundamental form: |J Δuv| is the distance in scene units to
+//! first order), so the closest point of a segment is the G-orthogonal projection; the UV tangent
+//! τ becomes J τ, projected onto the tangent plane. The chart giving the smallest distance wins.
+//!
+//! **SVG.** The `d` attribute of every `<path>` is parsed with the `svg` crate: M/L/H/V/C/S/Q/T/Z,
+//! absolute and relative; Bézier curves are flattened to chords within `tolerance` (UV units).
+//! The viewBox (or, without one, `0 0 width height`) maps to the UV square: u = (x − x₀)/w,
+//! v = 1 − (y − y₀)/h (SVG's y points down, v up). Elliptical arcs and `transform` attributes
+//! are refused with an error (convert arcs to Béziers and flatten transforms in the editor).
+//!
+//! **Magnitude.** ℓ* has the length max(|ℓᵢ|, median |ℓ|): a curve asks for a clear highlight
+//! direction even where the current ℓ is nearly zero.
+
+use std::path::Path;
+
+use nalgebra::{Matrix2, Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+use svg::node::element::path::{Command, Data, Position};
+use svg::parser::Event;
+
+use super::{check_radius, check_weight, Context, EditReport, State};
+use crate::{Error, Result};
+
+/// A curve edit: `{"tool": "curve", "svg": "highlights.svg", "radius": 2}` (or `"uv"` or
+/// `"points"` instead of `"svg"`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CurveEdit {
+    /// An SVG file of paths over the UV square (already resolved by the caller).
+    #[serde(default)]
+    pub svg: Option<String>,
+    /// Polylines in UV coordinates.
+    #[serde(default)]
+    pub uv: Option<Vec<Vec<[f64; 2]>>>,
+    /// Polylines of 3D points near the surface, scene units.
+    #[serde(default)]
+    pub points: Option<Vec<Vec<[f64; 3]>>>,
+    /// Vertices closer than this to a curve (scene units) get its tangent as target.
+    pub radius: f64,
+    /// Weight of the targets on the curve (default 1), falling off as (1 − d²/r²)².
+    #[serde(default = "super::one")]
+    pub weight: f64,
+    /// Flattening tolerance of SVG Bézier curves, UV units (default 0.001).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_tolerance() -> f64 {
+    1e-3
+}
+
+impl CurveEdit {
+    /// Range-checks every number; exactly one of `svg`, `uv`, `points`.
+    pub fn validate(&self) -> Result<()> {
+        let given = [self.svg.is_some(), self.uv.is_some(), self.points.is_some()];
+        if given.iter().filter(|g| **g).count() != 1 {
+            return Err(Error::setting("svg", "give exactly one of `svg`, `uv` or `points`"));
+        }
+        check_radius("radius", self.radius)?;
+        check_weight("weight", self.weight)?;
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance <= 0.1) {
+            return Err(Error::setting(
+                "tolerance",
+                format!("must be within (0, 0.1], got {}", self.tolerance),
+            ));
+        }
+        if let Some(lines) = &self.uv {
+            check_polylines("uv", lines)?;
+        }
+        if let Some(lines) = &self.points {
+            check_polylines("points", lines)?;
+        }
+        Ok(())
+    }
+}
+
+fn check_polylines<const N: usize>(key: &str, lines: &[Vec<[f64; N]>]) -> Result<()> {
+    if lines.is_empty() {
+        return Err(Error::setting(key, "holds no polyline"));
+    }
+    for (k, l) in lines.iter().enumerate() {
+        if l.len() < 2 {
+            return Err(Error::setting(format!("{key}[{k}]"), "needs at least two points"));
+        }
+        if let Some(j) = l.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(Error::setting(format!("{key}[{k}][{j}]"), "coordinates must be finite"));
+        }
+    }
+    Ok(())
+}
+
+/// Reads the paths of an SVG file as UV polylines (module documentation).
+pub fn read_svg_polylines(path: &Path, tolerance: f64) -> Result<Vec<Vec<Vector2<f64>>>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    parse_svg_polylines(&text, tolerance)
+        .map_err(|message| Error::Parse { path: path.to_path_buf(), line: 0, message })
+}
+
+/// Parses SVG text into UV polylines; the error is a message (the caller adds the file).
+pub fn parse_svg_polylines(
+    text: &str,
+    tolerance: f64,
+) -> std::result::Result<Vec<Vec<Vector2<f64>>>, String> {
+    let mut view: Option<[f64; 4]> = None;
+    let mut paths: Vec<String> = Vec::new();
+    for event in svg::read(text).map_err(|e| e.to_string())? {
+        match event {
+            Event::Error(e) => return Err(format!("SVG syntax: {e}")),
+            Event::Tag(name, _, attrs) => {
+                if attrs.contains_key("transform") {
+                    return Err(format!(
+                        "<{name}> has a transform attribute, which is not supported; flatten \
+                         transforms in the editor"
+                    ));
+                }
+                if name == "svg" && view.is_none() {
+                    view = Some(view_box(&attrs)?);
+                }
+                if name == "path" {
+                    if let Some(d) = attrs.get("d") {
+                        paths.push(d.to_string());
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    let view = view.ok_or("no <svg> element")?;
+    let to_uv =
+        |p: Vector2<f64>| Vector2::new((p.x - view[0]) / view[2], 1.0 - (p.y - view[1]) / view[3]);
+    let tol = tolerance * view[2].min(view[3]);
+    let mut out = Vec::new();
+    for d in &paths {
+        let data = Data::parse(d).map_err(|e| format!("path data {d:?}: {e}"))?;
+        for line in flatten(&data, tol)? {
+            if line.len() >= 2 {
+                out.push(line.into_iter().map(to_uv).collect());
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err("no path with at least two points".into());
+    }
+    Ok(out)
+}
+
+fn view_box(attrs: &svg::node::Attributes) -> std::result::Result<[f64; 4], String> {
+    if let Some(vb) = attrs.get("viewBox") {
+        let v: Vec<f64> = vb
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| format!("viewBox {:?}: expected four numbers", vb.to_string()))?;
+        if v.len() == 4 && v.iter().all(|x| x.is_finite()) && v[2] > 0.0 && v[3] > 0.0 {
+            return Ok([v[0], v[1], v[2], v[3]]);
+        }
+        return Err(format!("viewBox {:?}: expected x y width height, sizes > 0", vb.to_string()));
+    }
+    let size = |key: &str| {
+        attrs.get(key).and_then(|s| {
+            let s = s.trim();
+            let end = s.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(s.len());
+            s[..end].parse::<f64>().ok().filter(|x| *x > 0.0 && x.is_finite())
+        })
+    };
+    match (size("width"), size("height")) {
+        (Some(w), Some(h)) => Ok([0.0, 0.0, w, h]),
+        _ => Err("the <svg> element has neither a viewBox nor a width and height".into()),
+    }
+}
+
+/// Flattens path data into polylines (one per subpath), in SVG coordinates.
+fn flatten(data: &Data, tol: f64) -> std::result::Result<Vec<Vec<Vector2<f64>>>, String> {
+    let mut lines: Vec<Vec<Vector2<f64>>> = Vec::new();
+    let mut cur = Vector2::zeros();
+    let mut start = Vector2::zeros();
+    // The reflected control point of the previous C/S (cubic) or Q/T (quadratic).
+    let mut last_cubic: Option<Vector2<f64>> = None;
+    let mut last_quad: Option<Vector2<f64>> = None;
+    let push = |lines: &mut Vec<Vec<Vector2<f64>>>, p: Vector2<f64>| {
+        if let Some(l) = lines.last_mut() {
+            l.push(p);
+        }
+    };
+    for cmd in data.iter() {
+        let (pos, params): (Option<&Position>, Vec<f64>) = match cmd {
+            Command::Move(p, a)
+            | Command::Line(p, a)
+            | Command::HorizontalLine(p, a)
+            | Command::VerticalLine(p, a)
+            | Command::QuadraticCurve(p, a)
+            | Command::SmoothQuadraticCurve(p, a)
+            | Command::CubicCurve(p, a)
+            | Command::SmoothCubicCurve(p, a)
+            | Command::EllipticalArc(p, a) => (Some(p), a.iter().map(|&x| x as f64).collect()),
+            Command::Close => (None, Vec::new()),
+        };
+        let rel = matches!(pos, Some(Position::Relative));
+        let abs = |base: Vector2<f64>, x: f64, y: f64| {
+            if rel {
+                base + Vector2::new(x, y)
+            } else {
+                Vector2::new(x, y)
+            }
+        };
+        let arity = match cmd {
+            Command::Move(..) | Command::Line(..) | Command::SmoothQuadraticCurve(..) => 2,
+            Command::HorizontalLine(..) | Command::VerticalLine(..) => 1,
+            Command::QuadraticCurve(..) | Command::SmoothCubicCurve(..) => 4,
+            Command::CubicCurve(..) => 6,
+            Command::EllipticalArc(..) => {
+                return Err(
+                    "elliptical arcs (A) are not supported; convert them to Bézier curves".into()
+                )
+            }
+            Command::Close => 0,
+        };
+        if arity == 0 {
+            if lines.last().is_some_and(|l| !l.is_empty()) {
+                push(&mut lines, start);
+            }
+            cur = start;
+            lines.push(Vec::new());
+            lines.last_mut().map(|l| l.push(start));
+            last_cubic = None;
+            last_quad = None;
+            continue;
+        }
+        if params.is_empty() || params.len() % arity != 0 {
+            return Err(format!("a command has {} numbers, not a multiple of {arity}", params.len()));
+        }
+        for (k, a) in params.chunks(arity).enumerate() {
+            let (mut nc, mut nq) = (None, None);
+            match cmd {
+                Command::Move(..) if k == 0 => {
+                    cur = abs(cur, a[0], a[1]);
+                    start = cur;
+                    lines.push(vec![cur]);
+                }
+                Command::Move(..) | Command::Line(..) => {
+                    cur = abs(cur, a[0], a[1]);
+                    push(&mut lines, cur);
+                }
+                Command::HorizontalLine(..) => {
+                    cur.x = if rel { cur.x + a[0] } else { a[0] };
+                    push(&mut lines, cur);
+                }
+                Command::VerticalLine(..) => {
+                    cur.y = if rel { cur.y + a[0] } else { a[0] };
+                    push(&mut lines, cur);
+                }
+                Command::CubicCurve(..) | Command::SmoothCubicCurve(..) => {
+                    let (c1, c2, end) = if matches!(cmd, Command::CubicCurve(..)) {
+                        (abs(cur, a[0], a[1]), abs(cur, a[2], a[3]), abs(cur, a[4], a[5]))
+                    } else {
+                        let c1 = last_cubic.map_or(cur, |c| cur * 2.0 - c);
+                        (c1, abs(cur, a[0], a[1]), abs(cur, a[2], a[3]))
+                    };
+                    let m = (cur - c1 * 2.0 + c2).norm().max((c1 - c2 * 2.0 + end).norm());
+                    let n = segments(6.0 * m, tol);
+                    for s in 1..=n {
+                        let t = s as f64 / n as f64;
+                        let mt = 1.0 - t;
+                        let p = cur * (mt * mt * mt)
+                            + c1 * (3.0 * mt * mt * t)
+                            + c2 * (3.0 * mt * t * t)
+                            + end * (t * t * t);
+                        push(&mut lines, p);
+                    }
+                    nc = Some(c2);
+                    cur = end;
+                }
+                Command::QuadraticCurve(..) | Command::SmoothQuadraticCurve(..) => {
+                    let (c, end) = if matches!(cmd, Command::QuadraticCurve(..)) {
+                        (abs(cur, a[0], a[1]), abs(cur, a[2], a[3]))
+                    } else {
+                        (last_quad.map_or(cur, |c| cur * 2.0 - c), abs(cur, a[0], a[1]))
+                    };
+                    let n = segments(2.0 * (cur - c * 2.0 + end).norm(), tol);
+                    for s in 1..=n {
+                        let t = s as f64 / n as f64;
+                        let mt = 1.0 - t;
+                        push(&mut lines, cur * (mt * mt) + c * (2.0 * mt * t) + end * (t * t));
+                    }
+                    nq = Some(c);
+                    cur = end;
+                }
+                Command::EllipticalArc(..) | Command::Close => {}
+            }
+            last_cubic = nc;
+            last_quad = nq;
+        }
+    }
+    Ok(lines)
+}
+
+/// Chords needed for a curve whose second derivative is bounded by `m`: the chord error is at
+/// most m/(8n²).
+fn segments(m: f64, tol: f64) -> usize {
+    let n = (m / (8.0 * tol)).sqrt().ceil();
+    if n.is_finite() {
+        (n as usize).clamp(1, 1000)
+    } else {
+        1
+    }
+}
+
+/// The closest point of segment ab to p in the metric G: (parameter t, squared G-distance).
+fn closest_on_segment(
+    p: &Vector2<f64>,
+    a: &Vector2<f64>,
+    b: &Vector2<f64>,
+    g: &Matrix2<f64>,
+) -> (f64, f64) {
+    let e = b - a;
+    let ee = e.dot(&(g * e));
+    let t = if ee > 0.0 { ((p - a).dot(&(g * e)) / ee).clamp(0.0, 1.0) } else { 0.0 };
+    let d = a + e * t - p;
+    (t, d.dot(&(g * d)))
+}
+
+/// Applies a curve edit.
+pub(crate) fn apply(ctx: &Context, st: &mut State, e: &CurveEdit, report: &mut EditReport) -> Result<()> {
+    let mut norms: Vec<f64> = st.ell.iter().map(|l| l.norm()).collect();
+    let median = if norms.is_empty() {
+        0.0
+    } else {
+        let mid = norms.len() / 2;
+        *norms.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
+    };
+    let found = if let Some(points) = &e.points {
+        let lines: Vec<Vec<Vector3<f64>>> = points
+            .iter()
+            .map(|l| l.iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect())
+            .collect();
+        report.polylines = Some(lines.len());
+        report.segments = Some(lines.iter().map(|l| l.len() - 1).sum());
+        space_targets(ctx, &lines, e.radius)
+    } else {
+        let lines: Vec<Vec<Vector2<f64>>> = match (&e.svg, &e.uv) {
+            (Some(path), _) => read_svg_polylines(Path::new(path), e.tolerance)?,
+            (None, Some(uv)) => {
+                uv.iter().map(|l| l.iter().map(|p| Vector2::new(p[0], p[1])).collect()).collect()
+            }
+            (None, None) => Vec::new(),
+        };
+        report.polylines = Some(lines.len());
+        report.segments = Some(lines.iter().map(|l| l.len().saturating_sub(1)).sum());
+        let key = if e.svg.is_some() { "svg" } else { "uv" };
+        uv_targets(ctx, &lines, e.radius).ok_or_else(|| {
+            Error::setting(key, "the mesh has no UV coordinates; give 3D `points` instead")
+        })?
+    };
+    let mut count = 0;
+    let mut critical = 0;
+    for (i, hit) in found.into_iter().enumerate() {
+        let Some((d, tangent)) = hit else { continue };
+        st.support[i] = true;
+        if st.critical[i] {
+            critical += 1;
+            continue;
+        }
+        let n = ctx.normals[i];
+        let t = tangent - n * n.dot(&tangent);
+        let w = e.weight * (1.0 - (d / e.radius).powi(2)).powi(2);
+        if !(t.norm() > 1e-9 * tangent.norm()) || !(w > 0.0) {
+            continue;
+        }
+        let len = st.ell[i].norm().max(median);
+        let len = if len > 0.0 { len } else { 1.0 };
+        st.set_target(i, t.normalize() * len, w);
+        count += 1;
+    }
+    report.vertices = count;
+    report.critical_vertices = critical;
+    Ok(())
+}
+
+/// Per vertex, the (distance, 3D tangent) of the closest 3D polyline within `radius`.
+fn space_targets(
+    ctx: &Context,
+    lines: &[Vec<Vector3<f64>>],
+    radius: f64,
+) -> Vec<Option<(f64, Vector3<f64>)>> {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    for p in lines.iter().flatten() {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let (lo, hi) = (lo.add_scalar(-radius), hi.add_scalar(radius));
+    ctx.mesh
+        .positions
+        .iter()
+        .map(|p| {
+            if (0..3).any(|k| p[k] < lo[k] || p[k] > hi[k]) {
+                return None;
+            }
+            let mut best: Option<(f64, Vector3<f64>)> = None;
+            for l in lines {
+                for s in l.windows(2) {
+                    let e = s[1] - s[0];
+                    let ee = e.norm_squared();
+                    if !(ee > 0.0) {
+                        continue;
+                    }
+                    let t = ((p - s[0]).dot(&e) / ee).clamp(0.0, 1.0);
+                    let d = (s[0] + e * t - p).norm();
+                    if d < radius && best.map_or(true, |b| d < b.0) {
+                        best = Some((d, e));
+                    }
+                }
+            }
+            best
+        })
+        .collect()
+}
+
+/// Per vertex, the (distance, 3D tangent) of the closest UV polyline within `radius`, measured
+/// through the UV Jacobian of each of the vertex's charts. `None` if the mesh has no UVs.
+#[allow(clippy::type_complexity)]
+fn uv_targets(
+    ctx: &Context,
+    lines: &[Vec<Vector2<f64>>],
+    radius: f64,
+) -> Option<Vec<Option<(f64, Vector3<f64>)>>> {
+    let mesh = ctx.mesh;
+    let uv = mesh.uv.as_ref()?;
+    let face_jacobian: Vec<Option<[Vector3<f64>; 2]>> = (0..mesh.num_faces())
+        .map(|f| {
+            let [p0, p1, p2] = mesh.face_positions(f);
+            let [t0, t1, t2] = uv.face(f);
+            let (e1, e2, d1, d2) = (p1 - p0, p2 - p0, t1 - t0, t2 - t0);
+            let det = d1.x * d2.y - d2.x * d1.y;
+            let scale = d1.norm() * d2.norm();
+            if !(det.abs() > 1e-12 * scale && scale > 0.0) {
+                return None;
+            }
+            let ju = (e1 * d2.y - e2 * d1.y) / det;
+            let jv = (e2 * d1.x - e1 * d2.x) / det;
+            (ju.iter().chain(jv.iter()).all(|c| c.is_finite())).then_some([ju, jv])
+        })
+        .collect();
+    let mut lo = Vector2::repeat(f64::INFINITY);
+    let mut hi = Vector2::repeat(f64::NEG_INFINITY);
+    for p in lines.iter().flatten() {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let r2 = radius * radius;
+    Some(
+        (0..mesh.num_vertices())
+            .map(|v| {
+                // (uv index, angle sum, Σ angle·J) per chart around v.
+                let mut charts: Vec<(u32, f64, [Vector3<f64>; 2])> = Vec::new();
+                for &(f, c) in ctx.vf.of(v) {
+                    let (f, c) = (f as usize, c as usize);
+                    let Some(j) = face_jacobian[f] else { continue };
+                    let tri = mesh.face_positions(f);
+                    let angle = crate::geometry::normals::corner_angle(
+                        &tri[c],
+                        &tri[(c + 1) % 3],
+                        &tri[(c + 2) % 3],
+                    );
+                    let key = uv.corners[f][c];
+                    let k = match charts.iter().position(|x| x.0 == key) {
+                        Some(k) => k,
+                        None => {
+                            charts.push((key, 0.0, [Vector3::zeros(); 2]));
+                            charts.len() - 1
+                        }
+                    };
+                    charts[k].1 += angle;
+                    charts[k].2[0] += j[0] * angle;
+                    charts[k].2[1] += j[1] * angle;
+                }
+                let mut best: Option<(f64, Vector3<f64>)> = None;
+                for (key, total, js) in charts {
+                    if !(total > 0.0) {
+                        continue;
+                    }
+                    let (ju, jv) = (js[0] / total, js[1] / total);
+                    let g = Matrix2::new(ju.dot(&ju), ju.dot(&jv), jv.dot(&ju), jv.dot(&jv));
+                    let smallest = 0.5 * (g.trace() - ((g[(0, 0)] - g[(1, 1)]).powi(2)
+                        + 4.0 * g[(0, 1)].powi(2))
+                    .sqrt());
+                    if !(smallest > 0.0) {
+                        continue;
+                    }
+                    let p = uv.values[key as usize];
+                    let r_uv = radius / smallest.sqrt();
+                    if p.x < lo.x - r_uv || p.x > hi.x + r_uv || p.y < lo.y - r_uv || p.y > hi.y + r_uv
+                    {
+                        continue;
+                    }
+                    for l in lines {
+                        for s in l.windows(2) {
+                            let (_, d2) = closest_on_segment(&p, &s[0], &s[1], &g);
+                            if d2 < r2 && best.map_or(true, |b| d2 < b.0 * b.0) {
+                                let e = s[1] - s[0];
+                                best = Some((d2.sqrt(), ju * e.x + jv * e.y));
+                            }
+                        }
+                    }
+                }
+                best
+            })
+            .collect(),
+    )
+}

@@ -1,0 +1,446 @@
+//! Highlight-editing tools (the paper's §5, docs/math.md §7): they turn a designer's gesture into
+//! target highlight tangents ℓ*ᵢ (and, for the stencil, a new grain field; for the light tool, a
+//! new light) for the optimizer of [`crate::solve`].
+//!
+//! Every brush tool acts on a support B — the vertices within a radius of a centre — with the
+//! planar parametrization of a plane fitted to B, scaled so that B lies in the unit disk, and the
+//! fall-off w(x, y) = (1 − x² − y²)² ([`support`]). The tools:
+//!
+//! - **bend / expand** ([`warp`]): ℓ*ᵢ = J_W(q) ℓ_q with q = W⁻¹(pᵢ), which moves the potential
+//!   highlight curves through B by the warp W;
+//! - **stencil** ([`stencil`]): u*ᵢ = ±h × nᵢ inside B (a highlight *region*), blended into the
+//!   surrounding field by a connection-Laplacian solve;
+//! - **light** and **move_light** ([`light`]): the light that produces a wanted ℓ at a vertex
+//!   with the current field; or a new key light with the old highlights as targets;
+//! - **curve** ([`curve`], beyond the paper): designer-drawn curves (UV polylines, an SVG file, or
+//!   3D polylines) whose tangents become the targets of the vertices near them.
+//!
+//! Edits apply in order; each one reads the targets left by the ones before it (a bend after a
+//! bend composes the two warps). Vertices outside every edit keep their current ℓ as target, with
+//! weight [`EditOptions::outside_weight`].
+
+pub mod curve;
+pub mod light;
+pub mod stencil;
+pub mod support;
+pub mod warp;
+
+use nalgebra::{Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::{Geometry, GradientForm};
+use crate::highlight::critical::{critical_points, DEFAULT_CRITICAL_THRESHOLD};
+use crate::highlight::{half_vectors, highlight_field, Lighting, Symmetry};
+use crate::mesh::{Mesh, VertexFaces};
+use crate::{Error, Result};
+
+pub use curve::CurveEdit;
+pub use light::{LightEdit, MoveLightEdit};
+pub use stencil::StencilEdit;
+pub use support::{Centre, Metric};
+pub use warp::{WarpEdit, WarpKind};
+
+/// What the tools edit: the surface, the current field and lighting.
+#[derive(Clone, Copy, Debug)]
+pub struct EditInput<'a> {
+    /// The surface.
+    pub mesh: &'a Mesh,
+    /// Its per-vertex geometry.
+    pub geometry: &'a Geometry,
+    /// The current grain angle per vertex (in the geometry's frames).
+    pub phi: &'a [f64],
+    /// The current light and view.
+    pub lighting: &'a Lighting,
+    /// The half vectors of `lighting` at every vertex.
+    pub h: &'a [Vector3<f64>],
+    /// k = 1 or 2.
+    pub symmetry: Symmetry,
+    /// Which Eq. 10 regression computes ∇φ.
+    pub gradient_form: GradientForm,
+}
+
+/// Options of [`apply_edits`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct EditOptions {
+    /// Weight of the "keep the current ℓ" targets of the vertices outside every edit
+    /// (default 1; 0 leaves them without a target).
+    pub outside_weight: f64,
+}
+
+impl Default for EditOptions {
+    fn default() -> Self {
+        EditOptions { outside_weight: 1.0 }
+    }
+}
+
+impl EditOptions {
+    /// Range-checks the options.
+    pub fn validate(&self) -> Result<()> {
+        check_weight("outside_weight", self.outside_weight)
+    }
+}
+
+/// One item of the scene's `edits` list: `{"tool": "bend", ...}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(tag = "tool", rename_all = "snake_case")]
+pub enum Edit {
+    /// Bend the highlights through the brush towards its +y direction (paper §5, Fig. 8).
+    Bend(WarpEdit),
+    /// Push the highlights through the brush away from its x axis (paper §5, Fig. 9).
+    Expand(WarpEdit),
+    /// Make the brush a highlight region: u ⟂ h (paper §5, Fig. 11).
+    Stencil(StencilEdit),
+    /// Find the light that gives a wanted ℓ at a vertex with the current field (paper §5, Fig. 10).
+    Light(LightEdit),
+    /// Move the key light and keep the current highlights as targets (paper §5, Fig. 10).
+    MoveLight(MoveLightEdit),
+    /// Highlight curves drawn by the designer (UV polylines, SVG or 3D polylines).
+    Curve(CurveEdit),
+}
+
+impl Edit {
+    /// The tool's name as written in the scene.
+    pub fn tool(&self) -> &'static str {
+        match self {
+            Edit::Bend(_) => "bend",
+            Edit::Expand(_) => "expand",
+            Edit::Stencil(_) => "stencil",
+            Edit::Light(_) => "light",
+            Edit::MoveLight(_) => "move_light",
+            Edit::Curve(_) => "curve",
+        }
+    }
+
+    /// Range-checks every number; error keys are relative to the edit (`radius`, `centre.point`).
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            Edit::Bend(e) => e.validate(WarpKind::Bend),
+            Edit::Expand(e) => e.validate(WarpKind::Expand),
+            Edit::Stencil(e) => e.validate(),
+            Edit::Light(e) => e.validate(),
+            Edit::MoveLight(e) => e.validate(),
+            Edit::Curve(e) => e.validate(),
+        }
+    }
+}
+
+/// Validates a list of edits; error keys are `[k].key` (the scene loader adds `edits`).
+pub fn validate_edits(edits: &[Edit]) -> Result<()> {
+    for (k, e) in edits.iter().enumerate() {
+        e.validate().map_err(|err| at_edit(k, e.tool(), err))?;
+    }
+    Ok(())
+}
+
+/// What [`apply_edits`] produces: the inputs of the optimizer.
+#[derive(Clone, Debug)]
+pub struct EditResult {
+    /// The grain angles after the stencils (the optimizer's starting field).
+    pub phi: Vec<f64>,
+    /// The lighting after the light tools.
+    pub lighting: Lighting,
+    /// The half vectors of `lighting`.
+    pub h: Vec<Vector3<f64>>,
+    /// World-space target tangent ℓ*ᵢ (in the tangent plane of vertex i, not normalized);
+    /// `None` where the vertex has no target (weight 0, or a critical point, where ℓ does not
+    /// depend on the field).
+    pub target_ell: Vec<Option<Vector3<f64>>>,
+    /// Weight of each target (0 where `target_ell` is `None`).
+    pub weight: Vec<f64>,
+    /// Inside the support of some edit (the vertices the optimizer should free).
+    pub support: Vec<bool>,
+    /// One report per edit.
+    pub reports: Vec<EditReport>,
+}
+
+/// What one edit did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct EditReport {
+    /// Position in the `edits` list.
+    pub index: usize,
+    /// The tool's name.
+    pub tool: String,
+    /// Vertices that received a target (or, for the light tools, the vertices of the search).
+    pub vertices: usize,
+    /// Critical points (hᵀn above the threshold) inside the support: left without a target.
+    pub critical_vertices: usize,
+    /// Warps: the largest angle between ℓ* and the ℓ it replaced, degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_turn_deg: Option<f64>,
+    /// Stencil: vertices of the blend band around the support.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blend_vertices: Option<usize>,
+    /// Stencil: the largest |hᵀu| inside the support after the edit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_h_dot_u: Option<f64>,
+    /// Light tools: the vertex of the search (light) or none (move_light).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<usize>,
+    /// Light tools: the new light direction (unit, towards the light).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light: Option<[f64; 3]>,
+    /// Light tool: the angle (mod π) between the wanted ℓ and the ℓ the new light produces,
+    /// degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub angle_error_deg: Option<f64>,
+    /// Light tools: the angle between the old and the new light, degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_turn_deg: Option<f64>,
+    /// move_light: the median angle (mod π) between ℓ under the old and the new light before
+    /// re-optimization, degrees: how far the highlights would move if the field were kept.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub median_ell_change_deg: Option<f64>,
+    /// Curve: the number of polylines and of their segments.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polylines: Option<usize>,
+    /// Curve: segments after flattening.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub segments: Option<usize>,
+}
+
+impl EditReport {
+    fn new(index: usize, tool: &str) -> Self {
+        EditReport { index, tool: tool.into(), ..Default::default() }
+    }
+}
+
+/// Applies `edits` in order and returns the optimizer's targets.
+///
+/// Errors: an invalid edit (`[k].key`), an edit whose support holds no vertex, a warp that cannot
+/// be inverted, a light tool with no admissible light, a curve tool without UVs.
+pub fn apply_edits(
+    input: &EditInput,
+    edits: &[Edit],
+    options: &EditOptions,
+) -> Result<EditResult> {
+    options.validate()?;
+    validate_edits(edits)?;
+    let n = input.mesh.num_vertices();
+    if input.geometry.num_vertices() != n || input.phi.len() != n || input.h.len() != n {
+        return Err(Error::invalid_arg(
+            "edit input",
+            format!(
+                "{} vertices, but geometry {}, phi {}, h {}",
+                n,
+                input.geometry.num_vertices(),
+                input.phi.len(),
+                input.h.len()
+            ),
+        ));
+    }
+    let ctx = Context::new(input);
+    let mut st = State::new(&ctx, input);
+    let mut reports = Vec::with_capacity(edits.len());
+    for (k, e) in edits.iter().enumerate() {
+        let mut report = EditReport::new(k, e.tool());
+        let r = match e {
+            Edit::Bend(w) => warp::apply(&ctx, &mut st, w, WarpKind::Bend, &mut report),
+            Edit::Expand(w) => warp::apply(&ctx, &mut st, w, WarpKind::Expand, &mut report),
+            Edit::Stencil(s) => stencil::apply(&ctx, &mut st, s, &mut report),
+            Edit::Light(l) => light::apply(&ctx, &mut st, l, &mut report),
+            Edit::MoveLight(l) => light::apply_move(&ctx, &mut st, l, &mut report),
+            Edit::Curve(c) => curve::apply(&ctx, &mut st, c, &mut report),
+        };
+        r.map_err(|err| at_edit(k, e.tool(), err))?;
+        reports.push(report);
+    }
+    st.finish(options, reports)
+}
+
+/// The targets q(ℓ̄*ᵢ) of [`crate::solve::HighlightTerm::target_q`]: ℓ* in the frame of vertex
+/// i (ℓ̄* = [tᵢ bᵢ]ᵀℓ*) through the regularized tensor of [`crate::highlight::tensor::q`].
+pub fn target_q(
+    geometry: &Geometry,
+    target_ell: &[Option<Vector3<f64>>],
+    epsilon: f64,
+) -> Vec<Option<Vector2<f64>>> {
+    geometry
+        .frames
+        .iter()
+        .zip(target_ell)
+        .map(|(f, t)| t.map(|l| crate::highlight::tensor::q(&f.to_local(&l), epsilon)))
+        .collect()
+}
+
+/// Read-only data shared by the tools.
+pub(crate) struct Context<'a> {
+    pub mesh: &'a Mesh,
+    pub geom: &'a Geometry,
+    pub symmetry: Symmetry,
+    pub form: GradientForm,
+    pub vf: VertexFaces,
+    pub normals: Vec<Vector3<f64>>,
+}
+
+impl<'a> Context<'a> {
+    fn new(input: &EditInput<'a>) -> Self {
+        Context {
+            mesh: input.mesh,
+            geom: input.geometry,
+            symmetry: input.symmetry,
+            form: input.gradient_form,
+            vf: VertexFaces::new(input.mesh),
+            normals: input.geometry.frames.iter().map(|f| f.n).collect(),
+        }
+    }
+
+    /// ℓ of the field `phi` under half vectors `h` (Eq. 7).
+    pub fn ell_of(&self, phi: &[f64], h: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+        highlight_field(self.geom, phi, self.symmetry, self.form, h).ell
+    }
+}
+
+/// The state the edits transform, in order.
+pub(crate) struct State {
+    pub phi: Vec<f64>,
+    pub lighting: Lighting,
+    pub h: Vec<Vector3<f64>>,
+    /// ℓ of `phi` under `lighting` (the "current" ℓ).
+    pub ell: Vec<Vector3<f64>>,
+    /// hᵀn above the critical threshold.
+    pub critical: Vec<bool>,
+    /// The target field so far.
+    pub target: Vec<Vector3<f64>>,
+    /// Weight of an edit's target; `None` where no edit has set one yet.
+    pub edit_weight: Vec<Option<f64>>,
+    /// Inside some edit's support.
+    pub support: Vec<bool>,
+    /// Set by move_light: the untargeted vertices keep the old light's ℓ from then on.
+    pub pinned: bool,
+}
+
+impl State {
+    fn new(ctx: &Context, input: &EditInput) -> Self {
+        let ell = ctx.ell_of(input.phi, input.h);
+        let n = ell.len();
+        State {
+            phi: input.phi.to_vec(),
+            lighting: *input.lighting,
+            h: input.h.to_vec(),
+            critical: critical_points(
+                input.h,
+                ctx.normals.iter().copied(),
+                DEFAULT_CRITICAL_THRESHOLD,
+            ),
+            target: ell.clone(),
+            ell,
+            edit_weight: vec![None; n],
+            support: vec![false; n],
+            pinned: false,
+        }
+    }
+
+    /// Recomputes h, ℓ and the critical points after φ or the lighting changed, and refreshes
+    /// the "keep current" targets of the vertices no edit has set (unless pinned).
+    pub fn refresh(&mut self, ctx: &Context, lighting_changed: bool) {
+        if lighting_changed {
+            self.h = half_vectors(&self.lighting, &ctx.mesh.positions, &ctx.normals);
+            self.critical =
+                critical_points(&self.h, ctx.normals.iter().copied(), DEFAULT_CRITICAL_THRESHOLD);
+        }
+        self.ell = ctx.ell_of(&self.phi, &self.h);
+        if !self.pinned {
+            for i in 0..self.ell.len() {
+                if self.edit_weight[i].is_none() {
+                    self.target[i] = self.ell[i];
+                }
+            }
+        }
+    }
+
+    /// Sets the target of vertex `i` from an edit of weight `w`.
+    pub fn set_target(&mut self, i: usize, ell: Vector3<f64>, w: f64) {
+        self.target[i] = ell;
+        self.edit_weight[i] = Some(w);
+        self.support[i] = true;
+    }
+
+    fn finish(self, options: &EditOptions, reports: Vec<EditReport>) -> Result<EditResult> {
+        let n = self.target.len();
+        let mut target_ell = vec![None; n];
+        let mut weight = vec![0.0; n];
+        for i in 0..n {
+            let w = self.edit_weight[i].unwrap_or(options.outside_weight);
+            if self.critical[i] || w <= 0.0 {
+                continue;
+            }
+            let t = self.target[i];
+            if !t.iter().all(|c| c.is_finite()) {
+                return Err(Error::Numerical {
+                    stage: "edits",
+                    message: format!("the target of vertex {i} is not finite"),
+                });
+            }
+            target_ell[i] = Some(t);
+            weight[i] = w;
+        }
+        if let Some(i) = self.phi.iter().position(|p| !p.is_finite()) {
+            return Err(Error::Numerical {
+                stage: "edits",
+                message: format!("the grain angle of vertex {i} is not finite"),
+            });
+        }
+        Ok(EditResult {
+            phi: self.phi,
+            lighting: self.lighting,
+            h: self.h,
+            target_ell,
+            weight,
+            support: self.support,
+            reports,
+        })
+    }
+}
+
+/// Prefixes the key of a setting error with the edit's index; names the edit in other errors.
+fn at_edit(k: usize, tool: &str, err: Error) -> Error {
+    match err {
+        Error::Setting { key, message } => Error::setting(format!("[{k}].{key}"), message),
+        Error::Numerical { stage, message } => {
+            Error::Numerical { stage, message: format!("edit [{k}] ({tool}): {message}") }
+        }
+        other => other,
+    }
+}
+
+/// A weight must be finite and ≥ 0.
+pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
+    if !(w.is_finite() && w >= 0.0) {
+        return Err(Error::setting(key, format!("must be a finite number ≥ 0, got {w}")));
+    }
+    Ok(())
+}
+
+/// A radius must be finite and > 0.
+pub(crate) fn check_radius(key: &str, r: f64) -> Result<()> {
+    if !(r.is_finite() && r > 0.0) {
+        return Err(Error::setting(key, format!("must be a finite number > 0, got {r}")));
+    }
+    Ok(())
+}
+
+/// A direction must be finite and non-zero.
+pub(crate) fn check_direction(key: &str, d: &[f64; 3]) -> Result<()> {
+    let ok = d.iter().all(|c| c.is_finite()) && d.iter().any(|&c| c != 0.0);
+    if !ok {
+        return Err(Error::setting(
+            key,
+            format!("must be a finite non-zero vector, got [{}, {}, {}]", d[0], d[1], d[2]),
+        ));
+    }
+    Ok(())
+}
+
+/// The angle between two directions modulo π (0 to 90°), in degrees; 90° if either vanishes.
+pub(crate) fn line_angle_deg(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let (na, nb) = (a.norm(), b.norm());
+    if !(na > 0.0 && nb > 0.0) {
+        return 90.0;
+    }
+    (a.dot(b).abs() / (na * nb)).min(1.0).acos().to_degrees()
+}
+
+pub(crate) fn one() -> f64 {
+    1.0
+}

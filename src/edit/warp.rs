@@ -1,0 +1,258 @@
+//! The warp tools of the paper's §5 (Fig. 7–9): bend and expand.
+//!
+//! A warp W moves points of the brush plane along y: W(x, y) = (x, y + s·d(x, y)), with
+//!
+//! ```text
+//! bend:    d(x, y) = w(x, y)/2
+//! expand:  d(x, y) = w(x, y)·g(y)/2,   g(y) = sin y / (sin² y + δ²)^(1/4),  δ = 0.02
+//! ```
+//!
+//! w = (1 − x² − y²)² the fall-off and s the strength (s = 1 is the paper's tool). The paper
+//! prints √(sin y) for the expand tool, imaginary for y < 0; math.md §5.7 reads it as
+//! sign(y)√|sin y|, whose y-derivative is infinite at y = 0. g is that function regularized:
+//! odd, smooth, equal to sign(y)√|sin y| within 1% for |y| > 0.2, with g′(0) = δ^(−1/2) ≈ 7.
+//! W is the identity on and outside the unit circle, keeps x, and is a bijection of the disk as
+//! long as ∂y′/∂y = 1 + s ∂d/∂y > 0, i.e. for s within [`strength_range`].
+//!
+//! The targets (paper §5): ℓ*ᵢ = J_W(q) ℓ_q with q = W⁻¹(pᵢ), pᵢ the planar coordinates of vertex
+//! i and J_W = [[1, 0], [s ∂d/∂x, 1 + s ∂d/∂y]]. W⁻¹ is solved along the vertical line x = xᵢ by
+//! Newton's method safeguarded by bisection (W maps the chord of the disk at x onto itself,
+//! monotonically). ℓ_q is interpolated from the current targets (see
+//! [`super::support::PlaneLocator`]), mapped to the plane by [eₓ e_y]ᵀ, warped by J_W, and lifted
+//! back to the tangent plane of vertex i ([`super::support::Support::vector_from_plane`]).
+
+use nalgebra::{Matrix2, Vector2};
+use serde::{Deserialize, Serialize};
+
+use super::support::{Centre, Metric, PlaneLocator, Support};
+use super::{check_direction, check_radius, check_weight, line_angle_deg, Context, EditReport, State};
+use crate::highlight::Symmetry;
+use crate::{Error, Result};
+
+/// The regularization δ of the expand tool's √|sin y|.
+pub const EXPAND_DELTA: f64 = 0.02;
+
+/// Which warp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WarpKind {
+    /// W_b(x, y) = (x, y + s·w/2): highlights bend towards +y.
+    Bend,
+    /// W_e(x, y) = (x, y + s·w·g(y)/2): highlights move away from the x axis.
+    Expand,
+}
+
+/// The admissible strengths: W stays a bijection of the unit disk (min ∂y′/∂y > 0, with a
+/// margin). Bend: max |∂d/∂y| = 4/(3√3)·… = 0.770 at (0, ∓1/√3), so |s| < 1.299; expand: ∂d/∂y
+/// ranges over [−0.511, 3.54] (δ = 0.02), so −0.283 < s < 1.957.
+pub fn strength_range(kind: WarpKind) -> (f64, f64) {
+    match kind {
+        WarpKind::Bend => (-1.25, 1.25),
+        WarpKind::Expand => (-0.25, 1.9),
+    }
+}
+
+/// d(x, y) and its partial derivatives (∂d/∂x, ∂d/∂y); W(x, y) = (x, y + s·d).
+pub fn displacement(kind: WarpKind, p: &Vector2<f64>) -> (f64, f64, f64) {
+    let s = 1.0 - p.norm_squared();
+    if s <= 0.0 {
+        return (0.0, 0.0, 0.0);
+    }
+    let (w, wx, wy) = (s * s, -4.0 * p.x * s, -4.0 * p.y * s);
+    match kind {
+        WarpKind::Bend => (0.5 * w, 0.5 * wx, 0.5 * wy),
+        WarpKind::Expand => {
+            let (sn, cs) = p.y.sin_cos();
+            let dd = EXPAND_DELTA * EXPAND_DELTA;
+            let base = sn * sn + dd;
+            let g = sn / base.powf(0.25);
+            let gp = cs * (0.5 * sn * sn + dd) / base.powf(1.25);
+            (0.5 * w * g, 0.5 * wx * g, 0.5 * (wy * g + w * gp))
+        }
+    }
+}
+
+/// W(p) for strength `s`.
+pub fn warp(kind: WarpKind, s: f64, p: &Vector2<f64>) -> Vector2<f64> {
+    Vector2::new(p.x, p.y + s * displacement(kind, p).0)
+}
+
+/// The Jacobian J_W(p).
+pub fn jacobian(kind: WarpKind, s: f64, p: &Vector2<f64>) -> Matrix2<f64> {
+    let (_, dx, dy) = displacement(kind, p);
+    Matrix2::new(1.0, 0.0, s * dx, 1.0 + s * dy)
+}
+
+/// W⁻¹(p): Newton's method on y ↦ y + s·d(x, y) − p_y along the chord x = p_x, safeguarded by
+/// bisection. `None` if the root is not found or W is not monotone there (∂y′/∂y ≤ 0).
+pub fn inverse(kind: WarpKind, s: f64, p: &Vector2<f64>) -> Option<Vector2<f64>> {
+    let half = (1.0 - p.x * p.x).max(0.0).sqrt();
+    if s == 0.0 || half == 0.0 || p.y.abs() >= half {
+        return Some(*p);
+    }
+    let f = |y: f64| {
+        let (d, _, dy) = displacement(kind, &Vector2::new(p.x, y));
+        (y + s * d - p.y, 1.0 + s * dy)
+    };
+    let (mut lo, mut hi) = (-half, half);
+    let mut y = p.y;
+    for _ in 0..200 {
+        let (fy, dfy) = f(y);
+        if fy.abs() <= 1e-14 {
+            break;
+        }
+        if fy < 0.0 {
+            lo = y;
+        } else {
+            hi = y;
+        }
+        let newton = y - fy / dfy;
+        y = if dfy > 0.0 && newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+        if hi - lo <= 1e-15 {
+            break;
+        }
+    }
+    let (fy, dfy) = f(y);
+    (fy.abs() <= 1e-10 && dfy > 0.0 && y.is_finite()).then(|| Vector2::new(p.x, y))
+}
+
+/// A bend or expand edit: `{"tool": "bend", "centre": {"vertex": 12}, "radius": 5}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WarpEdit {
+    /// The brush centre.
+    #[serde(alias = "center")]
+    pub centre: Centre,
+    /// The brush radius, scene units.
+    pub radius: f64,
+    /// How distances are measured (default `geodesic`).
+    #[serde(default)]
+    pub metric: Metric,
+    /// The warp strength s (default 1, the paper's tool; see [`strength_range`]; negative
+    /// bends the other way).
+    #[serde(default = "super::one")]
+    pub strength: f64,
+    /// A world vector whose projection onto the brush plane is the brush's +y axis (the way
+    /// highlights are pushed). Default: across the current highlights at the brush.
+    #[serde(default)]
+    pub direction: Option<[f64; 3]>,
+    /// Weight of the edit's targets (default 1).
+    #[serde(default = "super::one")]
+    pub weight: f64,
+}
+
+impl WarpEdit {
+    /// Range-checks every number.
+    pub fn validate(&self, kind: WarpKind) -> Result<()> {
+        self.centre.validate()?;
+        check_radius("radius", self.radius)?;
+        let (lo, hi) = strength_range(kind);
+        if !(self.strength.is_finite() && self.strength >= lo && self.strength <= hi) {
+            return Err(Error::setting(
+                "strength",
+                format!(
+                    "must be within [{lo}, {hi}] (beyond, the warp folds the brush onto \
+                     itself), got {}",
+                    self.strength
+                ),
+            ));
+        }
+        if let Some(d) = &self.direction {
+            check_direction("direction", d)?;
+        }
+        check_weight("weight", self.weight)
+    }
+}
+
+/// Applies a warp edit to the state.
+pub(crate) fn apply(
+    ctx: &Context,
+    st: &mut State,
+    e: &WarpEdit,
+    kind: WarpKind,
+    report: &mut EditReport,
+) -> Result<()> {
+    let support =
+        Support::new(ctx, &e.centre, e.radius, e.metric, e.direction.as_ref(), &st.target)?;
+    let locator = PlaneLocator::new(ctx, &support);
+    let align = ctx.symmetry == Symmetry::Line;
+    let mut targets = Vec::with_capacity(support.vertices.len());
+    let mut max_turn: f64 = 0.0;
+    let mut critical = 0;
+    for (&v, p) in support.vertices.iter().zip(&support.xy) {
+        if st.critical[v] {
+            critical += 1;
+            continue;
+        }
+        let q = inverse(kind, e.strength, p).ok_or_else(|| Error::Numerical {
+            stage: "warp inverse",
+            message: format!(
+                "W⁻¹ not found at vertex {v} (planar point ({:.4}, {:.4})); lower the strength",
+                p.x, p.y
+            ),
+        })?;
+        let pos = ctx.mesh.positions[v];
+        let ell_q = locator.interpolate(ctx, &q, &pos, &st.target, align);
+        let planar = jacobian(kind, e.strength, &q) * support.vector_to_plane(&ell_q);
+        let new = support.vector_from_plane(&ctx.geom.frames[v], &planar);
+        max_turn = max_turn.max(line_angle_deg(&new, &st.target[v]));
+        targets.push((v, new));
+    }
+    for (v, t) in &targets {
+        st.set_target(*v, *t, e.weight);
+    }
+    for &v in &support.vertices {
+        st.support[v] = true;
+    }
+    report.vertices = targets.len();
+    report.critical_vertices = critical;
+    report.max_turn_deg = Some(max_turn);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Scans ∂y′/∂y = 1 + s ∂d/∂y over the disk at the ends of the admissible range.
+    #[test]
+    fn admissible_strengths_keep_the_warp_monotone() {
+        for kind in [WarpKind::Bend, WarpKind::Expand] {
+            let (lo, hi) = strength_range(kind);
+            let n = 400;
+            let mut min_dy: f64 = f64::INFINITY;
+            let mut max_dy: f64 = f64::NEG_INFINITY;
+            for i in 0..=n {
+                for j in 0..=n {
+                    let p = Vector2::new(-1.0 + 2.0 * i as f64 / n as f64, -1.0 + 2.0 * j as f64 / n as f64);
+                    let (_, _, dy) = displacement(kind, &p);
+                    min_dy = min_dy.min(dy);
+                    max_dy = max_dy.max(dy);
+                }
+            }
+            assert!(1.0 + hi * min_dy > 0.02, "{kind:?}: {min_dy}");
+            assert!(1.0 + lo * max_dy > 0.02, "{kind:?}: {max_dy}");
+        }
+    }
+
+    #[test]
+    fn inverse_undoes_the_warp() {
+        for kind in [WarpKind::Bend, WarpKind::Expand] {
+            for &(x, y) in &[(0.0, 0.0), (0.3, -0.4), (-0.7, 0.5), (0.1, 0.001), (0.0, 0.9)] {
+                let p = Vector2::new(x, y);
+                let w = warp(kind, 1.0, &p);
+                let back = inverse(kind, 1.0, &w).unwrap();
+                assert!((back - p).norm() < 1e-9, "{kind:?} {p:?} {back:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn regularized_expand_matches_the_paper_away_from_the_axis() {
+        for &y in &[0.2f64, 0.5, -0.7, 1.0] {
+            let (d, _, _) = displacement(WarpKind::Expand, &Vector2::new(0.0, y));
+            let w = (1.0 - y * y).powi(2);
+            let paper = 0.5 * w * y.signum() * y.sin().abs().sqrt();
+            assert!((d - paper).abs() <= 0.01 * paper.abs(), "{y}: {d} vs {paper}");
+        }
+    }
+}
