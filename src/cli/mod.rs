@@ -3,6 +3,7 @@
 mod field;
 mod inspect;
 mod mesh_args;
+mod optimize;
 mod progress;
 mod schema;
 
@@ -30,6 +31,8 @@ enum Command {
     Inspect(inspect::InspectArgs),
     /// Geometry, an initial grain field and its highlight field (Eq. 7), written as FIELD.json.
     Field(field::FieldArgs),
+    /// Highlight edits and the solve (paper §4–5): FIELD.json with the field before and after.
+    Optimize(optimize::OptimizeArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
 }
@@ -40,5 +43,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Field(a) => field::run(a, cli.quiet),
         Command::Schema(a) => schema::run(a),
+        Command::Optimize(a) => optimize::run(a, cli.quiet),
     }
 }

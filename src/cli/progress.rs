@@ -41,3 +41,12 @@ impl Drop for Stages {
         }
     }
 }
+
+/// A [`Stages`] spinner that also observes the library's pipeline stages.
+pub type Spinner = Stages;
+
+impl grainline::pipeline::Observer for Stages {
+    fn stage(&self, name: &str) {
+        Stages::stage(self, name);
+    }
+}

@@ -5,6 +5,8 @@
 //! as-brushed render effect asks for them; the preview renders only when the scene has a
 //! `render` section. Every stage is timed, and the times add up to the run's wall time.
 
+pub mod optimize;
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -49,10 +49,10 @@ pub struct Scene {
     pub field: FieldSection,
     /// Highlight edits, applied in order.
     #[serde(default)]
-    pub edits: Vec<serde_json::Value>,
-    /// The optimizer.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub solver: Option<serde_json::Value>,
+    pub edits: Vec<crate::edit::Edit>,
+    /// The optimizer: energies, fabrication constraints, stopping rules.
+    #[serde(default)]
+    pub solver: crate::solve::SolverSettings,
     /// Brush strokes and their exports (SVG, G-code); absent: no tracing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub toolpaths: Option<serde_json::Value>,
@@ -100,6 +100,8 @@ impl Scene {
         }
         self.view.validate().map_err(|e| prefix("view", e))?;
         self.field.validate().map_err(|e| prefix("field", e))?;
+        crate::edit::validate_edits(&self.edits).map_err(|e| prefix("edits", e))?;
+        self.solver.validate().map_err(|e| prefix("solver", e))?;
         Ok(())
     }
 }

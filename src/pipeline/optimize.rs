@@ -1,0 +1,142 @@
+//! The edit and solve stages: targets from the scene's edits, then the sparse LM.
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use super::{Prepared, Stages};
+use crate::edit::{apply_edits, target_q, Edit, EditInput, EditOptions, EditReport};
+use crate::field::FieldFile;
+use crate::highlight::critical::critical_points;
+use crate::highlight::tensor::default_epsilon;
+use crate::highlight::{highlight_field, HighlightField, Lighting};
+use crate::scene::LoadedScene;
+use crate::solve::{optimize, HighlightTerm, OptimizeReport};
+use crate::Result;
+
+/// The field after the edits and the solve.
+pub struct Optimized {
+    /// φ after the solve.
+    pub phi: Vec<f64>,
+    /// φ after the edits' direct changes (stencils), before the solve.
+    pub phi_edited: Vec<f64>,
+    /// The lighting after the light tools.
+    pub lighting: Lighting,
+    /// Half vectors of that lighting.
+    pub h: Vec<Vector3<f64>>,
+    /// ∇φ, m and ℓ of the solved field.
+    pub highlight: HighlightField,
+    /// Critical points under that lighting.
+    pub critical: Vec<bool>,
+    /// Target ℓ* per vertex.
+    pub target_ell: Vec<Option<Vector3<f64>>>,
+    /// Vertices inside an edit's support.
+    pub support: Vec<bool>,
+    /// What the edits and the solver did.
+    pub report: OptimizeStageReport,
+}
+
+/// The edits' and the solver's report.
+#[derive(Clone, Debug, Serialize)]
+pub struct OptimizeStageReport {
+    /// One entry per edit.
+    pub edits: Vec<EditReport>,
+    /// The key light after the edits (it differs from the scene's when a light tool ran).
+    pub key_light: [f64; 3],
+    /// Vertices inside an edit's support.
+    pub edited_vertices: usize,
+    /// The solver.
+    pub solver: OptimizeReport,
+}
+
+/// Applies the edits and solves for φ.
+pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Result<Optimized> {
+    stages.start("edits");
+    let settings = &s.scene.solver;
+    // Paths in edits are relative to the scene file.
+    let edits: Vec<Edit> = s
+        .scene
+        .edits
+        .iter()
+        .map(|e| match e {
+            Edit::Curve(c) if c.svg.is_some() => {
+                let mut c = c.clone();
+                c.svg = c.svg.map(|p| s.input(&p).display().to_string());
+                Edit::Curve(c)
+            }
+            other => other.clone(),
+        })
+        .collect();
+    let g = &p.field.geometry;
+    let symmetry = p.field_options.symmetry;
+    let form = p.field_options.gradient_form;
+    let input = EditInput {
+        mesh: &p.mesh,
+        geometry: g,
+        phi: &p.field.phi,
+        lighting: &p.field_options.lighting,
+        h: &p.field.h,
+        symmetry,
+        gradient_form: form,
+    };
+    let er = apply_edits(&input, &edits, &EditOptions { outside_weight: settings.outside_weight })
+        .map_err(|e| crate::scene::prefix("edits", e))?;
+    let normals: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
+    let h = er.h.clone();
+    stages.start("solve");
+    let before = highlight_field(g, &er.phi, symmetry, form, &h);
+    let m_norms: Vec<f64> = before.m.iter().map(|m| m.norm()).collect();
+    let epsilon = default_epsilon(&m_norms);
+    let term = HighlightTerm {
+        geometry: g,
+        h: &h,
+        symmetry,
+        form,
+        epsilon,
+        target_q: target_q(g, &er.target_ell, epsilon),
+        weight: er.weight.clone(),
+    };
+    let solved = optimize(&p.mesh, &term, &er.phi, &er.support, settings)
+        .map_err(|e| crate::scene::prefix("solver", e))?;
+    let highlight = highlight_field(g, &solved.phi, symmetry, form, &h);
+    let critical = critical_points(&h, normals.into_iter(), p.field_options.critical_threshold);
+    let l = er.lighting.light;
+    Ok(Optimized {
+        phi: solved.phi,
+        phi_edited: er.phi,
+        lighting: er.lighting,
+        h,
+        highlight,
+        critical,
+        target_ell: er.target_ell,
+        support: er.support.clone(),
+        report: OptimizeStageReport {
+            edits: er.reports,
+            key_light: [l.x, l.y, l.z],
+            edited_vertices: er.support.iter().filter(|&&s| s).count(),
+            solver: solved.report,
+        },
+    })
+}
+
+/// FIELD.json of an optimized field: the `field` format plus `phi_before`, `u_before`,
+/// `phi` and `target_ell`.
+pub fn optimized_field_file(p: &Prepared, o: &Optimized) -> Result<FieldFile> {
+    let mut options = p.field_options.clone();
+    options.lighting = o.lighting;
+    let result = crate::field::FieldResult {
+        geometry: p.field.geometry.clone(),
+        phi: o.phi.clone(),
+        h: o.h.clone(),
+        highlight: o.highlight.clone(),
+        critical: o.critical.clone(),
+        fallback_vertices: p.field.fallback_vertices.clone(),
+    };
+    let mut file = FieldFile::new(&p.mesh, &p.mesh_name, &options, &result)?;
+    let arr = |v: &Vector3<f64>| [v.x, v.y, v.z];
+    file.phi_before = Some(p.field.phi.clone());
+    file.u_before = Some(p.field.geometry.directions_of(&p.field.phi).iter().map(arr).collect());
+    file.phi = Some(o.phi.clone());
+    file.target_ell = Some(o.target_ell.iter().map(|t| t.as_ref().map(arr)).collect());
+    file.check_finite()?;
+    Ok(file)
+}
