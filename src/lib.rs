@@ -15,6 +15,7 @@ pub mod geometry;
 pub mod highlight;
 pub mod mesh;
 pub mod output;
+pub mod render;
 pub mod solve;
 
 pub use error::{Error, Result};
