@@ -12,7 +12,9 @@ use std::time::Instant;
 
 use grainline::highlight::Symmetry;
 use grainline::render::settings::LicSettings;
-use grainline::render::{render, Camera, LightSpec, Material, RenderInput, RenderSettings, ToneMap};
+use grainline::render::{
+    render, Camera, LightSpec, Material, RenderInput, RenderSettings, ToneMap,
+};
 use nalgebra::Vector3;
 
 struct Torus {
@@ -60,7 +62,11 @@ fn three_lights() -> Vec<LightSpec> {
         colour: [1.0; 3],
         key,
     };
-    vec![d([0.3, -0.6, 1.0], 2.0, true), d([-1.0, 0.2, 0.4], 0.8, false), d([0.6, 0.8, -0.2], 0.5, false)]
+    vec![
+        d([0.3, -0.6, 1.0], 2.0, true),
+        d([-1.0, 0.2, 0.4], 0.8, false),
+        d([0.6, 0.8, -0.2], 0.5, false),
+    ]
 }
 
 fn stats(mut v: Vec<f64>) -> (f64, f64, f64) {
@@ -132,7 +138,8 @@ fn write_sky(path: &std::path::Path) {
             let ph = std::f64::consts::TAU * (i as f64 + 0.5) / w as f64 - std::f64::consts::PI;
             let d = Vector3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
             let sun = Vector3::new(0.4, -0.5, 0.75).normalize();
-            let mut c = if d.z > 0.0 { [0.4, 0.55, 0.9].map(|x| x * (0.4 + d.z)) } else { [0.15; 3] };
+            let mut c =
+                if d.z > 0.0 { [0.4, 0.55, 0.9].map(|x| x * (0.4 + d.z)) } else { [0.15; 3] };
             if d.dot(&sun) > 0.995 {
                 c = [40.0, 38.0, 34.0];
             }
@@ -159,7 +166,8 @@ fn main() {
         mesh.faces.len(),
         t.elapsed().as_secs_f64() * 1e3
     );
-    let mut input = RenderInput::new(&mesh.pos, &mesh.faces, &mesh.normals, &mesh.u, Symmetry::Line);
+    let mut input =
+        RenderInput::new(&mesh.pos, &mesh.faces, &mesh.normals, &mesh.u, Symmetry::Line);
     input.ell = Some(&mesh.ell);
     let lights = three_lights();
     let material = Material::default();
@@ -171,20 +179,52 @@ fn main() {
         ..Default::default()
     };
     println!("threads: {}", rayon::current_num_threads());
-    timed("1024², 3 lights, AS, ss 1", 5, || render(&input, &material, &lights, &camera(), &base).unwrap(), Some("shading"));
+    timed(
+        "1024², 3 lights, AS, ss 1",
+        5,
+        || render(&input, &material, &lights, &camera(), &base).unwrap(),
+        Some("shading"),
+    );
     let ss2 = RenderSettings { supersample: 2, ..base.clone() };
-    timed("1024², 3 lights, AS, ss 2", 3, || render(&input, &material, &lights, &camera(), &ss2).unwrap(), None);
+    timed(
+        "1024², 3 lights, AS, ss 2",
+        3,
+        || render(&input, &material, &lights, &camera(), &ss2).unwrap(),
+        None,
+    );
     let mut lic = base.clone();
     lic.effects.lic = Some(LicSettings { length_px: 12.0, strength: 0.6, seed: 1 });
-    timed("1024², 3 lights, AS, ss 1, + LIC (L = 12 px)", 5, || render(&input, &material, &lights, &camera(), &lic).unwrap(), Some("lic"));
+    timed(
+        "1024², 3 lights, AS, ss 1, + LIC (L = 12 px)",
+        5,
+        || render(&input, &material, &lights, &camera(), &lic).unwrap(),
+        Some("lic"),
+    );
     let mut sh = base.clone();
     sh.effects.shadows = true;
-    timed("1024², 3 lights, AS, ss 1, + shadows", 3, || render(&input, &material, &lights, &camera(), &sh).unwrap(), Some("shading"));
+    timed(
+        "1024², 3 lights, AS, ss 1, + shadows",
+        3,
+        || render(&input, &material, &lights, &camera(), &sh).unwrap(),
+        Some("shading"),
+    );
 
     // Supersampling against a reference at s = 8 (256²).
     let small = RenderSettings { width: 256, height: 256, ..base.clone() };
-    let reference = decode(&render(&input, &material, &lights, &camera(), &RenderSettings { supersample: 8, ..small.clone() }).unwrap().png);
-    println!("\n| supersample | RMS error (8-bit sRGB) | p99 pixel error | time, median of 3 (ms) |");
+    let reference = decode(
+        &render(
+            &input,
+            &material,
+            &lights,
+            &camera(),
+            &RenderSettings { supersample: 8, ..small.clone() },
+        )
+        .unwrap()
+        .png,
+    );
+    println!(
+        "\n| supersample | RMS error (8-bit sRGB) | p99 pixel error | time, median of 3 (ms) |"
+    );
     println!("|---|---|---|---|");
     for s in [1u32, 2, 3, 4] {
         let st = RenderSettings { supersample: s, ..small.clone() };
@@ -205,7 +245,12 @@ fn main() {
     let sky = dir.join("sky.hdr");
     write_sky(&sky);
     let env = |n: u32| {
-        vec![LightSpec::Environment { file: sky.to_string_lossy().into(), scale: 1.0, samples: n, rotation_deg: 0.0 }]
+        vec![LightSpec::Environment {
+            file: sky.to_string_lossy().into(),
+            scale: 1.0,
+            samples: n,
+            rotation_deg: 0.0,
+        }]
     };
     let tiny = RenderSettings { width: 128, height: 128, ..base.clone() };
     let reference = decode(&render(&input, &material, &env(8192), &camera(), &tiny).unwrap().png);

@@ -90,14 +90,31 @@ fn directional_albedo_at_most_one_with_unit_fresnel() {
     let cases: Vec<(&str, Material)> = vec![
         (
             "ashikhmin_shirley",
-            mat(BrdfSpec::AshikhminShirley { nu: 100.0, nv: 10.0, rs: [1.0; 3] }, Fresnel::None, 0.0),
+            mat(
+                BrdfSpec::AshikhminShirley { nu: 100.0, nv: 10.0, rs: [1.0; 3] },
+                Fresnel::None,
+                0.0,
+            ),
         ),
-        ("ashikhmin_shirley_iso", mat(BrdfSpec::AshikhminShirley { nu: 20.0, nv: 20.0, rs: [1.0; 3] }, Fresnel::None, 0.0)),
-        ("ward", mat(BrdfSpec::Ward { alpha_x: 0.15, alpha_y: 0.3, rho_s: 1.0 }, Fresnel::None, 0.0)),
+        (
+            "ashikhmin_shirley_iso",
+            mat(
+                BrdfSpec::AshikhminShirley { nu: 20.0, nv: 20.0, rs: [1.0; 3] },
+                Fresnel::None,
+                0.0,
+            ),
+        ),
+        (
+            "ward",
+            mat(BrdfSpec::Ward { alpha_x: 0.15, alpha_y: 0.3, rho_s: 1.0 }, Fresnel::None, 0.0),
+        ),
         ("ggx", mat(ggx(0.15, 0.5), Fresnel::None, 0.0)),
         ("ggx_rough", mat(ggx(0.8, 0.8), Fresnel::None, 0.0)),
         // The diffuse term alone: exactly 1 for a white Lambert surface.
-        ("lambert", mat(BrdfSpec::Ward { alpha_x: 0.3, alpha_y: 0.3, rho_s: 0.0 }, Fresnel::None, 1.0)),
+        (
+            "lambert",
+            mat(BrdfSpec::Ward { alpha_x: 0.3, alpha_y: 0.3, rho_s: 0.0 }, Fresnel::None, 1.0),
+        ),
     ];
     for (name, m) in cases {
         let f = from_material(&m);
@@ -133,7 +150,10 @@ fn rotating_the_grain_by_90_degrees_swaps_the_roughnesses() {
             for wo in dirs.iter().skip(1).step_by(2) {
                 let x = fa.eval(&rot(wi), &rot(wo));
                 let y = fb.eval(wi, wo);
-                assert!((x[0] - y[0]).abs() <= 1e-10 * x[0].abs().max(1.0), "{a:?}: {x:?} vs {y:?}");
+                assert!(
+                    (x[0] - y[0]).abs() <= 1e-10 * x[0].abs().max(1.0),
+                    "{a:?}: {x:?} vs {y:?}"
+                );
             }
         }
     }
@@ -144,8 +164,16 @@ fn isotropic_limit_equals_the_isotropic_formula() {
     let dirs = directions(100);
     let (n, rs, rd) = (50.0, 0.6, 0.3);
     let alpha = 0.25;
-    let f_as = from_material(&mat(BrdfSpec::AshikhminShirley { nu: n, nv: n, rs: [rs; 3] }, Fresnel::None, rd));
-    let f_w = from_material(&mat(BrdfSpec::Ward { alpha_x: alpha, alpha_y: alpha, rho_s: 0.7 }, Fresnel::None, 0.0));
+    let f_as = from_material(&mat(
+        BrdfSpec::AshikhminShirley { nu: n, nv: n, rs: [rs; 3] },
+        Fresnel::None,
+        rd,
+    ));
+    let f_w = from_material(&mat(
+        BrdfSpec::Ward { alpha_x: alpha, alpha_y: alpha, rho_s: 0.7 },
+        Fresnel::None,
+        0.0,
+    ));
     let f_g = from_material(&mat(ggx(alpha, alpha), Fresnel::None, 0.0));
     for wi in dirs.iter().step_by(2) {
         for wo in dirs.iter().skip(1).step_by(2) {
@@ -164,7 +192,8 @@ fn isotropic_limit_equals_the_isotropic_formula() {
             assert!((got - want).abs() <= 1e-9 * want.max(1.0), "AS {got} vs {want}");
             // [War92] Eq. 4: isotropic Gaussian, exp(−tan²θ_h/α²).
             let tan2 = (1.0 - ch * ch) / (ch * ch);
-            let want = 0.7 * (-tan2 / (alpha * alpha)).exp() / (4.0 * PI * alpha * alpha * (ci * co).sqrt());
+            let want = 0.7 * (-tan2 / (alpha * alpha)).exp()
+                / (4.0 * PI * alpha * alpha * (ci * co).sqrt());
             let got = f_w.eval(wi, wo)[0];
             assert!((got - want).abs() <= 1e-9 * want.max(1.0), "Ward {got} vs {want}");
             // Isotropic GGX (Walter et al. 2007, Eq. 33) with the height-correlated Smith term.
@@ -184,7 +213,8 @@ fn conductor_presets_match_their_normal_incidence_reflectance() {
     // R₀ = ((η−1)² + k²)/((η+1)² + k²).
     for (eta, k) in [ALUMINIUM, BRONZE] {
         for c in 0..3 {
-            let r0 = ((eta[c] - 1.0).powi(2) + k[c] * k[c]) / ((eta[c] + 1.0).powi(2) + k[c] * k[c]);
+            let r0 =
+                ((eta[c] - 1.0).powi(2) + k[c] * k[c]) / ((eta[c] + 1.0).powi(2) + k[c] * k[c]);
             assert!((conductor(1.0, eta[c], k[c]) - r0).abs() < 1e-12);
             assert!((conductor(0.0, eta[c], k[c]) - 1.0).abs() < 1e-9, "grazing → 1");
         }

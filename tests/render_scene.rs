@@ -45,7 +45,12 @@ struct Quad {
 fn quad(n: usize, u: Vector3<f64>) -> Quad {
     let m = plane(1.0, Grid::new(n, n));
     let k = m.positions.len();
-    Quad { pos: m.positions.clone(), faces: m.faces.clone(), normals: vec![Vector3::z(); k], u: vec![u; k] }
+    Quad {
+        pos: m.positions.clone(),
+        faces: m.faces.clone(),
+        normals: vec![Vector3::z(); k],
+        u: vec![u; k],
+    }
 }
 
 /// The ray through the centre of pixel (i, j) of a w × h image, hitting z = 0.
@@ -54,7 +59,8 @@ fn pixel_point(cam: &Camera, w: usize, h: usize, i: usize, j: usize) -> Vector3<
     let right = fwd.cross(&cam.up).normalize();
     let up = right.cross(&fwd);
     let f = 0.5 * h as f64 / (0.5 * cam.fov_deg.to_radians()).tan();
-    let d = fwd + right * ((i as f64 + 0.5 - 0.5 * w as f64) / f) - up * ((j as f64 + 0.5 - 0.5 * h as f64) / f);
+    let d = fwd + right * ((i as f64 + 0.5 - 0.5 * w as f64) / f)
+        - up * ((j as f64 + 0.5 - 0.5 * h as f64) / f);
     let t = -cam.eye.z / d.z;
     cam.eye + d * t
 }
@@ -63,7 +69,12 @@ fn pixel_point(cam: &Camera, w: usize, h: usize, i: usize, j: usize) -> Vector3<
 fn flat_quad_radiance_is_the_brdf_formula() {
     let q = quad(4, Vector3::x());
     let input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
-    let cam = Camera { eye: Vector3::new(0.3, -1.2, 2.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 40.0 };
+    let cam = Camera {
+        eye: Vector3::new(0.3, -1.2, 2.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 40.0,
+    };
     let l = Vector3::new(0.3, 0.5, 1.0).normalize();
     let e = 2.0;
     let (w, h) = (41usize, 31usize);
@@ -79,7 +90,10 @@ fn flat_quad_radiance_is_the_brdf_formula() {
         let spec = ((nu + 1.0) * (nv + 1.0)).sqrt() / (8.0 * PI) * hh.z.powf(ex)
             / (hh.dot(&wi) * wi.z.max(wo.z))
             * fres;
-        let dif = 28.0 * d / (23.0 * PI) * (1.0 - rs) * (1.0 - (1.0 - wi.z / 2.0).powi(5)) * (1.0 - (1.0 - wo.z / 2.0).powi(5));
+        let dif = 28.0 * d / (23.0 * PI)
+            * (1.0 - rs)
+            * (1.0 - (1.0 - wi.z / 2.0).powi(5))
+            * (1.0 - (1.0 - wo.z / 2.0).powi(5));
         spec + dif
     };
     let ward_formula = |wi: Vector3<f64>, wo: Vector3<f64>| {
@@ -91,20 +105,43 @@ fn flat_quad_radiance_is_the_brdf_formula() {
         let hh = (wi + wo).normalize();
         let f0 = 0.9;
         let fres = f0 + (1.0 - f0) * (1.0 - hh.dot(&wi)).powi(5);
-        let dd = 1.0 / (PI * ax * ay * ((hh.x / ax).powi(2) + (hh.y / ay).powi(2) + hh.z * hh.z).powi(2));
-        let lam = |w: Vector3<f64>| 0.5 * ((1.0 + ((ax * w.x).powi(2) + (ay * w.y).powi(2)) / (w.z * w.z)).sqrt() - 1.0);
+        let dd = 1.0
+            / (PI * ax * ay * ((hh.x / ax).powi(2) + (hh.y / ay).powi(2) + hh.z * hh.z).powi(2));
+        let lam = |w: Vector3<f64>| {
+            0.5 * ((1.0 + ((ax * w.x).powi(2) + (ay * w.y).powi(2)) / (w.z * w.z)).sqrt() - 1.0)
+        };
         d / PI + fres * dd / (1.0 + lam(wi) + lam(wo)) / (4.0 * wi.z * wo.z)
     };
     let cases: Vec<(Material, &dyn Fn(Vector3<f64>, Vector3<f64>) -> f64)> = vec![
-        (Material { brdf: BrdfSpec::AshikhminShirley { nu, nv, rs: [rs; 3] }, fresnel: Fresnel::None, diffuse: [d; 3] }, &as_formula),
-        (Material { brdf: BrdfSpec::Ward { alpha_x: ax, alpha_y: ay, rho_s: 0.6 }, fresnel: Fresnel::None, diffuse: [d; 3] }, &ward_formula),
         (
-            Material { brdf: BrdfSpec::Ggx { alpha_u: ax, alpha_v: ay }, fresnel: Fresnel::Schlick { f0: [0.9; 3] }, diffuse: [d; 3] },
+            Material {
+                brdf: BrdfSpec::AshikhminShirley { nu, nv, rs: [rs; 3] },
+                fresnel: Fresnel::None,
+                diffuse: [d; 3],
+            },
+            &as_formula,
+        ),
+        (
+            Material {
+                brdf: BrdfSpec::Ward { alpha_x: ax, alpha_y: ay, rho_s: 0.6 },
+                fresnel: Fresnel::None,
+                diffuse: [d; 3],
+            },
+            &ward_formula,
+        ),
+        (
+            Material {
+                brdf: BrdfSpec::Ggx { alpha_u: ax, alpha_v: ay },
+                fresnel: Fresnel::Schlick { f0: [0.9; 3] },
+                diffuse: [d; 3],
+            },
             &ggx_formula,
         ),
     ];
     for (m, formula) in cases {
-        let out = render(&input, &m, &[dir_light(l.into(), e)], &cam, &settings(w as u32, h as u32, 1)).unwrap();
+        let out =
+            render(&input, &m, &[dir_light(l.into(), e)], &cam, &settings(w as u32, h as u32, 1))
+                .unwrap();
         let (pw, ph, px) = pixels(&out);
         assert_eq!((pw, ph), (w, h));
         for (i, j) in [(20, 15), (14, 10), (27, 20), (24, 11)] {
@@ -113,7 +150,11 @@ fn flat_quad_radiance_is_the_brdf_formula() {
             let wo = (cam.eye - p).normalize();
             let want = formula(l, wo) * e * l.z;
             let got = f64::from(px[j * w + i][0]);
-            assert!((got - want).abs() <= 2e-4 * want.max(1e-3), "{:?} pixel ({i},{j}): {got} vs {want}", m.brdf);
+            assert!(
+                (got - want).abs() <= 2e-4 * want.max(1e-3),
+                "{:?} pixel ({i},{j}): {got} vs {want}",
+                m.brdf
+            );
         }
     }
 }
@@ -136,18 +177,35 @@ fn project(cam: &Camera, w: usize, h: usize, p: &Vector3<f64>) -> [f64; 2] {
 }
 
 fn sharp_as() -> Material {
-    Material { brdf: BrdfSpec::AshikhminShirley { nu: 5000.0, nv: 20.0, rs: [0.9; 3] }, fresnel: Fresnel::None, diffuse: [0.0; 3] }
+    Material {
+        brdf: BrdfSpec::AshikhminShirley { nu: 5000.0, nv: 20.0, rs: [0.9; 3] },
+        fresnel: Fresnel::None,
+        diffuse: [0.0; 3],
+    }
 }
 
 #[test]
 fn cylinder_circumferential_grain_gives_a_highlight_line_parallel_to_the_axis() {
     let (pos, faces, normals) = cyl();
-    let u: Vec<Vector3<f64>> = pos.iter().map(|p| Vector3::new(-p.y, p.x, 0.0).normalize()).collect();
+    let u: Vec<Vector3<f64>> =
+        pos.iter().map(|p| Vector3::new(-p.y, p.x, 0.0).normalize()).collect();
     let input = RenderInput::new(&pos, &faces, &normals, &u, Symmetry::Line);
-    let cam = Camera { eye: Vector3::new(6.0, 0.0, 0.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 45.0 };
+    let cam = Camera {
+        eye: Vector3::new(6.0, 0.0, 0.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 45.0,
+    };
     let l = Vector3::new(0.8, 0.6, 0.0);
     let (w, h) = (161usize, 201usize);
-    let out = render(&input, &sharp_as(), &[dir_light(l.into(), 1.0)], &cam, &settings(w as u32, h as u32, 1)).unwrap();
+    let out = render(
+        &input,
+        &sharp_as(),
+        &[dir_light(l.into(), 1.0)],
+        &cam,
+        &settings(w as u32, h as u32, 1),
+    )
+    .unwrap();
     let (_, _, px) = pixels(&out);
     // The model: hᵀe_θ = 0 with h ∝ l + ω_out. At p = (cos θ, sin θ, z) and eye (6, 0, 0):
     // l·e_θ = −l_x sin θ + l_y cos θ and ω_out·e_θ = −6 sin θ / |e − p|, so
@@ -163,13 +221,20 @@ fn cylinder_circumferential_grain_gives_a_highlight_line_parallel_to_the_axis() 
         let p = Vector3::new(th.cos(), th.sin(), z);
         let [x, y] = project(&cam, w, h, &p);
         let row = y.floor() as usize;
-        let (best, _) = (0..w).map(|i| (i, px[row * w + i][0])).fold((0, -1.0f32), |a, b| if b.1 > a.1 { b } else { a });
+        let (best, _) = (0..w).map(|i| (i, px[row * w + i][0])).fold((0, -1.0f32), |a, b| {
+            if b.1 > a.1 {
+                b
+            } else {
+                a
+            }
+        });
         let got = best as f64 + 0.5;
         assert!((got - x).abs() <= 1.0, "z = {z}: brightest column {got}, model {x}");
         cols.push(x);
     }
     // The line is parallel to the axis in the image (within a pixel over its height).
-    let spread = cols.iter().cloned().fold(f64::MIN, f64::max) - cols.iter().cloned().fold(f64::MAX, f64::min);
+    let spread = cols.iter().cloned().fold(f64::MIN, f64::max)
+        - cols.iter().cloned().fold(f64::MAX, f64::min);
     assert!(spread < 1.0, "highlight columns spread over {spread} px");
 }
 
@@ -178,10 +243,22 @@ fn cylinder_axial_grain_gives_a_highlight_perpendicular_to_the_axis() {
     let (pos, faces, normals) = cyl();
     let u = vec![Vector3::z(); pos.len()];
     let input = RenderInput::new(&pos, &faces, &normals, &u, Symmetry::Line);
-    let cam = Camera { eye: Vector3::new(6.0, 0.0, 0.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 45.0 };
+    let cam = Camera {
+        eye: Vector3::new(6.0, 0.0, 0.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 45.0,
+    };
     let l = Vector3::new(0.8, 0.3, 0.25).normalize();
     let (w, h) = (161usize, 201usize);
-    let out = render(&input, &sharp_as(), &[dir_light(l.into(), 1.0)], &cam, &settings(w as u32, h as u32, 1)).unwrap();
+    let out = render(
+        &input,
+        &sharp_as(),
+        &[dir_light(l.into(), 1.0)],
+        &cam,
+        &settings(w as u32, h as u32, 1),
+    )
+    .unwrap();
     let (_, _, px) = pixels(&out);
     // The model: hᵀz = 0 ⇔ l_z + ω_out,z = 0 ⇔ z = l_z |e − p|, i.e.
     // z = l_z √D / √(1 − l_z²) with D = (6 − cos θ)² + sin² θ.
@@ -192,7 +269,13 @@ fn cylinder_axial_grain_gives_a_highlight_perpendicular_to_the_axis() {
         let p = Vector3::new(th.cos(), th.sin(), z);
         let [x, y] = project(&cam, w, h, &p);
         let col = x.floor() as usize;
-        let (best, _) = (0..h).map(|j| (j, px[j * w + col][0])).fold((0, -1.0f32), |a, b| if b.1 > a.1 { b } else { a });
+        let (best, _) = (0..h).map(|j| (j, px[j * w + col][0])).fold((0, -1.0f32), |a, b| {
+            if b.1 > a.1 {
+                b
+            } else {
+                a
+            }
+        });
         let got = best as f64 + 0.5;
         assert!((got - y).abs() <= 1.0, "θ = {th}: brightest row {got}, model {y}");
     }
@@ -204,9 +287,19 @@ fn k2_grain_with_alternating_signs_renders_as_the_uniform_field() {
     // flipped at every other vertex.
     let mut q = quad(8, Vector3::x());
     q.u = q.pos.iter().map(|p| Vector3::new((1.5 * p.x).cos(), (1.5 * p.x).sin(), 0.0)).collect();
-    let alt: Vec<Vector3<f64>> = q.u.iter().enumerate().map(|(k, u)| if k % 2 == 0 { *u } else { -u }).collect();
-    let cam = Camera { eye: Vector3::new(0.2, -1.5, 1.6), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 50.0 };
-    let m = Material { brdf: BrdfSpec::Ggx { alpha_u: 0.05, alpha_v: 0.4 }, fresnel: Fresnel::None, diffuse: [0.0; 3] };
+    let alt: Vec<Vector3<f64>> =
+        q.u.iter().enumerate().map(|(k, u)| if k % 2 == 0 { *u } else { -u }).collect();
+    let cam = Camera {
+        eye: Vector3::new(0.2, -1.5, 1.6),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 50.0,
+    };
+    let m = Material {
+        brdf: BrdfSpec::Ggx { alpha_u: 0.05, alpha_v: 0.4 },
+        fresnel: Fresnel::None,
+        diffuse: [0.0; 3],
+    };
     let lights = [dir_light([0.2, 0.6, 1.0], 1.0)];
     let st = settings(64, 48, 2);
     let run = |u: &[Vector3<f64>], k: Symmetry| {
@@ -225,7 +318,8 @@ fn k2_grain_with_alternating_signs_renders_as_the_uniform_field() {
     assert!(max_diff > 0.01, "k = 1 interpolation of the flipped field should differ ({max_diff})");
 }
 
-fn torus_input() -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Vector3<f64>>, Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+fn torus_input(
+) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Vector3<f64>>, Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
     let m = grainline::generate::torus(2.0, 0.7, 96, 48);
     let (big_r, _) = (2.0, 0.7);
     let normals: Vec<Vector3<f64>> = m
@@ -236,13 +330,19 @@ fn torus_input() -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Vector3<f64>>, Vec<Ve
             (p - c).normalize()
         })
         .collect();
-    let u: Vec<Vector3<f64>> = m.positions.iter().map(|p| Vector3::new(-p.y, p.x, 0.0).normalize()).collect();
+    let u: Vec<Vector3<f64>> =
+        m.positions.iter().map(|p| Vector3::new(-p.y, p.x, 0.0).normalize()).collect();
     let ell: Vec<Vector3<f64>> = normals.iter().zip(&u).map(|(n, u)| n.cross(u)).collect();
     (m.positions.clone(), m.faces.clone(), normals, u, ell)
 }
 
 fn torus_camera() -> Camera {
-    Camera { eye: Vector3::new(0.0, -6.0, 4.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 45.0 }
+    Camera {
+        eye: Vector3::new(0.0, -6.0, 4.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 45.0,
+    }
 }
 
 #[test]
@@ -258,7 +358,9 @@ fn identical_bytes_with_one_and_two_threads() {
     st.effects.highlight_curves = Some(HighlightCurveSettings { lights: vec![], width_px: 1.5 });
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&input, &Material::default(), &lights, &torus_camera(), &st).unwrap())
+        pool.install(|| {
+            render(&input, &Material::default(), &lights, &torus_camera(), &st).unwrap()
+        })
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.png, b.png);
@@ -273,7 +375,9 @@ fn report_proves_what_was_not_computed() {
     let mut input = RenderInput::new(&pos, &faces, &normals, &u, Symmetry::Line);
     input.ell = Some(&ell);
     let lights = [dir_light([0.3, -0.5, 1.0], 1.0)];
-    let plain = render(&input, &Material::default(), &lights, &torus_camera(), &settings(64, 48, 1)).unwrap();
+    let plain =
+        render(&input, &Material::default(), &lights, &torus_camera(), &settings(64, 48, 1))
+            .unwrap();
     let r = &plain.report;
     assert!(r.ran("raster") && r.ran("shading") && r.ran("encode_png"));
     for pass in ["bvh", "lic", "highlight_curves", "critical_points", "environment", "as_brushed"] {
@@ -311,8 +415,17 @@ fn shadows_darken_the_occluded_point_only_when_asked() {
     let normals = vec![Vector3::z(); pos.len()];
     let u = vec![Vector3::x(); pos.len()];
     let input = RenderInput::new(&pos, &faces, &normals, &u, Symmetry::Line);
-    let cam = Camera { eye: Vector3::new(0.0, -3.0, 1.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 30.0 };
-    let m = Material { brdf: BrdfSpec::Ward { alpha_x: 0.3, alpha_y: 0.3, rho_s: 0.0 }, fresnel: Fresnel::None, diffuse: [0.5; 3] };
+    let cam = Camera {
+        eye: Vector3::new(0.0, -3.0, 1.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 30.0,
+    };
+    let m = Material {
+        brdf: BrdfSpec::Ward { alpha_x: 0.3, alpha_y: 0.3, rho_s: 0.0 },
+        fresnel: Fresnel::None,
+        diffuse: [0.5; 3],
+    };
     let lights = [dir_light([0.0, 0.0, 1.0], 1.0)];
     let (w, h) = (31u32, 31u32);
     let centre = |out: &RenderOutput| pixels(out).2[15 * 31 + 15][0];
@@ -341,9 +454,23 @@ fn uniform_environment_gives_the_lambert_integral() {
     let radiance = 128.5 / 128.0;
     let q = quad(2, Vector3::x());
     let input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
-    let cam = Camera { eye: Vector3::new(0.0, -1.0, 2.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 30.0 };
-    let m = Material { brdf: BrdfSpec::Ward { alpha_x: 0.3, alpha_y: 0.3, rho_s: 0.0 }, fresnel: Fresnel::None, diffuse: [0.6; 3] };
-    let lights = [LightSpec::Environment { file: file.to_string_lossy().into(), scale: 1.0, samples: 4096, rotation_deg: 0.0 }];
+    let cam = Camera {
+        eye: Vector3::new(0.0, -1.0, 2.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 30.0,
+    };
+    let m = Material {
+        brdf: BrdfSpec::Ward { alpha_x: 0.3, alpha_y: 0.3, rho_s: 0.0 },
+        fresnel: Fresnel::None,
+        diffuse: [0.6; 3],
+    };
+    let lights = [LightSpec::Environment {
+        file: file.to_string_lossy().into(),
+        scale: 1.0,
+        samples: 4096,
+        rotation_deg: 0.0,
+    }];
     let out = render(&input, &m, &lights, &cam, &settings(21, 21, 1)).unwrap();
     // ∫ ρ/π · L · cos dω over the upper hemisphere = ρ L.
     let got = f64::from(pixels(&out).2[10 * 21 + 10][0]);
@@ -356,13 +483,20 @@ fn uniform_environment_gives_the_lambert_integral() {
 fn bad_settings_name_their_key() {
     let q = quad(1, Vector3::x());
     let input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
-    let cam = Camera { eye: Vector3::new(0.0, -1.0, 2.0), target: Vector3::zeros(), up: Vector3::z(), fov_deg: 30.0 };
+    let cam = Camera {
+        eye: Vector3::new(0.0, -1.0, 2.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 30.0,
+    };
     let mut st = settings(10, 10, 1);
     st.supersample = 0;
     let e = render(&input, &Material::default(), &[], &cam, &st).unwrap_err().to_string();
     assert!(e.starts_with("render.supersample"), "{e}");
     let lights = [dir_light([0.0, 0.0, 0.0], 1.0)];
-    let e = render(&input, &Material::default(), &lights, &cam, &settings(10, 10, 1)).unwrap_err().to_string();
+    let e = render(&input, &Material::default(), &lights, &cam, &settings(10, 10, 1))
+        .unwrap_err()
+        .to_string();
     assert!(e.starts_with("lights[0].direction"), "{e}");
     let m = Material { brdf: BrdfSpec::Ggx { alpha_u: -1.0, alpha_v: 0.1 }, ..Default::default() };
     let e = render(&input, &m, &[], &cam, &settings(10, 10, 1)).unwrap_err().to_string();

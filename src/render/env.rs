@@ -31,8 +31,8 @@ pub(crate) struct EnvSample {
 impl EnvMap {
     /// Reads a `.hdr` (Radiance RGBE) or `.png` (sRGB, decoded by tiny-skia) file.
     pub fn load(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path)
-            .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        let bytes =
+            std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
         let is_png = bytes.starts_with(b"\x89PNG");
         let r = if is_png { parse_png(&bytes) } else { parse_hdr(&bytes) };
         r.map_err(|message| Error::Parse { path: path.to_path_buf(), line: 0, message })
@@ -47,7 +47,8 @@ impl EnvMap {
         let sin_t = |j: usize| (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin();
         let mean = self.texels.iter().map(lum).sum::<f64>() / (w * h) as f64;
         let floor = 0.01 * mean + 1e-12;
-        let pmf: Vec<f64> = (0..w * h).map(|k| (lum(&self.texels[k]) + floor) * sin_t(k / w)).collect();
+        let pmf: Vec<f64> =
+            (0..w * h).map(|k| (lum(&self.texels[k]) + floor) * sin_t(k / w)).collect();
         let mut cdf = Vec::with_capacity(pmf.len());
         let mut acc = 0.0;
         for p in &pmf {
@@ -69,7 +70,8 @@ impl EnvMap {
                 let fi = (i as f64 + y) / w as f64;
                 let phi = std::f64::consts::TAU * fi - std::f64::consts::PI + rot;
                 let theta = std::f64::consts::PI * (j as f64 + 0.5) / h as f64;
-                let dir = Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+                let dir =
+                    Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
                 let p = pmf[k] / total;
                 let t = self.texels[k];
                 let c = scale * texel_omega(j) / (p * n as f64);

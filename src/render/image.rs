@@ -73,8 +73,7 @@ pub(crate) fn encode_png(rgb: &[[u8; 3]], w: usize, h: usize) -> Result<Vec<u8>>
     for (px, c) in pm.data_mut().chunks_exact_mut(4).zip(rgb) {
         px.copy_from_slice(&[c[0], c[1], c[2], 255]);
     }
-    pm.encode_png()
-        .map_err(|e| Error::Numerical { stage: "PNG encoding", message: e.to_string() })
+    pm.encode_png().map_err(|e| Error::Numerical { stage: "PNG encoding", message: e.to_string() })
 }
 
 /// A little-endian colour PFM of linear radiance (rows bottom to top, as the format says).

@@ -121,7 +121,9 @@ impl<'a> RenderInput<'a> {
         finite("positions", self.positions)?;
         finite("normals", self.normals)?;
         finite("u", self.u)?;
-        for (name, v) in [("ell", self.ell), ("brushed_u", self.brushed_u), ("brushed_ell", self.brushed_ell)] {
+        for (name, v) in
+            [("ell", self.ell), ("brushed_u", self.brushed_u), ("brushed_ell", self.brushed_ell)]
+        {
             if let Some(v) = v {
                 finite(name, v)?;
             }
@@ -146,7 +148,8 @@ impl<'a> RenderInput<'a> {
             }
         }
         let polylines = self.strokes.into_iter().flatten().flatten();
-        let targets = self.edits.into_iter().flat_map(|e| e.targets.iter().flat_map(|(p, d)| [p, d]));
+        let targets =
+            self.edits.into_iter().flat_map(|e| e.targets.iter().flat_map(|(p, d)| [p, d]));
         if polylines.chain(targets).any(|p| p.iter().any(|c| !c.is_finite())) {
             return Err(bad("strokes/targets", "a point is not finite".into()));
         }
@@ -174,7 +177,9 @@ impl Timer<'_> {
     fn run<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
         let t = Instant::now();
         let r = f();
-        self.report.passes.push(PassTime { name: name.into(), ms: t.elapsed().as_secs_f64() * 1e3 });
+        self.report
+            .passes
+            .push(PassTime { name: name.into(), ms: t.elapsed().as_secs_f64() * 1e3 });
         r
     }
 }
@@ -231,7 +236,8 @@ pub fn render(
         ));
     }
 
-    let (w, h, s) = (settings.width as usize, settings.height as usize, settings.supersample as usize);
+    let (w, h, s) =
+        (settings.width as usize, settings.height as usize, settings.supersample as usize);
     let (sw, sh) = (w * s, h * s);
     let mut report = RenderReport {
         width: settings.width,
@@ -251,7 +257,8 @@ pub fn render(
     counters.triangles_clipped = rstats.triangles_clipped as u64;
     counters.screen_triangles = rstats.screen_triangles as u64;
     counters.samples = (sw * sh) as u64;
-    counters.covered_samples = vis.samples.iter().filter(|x| x.face != raster::EMPTY).count() as u64;
+    counters.covered_samples =
+        vis.samples.iter().filter(|x| x.face != raster::EMPTY).count() as u64;
     if counters.covered_samples == 0 {
         warnings.push("the mesh covers no pixel: check the view".to_string());
     }
@@ -385,14 +392,18 @@ pub fn render(
     };
 
     // Halves: the designed grain, and the as-brushed one side by side.
-    let side_by_side =
-        matches!(&fx.as_brushed, Some(a) if a.mode == AsBrushedMode::SideBySide) && brushed.is_some();
+    let side_by_side = matches!(&fx.as_brushed, Some(a) if a.mode == AsBrushedMode::SideBySide)
+        && brushed.is_some();
     let mut halves: Vec<(Vec<[f32; 3]>, Vec<[f32; 4]>)> = Vec::new();
     let layer = overlays(input.u, &mut counters, &mut timer);
     let main_rad = match (&fx.as_brushed, &brushed) {
         (Some(a), Some(b)) if a.mode == AsBrushedMode::Difference => {
             let gain = a.gain as f32;
-            designed.iter().zip(b).map(|(x, y)| [0, 1, 2].map(|c| (x[c] - y[c]).abs() * gain)).collect()
+            designed
+                .iter()
+                .zip(b)
+                .map(|(x, y)| [0, 1, 2].map(|c| (x[c] - y[c]).abs() * gain))
+                .collect()
         }
         _ => designed,
     };
@@ -407,7 +418,8 @@ pub fn render(
     // Resolve: box filter, tone map, LIC modulation, overlays, background.
     let out_w = w * halves.len();
     let bg = settings.background;
-    let cover: Vec<[f32; 1]> = vis.samples.iter().map(|x| [f32::from(u8::from(x.face != raster::EMPTY))]).collect();
+    let cover: Vec<[f32; 1]> =
+        vis.samples.iter().map(|x| [f32::from(u8::from(x.face != raster::EMPTY))]).collect();
     let (rgb8, linear_px) = timer.run("resolve", || {
         let coverage = image::downsample(&cover, w, h, s);
         let mut rgb8 = vec![[0u8; 3]; out_w * h];
@@ -422,7 +434,11 @@ pub fn render(
                     linear_px[o] = rad[k];
                     let a = f64::from(coverage[k][0]);
                     let mut c = [0usize, 1, 2].map(|i| {
-                        let m = image::tone_map(f64::from(rad[k][i]), settings.tone_map, settings.exposure);
+                        let m = image::tone_map(
+                            f64::from(rad[k][i]),
+                            settings.tone_map,
+                            settings.exposure,
+                        );
                         image::linear_to_srgb(m)
                     });
                     if let (Some(l), Some(lv)) = (&fx.lic, &lic_values) {
@@ -452,7 +468,12 @@ pub fn render(
             let mut canvas = Canvas::new(&rgb8, out_w, h)
                 .ok_or_else(|| Error::setting("render.width", "image cannot be allocated"))?;
             for hi in 0..halves.len() {
-                let pp = PointProjector { out: Projector::new(camera, w, h), vis: &vis, s, x0: (hi * w) as f64 };
+                let pp = PointProjector {
+                    out: Projector::new(camera, w, h),
+                    vis: &vis,
+                    s,
+                    x0: (hi * w) as f64,
+                };
                 draw_vectors(&mut canvas, &pp, input, fx, &mut counters);
             }
             Ok(canvas.into_rgb())
@@ -461,9 +482,10 @@ pub fn render(
         rgb8
     };
 
-    let as_brushed = input.brushed_u.filter(|_| fx.as_brushed.is_some()).map(|bu| {
-        timer.run("as_brushed_stats", || as_brushed_stats(input, bu))
-    });
+    let as_brushed = input
+        .brushed_u
+        .filter(|_| fx.as_brushed.is_some())
+        .map(|bu| timer.run("as_brushed_stats", || as_brushed_stats(input, bu)));
 
     let png = timer.run("encode_png", || image::encode_png(&rgb8, out_w, h))?;
     let linear = settings
@@ -539,13 +561,14 @@ fn draw_vectors(
         for line in strokes {
             // Draw runs of consecutive visible points.
             let mut run: Vec<[f64; 2]> = Vec::new();
-            let flush = |run: &mut Vec<[f64; 2]>, canvas: &mut Canvas, counters: &mut RenderCounters| {
-                if run.len() >= 2 {
-                    canvas.polyline(run, [255, 255, 255], st.width_px);
-                    counters.stroke_segments += (run.len() - 1) as u64;
-                }
-                run.clear();
-            };
+            let flush =
+                |run: &mut Vec<[f64; 2]>, canvas: &mut Canvas, counters: &mut RenderCounters| {
+                    if run.len() >= 2 {
+                        canvas.polyline(run, [255, 255, 255], st.width_px);
+                        counters.stroke_segments += (run.len() - 1) as u64;
+                    }
+                    run.clear();
+                };
             for p in line {
                 match pp.visible(p) {
                     Some(xy) => run.push(xy),
@@ -557,8 +580,7 @@ fn draw_vectors(
     }
     if let (Some(es), Some(e)) = (&fx.edits, input.edits) {
         for (p, d) in &e.targets {
-            let (Some(a), Some((b, _))) = (pp.visible(p), pp.out.project(&(p + d * 1e-3)))
-            else {
+            let (Some(a), Some((b, _))) = (pp.visible(p), pp.out.project(&(p + d * 1e-3))) else {
                 continue;
             };
             let b = [b[0] + pp.x0, b[1]];

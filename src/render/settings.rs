@@ -281,9 +281,7 @@ pub fn validate_lights(lights: &[LightSpec]) -> Result<()> {
 /// The light of the highlight model: the first directional light with `key: true`, else the
 /// first directional light.
 pub fn key_light_index(lights: &[LightSpec]) -> Option<usize> {
-    let dir = |l: &LightSpec, need_key: bool| {
-        matches!(l, LightSpec::Directional { key, .. } if *key || !need_key)
-    };
+    let dir = |l: &LightSpec, need_key: bool| matches!(l, LightSpec::Directional { key, .. } if *key || !need_key);
     lights.iter().position(|l| dir(l, true)).or_else(|| lights.iter().position(|l| dir(l, false)))
 }
 

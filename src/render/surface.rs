@@ -79,7 +79,7 @@ impl MeshData<'_> {
 
 impl Surf {
     /// The interpolated grain (unit, tangent). k = 1: the projected linear interpolation. k = 2:
-    /// the angle-doubled vector (cos 2φ, sin 2φ)·|u|² in the sample's frame is interpolated (the
+    /// the angle-doubled vector (cos 2φ, sin 2φ)·|u| in the sample's frame is interpolated (the
     /// tensor u uᵀ, paper §4.4), so u and −u at corners agree. Falls back to t where undefined.
     pub fn grain(&self, corner: [Vector3<f64>; 3], symmetry: Symmetry) -> Vector3<f64> {
         match symmetry {

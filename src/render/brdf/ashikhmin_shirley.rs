@@ -39,7 +39,11 @@ impl Brdf for AshikhminShirley {
         let spec_geo = match half(wi, wo) {
             Some(h) => {
                 let t2 = h.x * h.x + h.y * h.y;
-                let e = if t2 > 1e-300 { (self.nu * h.x * h.x + self.nv * h.y * h.y) / t2 } else { 0.0 };
+                let e = if t2 > 1e-300 {
+                    (self.nu * h.x * h.x + self.nv * h.y * h.y) / t2
+                } else {
+                    0.0
+                };
                 let hk = h.dot(wi).max(1e-12);
                 ((self.nu + 1.0) * (self.nv + 1.0)).sqrt() / (8.0 * pi) * h.z.max(0.0).powf(e)
                     / (hk * wi.z.max(wo.z))

@@ -3,7 +3,8 @@
 use super::super::settings::Fresnel;
 
 /// Aluminium η, k at (650, 550, 450) nm (Rakić 1995, as tabulated by PBRT/Mitsuba).
-pub const ALUMINIUM: ([f64; 3], [f64; 3]) = ([1.65746, 0.880369, 0.521229], [9.22387, 6.26952, 4.837]);
+pub const ALUMINIUM: ([f64; 3], [f64; 3]) =
+    ([1.65746, 0.880369, 0.521229], [9.22387, 6.26952, 4.837]);
 /// Steel, approximated by iron (Fe) η, k at (650, 550, 450) nm.
 pub const STEEL: ([f64; 3], [f64; 3]) = ([2.9114, 2.9497, 2.5845], [3.0893, 2.9318, 2.767]);
 /// Bronze: an approximation chosen so R₀ = ((η−1)² + k²)/((η+1)² + k²) ≈ (0.72, 0.55, 0.33).
