@@ -15,6 +15,12 @@ use grainline::render::{
 };
 use nalgebra::Vector3;
 
+type V3 = Vector3<f64>;
+/// A BRDF formula written out by hand, f(ω_in, ω_out) in the frame (u, v, n).
+type Formula<'a> = &'a dyn Fn(V3, V3) -> f64;
+/// Positions, faces, normals, grain, ℓ.
+type TorusData = (Vec<V3>, Vec<[u32; 3]>, Vec<V3>, Vec<V3>, Vec<V3>);
+
 fn settings(w: u32, h: u32, ss: u32) -> RenderSettings {
     RenderSettings {
         width: w,
@@ -112,7 +118,7 @@ fn flat_quad_radiance_is_the_brdf_formula() {
         };
         d / PI + fres * dd / (1.0 + lam(wi) + lam(wo)) / (4.0 * wi.z * wo.z)
     };
-    let cases: Vec<(Material, &dyn Fn(Vector3<f64>, Vector3<f64>) -> f64)> = vec![
+    let cases: Vec<(Material, Formula)> = vec![
         (
             Material {
                 brdf: BrdfSpec::AshikhminShirley { nu, nv, rs: [rs; 3] },
@@ -160,7 +166,7 @@ fn flat_quad_radiance_is_the_brdf_formula() {
 }
 
 /// Cylinder r = 1, height 4 about z, analytic normals.
-fn cyl() -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Vector3<f64>>) {
+fn cyl() -> (Vec<V3>, Vec<[u32; 3]>, Vec<V3>) {
     let m = cylinder(1.0, 4.0, 720, 64);
     let n = m.positions.iter().map(|p| Vector3::new(p.x, p.y, 0.0).normalize()).collect();
     (m.positions.clone(), m.faces.clone(), n)
@@ -318,8 +324,7 @@ fn k2_grain_with_alternating_signs_renders_as_the_uniform_field() {
     assert!(max_diff > 0.01, "k = 1 interpolation of the flipped field should differ ({max_diff})");
 }
 
-fn torus_input(
-) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>, Vec<Vector3<f64>>, Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+fn torus_input() -> TorusData {
     let m = grainline::generate::torus(2.0, 0.7, 96, 48);
     let (big_r, _) = (2.0, 0.7);
     let normals: Vec<Vector3<f64>> = m

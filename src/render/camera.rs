@@ -77,7 +77,7 @@ impl Projector {
     }
 
     /// Camera coordinates (right, up, depth).
-    pub fn to_camera(&self, p: &Vector3<f64>) -> Vector3<f64> {
+    pub fn camera_coords(&self, p: &Vector3<f64>) -> Vector3<f64> {
         let d = p - self.eye;
         Vector3::new(d.dot(&self.right), d.dot(&self.up), d.dot(&self.fwd))
     }
@@ -89,7 +89,7 @@ impl Projector {
 
     /// Pixel coordinates and depth of a world point, `None` behind the near plane.
     pub fn project(&self, p: &Vector3<f64>) -> Option<([f64; 2], f64)> {
-        let c = self.to_camera(p);
+        let c = self.camera_coords(p);
         (c.z > self.near).then(|| (self.cam_to_pixel(&c), c.z))
     }
 }

@@ -91,7 +91,7 @@ pub(crate) fn encode_pfm(rgb: &[[f32; 3]], w: usize, h: usize) -> Vec<u8> {
     out
 }
 
-/// Decodes a PFM written by [`encode_pfm`] (or any little- or big-endian colour PFM) into
+/// Decodes a PFM written by the renderer (or any little- or big-endian colour PFM) into
 /// top-to-bottom rows: `(width, height, pixels)`.
 pub fn decode_pfm(bytes: &[u8]) -> Option<(usize, usize, Vec<[f32; 3]>)> {
     let mut fields = Vec::new();

@@ -168,6 +168,9 @@ pub struct RenderOutput {
     pub report: RenderReport,
 }
 
+/// Radiance and overlay layer of one half of the image, per sample.
+type Half = (Vec<[f32; 3]>, Vec<[f32; 4]>);
+
 /// Times passes into the report.
 struct Timer<'r> {
     report: &'r mut RenderReport,
@@ -394,7 +397,7 @@ pub fn render(
     // Halves: the designed grain, and the as-brushed one side by side.
     let side_by_side = matches!(&fx.as_brushed, Some(a) if a.mode == AsBrushedMode::SideBySide)
         && brushed.is_some();
-    let mut halves: Vec<(Vec<[f32; 3]>, Vec<[f32; 4]>)> = Vec::new();
+    let mut halves: Vec<Half> = Vec::new();
     let layer = overlays(input.u, &mut counters, &mut timer);
     let main_rad = match (&fx.as_brushed, &brushed) {
         (Some(a), Some(b)) if a.mode == AsBrushedMode::Difference => {

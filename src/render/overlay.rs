@@ -127,7 +127,7 @@ pub(crate) fn highlight_curves(
                 }
                 let (xi, yi) = (x as isize, y as isize);
                 let grad = diff(xi, yi, 1, 0, &c).hypot(diff(xi, yi, 0, 1, &c)) as f64;
-                if !(grad > 1e-12) {
+                if grad.is_nan() || grad <= 1e-12 {
                     continue;
                 }
                 let d = (c[0] as f64).abs() / grad;

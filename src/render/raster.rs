@@ -67,7 +67,7 @@ pub(crate) fn rasterize(
     width: usize,
     height: usize,
 ) -> (VisBuffer, RasterStats) {
-    let cam_pos: Vec<Vector3<f64>> = positions.par_iter().map(|p| cam.to_camera(p)).collect();
+    let cam_pos: Vec<Vector3<f64>> = positions.par_iter().map(|p| cam.camera_coords(p)).collect();
     let per_face: Vec<(Vec<ScreenTri>, bool)> = faces
         .par_iter()
         .enumerate()
@@ -199,7 +199,7 @@ fn fill(t: &ScreenTri, chunk: &mut [Sample], row0: usize, width: usize) {
     for row in r0..r1 {
         let y = row as f64 + 0.5;
         let line = &mut chunk[(row - row0) * width..(row - row0 + 1) * width];
-        for col in t.cols.0..t.cols.1 {
+        for (col, s) in line.iter_mut().enumerate().take(t.cols.1).skip(t.cols.0) {
             let p = [col as f64 + 0.5, y];
             let l0 = edge(&t.xy[1], &t.xy[2], &p) * inv_area;
             let l1 = edge(&t.xy[2], &t.xy[0], &p) * inv_area;
@@ -214,7 +214,6 @@ fn fill(t: &ScreenTri, chunk: &mut [Sample], row0: usize, width: usize) {
                 continue;
             }
             let depth = (1.0 / sw) as f32;
-            let s = &mut line[col];
             if depth < s.depth {
                 let b1 = (w[0] * t.bary[0][0] + w[1] * t.bary[1][0] + w[2] * t.bary[2][0]) / sw;
                 let b2 = (w[0] * t.bary[0][1] + w[1] * t.bary[1][1] + w[2] * t.bary[2][1]) / sw;

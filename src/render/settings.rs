@@ -69,7 +69,7 @@ pub struct Material {
     #[serde(default)]
     pub fresnel: Fresnel,
     /// Diffuse albedo, linear RGB in [0, 1] (default 0.05 grey). For Ashikhmin–Shirley this is
-    /// its R_d (the coupled diffuse term of [AS00]); for the others a Lambert term ρ_d/π.
+    /// its R_d (the coupled diffuse term of \[AS00\]); for the others a Lambert term ρ_d/π.
     #[serde(default = "default_diffuse")]
     pub diffuse: [f64; 3],
 }
@@ -90,7 +90,7 @@ impl Default for Material {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BrdfSpec {
-    /// Ashikhmin–Shirley [AS00] (`brdf::ashikhmin_shirley`).
+    /// Ashikhmin–Shirley \[AS00\] (`brdf::ashikhmin_shirley`).
     AshikhminShirley {
         /// Phong exponent along the grain u (> 0).
         nu: f64,
@@ -99,7 +99,7 @@ pub enum BrdfSpec {
         /// Specular reflectance at normal incidence R_s, linear RGB in [0, 1].
         rs: [f64; 3],
     },
-    /// Ward [War92] (`brdf::ward`).
+    /// Ward \[War92\] (`brdf::ward`).
     Ward {
         /// Slope roughness along u (> 0).
         alpha_x: f64,

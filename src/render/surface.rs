@@ -100,9 +100,9 @@ impl Surf {
     /// interpolated length, `None` where the doubled-angle average vanishes.
     pub fn line(&self, corner: [Vector3<f64>; 3]) -> Option<(Vector3<f64>, f64)> {
         let (mut zx, mut zy, mut mag) = (0.0, 0.0, 0.0);
-        for k in 0..3 {
-            let x = corner[k].dot(&self.t);
-            let y = corner[k].dot(&self.b);
+        for (k, c) in corner.iter().enumerate() {
+            let x = c.dot(&self.t);
+            let y = c.dot(&self.b);
             let r2 = x * x + y * y;
             if !(r2 > 0.0 && r2.is_finite()) {
                 continue;
@@ -112,7 +112,7 @@ impl Surf {
             mag += self.w[k] * r2.sqrt();
         }
         let z = zx.hypot(zy);
-        if !(z > 1e-9 * mag.max(1e-300)) || !z.is_finite() {
+        if z.is_nan() || z <= 1e-9 * mag.max(1e-300) || !z.is_finite() {
             return None;
         }
         let phi = 0.5 * zy.atan2(zx);

@@ -1,4 +1,4 @@
-//! The Ashikhmin–Shirley anisotropic Phong BRDF [AS00]: M. Ashikhmin, P. Shirley, "An
+//! The Ashikhmin–Shirley anisotropic Phong BRDF \[AS00\]: M. Ashikhmin, P. Shirley, "An
 //! Anisotropic Phong BRDF Model", Journal of Graphics Tools 5(1), 2000, Eqs. 4–5.
 //!
 //! With h the half vector, k = ω_in, in the frame (u, v, n):

@@ -1,7 +1,7 @@
 //! BRDFs in the local frame of the grain: x = u (the grain), y = v = n × u, z = n.
 //!
 //! Each model lives in its own module and implements [`Brdf`]; adding a model is adding a module
-//! and a [`BrdfSpec`](super::settings::BrdfSpec) variant. All are centrally symmetric
+//! and a [`BrdfSpec`] variant. All are centrally symmetric
 //! (f(−x, −y) = f(x, y)), so a grain line field (k = 2, the paper's §4.4) renders them exactly.
 
 pub mod ashikhmin_shirley;

@@ -1,4 +1,4 @@
-//! Ward's anisotropic Gaussian BRDF [War92]: G. Ward, "Measuring and Modeling Anisotropic
+//! Ward's anisotropic Gaussian BRDF \[War92\]: G. Ward, "Measuring and Modeling Anisotropic
 //! Reflection", SIGGRAPH 1992, Eq. 5a:
 //!
 //! f = ρ_d/π + ρ_s · F(ω_in·h) · exp(−((h·u/α_x)² + (h·v/α_y)²) / (h·n)²)
@@ -6,7 +6,7 @@
 //!
 //! with F = 1 unless the material asks for a Fresnel factor. The original normalization is kept:
 //! it is reciprocal, but its albedo exceeds 1 near grazing incidence for rough lobes (a known
-//! property of [War92]; docs/render.md gives the measured bound).
+//! property of \[War92\]; docs/render.md gives the measured bound).
 
 use nalgebra::Vector3;
 
