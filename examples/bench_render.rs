@@ -209,6 +209,28 @@ fn main() {
         Some("shading"),
     );
 
+    // Optional pictures: GRAINLINE_RENDER_SAVE=DIR writes plain.png and overlays.png there.
+    if let Ok(dir) = std::env::var("GRAINLINE_RENDER_SAVE") {
+        let dir = std::path::PathBuf::from(dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let plain = render(&input, &material, &lights, &camera(), &ss2).unwrap();
+        std::fs::write(dir.join("plain.png"), plain.png).unwrap();
+        let mut st = ss2.clone();
+        st.effects.lic = Some(LicSettings { length_px: 12.0, strength: 0.6, seed: 1 });
+        st.effects.highlight_curves = Some(grainline::render::settings::HighlightCurveSettings {
+            lights: vec![0, 1],
+            width_px: 1.5,
+        });
+        st.effects.critical_points = Some(grainline::render::settings::CriticalSettings {
+            threshold: 0.999,
+            lights: vec![],
+        });
+        st.effects.shadows = true;
+        let over = render(&input, &material, &lights, &camera(), &st).unwrap();
+        std::fs::write(dir.join("overlays.png"), over.png).unwrap();
+        println!("{}", serde_json::to_string_pretty(&over.report).unwrap());
+    }
+
     // Supersampling against a reference at s = 8 (256²).
     let small = RenderSettings { width: 256, height: 256, ..base.clone() };
     let reference = decode(

@@ -512,3 +512,85 @@ fn bad_settings_name_their_key() {
     let l: Vec<LightSpec> = serde_json::from_str(json).unwrap();
     assert_eq!(grainline::render::key_light_index(&l), Some(0));
 }
+
+#[test]
+fn as_brushed_statistics_and_layout() {
+    use grainline::render::settings::{AsBrushedMode, AsBrushedSettings};
+    let q = quad(10, Vector3::x());
+    let n = q.pos.len(); // 121 vertices
+                         // Vertex k's as-brushed grain is turned by k/4 degrees: the angles are 0, 0.25, ..., 30°.
+    let brushed: Vec<Vector3<f64>> = (0..n)
+        .map(|k| {
+            let a = (k as f64 / 4.0).to_radians();
+            // Every third one reversed: for k = 2 the sign does not count.
+            let s = if k % 3 == 0 { -1.0 } else { 1.0 };
+            Vector3::new(a.cos(), a.sin(), 0.0) * s
+        })
+        .collect();
+    let mut input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
+    input.brushed_u = Some(&brushed);
+    let cam = Camera {
+        eye: Vector3::new(0.0, -1.5, 2.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 40.0,
+    };
+    let lights = [dir_light([0.1, 0.4, 1.0], 1.0)];
+    let mut st = settings(40, 30, 1);
+    st.effects.as_brushed = Some(AsBrushedSettings { mode: AsBrushedMode::SideBySide, gain: 4.0 });
+    let out = render(&input, &Material::default(), &lights, &cam, &st).unwrap();
+    let (w, h, px) = pixels(&out);
+    assert_eq!((w, h), (80, 30), "side by side doubles the width");
+    assert_eq!(out.report.width, 80);
+    let stats = out.report.as_brushed.as_ref().expect("stats");
+    // Nearest-rank median of k/4 for k = 0..120 is k = 60 → 15°; p95 is rank 115 → k = 114.
+    assert_eq!(stats.u_angle.count, n);
+    assert!((stats.u_angle.median_deg - 15.0).abs() < 1e-9, "{:?}", stats.u_angle);
+    assert!((stats.u_angle.p95_deg - 28.5).abs() < 1e-9, "{:?}", stats.u_angle);
+    assert!((stats.u_angle.max_deg - 30.0).abs() < 1e-9);
+    assert!(stats.ell_angle.is_none());
+    // The left half is the designed grain (vertex 0 agrees), so the two halves differ.
+    assert!(px[15 * 80 + 20] != px[15 * 80 + 60]);
+    // Difference mode with identical fields is black on the surface.
+    input.brushed_u = Some(&q.u);
+    st.effects.as_brushed = Some(AsBrushedSettings { mode: AsBrushedMode::Difference, gain: 4.0 });
+    let out = render(&input, &Material::default(), &lights, &cam, &st).unwrap();
+    let (w, _, px) = pixels(&out);
+    assert_eq!(w, 40);
+    assert!(px.iter().all(|p| p[0] == 0.0));
+    assert_eq!(out.report.as_brushed.unwrap().u_angle.max_deg, 0.0);
+}
+
+#[test]
+fn strokes_are_drawn_where_visible_only() {
+    use grainline::render::settings::StrokeSettings;
+    let q = quad(2, Vector3::x());
+    let mut st = settings(41, 41, 1);
+    st.tone_map = ToneMap::None;
+    st.effects.shading = false; // dark clay, so the white stroke stands out
+    st.effects.strokes = Some(StrokeSettings { width_px: 2.0 });
+    let cam = Camera {
+        eye: Vector3::new(0.0, 0.0, 3.0),
+        target: Vector3::zeros(),
+        up: Vector3::y(),
+        fov_deg: 40.0,
+    };
+    // On the quad (visible) and 0.5 below it (hidden by the quad).
+    let on: Vec<Vec<Vector3<f64>>> =
+        vec![(0..=10).map(|i| Vector3::new(-0.5 + 0.1 * f64::from(i), 0.0, 0.0)).collect()];
+    let below: Vec<Vec<Vector3<f64>>> =
+        vec![on[0].iter().map(|p| p - Vector3::new(0.0, 0.0, 0.5)).collect()];
+    let run = |strokes: &[Vec<Vector3<f64>>]| {
+        let mut input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
+        input.strokes = Some(strokes);
+        render(&input, &Material::default(), &[], &cam, &st).unwrap()
+    };
+    let a = run(&on);
+    assert_eq!(a.report.counters.stroke_segments, 10);
+    let img = tiny_skia::Pixmap::decode_png(&a.png).unwrap();
+    // The stroke crosses the image centre row (y = 20); its middle pixel is white.
+    let p = img.pixel(20, 20).unwrap();
+    assert!(p.red() > 200 && p.green() > 200, "{p:?}");
+    let b = run(&below);
+    assert_eq!(b.report.counters.stroke_segments, 0);
+}
