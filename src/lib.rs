@@ -17,6 +17,7 @@ pub mod highlight;
 pub mod mesh;
 pub mod output;
 pub mod pipeline;
+pub mod render;
 pub mod scene;
 pub mod solve;
 

@@ -1,0 +1,125 @@
+//! Resolving samples to pixels, tone mapping, sRGB, and the PNG and PFM encoders.
+
+use super::settings::ToneMap;
+use crate::{Error, Result};
+
+/// sRGB transfer function, linear [0, 1] → encoded [0, 1] (IEC 61966-2-1).
+pub fn linear_to_srgb(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Inverse sRGB transfer function for an 8-bit value.
+pub fn srgb_to_linear(v: u8) -> f64 {
+    let c = f64::from(v) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Tone maps one linear radiance value to display-linear [0, 1].
+pub fn tone_map(x: f64, map: ToneMap, exposure: f64) -> f64 {
+    let x = if x.is_finite() { x.max(0.0) } else { 0.0 };
+    match map {
+        ToneMap::None => x.min(1.0),
+        ToneMap::Exposure => (x * exposure.exp2()).min(1.0),
+        ToneMap::Reinhard => {
+            let y = x * exposure.exp2();
+            y / (1.0 + y)
+        }
+    }
+}
+
+/// Box-filters `s × s` blocks of a `(w·s) × (h·s)` buffer of N-channel values.
+pub(crate) fn downsample<const N: usize>(
+    src: &[[f32; N]],
+    w: usize,
+    h: usize,
+    s: usize,
+) -> Vec<[f32; N]> {
+    if s == 1 {
+        return src.to_vec();
+    }
+    let sw = w * s;
+    let norm = 1.0 / (s * s) as f32;
+    let mut out = vec![[0.0f32; N]; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut acc = [0.0f32; N];
+            for dy in 0..s {
+                let row = &src[(y * s + dy) * sw + x * s..(y * s + dy) * sw + x * s + s];
+                for v in row {
+                    for c in 0..N {
+                        acc[c] += v[c];
+                    }
+                }
+            }
+            out[y * w + x] = acc.map(|a| a * norm);
+        }
+    }
+    out
+}
+
+/// Encodes opaque 8-bit sRGB pixels as PNG bytes with tiny-skia.
+pub(crate) fn encode_png(rgb: &[[u8; 3]], w: usize, h: usize) -> Result<Vec<u8>> {
+    let mut pm = tiny_skia::Pixmap::new(w as u32, h as u32)
+        .ok_or_else(|| Error::setting("width", format!("image {w} × {h} cannot be allocated")))?;
+    for (px, c) in pm.data_mut().chunks_exact_mut(4).zip(rgb) {
+        px.copy_from_slice(&[c[0], c[1], c[2], 255]);
+    }
+    pm.encode_png().map_err(|e| Error::Numerical { stage: "PNG encoding", message: e.to_string() })
+}
+
+/// A little-endian colour PFM of linear radiance (rows bottom to top, as the format says).
+pub(crate) fn encode_pfm(rgb: &[[f32; 3]], w: usize, h: usize) -> Vec<u8> {
+    let mut out = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
+    out.reserve(12 * w * h);
+    for y in (0..h).rev() {
+        for c in &rgb[y * w..(y + 1) * w] {
+            for v in c {
+                let v = if v.is_finite() { *v } else { 0.0 };
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// Decodes a PFM written by the renderer (or any little- or big-endian colour PFM) into
+/// top-to-bottom rows: `(width, height, pixels)`.
+pub fn decode_pfm(bytes: &[u8]) -> Option<(usize, usize, Vec<[f32; 3]>)> {
+    let mut fields = Vec::new();
+    let mut p = 0;
+    while fields.len() < 4 {
+        while p < bytes.len() && bytes[p].is_ascii_whitespace() {
+            p += 1;
+        }
+        let s = p;
+        while p < bytes.len() && !bytes[p].is_ascii_whitespace() {
+            p += 1;
+        }
+        fields.push(std::str::from_utf8(&bytes[s..p]).ok()?.to_string());
+    }
+    p += 1;
+    if fields[0] != "PF" {
+        return None;
+    }
+    let w: usize = fields[1].parse().ok()?;
+    let h: usize = fields[2].parse().ok()?;
+    let scale: f64 = fields[3].parse().ok()?;
+    let data = bytes.get(p..p + 12 * w * h)?;
+    let mut px = vec![[0.0f32; 3]; w * h];
+    for (k, ch) in data.chunks_exact(4).enumerate() {
+        let b = [ch[0], ch[1], ch[2], ch[3]];
+        let v = if scale < 0.0 { f32::from_le_bytes(b) } else { f32::from_be_bytes(b) };
+        let (row, rest) = (k / (3 * w), k % (3 * w));
+        px[(h - 1 - row) * w + rest / 3][rest % 3] = v;
+    }
+    Some((w, h, px))
+}

@@ -1,0 +1,641 @@
+//! The CPU preview renderer (docs/render.md).
+//!
+//! A deterministic, multithreaded triangle rasterizer with a depth buffer and a pinhole camera,
+//! anisotropic BRDFs oriented by the grain field, directional, point and environment lights,
+//! optional shadows, and passes that draw what the highlight model says: LIC of ℓ, highlight
+//! curves hᵀu = 0, critical points, edit overlays, strokes, the as-brushed comparison and the
+//! coverage gap map. Each pass runs only if the settings list it, and the [`RenderReport`]
+//! proves which ran. The renderer reads the mesh and the model's outputs; it never calls the
+//! solver or the toolpaths.
+
+pub mod brdf;
+mod bvh;
+pub mod camera;
+pub mod env;
+pub mod image;
+mod lic;
+mod overlay;
+mod raster;
+pub mod report;
+pub mod settings;
+mod shade;
+mod surface;
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+pub use camera::Camera;
+pub use env::EnvMap;
+pub use report::{AngleStats, AsBrushedStats, PassTime, RenderCounters, RenderReport};
+pub use settings::{
+    key_light_index, validate_lights, AsBrushedMode, BrdfSpec, Effects, Fresnel, LightSpec,
+    Material, RenderSettings, ToneMap,
+};
+
+use crate::highlight::Symmetry;
+use crate::{Error, Result};
+use camera::Projector;
+use overlay::{Canvas, Ctx, PointProjector};
+use shade::{Light, ShadeCount, Shader};
+use surface::MeshData;
+
+/// Brush supports and target tangents of the edits, for the edit overlay.
+#[derive(Clone, Debug, Default)]
+pub struct EditOverlay {
+    /// Per-vertex support weight in [0, 1] (0 outside every brush), or empty.
+    pub support: Vec<f64>,
+    /// Target tangents: (position, direction) pairs drawn as arrows.
+    pub targets: Vec<(Vector3<f64>, Vector3<f64>)>,
+}
+
+/// The mesh and the per-vertex fields to render. Every per-vertex slice has one entry per
+/// position.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderInput<'a> {
+    /// Vertex positions.
+    pub positions: &'a [Vector3<f64>],
+    /// Triangles (vertex indices).
+    pub faces: &'a [[u32; 3]],
+    /// Vertex normals (need not be unit; zero falls back to the face normal).
+    pub normals: &'a [Vector3<f64>],
+    /// The designed grain u per vertex (3D; projected to the tangent plane per sample).
+    pub u: &'a [Vector3<f64>],
+    /// k = 1 or k = 2 (the grain is then interpolated as a line, paper §4.4).
+    pub symmetry: Symmetry,
+    /// The highlight tangent ℓ per vertex (needed by LIC).
+    pub ell: Option<&'a [Vector3<f64>]>,
+    /// Critical vertices (drawn as rings by the critical-points pass).
+    pub critical: Option<&'a [bool]>,
+    /// 3D stroke polylines (for the strokes pass).
+    pub strokes: Option<&'a [Vec<Vector3<f64>>]>,
+    /// The as-brushed grain per vertex.
+    pub brushed_u: Option<&'a [Vector3<f64>]>,
+    /// The as-brushed highlight tangent per vertex (for statistics).
+    pub brushed_ell: Option<&'a [Vector3<f64>]>,
+    /// Edit overlays.
+    pub edits: Option<&'a EditOverlay>,
+    /// Coverage gap per vertex (≥ 0; shown red up to `effects.gap.max`).
+    pub gap: Option<&'a [f64]>,
+}
+
+impl<'a> RenderInput<'a> {
+    /// The required fields, every optional one `None`.
+    pub fn new(
+        positions: &'a [Vector3<f64>],
+        faces: &'a [[u32; 3]],
+        normals: &'a [Vector3<f64>],
+        u: &'a [Vector3<f64>],
+        symmetry: Symmetry,
+    ) -> Self {
+        RenderInput {
+            positions,
+            faces,
+            normals,
+            u,
+            symmetry,
+            ell: None,
+            critical: None,
+            strokes: None,
+            brushed_u: None,
+            brushed_ell: None,
+            edits: None,
+            gap: None,
+        }
+    }
+
+    /// Checks lengths, indices and finiteness.
+    pub fn validate(&self) -> Result<()> {
+        let n = self.positions.len();
+        let bad = |what: &str, msg: String| Error::invalid_arg(format!("render input {what}"), msg);
+        let finite = |what: &str, v: &[Vector3<f64>]| -> Result<()> {
+            if v.len() != n {
+                return Err(bad(what, format!("has {} entries for {n} vertices", v.len())));
+            }
+            match v.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
+                Some(i) => Err(bad(what, format!("vertex {i} is not finite"))),
+                None => Ok(()),
+            }
+        };
+        finite("positions", self.positions)?;
+        finite("normals", self.normals)?;
+        finite("u", self.u)?;
+        for (name, v) in
+            [("ell", self.ell), ("brushed_u", self.brushed_u), ("brushed_ell", self.brushed_ell)]
+        {
+            if let Some(v) = v {
+                finite(name, v)?;
+            }
+        }
+        if let Some(f) = self.faces.iter().position(|f| f.iter().any(|&i| i as usize >= n)) {
+            return Err(bad("faces", format!("face {f} refers to a vertex ≥ {n}")));
+        }
+        if let Some(c) = self.critical {
+            if c.len() != n {
+                return Err(bad("critical", format!("has {} entries for {n} vertices", c.len())));
+            }
+        }
+        let scalars = [("gap", self.gap), ("edits.support", self.edits.map(|e| &e.support[..]))];
+        for (name, v) in scalars {
+            if let Some(v) = v {
+                if !v.is_empty() && v.len() != n {
+                    return Err(bad(name, format!("has {} entries for {n} vertices", v.len())));
+                }
+                if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                    return Err(bad(name, format!("vertex {i} is not finite")));
+                }
+            }
+        }
+        let polylines = self.strokes.into_iter().flatten().flatten();
+        let targets =
+            self.edits.into_iter().flat_map(|e| e.targets.iter().flat_map(|(p, d)| [p, d]));
+        if polylines.chain(targets).any(|p| p.iter().any(|c| !c.is_finite())) {
+            return Err(bad("strokes/targets", "a point is not finite".into()));
+        }
+        Ok(())
+    }
+}
+
+/// What [`render`] returns. The caller writes the files (atomically).
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// 8-bit sRGB PNG bytes.
+    pub png: Vec<u8>,
+    /// Linear radiance as PFM bytes, when `settings.linear` is set.
+    pub linear: Option<Vec<u8>>,
+    /// What ran, how long, and what was not computed.
+    pub report: RenderReport,
+}
+
+/// Radiance and overlay layer of one half of the image, per sample.
+type Half = (Vec<[f32; 3]>, Vec<[f32; 4]>);
+
+/// Times passes into the report.
+struct Timer<'r> {
+    report: &'r mut RenderReport,
+}
+
+impl Timer<'_> {
+    fn run<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+        let t = Instant::now();
+        let r = f();
+        self.report
+            .passes
+            .push(PassTime { name: name.into(), ms: t.elapsed().as_secs_f64() * 1e3 });
+        r
+    }
+}
+
+/// Renders the mesh. Validates everything first (material, lights, settings, camera, input);
+/// environment images are read from the paths in `lights` as given.
+pub fn render(
+    input: &RenderInput,
+    material: &Material,
+    lights: &[LightSpec],
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> Result<RenderOutput> {
+    let start = Instant::now();
+    material.validate().map_err(|e| prefix(e, "material"))?;
+    validate_lights(lights).map_err(|e| prefix(e, "lights"))?;
+    settings.validate().map_err(|e| prefix(e, "render"))?;
+    camera.validate()?;
+    input.validate()?;
+    let fx = &settings.effects;
+    let chosen = |list: &[usize], key: &str| -> Result<Vec<Light>> {
+        let prepared = Light::prepare(lights);
+        let idx: Vec<usize> = if list.is_empty() {
+            key_light_index(lights).into_iter().collect()
+        } else {
+            list.to_vec()
+        };
+        idx.iter()
+            .map(|&i| {
+                prepared.get(i).copied().flatten().ok_or_else(|| {
+                    Error::setting(
+                        format!("render.effects.{key}.lights"),
+                        format!("{i} is not the index of a directional or point light"),
+                    )
+                })
+            })
+            .collect()
+    };
+    let curve_lights = match &fx.highlight_curves {
+        Some(h) => chosen(&h.lights, "highlight_curves")?,
+        None => Vec::new(),
+    };
+    let critical_lights = match &fx.critical_points {
+        Some(c) => chosen(&c.lights, "critical_points")?,
+        None => Vec::new(),
+    };
+    if fx.lic.is_some() && input.ell.is_none() {
+        return Err(Error::setting("render.effects.lic", "needs ℓ per vertex (RenderInput::ell)"));
+    }
+    if fx.as_brushed.is_some() && input.brushed_u.is_none() {
+        return Err(Error::setting(
+            "render.effects.as_brushed",
+            "needs the as-brushed grain (RenderInput::brushed_u)",
+        ));
+    }
+
+    let (w, h, s) =
+        (settings.width as usize, settings.height as usize, settings.supersample as usize);
+    let (sw, sh) = (w * s, h * s);
+    let mut report = RenderReport {
+        width: settings.width,
+        height: settings.height,
+        supersample: settings.supersample,
+        ..Default::default()
+    };
+    let mut counters = RenderCounters::default();
+    let mut warnings = Vec::new();
+    let proj = Projector::new(camera, sw, sh);
+    let mut timer = Timer { report: &mut report };
+
+    let (vis, rstats) =
+        timer.run("raster", || raster::rasterize(&proj, input.positions, input.faces, sw, sh));
+    counters.triangles_in = rstats.triangles_in as u64;
+    counters.triangles_culled = rstats.triangles_culled as u64;
+    counters.triangles_clipped = rstats.triangles_clipped as u64;
+    counters.screen_triangles = rstats.screen_triangles as u64;
+    counters.samples = (sw * sh) as u64;
+    counters.covered_samples =
+        vis.samples.iter().filter(|x| x.face != raster::EMPTY).count() as u64;
+    if counters.covered_samples == 0 {
+        warnings.push("the mesh covers no pixel: check the view".to_string());
+    }
+
+    let ctx = Ctx {
+        mesh: MeshData { positions: input.positions, faces: input.faces, normals: input.normals },
+        vis: &vis,
+        eye: camera.eye,
+        symmetry: input.symmetry,
+    };
+    let bvh = if fx.shadows {
+        let b = timer.run("bvh", || bvh::Bvh::build(input.positions, input.faces));
+        counters.bvh_nodes = b.num_nodes() as u64;
+        Some(b)
+    } else {
+        None
+    };
+    let mut env_samples = Vec::new();
+    let has_env = lights.iter().any(|l| matches!(l, LightSpec::Environment { .. }));
+    if fx.shading && fx.environment && has_env {
+        env_samples = timer.run("environment", || -> Result<Vec<env::EnvSample>> {
+            let mut all = Vec::new();
+            for l in lights {
+                if let LightSpec::Environment { file, scale, samples, rotation_deg } = l {
+                    let map = EnvMap::load(std::path::Path::new(file))?;
+                    counters.env_texels += (map.width * map.height) as u64;
+                    all.extend(map.samples(*samples as usize, *scale, *rotation_deg));
+                }
+            }
+            Ok(all)
+        })?;
+        counters.env_samples = env_samples.len() as u64;
+    }
+    let brdf = brdf::from_material(material);
+    let diag = bbox_diagonal(input.positions);
+    let shader = Shader {
+        brdf: brdf.as_ref(),
+        lights: Light::prepare(lights).into_iter().flatten().collect(),
+        env: &env_samples,
+        bvh: bvh.as_ref(),
+        eps: 1e-4 * diag,
+    };
+
+    // Radiance of one grain field, per sample.
+    let radiance_of = |grain: &[Vector3<f64>], counters: &mut RenderCounters| -> Vec<[f32; 3]> {
+        let mut rad = vec![[0.0f32; 3]; sw * sh];
+        let w_ = sw;
+        let counts: Vec<ShadeCount> = rad
+            .par_chunks_mut(w_)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut c = ShadeCount::default();
+                for (x, o) in row.iter_mut().enumerate() {
+                    if let Some(surf) = ctx.surf(y * w_ + x) {
+                        let l = if fx.shading {
+                            let u = ctx.grain(&surf, grain);
+                            shader.shade(&surf, &u, &mut c)
+                        } else {
+                            // Clay: a grey Lambert surface lit from the eye.
+                            [0.18 * surf.n.dot(&surf.wo).max(0.0); 3]
+                        };
+                        *o = l.map(|v| v as f32);
+                    }
+                }
+                c
+            })
+            .collect();
+        for c in counts {
+            counters.brdf_evals += c.brdf_evals;
+            counters.shadow_rays += c.shadow_rays;
+        }
+        rad
+    };
+    let shading_name = if fx.shading { "shading" } else { "clay" };
+    let designed = timer.run(shading_name, || radiance_of(input.u, &mut counters));
+    let brushed = match (&fx.as_brushed, input.brushed_u) {
+        (Some(_), Some(bu)) => {
+            counters.as_brushed_shadings += 1;
+            Some(timer.run("as_brushed", || radiance_of(bu, &mut counters)))
+        }
+        _ => None,
+    };
+
+    // Per-sample overlay layers of one half.
+    let overlays = |grain: &[Vector3<f64>], counters: &mut RenderCounters, timer: &mut Timer| {
+        let mut layer = vec![[0.0f32; 4]; sw * sh];
+        if let (Some(g), Some(values)) = (&fx.gap, input.gap) {
+            counters.gap_samples += timer.run("gap", || {
+                overlay::scalar_tint(&ctx, values, g.max, [1.0, 0.1, 0.1], 0.7, &mut layer)
+            });
+        }
+        if let (Some(_), Some(e)) = (&fx.edits, input.edits) {
+            if !e.support.is_empty() {
+                counters.support_samples += timer.run("edit_support", || {
+                    overlay::scalar_tint(&ctx, &e.support, 1.0, [0.2, 0.45, 1.0], 0.35, &mut layer)
+                });
+            }
+        }
+        if let Some(c) = &fx.critical_points {
+            counters.critical_samples += timer.run("critical_points", || {
+                overlay::critical(&ctx, &critical_lights, c.threshold, &mut layer)
+            });
+        }
+        if let Some(hc) = &fx.highlight_curves {
+            let half = 0.5 * hc.width_px * s as f64;
+            counters.highlight_curve_samples += timer.run("highlight_curves", || {
+                curve_lights
+                    .iter()
+                    .enumerate()
+                    .map(|(i, l)| {
+                        let col = overlay::CURVE_COLOURS[i % overlay::CURVE_COLOURS.len()];
+                        overlay::highlight_curves(&ctx, grain, l, col, half, &mut layer)
+                    })
+                    .sum::<u64>()
+            });
+        }
+        layer
+    };
+
+    let lic_values = match (&fx.lic, input.ell) {
+        (Some(l), Some(ell)) => {
+            let (vals, noise, steps) = timer.run("lic", || {
+                let field = lic_field(&ctx, &proj, ell);
+                lic::lic(&field, s, l.length_px, l.seed)
+            });
+            counters.lic_noise_values = noise;
+            counters.lic_steps = steps;
+            Some(image::downsample(&vals.iter().map(|v| [*v]).collect::<Vec<_>>(), w, h, s))
+        }
+        _ => None,
+    };
+
+    // Halves: the designed grain, and the as-brushed one side by side.
+    let side_by_side = matches!(&fx.as_brushed, Some(a) if a.mode == AsBrushedMode::SideBySide)
+        && brushed.is_some();
+    let mut halves: Vec<Half> = Vec::new();
+    let layer = overlays(input.u, &mut counters, &mut timer);
+    let main_rad = match (&fx.as_brushed, &brushed) {
+        (Some(a), Some(b)) if a.mode == AsBrushedMode::Difference => {
+            let gain = a.gain as f32;
+            designed
+                .iter()
+                .zip(b)
+                .map(|(x, y)| [0, 1, 2].map(|c| (x[c] - y[c]).abs() * gain))
+                .collect()
+        }
+        _ => designed,
+    };
+    halves.push((main_rad, layer));
+    if side_by_side {
+        if let (Some(b), Some(bu)) = (brushed, input.brushed_u) {
+            let layer = overlays(bu, &mut counters, &mut timer);
+            halves.push((b, layer));
+        }
+    }
+
+    // Resolve: box filter, tone map, LIC modulation, overlays, background.
+    let out_w = w * halves.len();
+    let bg = settings.background;
+    let cover: Vec<[f32; 1]> =
+        vis.samples.iter().map(|x| [f32::from(u8::from(x.face != raster::EMPTY))]).collect();
+    let (rgb8, linear_px) = timer.run("resolve", || {
+        let coverage = image::downsample(&cover, w, h, s);
+        let mut rgb8 = vec![[0u8; 3]; out_w * h];
+        let mut linear_px = vec![[0.0f32; 3]; out_w * h];
+        for (hi, (rad, layer)) in halves.iter().enumerate() {
+            let rad = image::downsample(rad, w, h, s);
+            let layer = image::downsample(layer, w, h, s);
+            for y in 0..h {
+                for x in 0..w {
+                    let k = y * w + x;
+                    let o = y * out_w + hi * w + x;
+                    linear_px[o] = rad[k];
+                    let a = f64::from(coverage[k][0]);
+                    let mut c = [0usize, 1, 2].map(|i| {
+                        let m = image::tone_map(
+                            f64::from(rad[k][i]),
+                            settings.tone_map,
+                            settings.exposure,
+                        );
+                        image::linear_to_srgb(m)
+                    });
+                    if let (Some(l), Some(lv)) = (&fx.lic, &lic_values) {
+                        if hi == 0 {
+                            let f = (1.0 - l.strength) + l.strength * 2.0 * f64::from(lv[k][0]);
+                            c = c.map(|v| (v * f).clamp(0.0, 1.0));
+                        }
+                    }
+                    // The surface's radiance was box-filtered with zeros outside: un-premultiply
+                    // against the background by coverage.
+                    let c = [0, 1, 2].map(|i| c[i] + (1.0 - a) * bg[i]);
+                    let ov = layer[k];
+                    let c = [0, 1, 2].map(|i| f64::from(ov[i]) + c[i] * (1.0 - f64::from(ov[3])));
+                    rgb8[o] = c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8);
+                }
+            }
+        }
+        (rgb8, linear_px)
+    });
+
+    // Vector overlays.
+    let want_vectors = (fx.strokes.is_some() && input.strokes.is_some())
+        || (fx.edits.is_some() && input.edits.is_some_and(|e| !e.targets.is_empty()))
+        || (fx.critical_points.is_some() && input.critical.is_some());
+    let rgb8 = if want_vectors {
+        timer.run("vector_overlays", || -> Result<Vec<[u8; 3]>> {
+            let mut canvas = Canvas::new(&rgb8, out_w, h)
+                .ok_or_else(|| Error::setting("render.width", "image cannot be allocated"))?;
+            for hi in 0..halves.len() {
+                let pp = PointProjector {
+                    out: Projector::new(camera, w, h),
+                    vis: &vis,
+                    s,
+                    x0: (hi * w) as f64,
+                };
+                draw_vectors(&mut canvas, &pp, input, fx, &mut counters);
+            }
+            Ok(canvas.into_rgb())
+        })?
+    } else {
+        rgb8
+    };
+
+    let as_brushed = input
+        .brushed_u
+        .filter(|_| fx.as_brushed.is_some())
+        .map(|bu| timer.run("as_brushed_stats", || as_brushed_stats(input, bu)));
+
+    let png = timer.run("encode_png", || image::encode_png(&rgb8, out_w, h))?;
+    let linear = settings
+        .linear
+        .as_ref()
+        .map(|_| timer.run("encode_pfm", || image::encode_pfm(&linear_px, out_w, h)));
+    report.width = out_w as u32;
+    report.counters = counters;
+    report.as_brushed = as_brushed;
+    report.warnings = warnings;
+    report.total_ms = start.elapsed().as_secs_f64() * 1e3;
+    Ok(RenderOutput { png, linear, report })
+}
+
+/// Puts a section name in front of a setting's key.
+fn prefix(e: Error, section: &str) -> Error {
+    match e {
+        Error::Setting { key, message } if key.starts_with('[') => {
+            Error::setting(format!("{section}{key}"), message)
+        }
+        Error::Setting { key, message } => Error::setting(format!("{section}.{key}"), message),
+        e => e,
+    }
+}
+
+/// Length of the bounding-box diagonal (1 for an empty or degenerate mesh).
+fn bbox_diagonal(p: &[Vector3<f64>]) -> f64 {
+    let mut lo = Vector3::repeat(f64::MAX);
+    let mut hi = Vector3::repeat(f64::MIN);
+    for q in p {
+        lo = lo.inf(q);
+        hi = hi.sup(q);
+    }
+    let d = (hi - lo).norm();
+    if d.is_finite() && d > 0.0 {
+        d
+    } else {
+        1.0
+    }
+}
+
+/// The screen direction of ℓ at every sample (ℓ interpolated as a line field).
+fn lic_field(ctx: &Ctx, proj: &Projector, ell: &[Vector3<f64>]) -> lic::DirField {
+    let mut dirs = vec![[0.0f32; 2]; ctx.vis.width * ctx.vis.height];
+    ctx.for_samples(&mut dirs, |_, s, o| {
+        let c = ctx.mesh.corners(s);
+        if let Some((l, _)) = s.line(c.map(|i| ell[i])) {
+            let depth = (s.p - proj.eye).dot(&proj.fwd);
+            let a = proj.project(&s.p);
+            let b = proj.project(&(s.p + l * (1e-3 * depth)));
+            if let (Some((a, _)), Some((b, _))) = (a, b) {
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let n = dx.hypot(dy);
+                if n > 1e-12 && n.is_finite() {
+                    *o = [(dx / n) as f32, (dy / n) as f32];
+                }
+            }
+        }
+        0
+    });
+    lic::DirField { width: ctx.vis.width, height: ctx.vis.height, dirs }
+}
+
+/// Strokes, target arrows and critical-vertex rings.
+fn draw_vectors(
+    canvas: &mut Canvas,
+    pp: &PointProjector,
+    input: &RenderInput,
+    fx: &Effects,
+    counters: &mut RenderCounters,
+) {
+    if let (Some(st), Some(strokes)) = (&fx.strokes, input.strokes) {
+        for line in strokes {
+            // Draw runs of consecutive visible points.
+            let mut run: Vec<[f64; 2]> = Vec::new();
+            let flush =
+                |run: &mut Vec<[f64; 2]>, canvas: &mut Canvas, counters: &mut RenderCounters| {
+                    if run.len() >= 2 {
+                        canvas.polyline(run, [255, 255, 255], st.width_px);
+                        counters.stroke_segments += (run.len() - 1) as u64;
+                    }
+                    run.clear();
+                };
+            for p in line {
+                match pp.visible(p) {
+                    Some(xy) => run.push(xy),
+                    None => flush(&mut run, canvas, counters),
+                }
+            }
+            flush(&mut run, canvas, counters);
+        }
+    }
+    if let (Some(es), Some(e)) = (&fx.edits, input.edits) {
+        for (p, d) in &e.targets {
+            let (Some(a), Some((b, _))) = (pp.visible(p), pp.out.project(&(p + d * 1e-3))) else {
+                continue;
+            };
+            let b = [b[0] + pp.x0, b[1]];
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let n = dx.hypot(dy);
+            if !(n > 1e-12 && n.is_finite()) {
+                continue;
+            }
+            let (ux, uy) = (dx / n, dy / n);
+            let l = es.arrow_px;
+            let tip = [a[0] + ux * l, a[1] + uy * l];
+            let head = 0.3 * l;
+            let left = [tip[0] - head * (ux - 0.5 * uy), tip[1] - head * (uy + 0.5 * ux)];
+            let right = [tip[0] - head * (ux + 0.5 * uy), tip[1] - head * (uy - 0.5 * ux)];
+            canvas.polyline(&[a, tip], [80, 255, 120], 2.0);
+            canvas.polyline(&[left, tip, right], [80, 255, 120], 2.0);
+            counters.target_arrows += 1;
+        }
+    }
+    if let (Some(_), Some(crit)) = (&fx.critical_points, input.critical) {
+        for (p, _) in input.positions.iter().zip(crit).filter(|(_, c)| **c) {
+            if let Some(xy) = pp.visible(p) {
+                canvas.ring(xy, 4.0, [255, 0, 255], 1.5);
+                counters.critical_markers += 1;
+            }
+        }
+    }
+}
+
+/// Angle in degrees between two vectors, as lines (`line`) or oriented; `None` for a zero or
+/// non-finite vector.
+fn angle_deg(a: &Vector3<f64>, b: &Vector3<f64>, line: bool) -> Option<f64> {
+    let (na, nb) = (a.norm(), b.norm());
+    if !(na > 1e-12 && nb > 1e-12 && na.is_finite() && nb.is_finite()) {
+        return None;
+    }
+    let c = (a.dot(b) / (na * nb)).clamp(-1.0, 1.0);
+    Some(if line { c.abs() } else { c }.acos().to_degrees())
+}
+
+/// Per-vertex angles between the designed and as-brushed fields.
+fn as_brushed_stats(input: &RenderInput, bu: &[Vector3<f64>]) -> AsBrushedStats {
+    let stats = |a: &[Vector3<f64>], b: &[Vector3<f64>], line: bool| {
+        let all: Vec<Option<f64>> = a.iter().zip(b).map(|(x, y)| angle_deg(x, y, line)).collect();
+        let skipped = all.iter().filter(|x| x.is_none()).count();
+        AngleStats::of(all.into_iter().flatten().collect(), skipped)
+    };
+    AsBrushedStats {
+        u_angle: stats(input.u, bu, input.symmetry == Symmetry::Line),
+        ell_angle: match (input.ell, input.brushed_ell) {
+            (Some(a), Some(b)) => Some(stats(a, b, true)),
+            _ => None,
+        },
+    }
+}

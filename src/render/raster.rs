@@ -1,0 +1,224 @@
+//! The triangle rasterizer: near-plane clipping, binning into row bands, and a depth-buffered
+//! visibility buffer (face id and perspective-correct barycentrics per sample).
+//!
+//! Determinism: triangles are set up in parallel but collected in face order, binned in that
+//! order, and each band is filled by one thread in that order with a strict depth test, so the
+//! buffer does not depend on the thread count.
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use super::camera::Projector;
+
+/// Rows of samples per band.
+const BAND: usize = 16;
+
+/// No face at this sample.
+pub(crate) const EMPTY: u32 = u32::MAX;
+
+/// One visibility sample.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Sample {
+    /// Camera depth.
+    pub depth: f32,
+    /// Face index, or [`EMPTY`].
+    pub face: u32,
+    /// Barycentric weights of the face's corners 1 and 2.
+    pub b1: f32,
+    /// See `b1`.
+    pub b2: f32,
+}
+
+const CLEAR: Sample = Sample { depth: f32::INFINITY, face: EMPTY, b1: 0.0, b2: 0.0 };
+
+/// The visibility buffer of `width × height` samples.
+pub(crate) struct VisBuffer {
+    pub width: usize,
+    pub height: usize,
+    pub samples: Vec<Sample>,
+}
+
+/// Rasterizer counters.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct RasterStats {
+    pub triangles_in: usize,
+    pub triangles_culled: usize,
+    pub triangles_clipped: usize,
+    pub screen_triangles: usize,
+}
+
+/// A clipped screen-space triangle.
+struct ScreenTri {
+    face: u32,
+    xy: [[f64; 2]; 3],
+    inv_z: [f64; 3],
+    /// Barycentrics of the original face (corners 1 and 2) at each vertex.
+    bary: [[f64; 2]; 3],
+    /// Sample rows covered (inclusive start, exclusive end), columns likewise.
+    rows: (usize, usize),
+    cols: (usize, usize),
+}
+
+/// Rasterizes all faces into a `width × height` buffer.
+pub(crate) fn rasterize(
+    cam: &Projector,
+    positions: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    width: usize,
+    height: usize,
+) -> (VisBuffer, RasterStats) {
+    let cam_pos: Vec<Vector3<f64>> = positions.par_iter().map(|p| cam.camera_coords(p)).collect();
+    let per_face: Vec<(Vec<ScreenTri>, bool)> = faces
+        .par_iter()
+        .enumerate()
+        .map(|(f, tri)| setup(cam, &cam_pos, f as u32, tri, width, height))
+        .collect();
+    let mut stats = RasterStats { triangles_in: faces.len(), ..Default::default() };
+    let nbands = height.div_ceil(BAND);
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nbands];
+    let mut tris = Vec::new();
+    for (list, clipped) in per_face {
+        stats.triangles_clipped += usize::from(clipped);
+        if list.is_empty() {
+            stats.triangles_culled += 1;
+        }
+        for t in list {
+            let id = tris.len() as u32;
+            for b in &mut bins[t.rows.0 / BAND..t.rows.1.div_ceil(BAND)] {
+                b.push(id);
+            }
+            tris.push(t);
+        }
+    }
+    stats.screen_triangles = tris.len();
+    let mut samples = vec![CLEAR; width * height];
+    samples.par_chunks_mut(BAND * width).zip(bins.par_iter()).enumerate().for_each(
+        |(band, (chunk, bin))| {
+            let row0 = band * BAND;
+            for &id in bin {
+                fill(&tris[id as usize], chunk, row0, width);
+            }
+        },
+    );
+    (VisBuffer { width, height, samples }, stats)
+}
+
+/// Clips a face against the near plane and projects it; returns the screen triangles and
+/// whether clipping happened.
+fn setup(
+    cam: &Projector,
+    cam_pos: &[Vector3<f64>],
+    face: u32,
+    tri: &[u32; 3],
+    width: usize,
+    height: usize,
+) -> (Vec<ScreenTri>, bool) {
+    let corner_bary = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let verts: Vec<(Vector3<f64>, [f64; 2])> =
+        (0..3).map(|k| (cam_pos[tri[k] as usize], corner_bary[k])).collect();
+    let inside = |v: &(Vector3<f64>, [f64; 2])| v.0.z > cam.near;
+    let n_in = verts.iter().filter(|v| inside(v)).count();
+    let poly: Vec<(Vector3<f64>, [f64; 2])> = if n_in == 3 {
+        verts
+    } else if n_in == 0 {
+        return (Vec::new(), true);
+    } else {
+        // Sutherland–Hodgman against z = near, carrying the face barycentrics along.
+        let mut out = Vec::with_capacity(4);
+        for k in 0..3 {
+            let (a, b) = (&verts[k], &verts[(k + 1) % 3]);
+            if inside(a) {
+                out.push(*a);
+            }
+            if inside(a) != inside(b) {
+                let t = (cam.near - a.0.z) / (b.0.z - a.0.z);
+                let p = a.0 + (b.0 - a.0) * t;
+                let bc = [a.1[0] + (b.1[0] - a.1[0]) * t, a.1[1] + (b.1[1] - a.1[1]) * t];
+                out.push((Vector3::new(p.x, p.y, cam.near), bc));
+            }
+        }
+        out
+    };
+    let mut res = Vec::new();
+    for k in 1..poly.len().saturating_sub(1) {
+        let vs = [poly[0], poly[k], poly[k + 1]];
+        let xy = vs.map(|v| cam.cam_to_pixel(&v.0));
+        if xy.iter().flatten().any(|c| !c.is_finite()) {
+            continue;
+        }
+        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for p in &xy {
+            x0 = x0.min(p[0]);
+            x1 = x1.max(p[0]);
+            y0 = y0.min(p[1]);
+            y1 = y1.max(p[1]);
+        }
+        // Samples with centre c + ½ in [lo, hi]: indices ceil(lo − ½) ..= floor(hi − ½).
+        let span = |lo: f64, hi: f64, n: usize| {
+            let a = (lo - 0.5).ceil().max(0.0);
+            let b = ((hi - 0.5).floor() + 1.0).min(n as f64);
+            if b > a {
+                (a as usize, b as usize)
+            } else {
+                (0, 0)
+            }
+        };
+        let rows = span(y0, y1, height);
+        let cols = span(x0, x1, width);
+        if rows.1 <= rows.0 || cols.1 <= cols.0 {
+            continue;
+        }
+        res.push(ScreenTri {
+            face,
+            xy,
+            inv_z: vs.map(|v| 1.0 / v.0.z),
+            bary: vs.map(|v| v.1),
+            rows,
+            cols,
+        });
+    }
+    (res, n_in < 3)
+}
+
+/// Edge function: twice the signed area of (a, b, p).
+#[inline]
+fn edge(a: &[f64; 2], b: &[f64; 2], p: &[f64; 2]) -> f64 {
+    (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+}
+
+/// Fills the part of `t` inside the band starting at `row0`.
+fn fill(t: &ScreenTri, chunk: &mut [Sample], row0: usize, width: usize) {
+    let area = edge(&t.xy[0], &t.xy[1], &t.xy[2]);
+    if area.abs() < 1e-12 {
+        return;
+    }
+    let inv_area = 1.0 / area;
+    let rows_here = chunk.len() / width;
+    let r0 = t.rows.0.max(row0);
+    let r1 = t.rows.1.min(row0 + rows_here);
+    for row in r0..r1 {
+        let y = row as f64 + 0.5;
+        let line = &mut chunk[(row - row0) * width..(row - row0 + 1) * width];
+        for (col, s) in line.iter_mut().enumerate().take(t.cols.1).skip(t.cols.0) {
+            let p = [col as f64 + 0.5, y];
+            let l0 = edge(&t.xy[1], &t.xy[2], &p) * inv_area;
+            let l1 = edge(&t.xy[2], &t.xy[0], &p) * inv_area;
+            let l2 = 1.0 - l0 - l1;
+            if l0 < 0.0 || l1 < 0.0 || l2 < 0.0 {
+                continue;
+            }
+            // Perspective-correct interpolation: weights λ_k / z_k.
+            let w = [l0 * t.inv_z[0], l1 * t.inv_z[1], l2 * t.inv_z[2]];
+            let sw = w[0] + w[1] + w[2];
+            if sw <= 0.0 {
+                continue;
+            }
+            let depth = (1.0 / sw) as f32;
+            if depth < s.depth {
+                let b1 = (w[0] * t.bary[0][0] + w[1] * t.bary[1][0] + w[2] * t.bary[2][0]) / sw;
+                let b2 = (w[0] * t.bary[0][1] + w[1] * t.bary[1][1] + w[2] * t.bary[2][1]) / sw;
+                *s = Sample { depth, face: t.face, b1: b1 as f32, b2: b2 as f32 };
+            }
+        }
+    }
+}

@@ -1,0 +1,126 @@
+//! Per-sample surface reconstruction: position, shading normal and grain direction from the
+//! visibility buffer, with the grain interpolated as a vector (k = 1) or as a line (k = 2).
+
+use nalgebra::Vector3;
+
+use super::raster::{Sample, EMPTY};
+use crate::highlight::Symmetry;
+
+/// The mesh data the passes read.
+pub(crate) struct MeshData<'a> {
+    pub positions: &'a [Vector3<f64>],
+    pub faces: &'a [[u32; 3]],
+    pub normals: &'a [Vector3<f64>],
+}
+
+/// The surface seen at one sample.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Surf {
+    pub face: usize,
+    /// Barycentric weights of the face's three corners.
+    pub w: [f64; 3],
+    pub p: Vector3<f64>,
+    /// Unit shading normal, facing the eye.
+    pub n: Vector3<f64>,
+    /// Unit direction towards the eye.
+    pub wo: Vector3<f64>,
+    /// A fixed tangent frame (t, b) at the sample (math.md §2's rule).
+    pub t: Vector3<f64>,
+    pub b: Vector3<f64>,
+}
+
+/// A unit tangent t ⟂ n from a fixed axis (x, or y when |xᵀn| > 0.9), and b = n × t.
+pub(crate) fn tangent_frame(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let r = if n.x.abs() > 0.9 { Vector3::y() } else { Vector3::x() };
+    let t = (r - n * n.dot(&r)).normalize();
+    (t, n.cross(&t))
+}
+
+impl MeshData<'_> {
+    /// The surface at a sample, `None` for the background.
+    pub fn surf(&self, s: &Sample, eye: &Vector3<f64>) -> Option<Surf> {
+        if s.face == EMPTY {
+            return None;
+        }
+        let face = s.face as usize;
+        let [i0, i1, i2] = self.faces[face].map(|i| i as usize);
+        let (b1, b2) = (f64::from(s.b1), f64::from(s.b2));
+        let w = [1.0 - b1 - b2, b1, b2];
+        let ps = [self.positions[i0], self.positions[i1], self.positions[i2]];
+        let p = ps[0] * w[0] + ps[1] * w[1] + ps[2] * w[2];
+        let to_eye = eye - p;
+        let wo = if to_eye.norm() > 0.0 { to_eye.normalize() } else { Vector3::z() };
+        let mut geo = (ps[1] - ps[0]).cross(&(ps[2] - ps[0]));
+        geo = if geo.norm() > 0.0 { geo.normalize() } else { wo };
+        let ns = self.normals[i0] * w[0] + self.normals[i1] * w[1] + self.normals[i2] * w[2];
+        let mut n = if ns.norm() > 1e-12 && ns.iter().all(|c| c.is_finite()) {
+            ns.normalize()
+        } else {
+            geo
+        };
+        // Two-sided: a face seen from behind shades with its flipped normal.
+        if geo.dot(&wo) < 0.0 {
+            n = -n;
+        }
+        // A shading normal that faces away from the eye is bent just past the silhouette.
+        let c = n.dot(&wo);
+        if c < 0.01 {
+            n = (n + wo * (0.01 - c)).normalize();
+        }
+        let (t, b) = tangent_frame(&n);
+        Some(Surf { face, w, p, n, wo, t, b })
+    }
+
+    /// The three corner vertex indices of the sample's face.
+    pub fn corners(&self, s: &Surf) -> [usize; 3] {
+        self.faces[s.face].map(|i| i as usize)
+    }
+}
+
+impl Surf {
+    /// The interpolated grain (unit, tangent). k = 1: the projected linear interpolation. k = 2:
+    /// the angle-doubled vector (cos 2φ, sin 2φ)·|u| in the sample's frame is interpolated (the
+    /// tensor u uᵀ, paper §4.4), so u and −u at corners agree. Falls back to t where undefined.
+    pub fn grain(&self, corner: [Vector3<f64>; 3], symmetry: Symmetry) -> Vector3<f64> {
+        match symmetry {
+            Symmetry::Oriented => {
+                let u = corner[0] * self.w[0] + corner[1] * self.w[1] + corner[2] * self.w[2];
+                let u = u - self.n * self.n.dot(&u);
+                if u.norm() > 1e-12 {
+                    u.normalize()
+                } else {
+                    self.t
+                }
+            }
+            Symmetry::Line => self.line(corner).map_or(self.t, |(u, _)| u),
+        }
+    }
+
+    /// Interpolates a line field (sign ignored) given per corner: the unit direction and the
+    /// interpolated length, `None` where the doubled-angle average vanishes.
+    pub fn line(&self, corner: [Vector3<f64>; 3]) -> Option<(Vector3<f64>, f64)> {
+        let (mut zx, mut zy, mut mag) = (0.0, 0.0, 0.0);
+        for (k, c) in corner.iter().enumerate() {
+            let x = c.dot(&self.t);
+            let y = c.dot(&self.b);
+            let r2 = x * x + y * y;
+            if !(r2 > 0.0 && r2.is_finite()) {
+                continue;
+            }
+            zx += self.w[k] * (x * x - y * y) / r2.sqrt();
+            zy += self.w[k] * 2.0 * x * y / r2.sqrt();
+            mag += self.w[k] * r2.sqrt();
+        }
+        let z = zx.hypot(zy);
+        if z.is_nan() || z <= 1e-9 * mag.max(1e-300) || !z.is_finite() {
+            return None;
+        }
+        let phi = 0.5 * zy.atan2(zx);
+        Some((self.t * phi.cos() + self.b * phi.sin(), mag))
+    }
+
+    /// Barycentric interpolation of a per-vertex scalar.
+    pub fn scalar(&self, corner: [f64; 3]) -> f64 {
+        corner[0] * self.w[0] + corner[1] * self.w[1] + corner[2] * self.w[2]
+    }
+}
