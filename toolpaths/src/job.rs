@@ -18,6 +18,8 @@ use crate::svg_out::{write_svg, SvgOptions};
 /// Everything a job needs; `None` skips an output.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct JobOptions {
     /// Even-spacing placement.
     pub placement: PlacementOptions,
@@ -59,13 +61,27 @@ fn timed<T>(t: &mut Vec<PhaseTime>, phase: &str, f: impl FnOnce() -> Result<T>) 
     Ok(r)
 }
 
+impl JobOptions {
+    /// Check every option; errors name the key path (`placement.width`, `gcode.feed`, …).
+    pub fn validate(&self) -> Result<()> {
+        self.placement.validate()?;
+        self.plan.validate()?;
+        if let Some(c) = &self.coverage {
+            c.validate()?;
+        }
+        if let Some(s) = &self.svg {
+            s.validate()?;
+        }
+        if let Some(g) = &self.gcode {
+            g.validate()?;
+        }
+        Ok(())
+    }
+}
+
 /// Run the whole pipeline on a field mesh. Options are validated before any work.
 pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
-    o.placement.validate()?;
-    o.plan.validate()?;
-    if let Some(g) = &o.gcode {
-        g.validate()?;
-    }
+    o.validate()?;
     let mut t = Vec::new();
     let dom = timed(&mut t, "domain", || Domain::new(mesh))?;
     let placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;
