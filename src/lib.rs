@@ -15,7 +15,9 @@ pub mod geometry;
 pub mod highlight;
 pub mod mesh;
 pub mod output;
+pub mod panel;
 pub mod solve;
+pub mod uvfield;
 
 pub use error::{Error, Result};
 

@@ -3,6 +3,7 @@
 mod field;
 mod inspect;
 mod mesh_args;
+mod panel;
 mod progress;
 
 use clap::{Parser, Subcommand};
@@ -29,6 +30,8 @@ enum Command {
     Inspect(inspect::InspectArgs),
     /// Geometry, an initial grain field and its highlight field (Eq. 7), written as FIELD.json.
     Field(field::FieldArgs),
+    /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
+    Panel(panel::PanelArgs),
 }
 
 /// Runs the parsed command.
@@ -36,5 +39,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Field(a) => field::run(a, cli.quiet),
+        Command::Panel(a) => panel::run(a, cli.quiet),
     }
 }
