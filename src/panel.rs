@@ -176,6 +176,7 @@ impl Scanner<'_> {
     }
 
     fn number(&mut self) -> std::result::Result<f64, String> {
+        self.skip_sep();
         let start = self.i;
         let s = self.s;
         let mut i = self.i;
@@ -668,7 +669,7 @@ pub fn read_svg_loops(text: &str, name: &Path, tolerance: f64) -> Result<Vec<Loo
             if gap <= 1e-9 {
                 p.pop();
             }
-            if p.len() < 3 || signed_area(&p).abs() <= 1e-12 {
+            if p.len() < 3 {
                 return Err(ebad(format!("subpath {} encloses no area", k + 1)));
             }
             loops.push(Loop { points: p, element: element.clone() });
@@ -821,6 +822,13 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
         });
     }
     check_simple(loops, name)?;
+    if let Some(l) = loops.iter().find(|l| signed_area(&l.points).abs() <= 1e-12) {
+        return Err(Error::Parse {
+            path: name.to_path_buf(),
+            line: 0,
+            message: format!("{}: a subpath encloses no area", l.element),
+        });
+    }
     let numerical = |m: String| Error::Numerical { stage: "panel triangulation", message: m };
     let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
         ConstrainedDelaunayTriangulation::new();

@@ -146,7 +146,7 @@ fn cli_writes_the_obj_and_fails_with_one_line() {
         ("panel_bowtie.svg", &[][..], "itself"),
         ("panel_empty.svg", &[][..], "no closed outline"),
         ("no_such.svg", &[][..], "no_such.svg"),
-        ("panel_square_hole.svg", &["--max-edge", "-1"][..], "--max-edge"),
+        ("panel_square_hole.svg", &["--max-edge=-1"][..], "--max-edge"),
     ] {
         let o = run(svg, extra);
         let err = String::from_utf8_lossy(&o.stderr);
