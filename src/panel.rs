@@ -239,7 +239,10 @@ impl Scanner<'_> {
 
 /// Subpaths of path data, flattened in user units to within `tol` (user units).
 /// Returns (points, closed) per subpath.
-fn flatten_path(d: &str, tol: f64) -> std::result::Result<Vec<(Vec<[f64; 2]>, bool)>, String> {
+/// A flattened subpath and whether it was closed with `Z`.
+type Subpath = (Vec<[f64; 2]>, bool);
+
+fn flatten_path(d: &str, tol: f64) -> std::result::Result<Vec<Subpath>, String> {
     let mut sc = Scanner { s: d.as_bytes(), i: 0 };
     let mut subs: Vec<(Vec<[f64; 2]>, bool)> = Vec::new();
     let mut cur = [0.0, 0.0];

@@ -190,6 +190,7 @@ pub fn field_mesh(
     let mut face_uv: Vec<Option<[u32; 3]>> = vec![None; mesh.num_faces()];
     let mut acc: Vec<Vector2<f64>> = Vec::new();
 
+    #[allow(clippy::needless_range_loop)] // f indexes the mesh, its UVs and face_uv
     for f in 0..mesh.num_faces() {
         let w = uv.face(f);
         let p = mesh.face_positions(f);
@@ -249,7 +250,7 @@ pub fn field_mesh(
         .iter()
         .map(|a| {
             let n = a.norm();
-            if !(n > 1e-9) {
+            if n.is_nan() || n <= 1e-9 {
                 report.vanishing_directions += 1;
                 return [0.0, 0.0];
             }

@@ -72,7 +72,7 @@ pub struct Envelope {
 pub struct GcodeOptions {
     /// Dialect. Default linuxcnc.
     pub dialect: Dialect,
-    /// Job name for the header comment.
+    /// Job name for the header comment. Default "grainline".
     pub job: String,
     /// Cutting feed, mm/min (> 0). Default 1000.
     pub feed: f64,
@@ -82,9 +82,9 @@ pub struct GcodeOptions {
     pub safe_z: f64,
     /// Tool on/off. Default `M3 S1000`.
     pub spindle: Spindle,
-    /// Machine envelope to enforce, if any.
+    /// Machine envelope to enforce. Default none.
     pub envelope: Option<Envelope>,
-    /// Lowest Z the tool may reach, if any.
+    /// Lowest Z the tool may reach. Default none.
     pub z_floor: Option<f64>,
     /// Decimals for coordinates (1..=6). Default 3.
     pub decimals: usize,

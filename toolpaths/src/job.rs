@@ -21,17 +21,17 @@ use crate::svg_out::{write_svg, SvgOptions};
 #[serde(deny_unknown_fields)]
 #[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct JobOptions {
-    /// Even-spacing placement.
+    /// Even-spacing placement (defaults: see [`PlacementOptions`]).
     pub placement: PlacementOptions,
-    /// Orientation, ordering, leads, Z mode.
+    /// Orientation, ordering, leads, Z mode (defaults: see [`PlanOptions`]).
     pub plan: PlanOptions,
-    /// Coverage measurement.
+    /// Coverage measurement. Default none (not measured).
     pub coverage: Option<CoverageOptions>,
-    /// SVG output.
+    /// SVG output. Default none.
     pub svg: Option<SvgOptions>,
-    /// G-code output.
+    /// G-code output. Default none.
     pub gcode: Option<GcodeOptions>,
-    /// Strokes JSON output.
+    /// Strokes JSON output. Default false.
     pub strokes_json: bool,
 }
 

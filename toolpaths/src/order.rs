@@ -42,7 +42,7 @@ pub enum Direction {
 #[serde(deny_unknown_fields)]
 #[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct OrderOptions {
-    /// Where the tool starts (machine XY, mm).
+    /// Where the tool starts (machine XY, mm). Default [0, 0].
     pub home: Vec2,
     /// Most 2-opt sweeps over the tour. Default 50.
     pub two_opt_passes: usize,

@@ -32,7 +32,7 @@ pub struct SvgOptions {
     pub travel: bool,
     /// Margin around the UV bounding box, mm. Default 2.
     pub margin: f64,
-    /// Document title.
+    /// Document title. Default "grainline strokes".
     pub title: String,
     /// Decimals for coordinates. Default 3.
     pub decimals: usize,

@@ -113,11 +113,15 @@ fn every_section_names_its_key_path() {
     let mut o = JobOptions::default();
     o.placement.trace.max_step = -1.0;
     option_error(generate(m(), &o), "placement.trace.max_step");
-    let mut o = JobOptions::default();
-    o.coverage = Some(CoverageOptions { resolution: Some(0.0), ..Default::default() });
+    let o = JobOptions {
+        coverage: Some(CoverageOptions { resolution: Some(0.0), ..Default::default() }),
+        ..Default::default()
+    };
     option_error(generate(m(), &o), "coverage.resolution");
-    let mut o = JobOptions::default();
-    o.svg = Some(SvgOptions { decimals: 9, ..Default::default() });
+    let o = JobOptions {
+        svg: Some(SvgOptions { decimals: 9, ..Default::default() }),
+        ..Default::default()
+    };
     option_error(generate(m(), &o), "svg.decimals");
     let mut o = JobOptions::default();
     o.plan.z_mode = ZMode::SurfaceFollowing { max_tilt_deg: 200.0, on_tilt: TiltPolicy::Skip };
