@@ -158,3 +158,36 @@ fn cli_writes_the_obj_and_fails_with_one_line() {
     assert_eq!(std::fs::read(&out).unwrap(), before, "a failed run must not touch the output");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn malformed_path_data_is_an_error_not_a_panic() {
+    for d in [
+        "M",
+        "M 1",
+        "L 1 2",
+        "M1 2 A",
+        "Z",
+        "M 0 0 Q 1",
+        "M 0 0 C 1 1 2 2",
+        "M 0 0 X 1 1",
+        "M 0 0 A 1 1 0 2 0 3 3",
+        "M 0 0 L nan 1",
+        "M 0 0 L 1e999 1",
+        "M0 0h",
+        "M 0 0 l 1 0 0 1 z m",
+        "M 0,0 1,0 0,1 z z z",
+    ] {
+        let text =
+            format!(r#"<svg width="10mm" height="10mm" viewBox="0 0 10 10"><path d="{d}"/></svg>"#);
+        let r = std::panic::catch_unwind(|| read_svg_loops(&text, Path::new("m.svg"), 0.01));
+        let r = r.unwrap_or_else(|_| panic!("{d:?} panicked"));
+        if let Err(e) = r {
+            assert!(e.to_string().starts_with("m.svg"), "{d:?}: {e}");
+        }
+    }
+    // Implicit line-tos after a moveto and stacked Z are fine.
+    let text = r#"<svg width="10mm" height="10mm" viewBox="0 0 10 10"><path d="M 0,0 4,0 0,4 z z"/></svg>"#;
+    let l = read_svg_loops(text, Path::new("m.svg"), 0.01).unwrap();
+    assert_eq!(l.len(), 1);
+    assert_eq!(l[0].points.len(), 3);
+}
