@@ -16,10 +16,12 @@ pub mod geometry;
 pub mod highlight;
 pub mod mesh;
 pub mod output;
+pub mod panel;
 pub mod pipeline;
 pub mod render;
 pub mod scene;
 pub mod solve;
+pub mod uvfield;
 
 pub use error::{Error, Result};
 

@@ -4,6 +4,7 @@ mod field;
 mod inspect;
 mod mesh_args;
 mod optimize;
+mod panel;
 mod progress;
 mod schema;
 
@@ -35,6 +36,8 @@ enum Command {
     Optimize(optimize::OptimizeArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
+    /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
+    Panel(panel::PanelArgs),
 }
 
 /// Runs the parsed command.
@@ -44,5 +47,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Field(a) => field::run(a, cli.quiet),
         Command::Schema(a) => schema::run(a),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
+        Command::Panel(a) => panel::run(a, cli.quiet),
     }
 }

@@ -23,11 +23,23 @@ const MAX_PIXELS: f64 = 4.0e6;
 /// Coverage options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct CoverageOptions {
     /// Pixel pitch, mm; `None` means `d_sep / 4`.
     pub resolution: Option<f64>,
     /// Keep the raster in the result. Default true.
     pub keep_map: bool,
+}
+
+impl CoverageOptions {
+    /// Reject a non-positive or non-finite `resolution`.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(r) = self.resolution {
+            positive("coverage.resolution", r)?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for CoverageOptions {

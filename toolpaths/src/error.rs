@@ -11,9 +11,10 @@ use thiserror::Error;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ToolpathError {
     /// A numeric option is NaN, infinite, or outside its allowed range.
-    #[error("invalid option `{name}` = {value}: {reason}")]
+    #[error("{name}: {reason}, got {value}")]
     InvalidOption {
-        /// Option name as documented (e.g. `feed`, `width`).
+        /// The option's key path from [`crate::JobOptions`] (e.g. `gcode.feed`,
+        /// `placement.width`), as in a scene file's `toolpaths` section.
         name: &'static str,
         /// The rejected value.
         value: f64,
@@ -128,11 +129,17 @@ pub(crate) fn finite(name: &'static str, value: f64) -> Result<f64> {
     }
 }
 
-/// Check that `value` lies in `[lo, hi)`.
-pub(crate) fn in_range(name: &'static str, value: f64, lo: f64, hi: f64) -> Result<f64> {
+/// Check that `value` lies in `[lo, hi)`; `reason` says so in words (e.g. "must be in [0, 1)").
+pub(crate) fn in_range(
+    name: &'static str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    reason: &'static str,
+) -> Result<f64> {
     if value.is_finite() && value >= lo && value < hi {
         Ok(value)
     } else {
-        Err(ToolpathError::InvalidOption { name, value, reason: "out of range" })
+        Err(ToolpathError::InvalidOption { name, value, reason })
     }
 }

@@ -23,6 +23,7 @@ use crate::simplify::Segment;
 /// Target controller.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub enum Dialect {
     /// Grbl 1.1 (hobby mills, laser/brush heads): no `G64`, ends with `M30`.
     Grbl,
@@ -36,6 +37,8 @@ pub enum Dialect {
 /// Turning the tool on and off.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub enum Spindle {
     /// No spindle commands.
     None,
@@ -52,6 +55,8 @@ pub enum Spindle {
 
 /// Axis-aligned machine envelope (mm).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct Envelope {
     /// Minimum X, Y, Z.
     pub min: Vec3,
@@ -62,10 +67,12 @@ pub struct Envelope {
 /// G-code options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct GcodeOptions {
     /// Dialect. Default linuxcnc.
     pub dialect: Dialect,
-    /// Job name for the header comment.
+    /// Job name for the header comment. Default "grainline".
     pub job: String,
     /// Cutting feed, mm/min (> 0). Default 1000.
     pub feed: f64,
@@ -75,9 +82,9 @@ pub struct GcodeOptions {
     pub safe_z: f64,
     /// Tool on/off. Default `M3 S1000`.
     pub spindle: Spindle,
-    /// Machine envelope to enforce, if any.
+    /// Machine envelope to enforce. Default none.
     pub envelope: Option<Envelope>,
-    /// Lowest Z the tool may reach, if any.
+    /// Lowest Z the tool may reach. Default none.
     pub z_floor: Option<f64>,
     /// Decimals for coordinates (1..=6). Default 3.
     pub decimals: usize,
@@ -102,26 +109,26 @@ impl Default for GcodeOptions {
 impl GcodeOptions {
     /// Reject zero, negative or NaN feeds and other bad values.
     pub fn validate(&self) -> Result<()> {
-        positive("feed", self.feed)?;
-        positive("plunge_feed", self.plunge_feed)?;
-        finite("safe_z", self.safe_z)?;
+        positive("gcode.feed", self.feed)?;
+        positive("gcode.plunge_feed", self.plunge_feed)?;
+        finite("gcode.safe_z", self.safe_z)?;
         if let Spindle::Speed(s) = self.spindle {
-            positive("spindle_speed", s)?;
+            positive("gcode.spindle.speed", s)?;
         }
         if !(1..=6).contains(&self.decimals) {
             return Err(ToolpathError::InvalidOption {
-                name: "decimals",
+                name: "gcode.decimals",
                 value: self.decimals as f64,
                 reason: "must be between 1 and 6",
             });
         }
         if let Some(e) = self.envelope {
             for k in 0..3 {
-                finite("envelope.min", e.min[k])?;
-                finite("envelope.max", e.max[k])?;
+                finite("gcode.envelope.min", e.min[k])?;
+                finite("gcode.envelope.max", e.max[k])?;
                 if e.min[k] > e.max[k] {
                     return Err(ToolpathError::InvalidOption {
-                        name: "envelope",
+                        name: "gcode.envelope",
                         value: e.min[k],
                         reason: "min must not exceed max",
                     });
@@ -129,7 +136,7 @@ impl GcodeOptions {
             }
         }
         if let Some(z) = self.z_floor {
-            finite("z_floor", z)?;
+            finite("gcode.z_floor", z)?;
         }
         Ok(())
     }
@@ -222,7 +229,7 @@ pub fn check_safety(plan: &Plan, o: &GcodeOptions) -> Result<()> {
     }
     if top > o.safe_z {
         return Err(ToolpathError::InvalidOption {
-            name: "safe_z",
+            name: "gcode.safe_z",
             value: o.safe_z,
             reason: "is below the highest point of a pass; travel would collide",
         });

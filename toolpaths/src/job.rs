@@ -18,18 +18,20 @@ use crate::svg_out::{write_svg, SvgOptions};
 /// Everything a job needs; `None` skips an output.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct JobOptions {
-    /// Even-spacing placement.
+    /// Even-spacing placement (defaults: see [`PlacementOptions`]).
     pub placement: PlacementOptions,
-    /// Orientation, ordering, leads, Z mode.
+    /// Orientation, ordering, leads, Z mode (defaults: see [`PlanOptions`]).
     pub plan: PlanOptions,
-    /// Coverage measurement.
+    /// Coverage measurement. Default none (not measured).
     pub coverage: Option<CoverageOptions>,
-    /// SVG output.
+    /// SVG output. Default none.
     pub svg: Option<SvgOptions>,
-    /// G-code output.
+    /// G-code output. Default none.
     pub gcode: Option<GcodeOptions>,
-    /// Strokes JSON output.
+    /// Strokes JSON output. Default false.
     pub strokes_json: bool,
 }
 
@@ -59,13 +61,27 @@ fn timed<T>(t: &mut Vec<PhaseTime>, phase: &str, f: impl FnOnce() -> Result<T>) 
     Ok(r)
 }
 
+impl JobOptions {
+    /// Check every option; errors name the key path (`placement.width`, `gcode.feed`, …).
+    pub fn validate(&self) -> Result<()> {
+        self.placement.validate()?;
+        self.plan.validate()?;
+        if let Some(c) = &self.coverage {
+            c.validate()?;
+        }
+        if let Some(s) = &self.svg {
+            s.validate()?;
+        }
+        if let Some(g) = &self.gcode {
+            g.validate()?;
+        }
+        Ok(())
+    }
+}
+
 /// Run the whole pipeline on a field mesh. Options are validated before any work.
 pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
-    o.placement.validate()?;
-    o.plan.validate()?;
-    if let Some(g) = &o.gcode {
-        g.validate()?;
-    }
+    o.validate()?;
     let mut t = Vec::new();
     let dom = timed(&mut t, "domain", || Domain::new(mesh))?;
     let placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;

@@ -24,6 +24,7 @@ use crate::improve::{or_opt, rotate_rings, two_opt};
 /// Global stroke orientation (the brushing direction is a process choice).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub enum Direction {
     /// Vector fields: along the arrows. Line fields: so that `(end − start) · reference ≥ 0`
     /// (closed loops: counter-clockwise in UV).
@@ -38,8 +39,10 @@ pub enum Direction {
 /// Ordering options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct OrderOptions {
-    /// Where the tool starts (machine XY, mm).
+    /// Where the tool starts (machine XY, mm). Default [0, 0].
     pub home: Vec2,
     /// Most 2-opt sweeps over the tour. Default 50.
     pub two_opt_passes: usize,

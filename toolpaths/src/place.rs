@@ -31,6 +31,8 @@ use crate::trace::{Stroke, TraceOptions, Tracer};
 /// Options of the even-spacing placement. Lengths in mm.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct PlacementOptions {
     /// Brush width, mm. Default 1.
     pub width: f64,
@@ -84,23 +86,23 @@ impl PlacementOptions {
 
     /// Reject NaN and out-of-range values with a clear error.
     pub fn validate(&self) -> Result<()> {
-        positive("width", self.width)?;
-        in_range("overlap", self.overlap, 0.0, 1.0)?;
-        positive("test_ratio", self.test_ratio)?;
+        positive("placement.width", self.width)?;
+        in_range("placement.overlap", self.overlap, 0.0, 1.0, "must be in [0, 1)")?;
+        positive("placement.test_ratio", self.test_ratio)?;
         if self.test_ratio > 1.0 {
             return Err(ToolpathError::InvalidOption {
-                name: "test_ratio",
+                name: "placement.test_ratio",
                 value: self.test_ratio,
                 reason: "must be in (0, 1]",
             });
         }
-        non_negative("min_length", self.min_length)?;
+        non_negative("placement.min_length", self.min_length)?;
         if let Some(r) = self.exclusion_radius {
-            non_negative("exclusion_radius", r)?;
+            non_negative("placement.exclusion_radius", r)?;
         }
         for (i, s) in self.seeds.iter().enumerate() {
             if !(s[0].is_finite() && s[1].is_finite()) {
-                return Err(ToolpathError::NonFinite { what: "seeds", index: i });
+                return Err(ToolpathError::NonFinite { what: "placement.seeds", index: i });
             }
         }
         self.trace.validate()

@@ -29,6 +29,7 @@ use crate::trace::{StopReason, Stroke};
 /// What to do with a stroke whose surface tilts beyond the limit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub enum TiltPolicy {
     /// Refuse the whole job with [`ToolpathError::TiltExceeded`].
     #[default]
@@ -40,6 +41,8 @@ pub enum TiltPolicy {
 /// How Z is chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "mode")]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub enum ZMode {
     /// A flat sheet at height `surface_z`; XY = UV.
     Flat {
@@ -58,6 +61,8 @@ pub enum ZMode {
 /// Options of [`plan_toolpath`]. Lengths in mm.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct PlanOptions {
     /// Global orientation. Default `along`.
     pub direction: Direction,
@@ -104,29 +109,35 @@ impl Default for PlanOptions {
 impl PlanOptions {
     /// Reject NaN and out-of-range values.
     pub fn validate(&self) -> Result<()> {
-        finite("reference.u", self.reference[0])?;
-        finite("reference.v", self.reference[1])?;
+        finite("plan.reference[0]", self.reference[0])?;
+        finite("plan.reference[1]", self.reference[1])?;
         if self.reference == [0.0, 0.0] {
             return Err(ToolpathError::InvalidOption {
-                name: "reference",
+                name: "plan.reference",
                 value: 0.0,
                 reason: "must be a non-zero vector",
             });
         }
-        positive("tolerance", self.tolerance)?;
-        non_negative("contact_depth", self.contact_depth)?;
-        non_negative("lead_in", self.lead_in)?;
-        non_negative("lead_out", self.lead_out)?;
-        non_negative("ramp_height", self.ramp_height)?;
-        non_negative("overtravel", self.overtravel)?;
-        finite("home.x", self.order.home[0])?;
-        finite("home.y", self.order.home[1])?;
+        positive("plan.tolerance", self.tolerance)?;
+        non_negative("plan.contact_depth", self.contact_depth)?;
+        non_negative("plan.lead_in", self.lead_in)?;
+        non_negative("plan.lead_out", self.lead_out)?;
+        non_negative("plan.ramp_height", self.ramp_height)?;
+        non_negative("plan.overtravel", self.overtravel)?;
+        finite("plan.order.home[0]", self.order.home[0])?;
+        finite("plan.order.home[1]", self.order.home[1])?;
         match self.z_mode {
             ZMode::Flat { surface_z } => {
-                finite("surface_z", surface_z)?;
+                finite("plan.z_mode.surface_z", surface_z)?;
             }
             ZMode::SurfaceFollowing { max_tilt_deg, .. } => {
-                crate::error::in_range("max_tilt_deg", max_tilt_deg, 0.0, 180.0)?;
+                crate::error::in_range(
+                    "plan.z_mode.max_tilt_deg",
+                    max_tilt_deg,
+                    0.0,
+                    180.0,
+                    "must be in [0, 180) degrees",
+                )?;
             }
         }
         Ok(())

@@ -14,6 +14,7 @@ use crate::trace::Stroke;
 /// How distances between strokes are measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub enum Spacing {
     /// On the part, with the first fundamental form (the default: the part is what gets
     /// brushed).

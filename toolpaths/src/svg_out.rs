@@ -23,6 +23,8 @@ use crate::plan::Plan;
 /// SVG options.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct SvgOptions {
     /// Draw the chart outlines layer. Default true.
     pub outlines: bool,
@@ -30,7 +32,7 @@ pub struct SvgOptions {
     pub travel: bool,
     /// Margin around the UV bounding box, mm. Default 2.
     pub margin: f64,
-    /// Document title.
+    /// Document title. Default "grainline strokes".
     pub title: String,
     /// Decimals for coordinates. Default 3.
     pub decimals: usize,
@@ -45,6 +47,21 @@ impl Default for SvgOptions {
             title: "grainline strokes".into(),
             decimals: 3,
         }
+    }
+}
+
+impl SvgOptions {
+    /// Reject a negative or non-finite `margin` and `decimals` outside 1..=6.
+    pub fn validate(&self) -> Result<()> {
+        non_negative("svg.margin", self.margin)?;
+        if !(1..=6).contains(&self.decimals) {
+            return Err(crate::error::ToolpathError::InvalidOption {
+                name: "svg.decimals",
+                value: self.decimals as f64,
+                reason: "must be between 1 and 6",
+            });
+        }
+        Ok(())
     }
 }
 
@@ -88,7 +105,7 @@ pub(crate) fn boundary_loops(dom: &Domain) -> Vec<Vec<Vec2>> {
 
 /// Render the plan's strokes (UV) as an SVG document string.
 pub fn write_svg(dom: &Domain, plan: &Plan, o: &SvgOptions) -> Result<String> {
-    non_negative("margin", o.margin)?;
+    non_negative("svg.margin", o.margin)?;
     let dp = o.decimals.clamp(1, 6);
     let b = dom.bbox();
     let w = b[1][0] - b[0][0] + 2.0 * o.margin;

@@ -28,6 +28,8 @@ pub use crate::stroke::{StopReason, Stroke};
 /// Options of the streamline integrator. Lengths are surface millimetres.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
+#[serde(deny_unknown_fields)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
 pub struct TraceOptions {
     /// Local error tolerance per step, mm on the surface: both the Dormand–Prince error
     /// estimate and the sagitta of each chord (distance between the polyline and the
@@ -65,14 +67,14 @@ impl Default for TraceOptions {
 impl TraceOptions {
     /// Reject NaN, infinite or non-positive values.
     pub fn validate(&self) -> Result<()> {
-        positive("tolerance", self.tolerance)?;
-        positive("max_step", self.max_step)?;
-        positive("min_step", self.min_step)?;
-        positive("max_length", self.max_length)?;
-        non_negative("exclusion_radius", self.exclusion_radius)?;
+        positive("placement.trace.tolerance", self.tolerance)?;
+        positive("placement.trace.max_step", self.max_step)?;
+        positive("placement.trace.min_step", self.min_step)?;
+        positive("placement.trace.max_length", self.max_length)?;
+        non_negative("placement.trace.exclusion_radius", self.exclusion_radius)?;
         if self.min_step > self.max_step {
             return Err(ToolpathError::InvalidOption {
-                name: "min_step",
+                name: "placement.trace.min_step",
                 value: self.min_step,
                 reason: "must not exceed max_step",
             });

@@ -22,27 +22,30 @@ fn zero_negative_or_nan_numbers_are_errors() {
     for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         let mut o = JobOptions { gcode: Some(GcodeOptions::default()), ..Default::default() };
         o.placement.width = bad;
-        option_error(generate(mesh(), &o), "width");
+        option_error(generate(mesh(), &o), "placement.width");
         let mut o = JobOptions { gcode: Some(GcodeOptions::default()), ..Default::default() };
         o.gcode.as_mut().unwrap().feed = bad;
-        option_error(generate(mesh(), &o), "feed");
+        option_error(generate(mesh(), &o), "gcode.feed");
         let mut o = JobOptions { gcode: Some(GcodeOptions::default()), ..Default::default() };
         o.gcode.as_mut().unwrap().plunge_feed = bad;
-        option_error(generate(mesh(), &o), "plunge_feed");
+        option_error(generate(mesh(), &o), "gcode.plunge_feed");
         let mut o = JobOptions::default();
         o.placement.test_ratio = bad;
-        option_error(generate(mesh(), &o), "test_ratio");
+        option_error(generate(mesh(), &o), "placement.test_ratio");
         let mut o = JobOptions::default();
         o.plan.tolerance = bad;
-        option_error(generate(mesh(), &o), "tolerance");
+        option_error(generate(mesh(), &o), "plan.tolerance");
     }
     // Overlap 1 would make the spacing zero.
     let mut o = JobOptions::default();
     o.placement.overlap = 1.0;
-    option_error(generate(mesh(), &o), "overlap");
-    let msg =
-        ToolpathError::InvalidOption { name: "feed", value: 0.0, reason: "must be finite and > 0" };
-    assert_eq!(msg.to_string(), "invalid option `feed` = 0: must be finite and > 0");
+    option_error(generate(mesh(), &o), "placement.overlap");
+    let msg = ToolpathError::InvalidOption {
+        name: "gcode.feed",
+        value: 0.0,
+        reason: "must be finite and > 0",
+    };
+    assert_eq!(msg.to_string(), "gcode.feed: must be finite and > 0, got 0");
 }
 
 #[test]
@@ -102,4 +105,56 @@ fn envelope_and_floor_violations_are_refused_with_the_amount() {
         ..Default::default()
     })
     .is_ok());
+}
+
+#[test]
+fn every_section_names_its_key_path() {
+    let m = || mesh();
+    let mut o = JobOptions::default();
+    o.placement.trace.max_step = -1.0;
+    option_error(generate(m(), &o), "placement.trace.max_step");
+    let o = JobOptions {
+        coverage: Some(CoverageOptions { resolution: Some(0.0), ..Default::default() }),
+        ..Default::default()
+    };
+    option_error(generate(m(), &o), "coverage.resolution");
+    let o = JobOptions {
+        svg: Some(SvgOptions { decimals: 9, ..Default::default() }),
+        ..Default::default()
+    };
+    option_error(generate(m(), &o), "svg.decimals");
+    let mut o = JobOptions::default();
+    o.plan.z_mode = ZMode::SurfaceFollowing { max_tilt_deg: 200.0, on_tilt: TiltPolicy::Skip };
+    option_error(generate(m(), &o), "plan.z_mode.max_tilt_deg");
+    let mut o = JobOptions { gcode: Some(GcodeOptions::default()), ..Default::default() };
+    o.gcode.as_mut().unwrap().spindle = Spindle::Speed(-5.0);
+    option_error(generate(m(), &o), "gcode.spindle.speed");
+}
+
+#[test]
+fn unknown_keys_are_refused_at_every_level() {
+    let ok: JobOptions = serde_json::from_str(
+        r#"{"placement": {"width": 2.0, "trace": {"cross_seams": true}},
+            "plan": {"z_mode": {"mode": "flat", "surface_z": 1.0}, "order": {"home": [1, 2]}},
+            "gcode": {"spindle": {"speed": 900}, "envelope": {"min": [0,0,0], "max": [1,1,1]}},
+            "svg": {}, "coverage": {}}"#,
+    )
+    .unwrap();
+    assert_eq!(ok.placement.width, 2.0);
+    assert!(ok.placement.trace.cross_seams);
+    assert_eq!(ok.plan.z_mode, ZMode::Flat { surface_z: 1.0 });
+    for bad in [
+        r#"{"placement": {"widht": 2.0}}"#,
+        r#"{"placement": {"trace": {"tolerence": 1}}}"#,
+        r#"{"plan": {"order": {"homes": [0, 0]}}}"#,
+        r#"{"plan": {"z_mode": {"mode": "flat", "surface_z": 0, "extra": 1}}}"#,
+        r#"{"gcode": {"envelope": {"min": [0,0,0], "max": [1,1,1], "mid": 0}}}"#,
+        r#"{"gcode": {"spindle": {"snippet": {"on": "M7", "off": "M9", "x": 1}}}}"#,
+        r#"{"svg": {"margins": 1}}"#,
+        r#"{"coverage": {"resolutoin": 1}}"#,
+        r#"{"strokes": true}"#,
+    ] {
+        let e = serde_json::from_str::<JobOptions>(bad).expect_err(bad).to_string();
+        assert!(e.contains("unknown field"), "{bad}: {e}");
+    }
 }

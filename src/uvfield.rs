@@ -1,0 +1,650 @@
+//! Carrying the 3D grain field into the toolpaths crate's UV domain, and back.
+//!
+//! [`field_mesh`] turns a mesh with per-corner UVs and a per-vertex grain angle φ into a
+//! [`FieldMesh`]:
+//!
+//! * **UV vertices** are the distinct (position, UV value) pairs of the face corners, numbered
+//!   in order of first appearance (face by face, corner by corner), so a vertex on a UV seam
+//!   becomes one UV vertex per side.
+//! * **Directions.** For a triangle with UV edges `e₁, e₂` and 3D edges `E₁, E₂`, the lift's
+//!   Jacobian is `J = [E₁ E₂]·[e₁ e₂]⁻¹` (3×2) and the first fundamental form is `M = JᵀJ`.
+//!   A 3D grain direction `u` is carried into UV by the pseudo-inverse,
+//!   `d = J⁺u = M⁻¹Jᵀu`: the UV vector whose lift `J d` is `u` projected onto the face plane.
+//!   Each corner contributes its vertex's `u` mapped through its own triangle's `J⁺`,
+//!   normalized in UV and weighted by the corner's 3D angle; the sum per UV vertex is the
+//!   direction (for k = 2 the sum is taken of angle-doubled vectors, `|d|(cos 2θ, sin 2θ)`,
+//!   and halved back, so the arbitrary sign of a line never cancels anything).
+//! * **Orientation.** No angle is ever measured against the UV axes in a tangent frame:
+//!   `J` contains the reflection of a mirrored or flipped UV triangle (its `det[e₁ e₂] < 0`),
+//!   so `J d = u` holds whatever the handedness of the chart, and a stroke traced along `d`
+//!   lifts to a curve running along `+u`. A chart mirrored in UV therefore gets mirrored UV
+//!   directions, never a grain turned over.
+//! * **Degenerate triangles** (UV area ≤ `degenerate_ratio` × UV bbox diagonal², or a lift
+//!   whose first fundamental form is not positive definite) are left out of the field mesh
+//!   and listed in the report; UV vertices used only by them are dropped.
+//! * **Seams** — mesh edges whose two faces disagree on the UV of an end — become
+//!   [`SeamPair`]s; the 3D lift (positions, the geometry's normals) and the per-triangle
+//!   metric `M` are attached, so spacing is measured on the part, in scene units.
+//!
+//! [`as_brushed`] goes the other way: each mesh vertex takes the UV tangent of the nearest
+//! placed stroke segment (found with a uniform grid), lifted to 3D through the Jacobian of
+//! one of its triangles, and the result is compared with the designed field.
+
+use std::collections::{BTreeMap, HashMap};
+
+use grainline_toolpaths::{
+    CoverageOptions, Directions, FieldMesh, GcodeOptions, JobOptions, JobOutput, Metric, Placement,
+    PlacementOptions, PlanOptions, SeamPair, SvgOptions, ToolpathError,
+};
+use nalgebra::{Matrix2, Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::geometry::Geometry;
+use crate::highlight::Symmetry;
+use crate::mesh::Mesh;
+use crate::{Error, Result};
+
+/// Options of [`field_mesh`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct UvFieldOptions {
+    /// A UV triangle whose |area| is at most this fraction of the squared UV bounding-box
+    /// diagonal is degenerate (skipped and reported). In [0, 1e-3]. Default 1e-12.
+    pub degenerate_ratio: f64,
+    /// Pass the UV seams to the toolpaths crate (strokes may then cross them when
+    /// `placement.trace.cross_seams` is on). Default true.
+    pub seams: bool,
+}
+
+impl Default for UvFieldOptions {
+    fn default() -> Self {
+        UvFieldOptions { degenerate_ratio: 1e-12, seams: true }
+    }
+}
+
+impl UvFieldOptions {
+    /// Range-checks every number; keys are relative to this section.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.degenerate_ratio.is_finite() && (0.0..=1e-3).contains(&self.degenerate_ratio)) {
+            return Err(Error::setting(
+                "degenerate_ratio",
+                format!("must be in [0, 1e-3], got {}", self.degenerate_ratio),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What [`field_mesh`] did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct UvFieldReport {
+    /// UV vertices in the field mesh.
+    pub uv_vertices: usize,
+    /// Triangles in the field mesh.
+    pub triangles: usize,
+    /// Mesh faces left out because their UV triangle (or lift) is degenerate.
+    pub degenerate_faces: Vec<u32>,
+    /// Triangles with negative signed UV area (mirrored or flipped), kept.
+    pub flipped_faces: usize,
+    /// Seam pairs passed on.
+    pub seam_pairs: usize,
+    /// UV vertices whose averaged direction vanished (the corners disagree: a singularity).
+    pub vanishing_directions: usize,
+    /// For each UV vertex, the mesh vertex it lifts to.
+    pub uv_to_vertex: Vec<u32>,
+}
+
+/// Lift Jacobian `J = [E₁ E₂]·[e₁ e₂]⁻¹` of a triangle (columns x_u, x_v), or `None` when the
+/// UV triangle is degenerate.
+fn jacobian(uv: [Vector2<f64>; 3], p: [Vector3<f64>; 3]) -> Option<[Vector3<f64>; 2]> {
+    let (e1, e2) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let det = e1.perp(&e2);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let (p1, p2) = (p[1] - p[0], p[2] - p[0]);
+    // [e1 e2]⁻¹ = 1/det [[e2y, −e2x], [−e1y, e1x]]
+    let xu = (p1 * e2.y - p2 * e1.y) / det;
+    let xv = (-p1 * e2.x + p2 * e1.x) / det;
+    Some([xu, xv])
+}
+
+/// `J⁺u = (JᵀJ)⁻¹ Jᵀ u`, or `None` when `JᵀJ` is singular.
+fn pseudo_inverse(j: &[Vector3<f64>; 2], u: &Vector3<f64>) -> Option<Vector2<f64>> {
+    let m = Matrix2::new(j[0].dot(&j[0]), j[0].dot(&j[1]), j[1].dot(&j[0]), j[1].dot(&j[1]));
+    let d = m.try_inverse()? * Vector2::new(j[0].dot(u), j[1].dot(u));
+    d.iter().all(|x| x.is_finite()).then_some(d)
+}
+
+fn toolpath_symmetry(s: Symmetry) -> grainline_toolpaths::Symmetry {
+    match s {
+        Symmetry::Oriented => grainline_toolpaths::Symmetry::Vector,
+        Symmetry::Line => grainline_toolpaths::Symmetry::Line,
+    }
+}
+
+fn corner_angle(p: [Vector3<f64>; 3], c: usize) -> f64 {
+    let a = p[(c + 1) % 3] - p[c];
+    let b = p[(c + 2) % 3] - p[c];
+    let ang = a.cross(&b).norm().atan2(a.dot(&b));
+    if ang.is_finite() {
+        ang
+    } else {
+        0.0
+    }
+}
+
+/// Builds the toolpaths crate's [`FieldMesh`] from a UV-mapped mesh and its grain field
+/// (angles `phi` in the `geometry` frames). See the module documentation.
+pub fn field_mesh(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    phi: &[f64],
+    symmetry: Symmetry,
+    opts: &UvFieldOptions,
+) -> Result<(FieldMesh, UvFieldReport)> {
+    opts.validate()?;
+    let uv = mesh.uv.as_ref().ok_or_else(|| {
+        Error::setting(
+            "toolpaths",
+            "the mesh has no UV coordinates (OBJ `vt`); toolpaths need a UV layout",
+        )
+    })?;
+    let nv = mesh.num_vertices();
+    if phi.len() != nv || geometry.num_vertices() != nv {
+        return Err(Error::invalid_arg(
+            "phi",
+            format!(
+                "{} angles and {} frames for {nv} vertices",
+                phi.len(),
+                geometry.num_vertices()
+            ),
+        ));
+    }
+    if let Some(i) = phi.iter().position(|p| !p.is_finite()) {
+        return Err(Error::Numerical {
+            stage: "uv field",
+            message: format!("grain angle of vertex {i} is not finite"),
+        });
+    }
+    let u3: Vec<Vector3<f64>> = geometry.directions_of(phi);
+    let k2 = symmetry == Symmetry::Line;
+
+    // UV bounding box diagonal for the degeneracy threshold.
+    let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
+    for t in &uv.values {
+        lo = lo.inf(t);
+        hi = hi.sup(t);
+    }
+    let diag2 = (hi - lo).norm_squared();
+    let min_area = opts.degenerate_ratio * diag2;
+
+    let mut report = UvFieldReport::default();
+    let mut ids: HashMap<(u32, u64, u64), u32> = HashMap::new();
+    let mut uv_pos: Vec<[f64; 2]> = Vec::new();
+    let mut uv_to_vertex: Vec<u32> = Vec::new();
+    let mut tris: Vec<[u32; 3]> = Vec::new();
+    let mut metrics: Vec<Metric> = Vec::new();
+    let mut jacobians: Vec<[Vector3<f64>; 2]> = Vec::new();
+    // Per face: its UV vertex ids (None when skipped), for the seams.
+    let mut face_uv: Vec<Option<[u32; 3]>> = vec![None; mesh.num_faces()];
+    let mut acc: Vec<Vector2<f64>> = Vec::new();
+
+    #[allow(clippy::needless_range_loop)] // f indexes the mesh, its UVs and face_uv
+    for f in 0..mesh.num_faces() {
+        let w = uv.face(f);
+        let p = mesh.face_positions(f);
+        let area2 = (w[1] - w[0]).perp(&(w[2] - w[0]));
+        let j = jacobian(w, p);
+        let metric = j.and_then(|j| {
+            let m = Metric { e: j[0].dot(&j[0]), f: j[0].dot(&j[1]), g: j[1].dot(&j[1]) };
+            m.is_valid().then_some(m)
+        });
+        let (Some(j), Some(metric)) = (j, metric) else {
+            report.degenerate_faces.push(f as u32);
+            continue;
+        };
+        if 0.5 * area2.abs() <= min_area {
+            report.degenerate_faces.push(f as u32);
+            continue;
+        }
+        report.flipped_faces += (area2 < 0.0) as usize;
+        let mut t = [0u32; 3];
+        for c in 0..3 {
+            let v = mesh.faces[f][c];
+            let key = (v, w[c].x.to_bits(), w[c].y.to_bits());
+            let id = *ids.entry(key).or_insert_with(|| {
+                uv_pos.push([w[c].x, w[c].y]);
+                uv_to_vertex.push(v);
+                acc.push(Vector2::zeros());
+                (uv_pos.len() - 1) as u32
+            });
+            t[c] = id;
+            // u carried into UV through this triangle: d = J⁺u.
+            if let Some(d) = pseudo_inverse(&j, &u3[v as usize]) {
+                let n = d.norm();
+                if n > 0.0 {
+                    let d = d / n;
+                    let wgt = corner_angle(p, c);
+                    let contrib =
+                        if k2 { Vector2::new(d.x * d.x - d.y * d.y, 2.0 * d.x * d.y) } else { d };
+                    acc[id as usize] += contrib * wgt;
+                }
+            }
+        }
+        face_uv[f] = Some(t);
+        tris.push(t);
+        metrics.push(metric);
+        jacobians.push(j);
+    }
+    if tris.is_empty() {
+        return Err(Error::InvalidMesh {
+            path: "toolpaths".into(),
+            message: format!(
+                "every one of the {} faces is degenerate in UV; nothing to brush",
+                mesh.num_faces()
+            ),
+        });
+    }
+    let dirs: Vec<[f64; 2]> = acc
+        .iter()
+        .map(|a| {
+            let n = a.norm();
+            if n.is_nan() || n <= 1e-9 {
+                report.vanishing_directions += 1;
+                return [0.0, 0.0];
+            }
+            if k2 {
+                // Halve the doubled angle, keep the magnitude as the coherence.
+                let th = 0.5 * a.y.atan2(a.x);
+                [n * th.cos(), n * th.sin()]
+            } else {
+                [a.x, a.y]
+            }
+        })
+        .collect();
+
+    // Seams: manifold mesh edges whose faces disagree on the UV vertex of an end.
+    let mut seams = Vec::new();
+    if opts.seams {
+        let mut edges: BTreeMap<(u32, u32), Vec<(usize, usize)>> = BTreeMap::new();
+        for (f, t) in mesh.faces.iter().enumerate() {
+            if face_uv[f].is_none() {
+                continue;
+            }
+            for c in 0..3 {
+                let (a, b) = (t[c], t[(c + 1) % 3]);
+                edges.entry((a.min(b), a.max(b))).or_default().push((f, c));
+            }
+        }
+        for ((a, _), list) in &edges {
+            if list.len() != 2 {
+                continue;
+            }
+            let side = |(f, c): (usize, usize)| {
+                let t = mesh.faces[f];
+                let u = face_uv[f].expect("kept face");
+                let (i, j) = (c, (c + 1) % 3);
+                // UV ids of the edge, ordered so that [0] lifts to mesh vertex `a`.
+                if t[i] == *a {
+                    [u[i], u[j]]
+                } else {
+                    [u[j], u[i]]
+                }
+            };
+            let (s0, s1) = (side(list[0]), side(list[1]));
+            if s0 != s1 {
+                seams.push(SeamPair { a: s0, b: s1 });
+            }
+        }
+    }
+    report.seam_pairs = seams.len();
+    report.uv_vertices = uv_pos.len();
+    report.triangles = tris.len();
+
+    let positions: Vec<[f64; 3]> =
+        uv_to_vertex.iter().map(|&v| mesh.positions[v as usize].into()).collect();
+    let normals: Vec<[f64; 3]> =
+        uv_to_vertex.iter().map(|&v| geometry.normal(v as usize).into()).collect();
+    report.uv_to_vertex = uv_to_vertex;
+    let fm = FieldMesh::new(uv_pos, tris, Directions::Vectors(dirs), toolpath_symmetry(symmetry))
+        .with_lift(positions, Some(normals))
+        .with_metric(metrics)
+        .with_seams(seams);
+    Ok((fm, report))
+}
+
+/// The grain rebuilt from the placed strokes.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AsBrushed {
+    /// Unit 3D direction per mesh vertex (the zero vector where `brushed` is false).
+    pub u: Vec<[f64; 3]>,
+    /// Whether the vertex got a direction (it has a UV vertex and there is a stroke).
+    pub brushed: Vec<bool>,
+    /// Angle between designed and as-brushed u per mesh vertex, degrees (mod 180° for k = 2;
+    /// 0 where not brushed).
+    pub angle_deg: Vec<f64>,
+    /// Median of `angle_deg` over brushed vertices.
+    pub median_deg: f64,
+    /// 95th percentile (nearest rank) of `angle_deg` over brushed vertices.
+    pub p95_deg: f64,
+    /// Largest `angle_deg`.
+    pub max_deg: f64,
+    /// Number of brushed vertices.
+    pub compared: usize,
+}
+
+/// A uniform grid of stroke segments in UV for nearest-segment queries.
+struct SegmentGrid {
+    segs: Vec<([f64; 2], [f64; 2])>,
+    origin: [f64; 2],
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl SegmentGrid {
+    fn new(placement: &Placement) -> SegmentGrid {
+        let mut segs = Vec::new();
+        for s in &placement.strokes {
+            for i in 1..s.uv.len() {
+                if s.breaks.contains(&i) {
+                    continue;
+                }
+                let (a, b) = (s.uv[i - 1], s.uv[i]);
+                if a != b {
+                    segs.push((a, b));
+                }
+            }
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let mut total = 0.0;
+        for (a, b) in &segs {
+            for k in 0..2 {
+                lo[k] = lo[k].min(a[k]).min(b[k]);
+                hi[k] = hi[k].max(a[k]).max(b[k]);
+            }
+            total += ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        }
+        if segs.is_empty() {
+            return SegmentGrid {
+                segs,
+                origin: [0.0; 2],
+                cell: 1.0,
+                nx: 0,
+                ny: 0,
+                cells: Vec::new(),
+            };
+        }
+        let (w, h) = ((hi[0] - lo[0]).max(1e-12), (hi[1] - lo[1]).max(1e-12));
+        // About four segments per cell, at most 1M cells.
+        let mean = total / segs.len() as f64;
+        let cell = (2.0 * mean).max((w * h / 1.0e6).sqrt()).max(1e-12);
+        let nx = (w / cell).ceil() as usize + 1;
+        let ny = (h / cell).ceil() as usize + 1;
+        let mut g =
+            SegmentGrid { segs, origin: lo, cell, nx, ny, cells: vec![Vec::new(); nx * ny] };
+        for (i, (a, b)) in g.segs.iter().enumerate() {
+            let (ia, ja) = g.cell_of(*a);
+            let (ib, jb) = g.cell_of(*b);
+            for j in ja.min(jb)..=ja.max(jb) {
+                for i2 in ia.min(ib)..=ia.max(ib) {
+                    g.cells[j * nx + i2].push(i as u32);
+                }
+            }
+        }
+        g
+    }
+
+    fn cell_of(&self, p: [f64; 2]) -> (usize, usize) {
+        let c =
+            |x: f64, o: f64, n: usize| (((x - o) / self.cell).floor().max(0.0) as usize).min(n - 1);
+        (c(p[0], self.origin[0], self.nx), c(p[1], self.origin[1], self.ny))
+    }
+
+    /// Nearest segment to `p`: (index, distance).
+    fn nearest(&self, p: [f64; 2]) -> Option<(usize, f64)> {
+        if self.segs.is_empty() {
+            return None;
+        }
+        let (ci, cj) = self.cell_of(p);
+        // Distance from p to the grid box (p may lie outside it).
+        let out = |x: f64, o: f64, n: usize| {
+            let hi = o + n as f64 * self.cell;
+            (o - x).max(x - hi).max(0.0)
+        };
+        let outside = out(p[0], self.origin[0], self.nx).hypot(out(p[1], self.origin[1], self.ny));
+        let mut best: Option<(usize, f64)> = None;
+        let rmax = self.nx.max(self.ny);
+        for r in 0..=rmax {
+            let (i0, i1) = (ci as isize - r as isize, ci as isize + r as isize);
+            let (j0, j1) = (cj as isize - r as isize, cj as isize + r as isize);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    if i != i0 && i != i1 && j != j0 && j != j1 {
+                        continue;
+                    }
+                    if i < 0 || j < 0 || i as usize >= self.nx || j as usize >= self.ny {
+                        continue;
+                    }
+                    for &s in &self.cells[j as usize * self.nx + i as usize] {
+                        let (a, b) = self.segs[s as usize];
+                        let d = point_segment(p, a, b);
+                        // Ties go to the lower index, so the result is deterministic.
+                        if best.is_none_or(|(bs, bd)| d < bd || (d == bd && (s as usize) < bs)) {
+                            best = Some((s as usize, d));
+                        }
+                    }
+                }
+            }
+            if let Some((_, d)) = best {
+                // Every unvisited cell is at least r·cell (plus the outside gap) away.
+                if d <= r as f64 * self.cell + outside {
+                    break;
+                }
+            }
+        }
+        best
+    }
+}
+
+fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    let ap = [p[0] - a[0], p[1] - a[1]];
+    let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if l2 > 0.0 { ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
+}
+
+/// Rebuilds the grain from placed strokes and compares it with the designed field.
+///
+/// `field` and `report` are what [`field_mesh`] returned for the same `mesh`; `placement` the
+/// strokes placed on it. Each UV vertex takes the unit UV tangent `t` of its nearest stroke
+/// segment; its 3D direction is `J t` (normalized, projected onto the vertex's tangent plane)
+/// for the Jacobian `J` of the first field-mesh triangle using that UV vertex. A mesh vertex
+/// with several UV vertices (a seam) takes the one nearest to a stroke.
+pub fn as_brushed(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    phi: &[f64],
+    symmetry: Symmetry,
+    field: &FieldMesh,
+    report: &UvFieldReport,
+    placement: &Placement,
+) -> Result<AsBrushed> {
+    let nv = mesh.num_vertices();
+    if phi.len() != nv || report.uv_to_vertex.len() != field.uv.len() {
+        return Err(Error::invalid_arg(
+            "as_brushed",
+            "the field mesh, its report and the grain angles do not belong to this mesh",
+        ));
+    }
+    let designed = geometry.directions_of(phi);
+    // First triangle of each UV vertex.
+    let mut first_tri = vec![u32::MAX; field.uv.len()];
+    for (t, tri) in field.triangles.iter().enumerate() {
+        for &v in tri {
+            if first_tri[v as usize] == u32::MAX {
+                first_tri[v as usize] = t as u32;
+            }
+        }
+    }
+    let grid = SegmentGrid::new(placement);
+    let mut best: Vec<Option<(f64, Vector3<f64>)>> = vec![None; nv];
+    for (uvv, p) in field.uv.iter().enumerate() {
+        let t = first_tri[uvv];
+        if t == u32::MAX {
+            continue;
+        }
+        let Some((s, d)) = grid.nearest(*p) else { continue };
+        let tri = field.triangles[t as usize];
+        let w = tri.map(|v| Vector2::from(field.uv[v as usize]));
+        let x = tri.map(|v| mesh.positions[report.uv_to_vertex[v as usize] as usize]);
+        let Some(j) = jacobian(w, x) else { continue };
+        let (a, b) = grid.segs[s];
+        let tangent = j[0] * (b[0] - a[0]) + j[1] * (b[1] - a[1]);
+        let v = report.uv_to_vertex[uvv] as usize;
+        let n = geometry.normal(v);
+        let tangent = tangent - n * n.dot(&tangent);
+        let len = tangent.norm();
+        if !(len > 0.0 && len.is_finite()) {
+            continue;
+        }
+        if best[v].is_none_or(|(bd, _)| d < bd) {
+            best[v] = Some((d, tangent / len));
+        }
+    }
+    let mut u = vec![[0.0; 3]; nv];
+    let mut brushed = vec![false; nv];
+    let mut angle_deg = vec![0.0; nv];
+    let mut angles = Vec::new();
+    for v in 0..nv {
+        let Some((_, t)) = best[v] else { continue };
+        let mut c = t.dot(&designed[v]).clamp(-1.0, 1.0);
+        if symmetry == Symmetry::Line {
+            c = c.abs();
+        }
+        let a = c.acos().to_degrees();
+        u[v] = t.into();
+        brushed[v] = true;
+        angle_deg[v] = a;
+        angles.push(a);
+    }
+    angles.sort_by(f64::total_cmp);
+    let rank = |q: f64| {
+        if angles.is_empty() {
+            0.0
+        } else {
+            let i = ((q * angles.len() as f64).ceil() as usize).clamp(1, angles.len()) - 1;
+            angles[i]
+        }
+    };
+    Ok(AsBrushed {
+        u,
+        brushed,
+        angle_deg,
+        median_deg: rank(0.5),
+        p95_deg: rank(0.95),
+        max_deg: angles.last().copied().unwrap_or(0.0),
+        compared: angles.len(),
+    })
+}
+
+/// The scene's `toolpaths` section: which files to write and how to place, plan and export
+/// the strokes. Output paths are as written in the scene; the caller resolves them.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ToolpathSection {
+    /// SVG of the strokes on the UV layout; none by default.
+    pub svg: Option<String>,
+    /// G-code program; none by default.
+    pub gcode: Option<String>,
+    /// Strokes JSON; none by default.
+    pub strokes_json: Option<String>,
+    /// From the grain field to the UV field mesh (defaults: see [`UvFieldOptions`]).
+    pub uv_field: UvFieldOptions,
+    /// Even-spacing placement (brush width, overlap, …). Lengths in scene units on the part.
+    pub placement: PlacementOptions,
+    /// Orientation, ordering, leads, Z.
+    pub plan: PlanOptions,
+    /// Coverage measurement; none (not measured) by default.
+    pub coverage: Option<CoverageOptions>,
+    /// SVG options, used when `svg` is set.
+    pub svg_options: SvgOptions,
+    /// G-code options, used when `gcode` is set.
+    pub gcode_options: GcodeOptions,
+}
+
+/// A toolpaths error as a grainline error: option errors keep their key path.
+pub fn toolpath_error(e: ToolpathError) -> Error {
+    match e {
+        ToolpathError::InvalidOption { name, value, reason } => {
+            // The toolpaths crate names `svg.*`/`gcode.*` after JobOptions; this section
+            // calls them `svg_options`/`gcode_options`.
+            let key = if let Some(rest) = name.strip_prefix("svg.") {
+                format!("svg_options.{rest}")
+            } else if let Some(rest) = name.strip_prefix("gcode.") {
+                format!("gcode_options.{rest}")
+            } else {
+                name.to_string()
+            };
+            Error::setting(key, format!("{reason}, got {value}"))
+        }
+        e @ (ToolpathError::OutsideEnvelope { .. } | ToolpathError::BelowFloor { .. }) => {
+            Error::setting("gcode_options.envelope", e.to_string())
+        }
+        e @ ToolpathError::TiltExceeded { .. } => {
+            Error::setting("plan.z_mode.max_tilt_deg", e.to_string())
+        }
+        e => Error::Numerical { stage: "toolpaths", message: e.to_string() },
+    }
+}
+
+impl ToolpathSection {
+    /// The toolpaths crate's job options for this section.
+    pub fn job_options(&self) -> JobOptions {
+        JobOptions {
+            placement: self.placement.clone(),
+            plan: self.plan.clone(),
+            coverage: self.coverage.clone(),
+            svg: self.svg.as_ref().map(|_| self.svg_options.clone()),
+            gcode: self.gcode.as_ref().map(|_| self.gcode_options.clone()),
+            strokes_json: self.strokes_json.is_some(),
+        }
+    }
+
+    /// Range-checks every setting; keys are relative to the section
+    /// (`placement.width`, `gcode_options.feed`, `svg`, …).
+    pub fn validate(&self) -> Result<()> {
+        for (key, v) in
+            [("svg", &self.svg), ("gcode", &self.gcode), ("strokes_json", &self.strokes_json)]
+        {
+            if v.as_deref().is_some_and(|s| s.trim().is_empty()) {
+                return Err(Error::setting(key, "must be a file name, got an empty string"));
+            }
+        }
+        self.uv_field.validate().map_err(|e| match e {
+            Error::Setting { key, message } => Error::setting(format!("uv_field.{key}"), message),
+            e => e,
+        })?;
+        let mut all = self.job_options();
+        all.svg = Some(self.svg_options.clone());
+        all.gcode = Some(self.gcode_options.clone());
+        all.validate().map_err(toolpath_error)
+    }
+}
+
+/// Builds the field mesh and runs the whole toolpaths job for a scene section.
+pub fn run_toolpaths(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    phi: &[f64],
+    symmetry: Symmetry,
+    section: &ToolpathSection,
+) -> Result<(JobOutput, UvFieldReport)> {
+    section.validate()?;
+    let (fm, report) = field_mesh(mesh, geometry, phi, symmetry, &section.uv_field)?;
+    let out = grainline_toolpaths::generate(fm, &section.job_options()).map_err(toolpath_error)?;
+    Ok((out, report))
+}
