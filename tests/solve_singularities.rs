@@ -39,14 +39,22 @@ fn planar_index_plus_one_minus_one_and_half() {
         (&|x, y| Vector3::new(x, y, 0.0), 1, 1.0),
         (&|x, y| Vector3::new(x, -y, 0.0), 1, -1.0),
         // A line field turning by half the angle: u = (cos θ/2, sin θ/2).
-        (&|x, y| {
-            let t = y.atan2(x) / 2.0;
-            Vector3::new(t.cos(), t.sin(), 0.0)
-        }, 2, 0.5),
-        (&|x, y| {
-            let t = -y.atan2(x) / 2.0;
-            Vector3::new(t.cos(), t.sin(), 0.0)
-        }, 2, -0.5),
+        (
+            &|x, y| {
+                let t = y.atan2(x) / 2.0;
+                Vector3::new(t.cos(), t.sin(), 0.0)
+            },
+            2,
+            0.5,
+        ),
+        (
+            &|x, y| {
+                let t = -y.atan2(x) / 2.0;
+                Vector3::new(t.cos(), t.sin(), 0.0)
+            },
+            2,
+            -0.5,
+        ),
     ];
     for (f, k, index) in cases {
         let phi = field(f);
@@ -65,7 +73,9 @@ fn indices_add_up_to_the_euler_characteristic() {
     // Poincaré–Hopf on closed surfaces: sphere χ = 2, torus χ = 0; frames are twisted at random
     // to show the result does not depend on them.
     let twisted = GeometryOptions { frame_twist_seed: Some(11), ..Default::default() };
-    for (mesh, chi) in [(generate::icosphere(1.0, 3), 2.0), (generate::torus(2.0, 0.7, 32, 12), 0.0)] {
+    for (mesh, chi) in
+        [(generate::icosphere(1.0, 3), 2.0), (generate::torus(2.0, 0.7, 32, 12), 0.0)]
+    {
         for opts in [GeometryOptions::default(), twisted] {
             let g = Geometry::compute(&mesh, &opts);
             for sym in [Symmetry::Oriented, Symmetry::Line] {

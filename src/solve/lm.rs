@@ -136,6 +136,9 @@ impl Energies {
 /// One iteration's record.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Iteration {
+    /// The continuation stage (0 without continuation; see [`super::optimize`]). The energy
+    /// is monotone within a stage; each stage has its own smoothness weight.
+    pub stage: usize,
     /// Every term's energy after the iteration (after its smoothing pass, if any).
     pub energies: Energies,
     /// Damping λ used for the accepted step.
@@ -187,8 +190,7 @@ impl Assembler<'_> {
     fn push(&mut self, entries: impl Iterator<Item = (u32, [f64; 2])>, r: [f64; 2]) {
         self.block.clear();
         let col_of = self.col_of;
-        self.block
-            .extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
+        self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
         for &(a, da) in &self.block {
             self.g[a] += da[0] * r[0] + da[1] * r[1];
             for &(b, db) in &self.block {
@@ -403,7 +405,9 @@ pub fn solve(
     let touched: Vec<u32> = (0..nv as u32)
         .filter(|&i| {
             col_of[i as usize].is_some()
-                || g.stencil.range(i as usize).any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
+                || g.stencil
+                    .range(i as usize)
+                    .any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
         })
         .collect();
     let k = term.symmetry.k();
@@ -526,6 +530,7 @@ pub fn solve(
                 let decrease = (energy - after) / energy.max(f64::MIN_POSITIVE);
                 energy = after;
                 iterations.push(Iteration {
+                    stage: 0,
                     energies: new,
                     damping: lambda,
                     step_norm,
