@@ -149,7 +149,8 @@ pub struct Iteration {
     pub smoothed: bool,
     /// Seconds spent assembling residuals, Jacobian and normal equations.
     pub assembly_seconds: f64,
-    /// Seconds spent in the factorization, solve and trial energy (all tries of the step).
+    /// Seconds spent in the damping, factorization, solve and trial energy of the accepted try
+    /// (rejected tries are not counted, as in the paper's Fig. 12a).
     pub solve_seconds: f64,
 }
 
@@ -490,8 +491,8 @@ pub fn solve(
         let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
         let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
         let assembly = t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
         loop {
+            let t1 = Instant::now();
             let symbolic = pat.symbolic.clone();
             let a = pat.damped(lambda, &dscale);
             let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower)
