@@ -22,6 +22,9 @@ fn face_containing(mesh: &Mesh, x: f64, y: f64) -> u32 {
         .unwrap() as u32
 }
 
+/// A planar field as a function of the offset from its centre.
+type Field<'a> = &'a dyn Fn(f64, f64) -> Vector3<f64>;
+
 #[test]
 fn planar_index_plus_one_minus_one_and_half() {
     let mesh = generate::plane(1.0, Grid::new(11, 11));
@@ -35,7 +38,7 @@ fn planar_index_plus_one_minus_one_and_half() {
             .map(|(p, fr)| fr.angle_of(&f(p.x - cx, p.y - cy)))
             .collect()
     };
-    let cases: [(&dyn Fn(f64, f64) -> Vector3<f64>, u32, f64); 4] = [
+    let cases: [(Field, u32, f64); 4] = [
         (&|x, y| Vector3::new(x, y, 0.0), 1, 1.0),
         (&|x, y| Vector3::new(x, -y, 0.0), 1, -1.0),
         // A line field turning by half the angle: u = (cos θ/2, sin θ/2).

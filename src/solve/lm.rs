@@ -478,7 +478,7 @@ pub fn solve(
         let t0 = Instant::now();
         let (trip, grad) = sys.normal_equations(&phi);
         let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        if !(gmax > options.gradient_tolerance) {
+        if gmax.is_nan() || gmax <= options.gradient_tolerance {
             stop = StopReason::Gradient;
             break;
         }
