@@ -4,7 +4,7 @@
 //! (math.md §3: the data term alone is ill-posed, so the free set is an edit's support plus a
 //! margin, and a weak smoothness term picks one solution). Each iteration assembles the stacked
 //! residual r = [r_ℓ; r_s; r_κ; r_σ; r_lock] (math.md §4) and its analytic Jacobian J through one
-//! residual-block abstraction ([`Block`]), solves
+//! residual-block abstraction (the private trait `Block`), solves
 //!
 //! ```text
 //! (JᵀJ + λ D) δ = −Jᵀr,        D = diag(JᵀJ) (Marquardt scaling, floored)
@@ -45,7 +45,7 @@ pub struct HingeOptions {
     pub weight: f64,
 }
 
-/// Options of [`solve`]. All weights are absolute here; [`super::optimize`] derives them from
+/// Options of [`solve`]. All weights are absolute here; [`super::optimize()`] derives them from
 /// the scene's relative settings.
 #[derive(Clone, Debug)]
 pub struct LmOptions {
@@ -136,7 +136,7 @@ impl Energies {
 /// One iteration's record.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Iteration {
-    /// The continuation stage (0 without continuation; see [`super::optimize`]). The energy
+    /// The continuation stage (0 without continuation; see [`super::optimize()`]). The energy
     /// is monotone within a stage; each stage has its own smoothness weight.
     pub stage: usize,
     /// Every term's energy after the iteration (after its smoothing pass, if any).
