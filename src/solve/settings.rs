@@ -66,8 +66,8 @@ impl Default for Constraints {
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSettings {
     /// Smoothness weight λ_s (≥ 0; default 0, which turns the interleaved smoothing pass on:
-    /// on spot this recovered 11 of 22 perturbed brushes exactly, against 2 of 10 with 1e-6 and
-    /// a bias of ~1e-2 rad with 1e-4; docs/benchmarks.md). **Relative**: the connection Dirichlet energy
+    /// on spot this recovered 11 of 22 perturbed brushes exactly, against 1 of 10 with 1e-6 and
+    /// 0 of 22 with 1e-4; docs/benchmarks.md). **Relative**: the connection Dirichlet energy
     /// Σ wᵢⱼ|…|² (scale-free) is multiplied by λ_s × the surface area, so that it scales like
     /// the highlight energy Σ Aᵢ‖Lᵢ − Lᵢ*‖² and λ_s means the same on a part in mm or in m.
     pub smoothness: f64,
