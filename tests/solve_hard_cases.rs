@@ -213,3 +213,36 @@ fn interleaved_smoothing_keeps_the_energy_monotone() {
             < 0.1 * r.report.initial_energy.total()
     );
 }
+
+#[test]
+fn byte_identical_at_any_thread_count() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(20, 20));
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let g = Geometry::compute(&mesh, &GeometryOptions::default());
+            let phi_true = smooth_field(&mesh, &g);
+            let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi_true.len()];
+            let t = targets(&g, &h, &phi_true, Symmetry::Line);
+            let support = brush(&mesh, Vector3::zeros(), 0.5);
+            let phi: Vec<f64> = phi_true
+                .iter()
+                .enumerate()
+                .map(|(i, p)| p + if support[i] { 0.2 } else { 0.0 })
+                .collect();
+            let s = SolverSettings {
+                constraints: grainline::solve::Constraints {
+                    turning_radius: Some(grainline::solve::TurningRadius {
+                        radius: 1.0,
+                        weight: 10.0,
+                    }),
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            optimize(&mesh, &t, &phi, &support, &s).unwrap().phi
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+}
