@@ -50,9 +50,8 @@ fn whole_mesh(targets: &[usize]) {
         term.epsilon = default_epsilon(&ms);
         term.target_q =
             (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
-        let phi: Vec<f64> = (0..n)
-            .map(|i| phi_true[i] + 0.2 * (3.0 * mesh.positions[i].x).sin())
-            .collect();
+        let phi: Vec<f64> =
+            (0..n).map(|i| phi_true[i] + 0.2 * (3.0 * mesh.positions[i].x).sin()).collect();
         let free: Vec<u32> = (0..n as u32).collect();
         let opts = LmOptions {
             smoothness: 1e-6 * g.areas.iter().sum::<f64>(),
@@ -75,7 +74,13 @@ fn whole_mesh(targets: &[usize]) {
         let (sa, ss) = (stats(&mut a), stats(&mut s));
         println!(
             "| {n} | {n} | {its} | {:.3}/{:.3}/{:.3} | {:.3}/{:.3}/{:.3} | {:.3} |",
-            sa.0, sa.1, sa.2, ss.0, ss.1, ss.2, sa.1 + ss.1
+            sa.0,
+            sa.1,
+            sa.2,
+            ss.0,
+            ss.1,
+            ss.2,
+            sa.1 + ss.1
         );
     }
 }
