@@ -3,7 +3,13 @@
 //!
 //! ```text
 //! cargo run --release --example bench_solver
+//! cargo run --release --example bench_solver -- --whole-mesh [VERTICES...]
 //! ```
+//!
+//! With `--whole-mesh`, every vertex of a torus of about 100k (or the given) vertices is free
+//! (λ_s relative 1e-6 plus the turning-radius hinge, so every block is assembled), and the
+//! seconds per iteration (assembly + solve) are reported as min/median/max over 3 runs of 3
+//! iterations.
 //!
 //! On an icosphere of 40,962 vertices, a brush around one point is made free with the brush
 //! radius chosen so it holds about 14, 32, 89, 217, 420 and 656 vertices; targets are the
@@ -15,7 +21,77 @@ use grainline::highlight::Symmetry;
 use grainline::solve::{solve, HighlightTerm, LmOptions};
 use nalgebra::Vector3;
 
+fn whole_mesh(targets: &[usize]) {
+    println!("| vertices | free | iterations | assembly s/it (min/median/max) | solve s/it (min/median/max) | total s/it (median) |");
+    println!("|---:|---:|---:|---:|---:|---:|");
+    for &nv in targets {
+        let minor = ((nv as f64 / 4.0).sqrt()).round().max(3.0) as usize;
+        let major = (nv / minor).max(3);
+        let mesh = grainline::generate::torus(2.0, 0.7, major, minor);
+        let g = Geometry::compute(&mesh, &GeometryOptions::default());
+        let n = mesh.num_vertices();
+        let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); n];
+        let phi_true: Vec<f64> = (0..n)
+            .map(|i| {
+                let p = mesh.positions[i];
+                g.frames[i].angle_of(&Vector3::new(-p.y, p.x, 0.3 * p.z))
+            })
+            .collect();
+        let mut term = HighlightTerm {
+            geometry: &g,
+            h: &h,
+            symmetry: Symmetry::Line,
+            form: GradientForm::Angle,
+            epsilon: 0.0,
+            target_q: vec![None; n],
+            weight: vec![1.0; n],
+        };
+        let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
+        term.epsilon = default_epsilon(&ms);
+        term.target_q =
+            (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+        let phi: Vec<f64> =
+            (0..n).map(|i| phi_true[i] + 0.2 * (3.0 * mesh.positions[i].x).sin()).collect();
+        let free: Vec<u32> = (0..n as u32).collect();
+        let opts = LmOptions {
+            smoothness: 1e-6 * g.areas.iter().sum::<f64>(),
+            max_iterations: 3,
+            turning: Some(grainline::solve::HingeOptions { bound: 2.0, weight: 1.0 }),
+            ..Default::default()
+        };
+        let (mut a, mut s, mut its) = (Vec::new(), Vec::new(), 0);
+        for _ in 0..3 {
+            let r = solve(&mesh, &term, &phi, &free, &opts).unwrap();
+            let k = r.iterations.len().max(1) as f64;
+            its = r.iterations.len();
+            a.push(r.iterations.iter().map(|i| i.assembly_seconds).sum::<f64>() / k);
+            s.push(r.iterations.iter().map(|i| i.solve_seconds).sum::<f64>() / k);
+        }
+        let stats = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            (v[0], v[v.len() / 2], v[v.len() - 1])
+        };
+        let (sa, ss) = (stats(&mut a), stats(&mut s));
+        println!(
+            "| {n} | {n} | {its} | {:.3}/{:.3}/{:.3} | {:.3}/{:.3}/{:.3} | {:.3} |",
+            sa.0,
+            sa.1,
+            sa.2,
+            ss.0,
+            ss.1,
+            ss.2,
+            sa.1 + ss.1
+        );
+    }
+}
+
 fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().map(String::as_str) == Some("--whole-mesh") {
+        let sizes: Vec<usize> = args[1..].iter().filter_map(|a| a.parse().ok()).collect();
+        whole_mesh(if sizes.is_empty() { &[100_000] } else { &sizes });
+        return;
+    }
     let mesh = grainline::generate::icosphere(1.0, 6);
     let g = Geometry::compute(&mesh, &GeometryOptions::default());
     let n = mesh.num_vertices();

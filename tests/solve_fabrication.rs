@@ -24,8 +24,7 @@ fn hinge_check(kind: HingeKind, form: GradientForm, symmetry: Symmetry) {
         .iter()
         .map(|p| 0.9 * p.x - 0.7 * p.y + 0.5 * (2.0 * p.x * p.y).sin())
         .collect();
-    let mut hinge =
-        GradientHinge { geometry: &g, symmetry, form, kind, bound: 1.0, weight: 3.0 };
+    let mut hinge = GradientHinge { geometry: &g, symmetry, form, kind, bound: 1.0, weight: 3.0 };
     // A bound at the median |x|: about half the rows active.
     let mut xs: Vec<f64> = (0..phi.len()).map(|i| hinge.value(&phi, i).abs()).collect();
     xs.sort_by(f64::total_cmp);
@@ -76,9 +75,9 @@ fn lock_residual_derivative_and_periodicity() {
         for &(phi, target) in &[(0.3, -0.4), (3.0, -3.0), (1.5, 1.5 + std::f64::consts::PI)] {
             let (r, d) = lock_residual(phi, target, 1.7, k);
             let h = 1e-6;
-            let fd =
-                (lock_residual(phi + h, target, 1.7, k).0 - lock_residual(phi - h, target, 1.7, k).0)
-                    / (2.0 * h);
+            let fd = (lock_residual(phi + h, target, 1.7, k).0
+                - lock_residual(phi - h, target, 1.7, k).0)
+                / (2.0 * h);
             assert!((fd - d).abs() < 1e-8, "k {k}: {d} vs {fd}");
             // |r| is periodic in 2π/k.
             let shifted = lock_residual(phi + std::f64::consts::TAU / k as f64, target, 1.7, k).0;

@@ -17,11 +17,18 @@ fn smooth_field(mesh: &Mesh, g: &Geometry) -> Vec<f64> {
     mesh.positions
         .iter()
         .zip(&g.frames)
-        .map(|(p, f)| f.angle_of(&Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1)))
+        .map(|(p, f)| {
+            f.angle_of(&Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1))
+        })
         .collect()
 }
 
-fn targets<'a>(g: &'a Geometry, h: &'a [Vector3<f64>], phi: &[f64], s: Symmetry) -> HighlightTerm<'a> {
+fn targets<'a>(
+    g: &'a Geometry,
+    h: &'a [Vector3<f64>],
+    phi: &[f64],
+    s: Symmetry,
+) -> HighlightTerm<'a> {
     let n = phi.len();
     let mut t = HighlightTerm {
         geometry: g,
@@ -63,7 +70,11 @@ fn zero_targets() {
     t.target_q = vec![None; phi.len()];
     let support = brush(&mesh, Vector3::zeros(), 0.5);
     // No energy at all: the gradient vanishes at once.
-    let s0 = SolverSettings { smoothness: 0.0, interleaved_smoothing: Some(false), ..Default::default() };
+    let s0 = SolverSettings {
+        smoothness: 0.0,
+        interleaved_smoothing: Some(false),
+        ..Default::default()
+    };
     let r = optimize(&mesh, &t, &phi, &support, &s0).unwrap();
     sane(&r.phi, &r.report);
     assert_eq!(r.report.stop, StopReason::Gradient);
@@ -85,7 +96,10 @@ fn nothing_to_solve() {
     let t = targets(&g, &h, &phi, Symmetry::Line);
     let r = optimize(&mesh, &t, &phi, &vec![false; phi.len()], &SolverSettings::default()).unwrap();
     sane(&r.phi, &r.report);
-    assert_eq!((r.report.stop, r.report.unknowns, r.report.edited), (StopReason::NothingToSolve, 0, 0));
+    assert_eq!(
+        (r.report.stop, r.report.unknowns, r.report.edited),
+        (StopReason::NothingToSolve, 0, 0)
+    );
     assert!(r.report.iterations.is_empty());
     // Every vertex hard-locked: nothing left either, and the locks hold.
     let s = SolverSettings {
@@ -168,7 +182,10 @@ fn k2_field_with_raw_jumps_of_pi_recovers() {
         .filter(|&i| support[i])
         .map(|i| (wrap_angle(2.0 * (r.phi[i] - phi_true[i])) / 2.0).abs())
         .fold(0.0, f64::max);
-    eprintln!("k = 2 with raw π jumps: {} iterations, worst {worst:.2e} rad", r.report.iterations.len());
+    eprintln!(
+        "k = 2 with raw π jumps: {} iterations, worst {worst:.2e} rad",
+        r.report.iterations.len()
+    );
     assert!(worst < 1e-3 && r.report.iterations.len() <= 10, "{worst}");
 }
 
@@ -191,5 +208,41 @@ fn interleaved_smoothing_keeps_the_energy_monotone() {
     sane(&r.phi, &r.report);
     let kept = r.report.iterations.iter().filter(|i| i.smoothed).count();
     eprintln!("smoothing passes kept: {kept} of {}", r.report.iterations.len());
-    assert!(r.report.iterations.last().unwrap().energies.total() < 0.1 * r.report.initial_energy.total());
+    assert!(
+        r.report.iterations.last().unwrap().energies.total()
+            < 0.1 * r.report.initial_energy.total()
+    );
+}
+
+#[test]
+fn byte_identical_at_any_thread_count() {
+    let mesh = generate::quadric_patch([0.9, 0.2, -0.5], 1.0, Grid::new(20, 20));
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let g = Geometry::compute(&mesh, &GeometryOptions::default());
+            let phi_true = smooth_field(&mesh, &g);
+            let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi_true.len()];
+            let t = targets(&g, &h, &phi_true, Symmetry::Line);
+            let support = brush(&mesh, Vector3::zeros(), 0.5);
+            let phi: Vec<f64> = phi_true
+                .iter()
+                .enumerate()
+                .map(|(i, p)| p + if support[i] { 0.2 } else { 0.0 })
+                .collect();
+            let s = SolverSettings {
+                constraints: grainline::solve::Constraints {
+                    turning_radius: Some(grainline::solve::TurningRadius {
+                        radius: 1.0,
+                        weight: 10.0,
+                    }),
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            optimize(&mesh, &t, &phi, &support, &s).unwrap().phi
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
 }

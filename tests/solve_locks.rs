@@ -14,9 +14,7 @@ use grainline::solve::{
 };
 use nalgebra::Vector3;
 
-fn setup(
-    n: usize,
-) -> (grainline::mesh::Mesh, Geometry, Vec<Vector3<f64>>, Vec<f64>) {
+fn setup(n: usize) -> (grainline::mesh::Mesh, Geometry, Vec<Vector3<f64>>, Vec<f64>) {
     let mesh = generate::quadric_patch([0.6, 0.1, -0.3], 1.0, Grid::new(n, n));
     let g = Geometry::compute(&mesh, &GeometryOptions::default());
     let phi: Vec<f64> = mesh
@@ -57,7 +55,11 @@ fn hard_locks_hold_exactly_and_world_directions_project() {
             max_iterations: 20,
             constraints: Constraints {
                 locks: vec![
-                    LockSpec { vertices: vec![3, 40, 100], direction: Some(dir), ..Default::default() },
+                    LockSpec {
+                        vertices: vec![3, 40, 100],
+                        direction: Some(dir),
+                        ..Default::default()
+                    },
                     LockSpec {
                         region: Some(LockRegion { center: [0.3, 0.3, 0.0], radius: 0.25 }),
                         direction: Some([1.0, -1.0, 0.0]),
@@ -78,7 +80,11 @@ fn hard_locks_hold_exactly_and_world_directions_project() {
             let d = Vector3::from(dir);
             let want = (d - n * n.dot(&d)).normalize();
             let got = g.frames[v].direction(r.phi[v]);
-            let err = if sym == Symmetry::Line { 1.0 - got.dot(&want).abs() } else { 1.0 - got.dot(&want) };
+            let err = if sym == Symmetry::Line {
+                1.0 - got.dot(&want).abs()
+            } else {
+                1.0 - got.dot(&want)
+            };
             assert!(err < 1e-12, "vertex {v}: {got} vs {want}");
         }
         let mut e = r.report.initial_energy.total();
@@ -97,7 +103,8 @@ fn boundary_loop_parallel_and_perpendicular() {
     assert_eq!(topo.num_boundary_loops(), 1);
     let lp: Vec<u32> = topo.boundary_loop(0).iter().map(|v| v.0).collect();
     for (rel, k) in [(BoundaryRelation::Parallel, 1), (BoundaryRelation::Perpendicular, 1)] {
-        let specs = vec![LockSpec { boundary_loop: Some(0), boundary: Some(rel), ..Default::default() }];
+        let specs =
+            vec![LockSpec { boundary_loop: Some(0), boundary: Some(rel), ..Default::default() }];
         let locks = resolve_locks(&mesh, &g, &specs, k, 0.01, "locks").unwrap();
         assert_eq!(locks.hard.len(), lp.len());
         for &(v, a) in &locks.hard {
@@ -181,7 +188,12 @@ fn k2_means_wrap_at_pi() {
 fn soft_locks_pull_towards_the_lock() {
     let (mesh, g, h, phi) = setup(12);
     let t = term(&g, &h, &phi, Symmetry::Oriented);
-    let lock = |w| LockSpec { vertices: vec![50], direction: Some([0.0, 1.0, 0.0]), weight: Some(w), ..Default::default() };
+    let lock = |w| LockSpec {
+        vertices: vec![50],
+        direction: Some([0.0, 1.0, 0.0]),
+        weight: Some(w),
+        ..Default::default()
+    };
     let mut errs = Vec::new();
     for w in [1.0, 1e4] {
         let settings = SolverSettings {
@@ -220,8 +232,14 @@ fn settings_validate_and_parse() {
     bad(r#"{"max_iterations": 0}"#, "max_iterations");
     bad(r#"{"constraints": {"splay": {"max": 0}}}"#, "constraints.splay.max");
     bad(r#"{"constraints": {"locks": [{"vertices": [1]}]}}"#, "constraints.locks[0]");
-    bad(r#"{"constraints": {"locks": [{"vertices": [1], "boundary": "parallel"}]}}"#, "constraints.locks[0].boundary");
-    bad(r#"{"constraints": {"locks": [{"region": {"center": [0,0,0], "radius": -1}, "direction": [1,0,0]}]}}"#, "constraints.locks[0].region.radius");
+    bad(
+        r#"{"constraints": {"locks": [{"vertices": [1], "boundary": "parallel"}]}}"#,
+        "constraints.locks[0].boundary",
+    );
+    bad(
+        r#"{"constraints": {"locks": [{"region": {"center": [0,0,0], "radius": -1}, "direction": [1,0,0]}]}}"#,
+        "constraints.locks[0].region.radius",
+    );
     // Mesh-dependent errors name the key too.
     let (mesh, g, h, phi) = setup(4);
     let t = term(&g, &h, &phi, Symmetry::Oriented);

@@ -22,6 +22,9 @@ fn face_containing(mesh: &Mesh, x: f64, y: f64) -> u32 {
         .unwrap() as u32
 }
 
+/// A planar field as a function of the offset from its centre.
+type Field<'a> = &'a dyn Fn(f64, f64) -> Vector3<f64>;
+
 #[test]
 fn planar_index_plus_one_minus_one_and_half() {
     let mesh = generate::plane(1.0, Grid::new(11, 11));
@@ -35,18 +38,26 @@ fn planar_index_plus_one_minus_one_and_half() {
             .map(|(p, fr)| fr.angle_of(&f(p.x - cx, p.y - cy)))
             .collect()
     };
-    let cases: [(&dyn Fn(f64, f64) -> Vector3<f64>, u32, f64); 4] = [
+    let cases: [(Field, u32, f64); 4] = [
         (&|x, y| Vector3::new(x, y, 0.0), 1, 1.0),
         (&|x, y| Vector3::new(x, -y, 0.0), 1, -1.0),
         // A line field turning by half the angle: u = (cos θ/2, sin θ/2).
-        (&|x, y| {
-            let t = y.atan2(x) / 2.0;
-            Vector3::new(t.cos(), t.sin(), 0.0)
-        }, 2, 0.5),
-        (&|x, y| {
-            let t = -y.atan2(x) / 2.0;
-            Vector3::new(t.cos(), t.sin(), 0.0)
-        }, 2, -0.5),
+        (
+            &|x, y| {
+                let t = y.atan2(x) / 2.0;
+                Vector3::new(t.cos(), t.sin(), 0.0)
+            },
+            2,
+            0.5,
+        ),
+        (
+            &|x, y| {
+                let t = -y.atan2(x) / 2.0;
+                Vector3::new(t.cos(), t.sin(), 0.0)
+            },
+            2,
+            -0.5,
+        ),
     ];
     for (f, k, index) in cases {
         let phi = field(f);
@@ -65,7 +76,9 @@ fn indices_add_up_to_the_euler_characteristic() {
     // Poincaré–Hopf on closed surfaces: sphere χ = 2, torus χ = 0; frames are twisted at random
     // to show the result does not depend on them.
     let twisted = GeometryOptions { frame_twist_seed: Some(11), ..Default::default() };
-    for (mesh, chi) in [(generate::icosphere(1.0, 3), 2.0), (generate::torus(2.0, 0.7, 32, 12), 0.0)] {
+    for (mesh, chi) in
+        [(generate::icosphere(1.0, 3), 2.0), (generate::torus(2.0, 0.7, 32, 12), 0.0)]
+    {
         for opts in [GeometryOptions::default(), twisted] {
             let g = Geometry::compute(&mesh, &opts);
             for sym in [Symmetry::Oriented, Symmetry::Line] {

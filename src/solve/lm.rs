@@ -4,7 +4,7 @@
 //! (math.md §3: the data term alone is ill-posed, so the free set is an edit's support plus a
 //! margin, and a weak smoothness term picks one solution). Each iteration assembles the stacked
 //! residual r = [r_ℓ; r_s; r_κ; r_σ; r_lock] (math.md §4) and its analytic Jacobian J through one
-//! residual-block abstraction ([`Block`]), solves
+//! residual-block abstraction (the private trait `Block`), solves
 //!
 //! ```text
 //! (JᵀJ + λ D) δ = −Jᵀr,        D = diag(JᵀJ) (Marquardt scaling, floored)
@@ -45,7 +45,7 @@ pub struct HingeOptions {
     pub weight: f64,
 }
 
-/// Options of [`solve`]. All weights are absolute here; [`super::optimize`] derives them from
+/// Options of [`solve`]. All weights are absolute here; [`super::optimize()`] derives them from
 /// the scene's relative settings.
 #[derive(Clone, Debug)]
 pub struct LmOptions {
@@ -136,6 +136,9 @@ impl Energies {
 /// One iteration's record.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Iteration {
+    /// The continuation stage (0 without continuation; see [`super::optimize()`]). The energy
+    /// is monotone within a stage; each stage has its own smoothness weight.
+    pub stage: usize,
     /// Every term's energy after the iteration (after its smoothing pass, if any).
     pub energies: Energies,
     /// Damping λ used for the accepted step.
@@ -146,7 +149,8 @@ pub struct Iteration {
     pub smoothed: bool,
     /// Seconds spent assembling residuals, Jacobian and normal equations.
     pub assembly_seconds: f64,
-    /// Seconds spent in the factorization, solve and trial energy (all tries of the step).
+    /// Seconds spent in the damping, factorization, solve and trial energy of the accepted try
+    /// (rejected tries are not counted, as in the paper's Fig. 12a).
     pub solve_seconds: f64,
 }
 
@@ -187,8 +191,7 @@ impl Assembler<'_> {
     fn push(&mut self, entries: impl Iterator<Item = (u32, [f64; 2])>, r: [f64; 2]) {
         self.block.clear();
         let col_of = self.col_of;
-        self.block
-            .extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
+        self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
         for &(a, da) in &self.block {
             self.g[a] += da[0] * r[0] + da[1] * r[1];
             for &(b, db) in &self.block {
@@ -403,7 +406,9 @@ pub fn solve(
     let touched: Vec<u32> = (0..nv as u32)
         .filter(|&i| {
             col_of[i as usize].is_some()
-                || g.stencil.range(i as usize).any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
+                || g.stencil
+                    .range(i as usize)
+                    .any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
         })
         .collect();
     let k = term.symmetry.k();
@@ -473,7 +478,7 @@ pub fn solve(
         let t0 = Instant::now();
         let (trip, grad) = sys.normal_equations(&phi);
         let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        if !(gmax > options.gradient_tolerance) {
+        if gmax.is_nan() || gmax <= options.gradient_tolerance {
             stop = StopReason::Gradient;
             break;
         }
@@ -486,8 +491,8 @@ pub fn solve(
         let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
         let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
         let assembly = t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
         loop {
+            let t1 = Instant::now();
             let symbolic = pat.symbolic.clone();
             let a = pat.damped(lambda, &dscale);
             let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower)
@@ -526,6 +531,7 @@ pub fn solve(
                 let decrease = (energy - after) / energy.max(f64::MIN_POSITIVE);
                 energy = after;
                 iterations.push(Iteration {
+                    stage: 0,
                     energies: new,
                     damping: lambda,
                     step_norm,

@@ -162,7 +162,8 @@ pub fn circular_mean(angles: &[(f64, f64)], k: u32) -> f64 {
         s += w * (kf * a).sin();
         wsum += w.abs();
     }
-    if !(c.hypot(s) > 1e-9 * wsum) {
+    let norm = c.hypot(s);
+    if norm.is_nan() || norm <= 1e-9 * wsum {
         return angles.first().map_or(0.0, |a| a.0);
     }
     s.atan2(c) / kf
@@ -248,7 +249,8 @@ pub fn resolve_locks(
         for (v, dir) in targets {
             let f = &geometry.frames[v as usize];
             let tangential = f.to_local(&dir);
-            if !(tangential.norm() > 1e-9 * dir.norm()) {
+            let len = tangential.norm();
+            if len.is_nan() || len <= 1e-9 * dir.norm() {
                 degenerate.push(v);
                 continue;
             }

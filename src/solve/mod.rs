@@ -1,6 +1,6 @@
 //! Inverting the highlight model: residuals and analytic Jacobians of the energies of the
 //! optimizer (the paper's §4.3, math.md §3–4), the sparse Levenberg–Marquardt driver, the
-//! fabrication constraints, and the entry point [`optimize`].
+//! fabrication constraints, and the entry point [`optimize()`].
 
 pub mod fabrication;
 pub mod highlight_term;

@@ -162,8 +162,32 @@ pub fn optimize(
         soft_locks: locks.soft.clone(),
         interleaved_smoothing: settings.smoothing_pass(),
     };
-    let lm = solve(mesh, term, &start, &free_list, &options)?;
-    let mut out = lm.phi;
+    let stages: Vec<f64> = if settings.continuation && settings.smoothness > 0.0 {
+        vec![1000.0, 100.0, 10.0, 1.0]
+    } else {
+        vec![1.0]
+    };
+    let mut out = start;
+    let (mut iterations, mut initial_energy, mut stop) =
+        (Vec::new(), None, StopReason::IterationCap);
+    for (stage, factor) in stages.iter().enumerate() {
+        let last = stage + 1 == stages.len();
+        let left = settings.max_iterations.saturating_sub(iterations.len());
+        let opts = LmOptions {
+            smoothness: factor * options.smoothness,
+            max_iterations: if last { left } else { left.min(5) },
+            ..options.clone()
+        };
+        let lm = solve(mesh, term, &out, &free_list, &opts)?;
+        initial_energy.get_or_insert(lm.initial_energy);
+        iterations.extend(lm.iterations.into_iter().map(|mut it| {
+            it.stage = stage;
+            it
+        }));
+        out = lm.phi;
+        stop = lm.stop;
+    }
+    let initial_energy = initial_energy.unwrap_or_default();
     for p in out.iter_mut() {
         *p = wrap_angle(*p);
     }
@@ -207,9 +231,9 @@ pub fn optimize(
         .map(|(v, a)| angle_difference(out[v as usize], a, k).abs())
         .fold(0.0, f64::max);
     let report = OptimizeReport {
-        iterations: lm.iterations,
-        initial_energy: lm.initial_energy,
-        stop: lm.stop,
+        iterations,
+        initial_energy,
+        stop,
         edited: support.iter().filter(|&&s| s).count(),
         unknowns: free_list.len(),
         hard_locked: locks.hard.len(),
