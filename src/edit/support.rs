@@ -521,7 +521,12 @@ impl PlaneLocator {
 
     /// The face and barycentric coordinates of planar point `q`; `near` is a world point that
     /// breaks ties between overlapping triangles.
-    pub fn locate(&self, ctx: &Context, q: &Vector2<f64>, near: &Vector3<f64>) -> (usize, [f64; 3]) {
+    pub fn locate(
+        &self,
+        ctx: &Context,
+        q: &Vector2<f64>,
+        near: &Vector3<f64>,
+    ) -> (usize, [f64; 3]) {
         let (ci, cj) = cell_of(q, &self.lo, self.cell, self.dim);
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for j in cj.saturating_sub(1)..=(cj + 1).min(self.dim - 1) {
@@ -574,7 +579,8 @@ impl PlaneLocator {
             .unwrap_or(&corners[0]);
         let mut out = Vector3::zeros();
         for k in 0..3 {
-            let c = if align && corners[k].dot(&reference) < 0.0 { -corners[k] } else { corners[k] };
+            let c =
+                if align && corners[k].dot(&reference) < 0.0 { -corners[k] } else { corners[k] };
             out += c * b[k];
         }
         out
