@@ -304,8 +304,8 @@ fn move_light_keeps_the_old_highlights_as_targets() {
     let ell = s.ell();
     let r = s.apply(&[Edit::MoveLight(MoveLightEdit { light: [0.0, 1.0, 1.0] })]);
     assert!((r.lighting.light - Vector3::new(0.0, 1.0, 1.0).normalize()).norm() < 1e-12);
-    for i in 0..ell.len() {
-        assert_eq!(r.target_ell[i], Some(ell[i]));
+    for (i, l) in ell.iter().enumerate() {
+        assert_eq!(r.target_ell[i], Some(*l));
         assert!(r.support[i]);
     }
     assert!(r.reports[0].median_ell_change_deg.is_some());

@@ -236,7 +236,9 @@ fn flatten(data: &Data, tol: f64) -> std::result::Result<Vec<Vec<Vector2<f64>>>,
             }
             cur = start;
             lines.push(Vec::new());
-            lines.last_mut().map(|l| l.push(start));
+            if let Some(l) = lines.last_mut() {
+                l.push(start);
+            }
             last_cubic = None;
             last_quad = None;
             continue;
@@ -429,7 +431,7 @@ fn space_targets(
                     }
                     let t = ((p - s[0]).dot(&e) / ee).clamp(0.0, 1.0);
                     let d = (s[0] + e * t - p).norm();
-                    if d < radius && best.map_or(true, |b| d < b.0) {
+                    if d < radius && best.is_none_or(|b| d < b.0) {
                         best = Some((d, e));
                     }
                 }
@@ -522,7 +524,7 @@ fn uv_targets(
                     for l in lines {
                         for s in l.windows(2) {
                             let (_, d2) = closest_on_segment(&p, &s[0], &s[1], &g);
-                            if d2 < r2 && best.map_or(true, |b| d2 < b.0 * b.0) {
+                            if d2 < r2 && best.is_none_or(|b| d2 < b.0 * b.0) {
                                 let e = s[1] - s[0];
                                 best = Some((d2.sqrt(), ju * e.x + jv * e.y));
                             }

@@ -18,7 +18,7 @@
 //! i and J_W = [[1, 0], [s ∂d/∂x, 1 + s ∂d/∂y]]. W⁻¹ is solved along the vertical line x = xᵢ by
 //! Newton's method safeguarded by bisection (W maps the chord of the disk at x onto itself,
 //! monotonically). ℓ_q is interpolated from the current targets (see
-//! [`super::support::PlaneLocator`]), mapped to the plane by [eₓ e_y]ᵀ, warped by J_W, and lifted
+//! [`super::support`], "point location"), mapped to the plane by [eₓ e_y]ᵀ, warped by J_W, and lifted
 //! back to the tangent plane of vertex i ([`super::support::Support::vector_from_plane`]).
 
 use nalgebra::{Matrix2, Vector2};
