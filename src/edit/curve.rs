@@ -103,8 +103,11 @@ fn check_polylines<const N: usize>(key: &str, lines: &[Vec<[f64; N]>]) -> Result
 pub fn read_svg_polylines(path: &Path, tolerance: f64) -> Result<Vec<Vec<Vector2<f64>>>> {
     let text = std::fs::read_to_string(path)
         .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    parse_svg_polylines(&text, tolerance)
-        .map_err(|message| Error::Parse { path: path.to_path_buf(), line: 0, message })
+    parse_svg_polylines(&text, tolerance).map_err(|message| Error::Parse {
+        path: path.to_path_buf(),
+        line: 0,
+        message,
+    })
 }
 
 /// Parses SVG text into UV polylines; the error is a message (the caller adds the file).
@@ -233,13 +236,18 @@ fn flatten(data: &Data, tol: f64) -> std::result::Result<Vec<Vec<Vector2<f64>>>,
             }
             cur = start;
             lines.push(Vec::new());
-            lines.last_mut().map(|l| l.push(start));
+            if let Some(l) = lines.last_mut() {
+                l.push(start);
+            }
             last_cubic = None;
             last_quad = None;
             continue;
         }
         if params.is_empty() || params.len() % arity != 0 {
-            return Err(format!("a command has {} numbers, not a multiple of {arity}", params.len()));
+            return Err(format!(
+                "a command has {} numbers, not a multiple of {arity}",
+                params.len()
+            ));
         }
         for (k, a) in params.chunks(arity).enumerate() {
             let (mut nc, mut nq) = (None, None);
@@ -332,7 +340,12 @@ fn closest_on_segment(
 }
 
 /// Applies a curve edit.
-pub(crate) fn apply(ctx: &Context, st: &mut State, e: &CurveEdit, report: &mut EditReport) -> Result<()> {
+pub(crate) fn apply(
+    ctx: &Context,
+    st: &mut State,
+    e: &CurveEdit,
+    report: &mut EditReport,
+) -> Result<()> {
     let mut norms: Vec<f64> = st.ell.iter().map(|l| l.norm()).collect();
     let median = if norms.is_empty() {
         0.0
@@ -418,7 +431,7 @@ fn space_targets(
                     }
                     let t = ((p - s[0]).dot(&e) / ee).clamp(0.0, 1.0);
                     let d = (s[0] + e * t - p).norm();
-                    if d < radius && best.map_or(true, |b| d < b.0) {
+                    if d < radius && best.is_none_or(|b| d < b.0) {
                         best = Some((d, e));
                     }
                 }
@@ -493,22 +506,25 @@ fn uv_targets(
                     }
                     let (ju, jv) = (js[0] / total, js[1] / total);
                     let g = Matrix2::new(ju.dot(&ju), ju.dot(&jv), jv.dot(&ju), jv.dot(&jv));
-                    let smallest = 0.5 * (g.trace() - ((g[(0, 0)] - g[(1, 1)]).powi(2)
-                        + 4.0 * g[(0, 1)].powi(2))
-                    .sqrt());
+                    let smallest = 0.5
+                        * (g.trace()
+                            - ((g[(0, 0)] - g[(1, 1)]).powi(2) + 4.0 * g[(0, 1)].powi(2)).sqrt());
                     if !(smallest > 0.0) {
                         continue;
                     }
                     let p = uv.values[key as usize];
                     let r_uv = radius / smallest.sqrt();
-                    if p.x < lo.x - r_uv || p.x > hi.x + r_uv || p.y < lo.y - r_uv || p.y > hi.y + r_uv
+                    if p.x < lo.x - r_uv
+                        || p.x > hi.x + r_uv
+                        || p.y < lo.y - r_uv
+                        || p.y > hi.y + r_uv
                     {
                         continue;
                     }
                     for l in lines {
                         for s in l.windows(2) {
                             let (_, d2) = closest_on_segment(&p, &s[0], &s[1], &g);
-                            if d2 < r2 && best.map_or(true, |b| d2 < b.0 * b.0) {
+                            if d2 < r2 && best.is_none_or(|b| d2 < b.0 * b.0) {
                                 let e = s[1] - s[0];
                                 best = Some((d2.sqrt(), ju * e.x + jv * e.y));
                             }

@@ -171,7 +171,7 @@ pub fn find_light(q: &LightQuery) -> Result<LightSearch> {
         let t = -half_pi + step * (j as f64 + 0.5);
         if admissible(t) {
             let e = error(t);
-            if best.map_or(true, |b| e < b.1) {
+            if best.is_none_or(|b| e < b.1) {
                 best = Some((t, e));
             }
         }

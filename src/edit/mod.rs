@@ -1,4 +1,4 @@
-//! Highlight-editing tools (the paper's §5, docs/math.md §7): they turn a designer's gesture into
+//! Highlight-editing tools (the paper's §5; docs/math.md, "Editing tools"): they turn a designer's gesture into
 //! target highlight tangents ℓ*ᵢ (and, for the stencil, a new grain field; for the light tool, a
 //! new light) for the optimizer of [`crate::solve`].
 //!
@@ -18,6 +18,9 @@
 //! Edits apply in order; each one reads the targets left by the ones before it (a bend after a
 //! bend composes the two warps). Vertices outside every edit keep their current ℓ as target, with
 //! weight [`EditOptions::outside_weight`].
+
+// `!(x > 0.0)` is how the tools reject NaN along with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod curve;
 pub mod light;
@@ -209,11 +212,7 @@ impl EditReport {
 ///
 /// Errors: an invalid edit (`[k].key`), an edit whose support holds no vertex, a warp that cannot
 /// be inverted, a light tool with no admissible light, a curve tool without UVs.
-pub fn apply_edits(
-    input: &EditInput,
-    edits: &[Edit],
-    options: &EditOptions,
-) -> Result<EditResult> {
+pub fn apply_edits(input: &EditInput, edits: &[Edit], options: &EditOptions) -> Result<EditResult> {
     options.validate()?;
     validate_edits(edits)?;
     let n = input.mesh.num_vertices();
@@ -438,7 +437,7 @@ pub(crate) fn line_angle_deg(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
     if !(na > 0.0 && nb > 0.0) {
         return 90.0;
     }
-    (a.dot(b).abs() / (na * nb)).min(1.0).acos().to_degrees()
+    a.cross(b).norm().atan2(a.dot(b).abs()).to_degrees()
 }
 
 pub(crate) fn one() -> f64 {

@@ -18,6 +18,11 @@
 //!   plane; (x, y) = [eₓ e_y]ᵀ(p − o)/r, so every support vertex lies in the unit disk
 //!   (projection never lengthens a distance); on a plane the support is exactly the disk.
 //! - **Fall-off** w(x, y) = (1 − x² − y²)² (paper §5).
+//! - **Point location** (the warps' ℓ_q): the faces with a corner in the support, projected to
+//!   the plane and bucketed in a grid; a value at a planar point q is the barycentric
+//!   interpolation of the corner values in the triangle containing q (the one nearest the query's
+//!   vertex in space when the projection overlaps itself), or, for q beyond a boundary, at the
+//!   closest point of the closest triangle.
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -103,7 +108,7 @@ pub(crate) fn resolve_centre(ctx: &Context, centre: &Centre) -> Result<SurfacePo
                 let [a, b, c] = mesh.face_positions(f);
                 let (x, bary) = closest_point_on_triangle(&p, &a, &b, &c);
                 let d2 = (x - p).norm_squared();
-                if best.as_ref().map_or(true, |b| d2 < b.0) {
+                if best.as_ref().is_none_or(|b| d2 < b.0) {
                     best = Some((d2, f, x, bary));
                 }
             }
@@ -521,7 +526,12 @@ impl PlaneLocator {
 
     /// The face and barycentric coordinates of planar point `q`; `near` is a world point that
     /// breaks ties between overlapping triangles.
-    pub fn locate(&self, ctx: &Context, q: &Vector2<f64>, near: &Vector3<f64>) -> (usize, [f64; 3]) {
+    pub fn locate(
+        &self,
+        ctx: &Context,
+        q: &Vector2<f64>,
+        near: &Vector3<f64>,
+    ) -> (usize, [f64; 3]) {
         let (ci, cj) = cell_of(q, &self.lo, self.cell, self.dim);
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for j in cj.saturating_sub(1)..=(cj + 1).min(self.dim - 1) {
@@ -532,7 +542,7 @@ impl PlaneLocator {
                     if b.iter().all(|&x| x >= -1e-9) {
                         let [p0, p1, p2] = ctx.mesh.face_positions(*f);
                         let d = ((p0 + p1 + p2) / 3.0 - near).norm_squared();
-                        if best.as_ref().map_or(true, |x| (d, *f) < (x.0, x.1)) {
+                        if best.as_ref().is_none_or(|x| (d, *f) < (x.0, x.1)) {
                             best = Some((d, *f, b));
                         }
                     }
@@ -549,7 +559,7 @@ impl PlaneLocator {
             let [a, b, c] = t.map(|p| Vector3::new(p.x, p.y, 0.0));
             let (x, bary) = closest_point_on_triangle(&q3, &a, &b, &c);
             let d = (x - q3).norm_squared();
-            if best.as_ref().map_or(true, |x| (d, *f) < (x.0, x.1)) {
+            if best.as_ref().is_none_or(|x| (d, *f) < (x.0, x.1)) {
                 best = Some((d, *f, bary));
             }
         }
@@ -574,7 +584,8 @@ impl PlaneLocator {
             .unwrap_or(&corners[0]);
         let mut out = Vector3::zeros();
         for k in 0..3 {
-            let c = if align && corners[k].dot(&reference) < 0.0 { -corners[k] } else { corners[k] };
+            let c =
+                if align && corners[k].dot(&reference) < 0.0 { -corners[k] } else { corners[k] };
             out += c * b[k];
         }
         out

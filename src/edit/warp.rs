@@ -18,14 +18,16 @@
 //! i and J_W = [[1, 0], [s ∂d/∂x, 1 + s ∂d/∂y]]. W⁻¹ is solved along the vertical line x = xᵢ by
 //! Newton's method safeguarded by bisection (W maps the chord of the disk at x onto itself,
 //! monotonically). ℓ_q is interpolated from the current targets (see
-//! [`super::support::PlaneLocator`]), mapped to the plane by [eₓ e_y]ᵀ, warped by J_W, and lifted
+//! [`super::support`], "point location"), mapped to the plane by [eₓ e_y]ᵀ, warped by J_W, and lifted
 //! back to the tangent plane of vertex i ([`super::support::Support::vector_from_plane`]).
 
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
 use super::support::{Centre, Metric, PlaneLocator, Support};
-use super::{check_direction, check_radius, check_weight, line_angle_deg, Context, EditReport, State};
+use super::{
+    check_direction, check_radius, check_weight, line_angle_deg, Context, EditReport, State,
+};
 use crate::highlight::Symmetry;
 use crate::{Error, Result};
 
@@ -223,7 +225,10 @@ mod tests {
             let mut max_dy: f64 = f64::NEG_INFINITY;
             for i in 0..=n {
                 for j in 0..=n {
-                    let p = Vector2::new(-1.0 + 2.0 * i as f64 / n as f64, -1.0 + 2.0 * j as f64 / n as f64);
+                    let p = Vector2::new(
+                        -1.0 + 2.0 * i as f64 / n as f64,
+                        -1.0 + 2.0 * j as f64 / n as f64,
+                    );
                     let (_, _, dy) = displacement(kind, &p);
                     min_dy = min_dy.min(dy);
                     max_dy = max_dy.max(dy);
