@@ -6,6 +6,7 @@ mod mesh_args;
 mod optimize;
 mod panel;
 mod progress;
+mod run;
 mod schema;
 
 use clap::{Parser, Subcommand};
@@ -34,6 +35,8 @@ enum Command {
     Field(field::FieldArgs),
     /// Highlight edits and the solve (paper §4–5): FIELD.json with the field before and after.
     Optimize(optimize::OptimizeArgs),
+    /// The whole scene: edits, solve, strokes, SVG and G-code, preview — only what it asks for.
+    Run(run::RunArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
     /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
@@ -46,6 +49,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Field(a) => field::run(a, cli.quiet),
         Command::Schema(a) => schema::run(a),
+        Command::Run(a) => run::run(a, cli.quiet),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
         Command::Panel(a) => panel::run(a, cli.quiet),
     }

@@ -6,6 +6,7 @@
 //! `render` section. Every stage is timed, and the times add up to the run's wall time.
 
 pub mod optimize;
+pub mod run;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -90,34 +91,11 @@ pub struct Prepared {
 /// The highlight model's light: the first directional light marked `"key": true`, else the
 /// first directional light.
 pub fn key_light(scene: &crate::scene::Scene) -> Result<Vector3<f64>> {
-    let directional: Vec<(usize, &serde_json::Value)> = scene
-        .lights
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| l.get("type").and_then(|t| t.as_str()) == Some("directional"))
-        .collect();
-    let chosen = directional
-        .iter()
-        .find(|(_, l)| l.get("key").and_then(|k| k.as_bool()) == Some(true))
-        .or_else(|| directional.first())
-        .ok_or_else(|| {
-            Error::setting("lights", "needs a directional light (the highlight model's key light)")
-        })?;
-    let (i, l) = chosen;
-    let d: Option<Vec<f64>> = l
-        .get("direction")
-        .and_then(|d| d.as_array())
-        .map(|a| a.iter().filter_map(|x| x.as_f64()).collect());
-    match d {
-        Some(d) if d.len() == 3 && d.iter().all(|c| c.is_finite()) => {
-            let v = Vector3::new(d[0], d[1], d[2]);
-            if v.norm() > 0.0 {
-                Ok(v)
-            } else {
-                Err(Error::setting(format!("lights[{i}].direction"), "must be non-zero"))
-            }
-        }
-        _ => Err(Error::setting(format!("lights[{i}].direction"), "must be three finite numbers")),
+    let i = crate::render::key_light_index(&scene.lights)
+        .ok_or_else(|| Error::setting("lights", "needs a directional light"))?;
+    match &scene.lights[i] {
+        crate::render::LightSpec::Directional { direction, .. } => Ok(Vector3::from(*direction)),
+        _ => Err(Error::setting("lights", "needs a directional light")),
     }
 }
 

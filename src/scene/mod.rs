@@ -36,12 +36,12 @@ pub struct Scene {
     #[serde(default)]
     pub units: crate::mesh::Units,
     /// The brushed material (BRDF and its parameters) used by the preview.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub material: Option<serde_json::Value>,
+    #[serde(default)]
+    pub material: crate::render::Material,
     /// The lights. The highlight model uses the key light: the first directional light marked
     /// `"key": true`, else the first directional light.
     #[serde(default)]
-    pub lights: Vec<serde_json::Value>,
+    pub lights: Vec<crate::render::LightSpec>,
     /// The viewer: the eye of the highlight model and the preview's camera.
     pub view: ViewSection,
     /// The initial grain field and the highlight model's settings.
@@ -55,10 +55,10 @@ pub struct Scene {
     pub solver: crate::solve::SolverSettings,
     /// Brush strokes and their exports (SVG, G-code); absent: no tracing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub toolpaths: Option<serde_json::Value>,
+    pub toolpaths: Option<crate::uvfield::ToolpathSection>,
     /// The preview image; absent: no rendering.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub render: Option<serde_json::Value>,
+    pub render: Option<crate::render::RenderSettings>,
 }
 
 impl Scene {
@@ -100,7 +100,22 @@ impl Scene {
         }
         self.view.validate().map_err(|e| prefix("view", e))?;
         self.field.validate().map_err(|e| prefix("field", e))?;
+        self.material.validate().map_err(|e| prefix("material", e))?;
+        crate::render::validate_lights(&self.lights).map_err(|e| prefix("lights", e))?;
+        if crate::render::key_light_index(&self.lights).is_none() {
+            return Err(Error::setting(
+                "lights",
+                "needs a directional light: the highlight model's key light (`\"key\": true` \
+                 picks one when there are several)",
+            ));
+        }
         crate::edit::validate_edits(&self.edits).map_err(|e| prefix("edits", e))?;
+        if let Some(t) = &self.toolpaths {
+            t.validate().map_err(|e| prefix("toolpaths", e))?;
+        }
+        if let Some(r) = &self.render {
+            r.validate().map_err(|e| prefix("render", e))?;
+        }
         self.solver.validate().map_err(|e| prefix("solver", e))?;
         Ok(())
     }

@@ -52,6 +52,9 @@ pub struct JobOutput {
     pub strokes_json: Option<String>,
     /// The report.
     pub report: Report,
+    /// Each stroke lifted onto the part (3D points, one per UV point), when the field mesh
+    /// has a lift; empty otherwise. Seam jumps are not marked.
+    pub strokes_3d: Vec<Vec<crate::geom::Vec3>>,
 }
 
 fn timed<T>(t: &mut Vec<PhaseTime>, phase: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
@@ -104,5 +107,30 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
         None
     };
     let report = Report::new(&placement, &plan, cov.as_ref(), t);
-    Ok(JobOutput { placement, plan, coverage: cov, svg, gcode, strokes_json: json, report })
+    let strokes_3d = if dom.has_lift() {
+        placement
+            .strokes
+            .iter()
+            .map(|s| {
+                s.uv.iter()
+                    .zip(&s.faces)
+                    .filter_map(|(p, &f)| {
+                        dom.lift(f, crate::locate::barycentric(dom.corners(f), *p))
+                    })
+                    .collect()
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    Ok(JobOutput {
+        placement,
+        plan,
+        coverage: cov,
+        svg,
+        gcode,
+        strokes_json: json,
+        report,
+        strokes_3d,
+    })
 }

@@ -1,0 +1,335 @@
+//! `grainline run`: every stage the scene's outputs need, and only those.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use super::optimize::{optimize_stage, optimized_field_file, OptimizeStageReport};
+use super::{output_path, prepare, Observer, StageTime, Stages};
+use crate::highlight::{highlight_field, Symmetry};
+use crate::output::{write_atomic, write_json_compact_atomic};
+use crate::render::{render, Camera, EditOverlay, RenderInput, RenderReport};
+use crate::scene::LoadedScene;
+use crate::uvfield::{as_brushed, field_mesh, toolpath_error, UvFieldReport};
+use crate::Result;
+
+/// Options of [`run`].
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Every relative output path of the scene lands under this directory (default: the scene
+    /// file's directory).
+    pub out_dir: Option<PathBuf>,
+}
+
+/// Which stages a scene needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct StagePlan {
+    /// The scene has edits: apply them and solve.
+    pub solve: bool,
+    /// A toolpath output or a strokes / as-brushed / gap effect needs the strokes.
+    pub trace: bool,
+    /// The scene has a `render` section.
+    pub render: bool,
+    /// The as-brushed field is needed (as-brushed effect).
+    pub as_brushed: bool,
+}
+
+impl StagePlan {
+    /// The stages `scene` needs.
+    pub fn of(scene: &crate::scene::Scene) -> StagePlan {
+        let fx = scene.render.as_ref().map(|r| &r.effects);
+        let as_brushed = fx.is_some_and(|f| f.as_brushed.is_some());
+        let render_needs_strokes =
+            fx.is_some_and(|f| f.strokes.is_some() || f.as_brushed.is_some() || f.gap.is_some());
+        let toolpath_outputs = scene
+            .toolpaths
+            .as_ref()
+            .is_some_and(|t| t.svg.is_some() || t.gcode.is_some() || t.strokes_json.is_some());
+        StagePlan {
+            solve: !scene.edits.is_empty(),
+            trace: toolpath_outputs || render_needs_strokes,
+            render: scene.render.is_some(),
+            as_brushed,
+        }
+    }
+}
+
+/// Figures of the toolpath stage.
+#[derive(Clone, Debug, Serialize)]
+pub struct ToolpathFigures {
+    /// The toolpaths crate's report (strokes, lengths, coverage, stop reasons).
+    pub job: grainline_toolpaths::Report,
+    /// UV triangles, flipped and degenerate faces, seams.
+    pub uv_vertices: usize,
+    /// Triangles handed to the toolpaths crate.
+    pub triangles: usize,
+    /// Faces left out (degenerate UV).
+    pub degenerate_faces: usize,
+    /// Mirrored or flipped UV triangles (kept, directions carried without turning over).
+    pub flipped_faces: usize,
+    /// Seam pairs.
+    pub seam_pairs: usize,
+}
+
+/// The as-brushed fidelity: the grain rebuilt from the strokes against the designed grain.
+#[derive(Clone, Debug, Serialize)]
+pub struct AsBrushedFigures {
+    /// Vertices compared.
+    pub compared: usize,
+    /// Median angle between designed and as-brushed u, degrees.
+    pub median_deg: f64,
+    /// 95th percentile of that angle, degrees.
+    pub p95_deg: f64,
+    /// Largest angle, degrees.
+    pub max_deg: f64,
+}
+
+/// The run report.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    /// Always `"grainline-run-report"`.
+    pub format: &'static str,
+    /// Format version (1).
+    pub version: u32,
+    /// The scene file.
+    pub scene: String,
+    /// Length unit of every length below.
+    pub units: String,
+    /// The stages the scene needed.
+    pub plan: StagePlan,
+    /// Every stage with its wall time; they add up to `wall_seconds`.
+    pub stages: Vec<StageTime>,
+    /// Wall time of the whole run.
+    pub wall_seconds: f64,
+    /// Mesh vertices and faces.
+    pub vertices: usize,
+    /// Mesh faces.
+    pub faces: usize,
+    /// Critical points (hᵀn above the threshold) of the final field.
+    pub critical_points: usize,
+    /// Edits and the solve (iterations, energies, constraint violations, singularities).
+    pub optimize: Option<OptimizeStageReport>,
+    /// Strokes, coverage, lengths.
+    pub toolpaths: Option<ToolpathFigures>,
+    /// Designed against as-brushed grain.
+    pub as_brushed: Option<AsBrushedFigures>,
+    /// The preview's passes, times and counters.
+    pub render: Option<RenderReport>,
+    /// Files written.
+    pub outputs: Vec<String>,
+}
+
+fn write_out(outs: &mut Vec<String>, path: &Path, bytes: &[u8]) -> Result<()> {
+    if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d)
+            .map_err(|source| crate::Error::Io { path: d.to_path_buf(), source })?;
+    }
+    write_atomic(path, bytes)?;
+    outs.push(path.display().to_string());
+    Ok(())
+}
+
+/// Runs the scene: the stages its outputs need, each timed; writes every output atomically.
+pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Result<RunReport> {
+    let start = Instant::now();
+    let scene = &s.scene;
+    let plan = StagePlan::of(scene);
+    let out = |p: &str| output_path(s, options.out_dir.as_deref(), p);
+    let mut stages = Stages::new(observer);
+    let mut outputs = Vec::new();
+    let prepared = prepare(s, &mut stages)?;
+    let g = &prepared.field.geometry;
+    let symmetry = prepared.field_options.symmetry;
+    // The field after edits and the solve, or the initial one.
+    let optimized =
+        if plan.solve { Some(optimize_stage(s, &prepared, &mut stages)?) } else { None };
+    let (phi, h, ell, critical, light) = match &optimized {
+        Some(o) => (&o.phi, &o.h, &o.highlight.ell, &o.critical, o.lighting.light),
+        None => (
+            &prepared.field.phi,
+            &prepared.field.h,
+            &prepared.field.highlight.ell,
+            &prepared.field.critical,
+            prepared.field_options.lighting.light,
+        ),
+    };
+    if let Some(p) = &scene.field.output {
+        stages.start("write field");
+        let file = match &optimized {
+            Some(o) => optimized_field_file(&prepared, o)?,
+            None => crate::field::FieldFile::new(
+                &prepared.mesh,
+                &prepared.mesh_name,
+                &prepared.field_options,
+                &prepared.field,
+            )?,
+        };
+        let path = out(p);
+        if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(d)
+                .map_err(|source| crate::Error::Io { path: d.to_path_buf(), source })?;
+        }
+        write_json_compact_atomic(&path, &file)?;
+        outputs.push(path.display().to_string());
+    }
+    let mut toolpaths = None;
+    let mut brushed = None;
+    let mut strokes_3d: Vec<Vec<Vector3<f64>>> = Vec::new();
+    if plan.trace {
+        stages.start("toolpaths");
+        let section = scene.toolpaths.clone().unwrap_or_default();
+        section.validate().map_err(|e| crate::scene::prefix("toolpaths", e))?;
+        let (fm, uvr): (_, UvFieldReport) =
+            field_mesh(&prepared.mesh, g, phi, symmetry, &section.uv_field)?;
+        let fm_copy = if plan.as_brushed { Some(fm.clone()) } else { None };
+        let job =
+            grainline_toolpaths::generate(fm, &section.job_options()).map_err(toolpath_error)?;
+        strokes_3d =
+            job.strokes_3d.iter().map(|s| s.iter().map(|p| Vector3::from(*p)).collect()).collect();
+        stages.start("write toolpaths");
+        for (name, text) in [
+            (&section.svg, &job.svg),
+            (&section.gcode, &job.gcode),
+            (&section.strokes_json, &job.strokes_json),
+        ] {
+            if let (Some(p), Some(t)) = (name, text) {
+                write_out(&mut outputs, &out(p), t.as_bytes())?;
+            }
+        }
+        if let Some(fm) = fm_copy {
+            stages.start("as-brushed");
+            let ab = as_brushed(&prepared.mesh, g, phi, symmetry, &fm, &uvr, &job.placement)?;
+            brushed = Some(ab);
+        }
+        toolpaths = Some(ToolpathFigures {
+            job: job.report.clone(),
+            uv_vertices: uvr.uv_vertices,
+            triangles: uvr.triangles,
+            degenerate_faces: uvr.degenerate_faces.len(),
+            flipped_faces: uvr.flipped_faces,
+            seam_pairs: uvr.seam_pairs,
+        });
+    }
+    let mut render_report = None;
+    if let Some(settings) = &scene.render {
+        stages.start("render");
+        let normals: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
+        let u = g.directions_of(phi);
+        let mut input = RenderInput::new(
+            &prepared.mesh.positions,
+            &prepared.mesh.faces,
+            &normals,
+            &u,
+            symmetry,
+        );
+        input.ell = Some(ell);
+        input.critical = Some(critical);
+        if settings.effects.strokes.is_some() {
+            input.strokes = Some(&strokes_3d);
+        }
+        let brushed_u: Option<Vec<Vector3<f64>>> =
+            brushed.as_ref().map(|b| b.u.iter().map(|v| Vector3::from(*v)).collect());
+        let brushed_ell = brushed_u.as_ref().map(|bu| {
+            let bphi = g.angles_of(bu);
+            highlight_field(g, &bphi, symmetry, prepared.field_options.gradient_form, h).ell
+        });
+        input.brushed_u = brushed_u.as_deref();
+        input.brushed_ell = brushed_ell.as_deref();
+        let overlay = optimized.as_ref().map(|o| EditOverlay {
+            support: o.support.iter().map(|&b| if b { 1.0 } else { 0.0 }).collect(),
+            targets: o
+                .target_ell
+                .iter()
+                .enumerate()
+                .filter(|(i, t)| t.is_some() && o.support[*i])
+                .map(|(i, t)| (prepared.mesh.positions[i], t.expect("filtered")))
+                .collect(),
+        });
+        if settings.effects.edits.is_some() {
+            input.edits = overlay.as_ref();
+        }
+        let camera = Camera {
+            eye: scene.view.eye.into(),
+            target: scene.view.target.into(),
+            up: scene.view.up.into(),
+            fov_deg: scene.view.fov_deg,
+        };
+        // Environment images are relative to the scene file; the key light may have moved.
+        let lights: Vec<crate::render::LightSpec> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| match l {
+                crate::render::LightSpec::Environment { file, scale, samples, rotation_deg } => {
+                    crate::render::LightSpec::Environment {
+                        file: s.input(file).display().to_string(),
+                        scale: *scale,
+                        samples: *samples,
+                        rotation_deg: *rotation_deg,
+                    }
+                }
+                crate::render::LightSpec::Directional { irradiance, colour, key, .. }
+                    if Some(i) == crate::render::key_light_index(&scene.lights) =>
+                {
+                    crate::render::LightSpec::Directional {
+                        direction: [light.x, light.y, light.z],
+                        irradiance: *irradiance,
+                        colour: *colour,
+                        key: *key,
+                    }
+                }
+                other => other.clone(),
+            })
+            .collect();
+        let r = render(&input, &scene.material, &lights, &camera, settings)
+            .map_err(|e| in_scene(s, e))?;
+        stages.start("write render");
+        write_out(&mut outputs, &out(&settings.output), &r.png)?;
+        if let (Some(p), Some(bytes)) = (&settings.linear, &r.linear) {
+            write_out(&mut outputs, &out(p), bytes)?;
+        }
+        render_report = Some(r.report);
+    }
+    let as_brushed_figures = brushed.as_ref().map(|b| AsBrushedFigures {
+        compared: b.compared,
+        median_deg: b.median_deg,
+        p95_deg: b.p95_deg,
+        max_deg: b.max_deg,
+    });
+    let times = stages.into_times();
+    Ok(RunReport {
+        format: "grainline-run-report",
+        version: 1,
+        scene: s.path.display().to_string(),
+        units: prepared.mesh.units.as_str().into(),
+        plan,
+        stages: times,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        vertices: prepared.mesh.num_vertices(),
+        faces: prepared.mesh.num_faces(),
+        critical_points: critical.iter().filter(|&&c| c).count(),
+        optimize: optimized.map(|o| o.report),
+        toolpaths,
+        as_brushed: as_brushed_figures,
+        render: render_report,
+        outputs,
+    })
+}
+
+fn in_scene(s: &LoadedScene, e: crate::Error) -> crate::Error {
+    match e {
+        crate::Error::Setting { key, message } => crate::Error::Scene {
+            path: s.path.clone(),
+            line: None,
+            message: format!("{key}: {message}"),
+        },
+        other => other,
+    }
+}
+
+/// Whether a symmetry renders as a line field.
+pub fn is_line(s: Symmetry) -> bool {
+    s == Symmetry::Line
+}
