@@ -1,0 +1,156 @@
+//! `grainline run` end to end: only the stages a scene needs run, outputs are byte-identical
+//! at one and two threads, stage times add up, bad scenes are named.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use grainline::generate;
+use grainline::mesh::write::obj_string;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("grainline-cli-run-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A small vase of revolution (UVs = angle, height) next to the scene.
+fn write_part(d: &Path) {
+    let mesh =
+        generate::revolve(|t| (30.0 + 8.0 * (std::f64::consts::PI * t).sin(), 60.0 * t), 48, 24);
+    std::fs::write(d.join("vase.obj"), obj_string(&mesh, "test vase")).unwrap();
+}
+
+fn scene(d: &Path, edits: &str, toolpaths: &str, render: &str) -> PathBuf {
+    let s = format!(
+        r#"{{
+  "mesh": "vase.obj",
+  "lights": [{{"type": "directional", "direction": [0.3, -0.5, 1]}}],
+  "view": {{"eye": [0, -200, 80], "target": [0, 0, 30]}},
+  "field": {{"init": "uv"}},
+  "edits": {edits}{toolpaths}{render}
+}}"#
+    );
+    let p = d.join("scene.json");
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+const BEND: &str =
+    r#"[{"tool": "bend", "centre": {"point": [0, -36, 30]}, "radius": 15, "strength": 0.5}]"#;
+const TOOLPATHS: &str = r#",
+  "toolpaths": {"svg": "o/v.svg", "gcode": "o/v.ngc", "placement": {"width": 3}}"#;
+const RENDER: &str = r#",
+  "render": {"width": 96, "height": 96, "output": "o/v.png", "effects": {"strokes": {}}}"#;
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap()
+}
+
+fn report(p: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
+
+fn stage_names(r: &serde_json::Value) -> Vec<String> {
+    r["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap().into()).collect()
+}
+
+#[test]
+fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
+    let d = dir("full");
+    write_part(&d);
+    let sc = scene(&d, BEND, TOOLPATHS, RENDER);
+    let mut bytes = Vec::new();
+    for t in ["1", "2"] {
+        let out = d.join(format!("t{t}"));
+        let o = run(&[
+            "--quiet",
+            "--threads",
+            t,
+            "run",
+            sc.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let files: Vec<Vec<u8>> = ["o/v.svg", "o/v.ngc", "o/v.png"]
+            .iter()
+            .map(|f| std::fs::read(out.join(f)).unwrap())
+            .collect();
+        assert!(files.iter().all(|f| !f.is_empty()));
+        let r = report(&out.join("run-report.json"));
+        assert_eq!(
+            stage_names(&r),
+            [
+                "load",
+                "field",
+                "edits",
+                "solve",
+                "toolpaths",
+                "write toolpaths",
+                "render",
+                "write render"
+            ]
+        );
+        // The stage times add up to the wall time (within 5 %).
+        let sum: f64 =
+            r["stages"].as_array().unwrap().iter().map(|s| s["seconds"].as_f64().unwrap()).sum();
+        let wall = r["wall_seconds"].as_f64().unwrap();
+        assert!((wall - sum).abs() <= 0.05 * wall + 1e-3, "stages {sum} s, wall {wall} s");
+        assert!(r["toolpaths"]["job"]["stroke_count"].as_u64().unwrap() > 5);
+        assert!(!r["optimize"]["solver"]["iterations"].as_array().unwrap().is_empty());
+        bytes.push(files);
+    }
+    assert!(bytes[0] == bytes[1], "outputs differ between --threads 1 and 2");
+}
+
+#[test]
+fn a_scene_computes_only_what_it_asks_for() {
+    let d = dir("minimal");
+    write_part(&d);
+    // No edits, no toolpaths, no render: only load and field.
+    let sc = scene(&d, "[]", "", "");
+    let rep = d.join("r.json");
+    let o = run(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&rep);
+    assert_eq!(stage_names(&r), ["load", "field"]);
+    assert!(r["optimize"].is_null() && r["toolpaths"].is_null() && r["render"].is_null());
+    // A render without stroke effects traces no strokes; with toolpaths but no edits, no solve.
+    let sc = scene(
+        &d,
+        "[]",
+        "",
+        r#",
+  "render": {"width": 64, "height": 64, "output": "o/m.png"}"#,
+    );
+    let o = run(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&rep);
+    assert_eq!(stage_names(&r), ["load", "field", "render", "write render"]);
+    assert_eq!(r["plan"]["trace"], false);
+    let sc = scene(&d, "[]", TOOLPATHS, "");
+    let o = run(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(stage_names(&report(&rep)), ["load", "field", "toolpaths", "write toolpaths"]);
+}
+
+#[test]
+fn bad_sections_are_named_and_nothing_is_written() {
+    let d = dir("bad");
+    write_part(&d);
+    for (toolpaths, needle) in [
+        (r#", "toolpaths": {"svg": "o/x.svg", "placement": {"widht": 3}}"#, "toolpaths.placement"),
+        (
+            r#", "toolpaths": {"svg": "o/x.svg", "placement": {"width": -3}}"#,
+            "toolpaths.placement.width",
+        ),
+        (r#", "render": {"width": 0, "output": "o/x.png"}"#, "render.width"),
+    ] {
+        let sc = scene(&d, "[]", toolpaths, "");
+        let o = run(&["--quiet", "run", sc.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{toolpaths}: {err}");
+        assert!(err.contains(needle), "{toolpaths}: {err}");
+        assert!(!d.join("o").exists(), "nothing written after a failure");
+    }
+}
