@@ -15,7 +15,7 @@ fn message(text: &str) -> String {
 
 #[test]
 fn minimal_scene_takes_documented_defaults() {
-    let s = parse(r#"{"mesh": "part.obj", "view": {"eye": [0, -5, 2]}}"#).unwrap();
+    let s = parse(r#"{"mesh": "part.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#).unwrap();
     let m = s.mesh.as_ref().unwrap();
     assert_eq!(m.0.path, "part.obj");
     assert_eq!(m.0.scale, 1.0);
@@ -29,7 +29,7 @@ fn minimal_scene_takes_documented_defaults() {
 fn mesh_as_object_with_options() {
     let s = parse(
         r#"{"mesh": {"path": "p.obj", "weld": 0.001, "scale": 2},
-            "view": {"eye": [0, -5, 2], "model": "distant"}}"#,
+            "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2], "model": "distant"}}"#,
     )
     .unwrap();
     assert_eq!(s.mesh.unwrap().0.weld, Some(0.001));
@@ -38,12 +38,14 @@ fn mesh_as_object_with_options() {
 #[test]
 fn unknown_key_names_its_path_and_line() {
     let m = message(
-        "{\"mesh\": {\"path\": \"p.obj\",\n \"sclae\": 2},\n \"view\": {\"eye\": [0, -5, 2]}}",
+        "{\"mesh\": {\"path\": \"p.obj\",\n \"sclae\": 2},\n \"lights\": [{\"type\": \"directional\", \"direction\": [0, 0, 1]}], \"view\": {\"eye\": [0, -5, 2]}}",
     );
     assert!(m.contains("mesh.sclae"), "{m}");
     assert!(m.contains("unknown field `sclae`"), "{m}");
     assert!(m.contains("scene.json:2"), "{m}");
-    let m = message(r#"{"mesh": "p.obj", "view": {"eye": [0, -5, 2]}, "feild": {}}"#);
+    let m = message(
+        r#"{"mesh": "p.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}, "feild": {}}"#,
+    );
     assert!(m.contains("feild"), "{m}");
 }
 
@@ -55,28 +57,37 @@ fn wrong_type_names_the_key() {
 
 #[test]
 fn syntax_error_names_the_line() {
-    let m = message("{\"mesh\": \"p.obj\",\n\n \"view\": {\"eye\": [0, -5, 2],}}");
+    let m = message("{\"mesh\": \"p.obj\",\n\n \"lights\": [{\"type\": \"directional\", \"direction\": [0, 0, 1]}], \"view\": {\"eye\": [0, -5, 2],}}");
     assert!(m.contains("scene.json:3"), "{m}");
 }
 
 #[test]
 fn ranges_are_checked_with_key_paths() {
     for (text, key) in [
-        (r#"{"mesh": "p.obj", "view": {"eye": [0, -5, 2], "fov_deg": 190}}"#, "view.fov_deg"),
+        (
+            r#"{"mesh": "p.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2], "fov_deg": 190}}"#,
+            "view.fov_deg",
+        ),
         (r#"{"mesh": "p.obj", "view": {"eye": [0, 0, 0]}}"#, "view.target"),
         (r#"{"mesh": "p.obj", "view": {"eye": [0, 0, 5]}}"#, "view.up"),
-        (r#"{"mesh": {"path": "p.obj", "scale": 0}, "view": {"eye": [0, -5, 2]}}"#, "mesh.scale"),
         (
-            r#"{"mesh": "p.obj", "view": {"eye": [0, -5, 2]}, "field": {"init": "world"}}"#,
+            r#"{"mesh": {"path": "p.obj", "scale": 0}, "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#,
+            "mesh.scale",
+        ),
+        (
+            r#"{"mesh": "p.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}, "field": {"init": "world"}}"#,
             "field.world",
         ),
         (
-            r#"{"mesh": "p.obj", "view": {"eye": [0, -5, 2]}, "field": {"critical_threshold": 2}}"#,
+            r#"{"mesh": "p.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}, "field": {"critical_threshold": 2}}"#,
             "field.critical_threshold",
         ),
-        (r#"{"view": {"eye": [0, -5, 2]}}"#, "mesh"),
         (
-            r#"{"mesh": "p.obj", "outline": {"path": "o.svg"}, "view": {"eye": [0, -5, 2]}}"#,
+            r#"{"lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#,
+            "mesh",
+        ),
+        (
+            r#"{"mesh": "p.obj", "outline": {"path": "o.svg"}, "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#,
             "outline",
         ),
     ] {
@@ -90,7 +101,7 @@ fn relative_paths_resolve_against_the_scene_file() {
     let dir = std::env::temp_dir().join(format!("grainline-scene-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join("s.json");
-    std::fs::write(&p, r#"{"mesh": "meshes/p.obj", "view": {"eye": [0, -5, 2]}}"#).unwrap();
+    std::fs::write(&p, r#"{"mesh": "meshes/p.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#).unwrap();
     let s = LoadedScene::read(&p).unwrap();
     assert_eq!(s.input("meshes/p.obj"), dir.join("meshes/p.obj"));
     let missing = LoadedScene::read(&dir.join("nope.json")).unwrap_err().to_string();
