@@ -140,11 +140,25 @@ pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
         let loaded = crate::mesh::load::load_obj(&path, &m.load_options(scene.units))?;
         return Ok((loaded.mesh, m.0.path.clone()));
     }
-    Err(Error::Scene {
+    let o = scene.outline.as_ref().ok_or_else(|| Error::Scene {
         path: s.path.clone(),
         line: None,
-        message: "outline: flat panels from an SVG outline are not available in this build".into(),
-    })
+        message: "mesh: missing (give `mesh` or `outline`)".into(),
+    })?;
+    if scene.units != crate::mesh::Units::Mm {
+        return Err(Error::Scene {
+            path: s.path.clone(),
+            line: None,
+            message: "units: a panel from an outline is in millimetres; set `units` to \"mm\"".into(),
+        });
+    }
+    let options = crate::panel::PanelOptions {
+        max_edge: o.max_edge,
+        min_angle_deg: o.min_angle,
+        ..crate::panel::PanelOptions::default()
+    };
+    let panel = crate::panel::panel_from_svg(&s.input(&o.path), &options)?;
+    Ok((panel.mesh, o.path.clone()))
 }
 
 /// Where an output of the scene goes: under `out_dir` when given, else relative to the scene
