@@ -68,28 +68,35 @@ pub(crate) fn rasterize(
     height: usize,
 ) -> (VisBuffer, RasterStats) {
     let cam_pos: Vec<Vector3<f64>> = positions.par_iter().map(|p| cam.camera_coords(p)).collect();
-    let per_face: Vec<([Option<ScreenTri>; 2], bool)> = faces
+    // Screen triangles in face order (rayon's collect keeps the order), without a per-face
+    // slot for the faces that give none.
+    let tris: Vec<ScreenTri> = faces
         .par_iter()
         .enumerate()
-        .map(|(f, tri)| setup(cam, &cam_pos, f as u32, tri, width, height))
+        .flat_map_iter(|(f, tri)| {
+            setup(cam, &cam_pos, f as u32, tri, width, height).0.into_iter().flatten()
+        })
         .collect();
-    let mut stats = RasterStats { triangles_in: faces.len(), ..Default::default() };
+    let clipped = faces
+        .par_iter()
+        .filter(|tri| tri.iter().any(|&i| cam_pos[i as usize].z <= cam.near))
+        .count();
+    let mut stats =
+        RasterStats { triangles_in: faces.len(), triangles_clipped: clipped, ..Default::default() };
     let nbands = height.div_ceil(BAND);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nbands];
-    let mut tris = Vec::new();
-    for (list, clipped) in per_face {
-        stats.triangles_clipped += usize::from(clipped);
-        if list.iter().all(Option::is_none) {
-            stats.triangles_culled += 1;
+    let mut faces_drawn = 0;
+    let mut last_face = u32::MAX;
+    for (id, t) in tris.iter().enumerate() {
+        if t.face != last_face {
+            faces_drawn += 1;
+            last_face = t.face;
         }
-        for t in list.into_iter().flatten() {
-            let id = tris.len() as u32;
-            for b in &mut bins[t.rows.0 / BAND..t.rows.1.div_ceil(BAND)] {
-                b.push(id);
-            }
-            tris.push(t);
+        for b in &mut bins[t.rows.0 / BAND..t.rows.1.div_ceil(BAND)] {
+            b.push(id as u32);
         }
     }
+    stats.triangles_culled = faces.len() - faces_drawn;
     stats.screen_triangles = tris.len();
     let mut samples = vec![CLEAR; width * height];
     samples.par_chunks_mut(BAND * width).zip(bins.par_iter()).enumerate().for_each(
