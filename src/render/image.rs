@@ -1,5 +1,7 @@
 //! Resolving samples to pixels, tone mapping, sRGB, and the PNG and PFM encoders.
 
+use rayon::prelude::*;
+
 use super::settings::ToneMap;
 use crate::{Error, Result};
 
@@ -49,8 +51,8 @@ pub(crate) fn downsample<const N: usize>(
     let sw = w * s;
     let norm = 1.0 / (s * s) as f32;
     let mut out = vec![[0.0f32; N]; w * h];
-    for y in 0..h {
-        for x in 0..w {
+    out.par_chunks_mut(w.max(1)).enumerate().for_each(|(y, line)| {
+        for (x, o) in line.iter_mut().enumerate() {
             let mut acc = [0.0f32; N];
             for dy in 0..s {
                 let row = &src[(y * s + dy) * sw + x * s..(y * s + dy) * sw + x * s + s];
@@ -60,9 +62,9 @@ pub(crate) fn downsample<const N: usize>(
                     }
                 }
             }
-            out[y * w + x] = acc.map(|a| a * norm);
+            *o = acc.map(|a| a * norm);
         }
-    }
+    });
     out
 }
 

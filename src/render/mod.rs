@@ -420,45 +420,31 @@ pub fn render(
 
     // Resolve: box filter, tone map, LIC modulation, overlays, background.
     let out_w = w * halves.len();
-    let bg = settings.background;
     let cover: Vec<[f32; 1]> =
         vis.samples.iter().map(|x| [f32::from(u8::from(x.face != raster::EMPTY))]).collect();
     let (rgb8, linear_px) = timer.run("resolve", || {
         let coverage = image::downsample(&cover, w, h, s);
+        let resolved: Vec<Half> = halves
+            .iter()
+            .map(|(rad, layer)| {
+                (image::downsample(rad, w, h, s), image::downsample(layer, w, h, s))
+            })
+            .collect();
         let mut rgb8 = vec![[0u8; 3]; out_w * h];
         let mut linear_px = vec![[0.0f32; 3]; out_w * h];
-        for (hi, (rad, layer)) in halves.iter().enumerate() {
-            let rad = image::downsample(rad, w, h, s);
-            let layer = image::downsample(layer, w, h, s);
-            for y in 0..h {
-                for x in 0..w {
-                    let k = y * w + x;
-                    let o = y * out_w + hi * w + x;
-                    linear_px[o] = rad[k];
-                    let a = f64::from(coverage[k][0]);
-                    let mut c = [0usize, 1, 2].map(|i| {
-                        let m = image::tone_map(
-                            f64::from(rad[k][i]),
-                            settings.tone_map,
-                            settings.exposure,
-                        );
-                        image::linear_to_srgb(m)
-                    });
-                    if let (Some(l), Some(lv)) = (&fx.lic, &lic_values) {
-                        if hi == 0 {
-                            let f = (1.0 - l.strength) + l.strength * 2.0 * f64::from(lv[k][0]);
-                            c = c.map(|v| (v * f).clamp(0.0, 1.0));
-                        }
+        rgb8.par_chunks_mut(out_w).zip(linear_px.par_chunks_mut(out_w)).enumerate().for_each(
+            |(y, (row8, rowl))| {
+                for (hi, (rad, layer)) in resolved.iter().enumerate() {
+                    for x in 0..w {
+                        let k = y * w + x;
+                        let o = hi * w + x;
+                        rowl[o] = rad[k];
+                        let lic = lic_values.as_ref().filter(|_| hi == 0).map(|v| v[k][0]);
+                        row8[o] = resolve_pixel(rad[k], layer[k], coverage[k][0], lic, settings);
                     }
-                    // The surface's radiance was box-filtered with zeros outside: un-premultiply
-                    // against the background by coverage.
-                    let c = [0, 1, 2].map(|i| c[i] + (1.0 - a) * bg[i]);
-                    let ov = layer[k];
-                    let c = [0, 1, 2].map(|i| f64::from(ov[i]) + c[i] * (1.0 - f64::from(ov[3])));
-                    rgb8[o] = c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8);
                 }
-            }
-        }
+            },
+        );
         (rgb8, linear_px)
     });
 
@@ -638,4 +624,28 @@ fn as_brushed_stats(input: &RenderInput, bu: &[Vector3<f64>]) -> AsBrushedStats 
             _ => None,
         },
     }
+}
+
+/// One output pixel: tone map, LIC modulation, background by coverage, overlay layer over.
+fn resolve_pixel(
+    rad: [f32; 3],
+    layer: [f32; 4],
+    coverage: f32,
+    lic: Option<f32>,
+    settings: &RenderSettings,
+) -> [u8; 3] {
+    let mut c = rad.map(|v| {
+        image::linear_to_srgb(image::tone_map(f64::from(v), settings.tone_map, settings.exposure))
+    });
+    if let (Some(l), Some(lv)) = (&settings.effects.lic, lic) {
+        let f = (1.0 - l.strength) + l.strength * 2.0 * f64::from(lv);
+        c = c.map(|v| (v * f).clamp(0.0, 1.0));
+    }
+    // The surface's radiance was box-filtered with zeros outside: add the background by the
+    // uncovered fraction.
+    let a = f64::from(coverage);
+    let bg = settings.background;
+    let c = [0, 1, 2].map(|i| c[i] + (1.0 - a) * bg[i]);
+    let c = [0, 1, 2].map(|i| f64::from(layer[i]) + c[i] * (1.0 - f64::from(layer[3])));
+    c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
 }

@@ -68,28 +68,35 @@ pub(crate) fn rasterize(
     height: usize,
 ) -> (VisBuffer, RasterStats) {
     let cam_pos: Vec<Vector3<f64>> = positions.par_iter().map(|p| cam.camera_coords(p)).collect();
-    let per_face: Vec<(Vec<ScreenTri>, bool)> = faces
+    // Screen triangles in face order (rayon's collect keeps the order), without a per-face
+    // slot for the faces that give none.
+    let tris: Vec<ScreenTri> = faces
         .par_iter()
         .enumerate()
-        .map(|(f, tri)| setup(cam, &cam_pos, f as u32, tri, width, height))
+        .flat_map_iter(|(f, tri)| {
+            setup(cam, &cam_pos, f as u32, tri, width, height).0.into_iter().flatten()
+        })
         .collect();
-    let mut stats = RasterStats { triangles_in: faces.len(), ..Default::default() };
+    let clipped = faces
+        .par_iter()
+        .filter(|tri| tri.iter().any(|&i| cam_pos[i as usize].z <= cam.near))
+        .count();
+    let mut stats =
+        RasterStats { triangles_in: faces.len(), triangles_clipped: clipped, ..Default::default() };
     let nbands = height.div_ceil(BAND);
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); nbands];
-    let mut tris = Vec::new();
-    for (list, clipped) in per_face {
-        stats.triangles_clipped += usize::from(clipped);
-        if list.is_empty() {
-            stats.triangles_culled += 1;
+    let mut faces_drawn = 0;
+    let mut last_face = u32::MAX;
+    for (id, t) in tris.iter().enumerate() {
+        if t.face != last_face {
+            faces_drawn += 1;
+            last_face = t.face;
         }
-        for t in list {
-            let id = tris.len() as u32;
-            for b in &mut bins[t.rows.0 / BAND..t.rows.1.div_ceil(BAND)] {
-                b.push(id);
-            }
-            tris.push(t);
+        for b in &mut bins[t.rows.0 / BAND..t.rows.1.div_ceil(BAND)] {
+            b.push(id as u32);
         }
     }
+    stats.triangles_culled = faces.len() - faces_drawn;
     stats.screen_triangles = tris.len();
     let mut samples = vec![CLEAR; width * height];
     samples.par_chunks_mut(BAND * width).zip(bins.par_iter()).enumerate().for_each(
@@ -103,8 +110,8 @@ pub(crate) fn rasterize(
     (VisBuffer { width, height, samples }, stats)
 }
 
-/// Clips a face against the near plane and projects it; returns the screen triangles and
-/// whether clipping happened.
+/// Clips a face against the near plane and projects it; returns the (at most two) screen
+/// triangles and whether clipping happened.
 fn setup(
     cam: &Projector,
     cam_pos: &[Vector3<f64>],
@@ -112,72 +119,80 @@ fn setup(
     tri: &[u32; 3],
     width: usize,
     height: usize,
-) -> (Vec<ScreenTri>, bool) {
+) -> ([Option<ScreenTri>; 2], bool) {
+    type V = (Vector3<f64>, [f64; 2]);
     let corner_bary = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-    let verts: Vec<(Vector3<f64>, [f64; 2])> =
-        (0..3).map(|k| (cam_pos[tri[k] as usize], corner_bary[k])).collect();
-    let inside = |v: &(Vector3<f64>, [f64; 2])| v.0.z > cam.near;
+    let verts: [V; 3] = [0, 1, 2].map(|k| (cam_pos[tri[k] as usize], corner_bary[k]));
+    let inside = |v: &V| v.0.z > cam.near;
     let n_in = verts.iter().filter(|v| inside(v)).count();
-    let poly: Vec<(Vector3<f64>, [f64; 2])> = if n_in == 3 {
-        verts
-    } else if n_in == 0 {
-        return (Vec::new(), true);
+    if n_in == 0 {
+        return ([None, None], true);
+    }
+    let mut poly: [V; 4] = [verts[0]; 4];
+    let mut len = 0;
+    if n_in == 3 {
+        poly[..3].copy_from_slice(&verts);
+        len = 3;
     } else {
         // Sutherland–Hodgman against z = near, carrying the face barycentrics along.
-        let mut out = Vec::with_capacity(4);
         for k in 0..3 {
             let (a, b) = (&verts[k], &verts[(k + 1) % 3]);
             if inside(a) {
-                out.push(*a);
+                poly[len] = *a;
+                len += 1;
             }
             if inside(a) != inside(b) {
                 let t = (cam.near - a.0.z) / (b.0.z - a.0.z);
                 let p = a.0 + (b.0 - a.0) * t;
                 let bc = [a.1[0] + (b.1[0] - a.1[0]) * t, a.1[1] + (b.1[1] - a.1[1]) * t];
-                out.push((Vector3::new(p.x, p.y, cam.near), bc));
+                poly[len] = (Vector3::new(p.x, p.y, cam.near), bc);
+                len += 1;
             }
         }
-        out
-    };
-    let mut res = Vec::new();
-    for k in 1..poly.len().saturating_sub(1) {
+    }
+    let mut res = [None, None];
+    for k in 1..len.saturating_sub(1) {
         let vs = [poly[0], poly[k], poly[k + 1]];
-        let xy = vs.map(|v| cam.cam_to_pixel(&v.0));
-        if xy.iter().flatten().any(|c| !c.is_finite()) {
-            continue;
-        }
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for p in &xy {
-            x0 = x0.min(p[0]);
-            x1 = x1.max(p[0]);
-            y0 = y0.min(p[1]);
-            y1 = y1.max(p[1]);
-        }
-        // Samples with centre c + ½ in [lo, hi]: indices ceil(lo − ½) ..= floor(hi − ½).
-        let span = |lo: f64, hi: f64, n: usize| {
-            let a = (lo - 0.5).ceil().max(0.0);
-            let b = ((hi - 0.5).floor() + 1.0).min(n as f64);
-            if b > a {
-                (a as usize, b as usize)
-            } else {
-                (0, 0)
-            }
-        };
-        let rows = span(y0, y1, height);
-        let cols = span(x0, x1, width);
-        if rows.1 <= rows.0 || cols.1 <= cols.0 {
-            continue;
-        }
-        res.push(ScreenTri {
-            face,
-            xy,
-            inv_z: vs.map(|v| 1.0 / v.0.z),
-            bary: vs.map(|v| v.1),
-            rows,
-            cols,
-        });
+        res[k - 1] = screen_tri(cam, face, &vs, width, height);
     }
     (res, n_in < 3)
+}
+
+/// Projects one camera-space triangle; `None` if it covers no sample centre's bounding box.
+fn screen_tri(
+    cam: &Projector,
+    face: u32,
+    vs: &[(Vector3<f64>, [f64; 2]); 3],
+    width: usize,
+    height: usize,
+) -> Option<ScreenTri> {
+    let xy = vs.map(|v| cam.cam_to_pixel(&v.0));
+    if xy.iter().flatten().any(|c| !c.is_finite()) {
+        return None;
+    }
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for p in &xy {
+        x0 = x0.min(p[0]);
+        x1 = x1.max(p[0]);
+        y0 = y0.min(p[1]);
+        y1 = y1.max(p[1]);
+    }
+    // Samples with centre c + ½ in [lo, hi]: indices ceil(lo − ½) ..= floor(hi − ½).
+    let span = |lo: f64, hi: f64, n: usize| {
+        let a = (lo - 0.5).ceil().max(0.0);
+        let b = ((hi - 0.5).floor() + 1.0).min(n as f64);
+        if b > a {
+            (a as usize, b as usize)
+        } else {
+            (0, 0)
+        }
+    };
+    let rows = span(y0, y1, height);
+    let cols = span(x0, x1, width);
+    if rows.1 <= rows.0 || cols.1 <= cols.0 {
+        return None;
+    }
+    Some(ScreenTri { face, xy, inv_z: vs.map(|v| 1.0 / v.0.z), bary: vs.map(|v| v.1), rows, cols })
 }
 
 /// Edge function: twice the signed area of (a, b, p).

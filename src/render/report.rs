@@ -17,7 +17,7 @@ pub struct PassTime {
 pub struct RenderCounters {
     /// Faces given.
     pub triangles_in: u64,
-    /// Faces entirely behind the near plane.
+    /// Faces that gave no screen triangle (behind the near plane or off-screen).
     pub triangles_culled: u64,
     /// Faces cut by the near plane.
     pub triangles_clipped: u64,
