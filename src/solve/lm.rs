@@ -27,6 +27,7 @@ use faer::prelude::*;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Side;
+use rayon::prelude::*;
 
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
 use super::highlight_term::HighlightTerm;
@@ -176,24 +177,34 @@ enum Term {
     Locks,
 }
 
-/// Accumulates Jᵀr and the lower triangle of JᵀJ from rows of up to two residual components.
-struct Assembler<'a> {
-    col_of: &'a [Option<u32>],
-    g: Vec<f64>,
+/// Rows per parallel chunk. Chunks are fixed by the row order alone, and their results are
+/// merged in chunk order, so the triplets, Jᵀr and the energies are bit-identical at any thread
+/// count (and to a serial run).
+const CHUNK: usize = 512;
+
+/// One chunk's contributions: triplets of JᵀJ's lower triangle and (column, value) terms of Jᵀr,
+/// in row order.
+#[derive(Default)]
+struct Local {
     trip: Vec<Triplet<usize, usize, f64>>,
+    g: Vec<(usize, f64)>,
     block: Vec<(usize, [f64; 2])>,
 }
 
-impl Assembler<'_> {
+impl Local {
     /// Adds one row block: residual `r` and its entries `(vertex, ∂r/∂φ_vertex)`; entries of
     /// fixed vertices are dropped.
     #[inline]
-    fn push(&mut self, entries: impl Iterator<Item = (u32, [f64; 2])>, r: [f64; 2]) {
+    fn push(
+        &mut self,
+        col_of: &[Option<u32>],
+        entries: impl Iterator<Item = (u32, [f64; 2])>,
+        r: [f64; 2],
+    ) {
         self.block.clear();
-        let col_of = self.col_of;
         self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
         for &(a, da) in &self.block {
-            self.g[a] += da[0] * r[0] + da[1] * r[1];
+            self.g.push((a, da[0] * r[0] + da[1] * r[1]));
             for &(b, db) in &self.block {
                 if a >= b {
                     self.trip.push(Triplet::new(a, b, da[0] * db[0] + da[1] * db[1]));
@@ -203,9 +214,45 @@ impl Assembler<'_> {
     }
 }
 
+/// Accumulates Jᵀr and the lower triangle of JᵀJ from rows of up to two residual components.
+struct Assembler<'a> {
+    col_of: &'a [Option<u32>],
+    g: Vec<f64>,
+    trip: Vec<Triplet<usize, usize, f64>>,
+}
+
+impl Assembler<'_> {
+    /// Assembles `row(item, push)` for every item, in parallel chunks merged in order.
+    fn rows<T: Sync>(&mut self, items: &[T], row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync) {
+        let col_of = self.col_of;
+        let locals: Vec<Local> = items
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut local = Local::default();
+                for it in chunk {
+                    row(it, &mut local, col_of);
+                }
+                local
+            })
+            .collect();
+        for local in locals {
+            self.trip.extend(local.trip);
+            for (c, v) in local.g {
+                self.g[c] += v;
+            }
+        }
+    }
+}
+
+/// Σ f(item) over `items`, in parallel chunks added in order (deterministic).
+fn chunked_sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
+    let parts: Vec<f64> = items.par_chunks(CHUNK).map(|c| c.iter().map(&f).sum::<f64>()).collect();
+    parts.iter().sum()
+}
+
 /// One block of the stacked residual: its energy, and its rows assembled into the normal
 /// equations. Rows must be pushed in an order and with entries that do not depend on φ.
-trait Block {
+trait Block: Sync {
     fn term(&self) -> Term;
     fn energy(&self, phi: &[f64]) -> f64;
     fn assemble(&self, phi: &[f64], acc: &mut Assembler);
@@ -221,19 +268,16 @@ impl Block for HighlightBlock<'_> {
         Term::Highlight
     }
     fn energy(&self, phi: &[f64]) -> f64 {
-        self.rows
-            .iter()
-            .map(|&i| {
-                let r = self.term.residual(phi, i as usize);
-                r[0] * r[0] + r[1] * r[1]
-            })
-            .sum()
+        chunked_sum(&self.rows, |&i| {
+            let r = self.term.residual(phi, i as usize);
+            r[0] * r[0] + r[1] * r[1]
+        })
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
-        for &i in &self.rows {
+        acc.rows(&self.rows, |&i, local, col_of| {
             let jac = self.term.jacobian(phi, i as usize);
-            acc.push(jac.entries.iter().copied(), jac.residual);
-        }
+            local.push(col_of, jac.entries.iter().copied(), jac.residual);
+        });
     }
 }
 
@@ -247,19 +291,16 @@ impl Block for SmoothnessBlock {
         Term::Smoothness
     }
     fn energy(&self, phi: &[f64]) -> f64 {
-        self.edges
-            .iter()
-            .map(|&(i, j, rho, w)| {
-                let r = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k).0;
-                r * r
-            })
-            .sum()
+        chunked_sum(&self.edges, |&(i, j, rho, w)| {
+            let r = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k).0;
+            r * r
+        })
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
-        for &(i, j, rho, w) in &self.edges {
+        acc.rows(&self.edges, |&(i, j, rho, w), local, col_of| {
             let (r, di, dj) = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k);
-            acc.push([(i, [di, 0.0]), (j, [dj, 0.0])].into_iter(), [r, 0.0]);
-        }
+            local.push(col_of, [(i, [di, 0.0]), (j, [dj, 0.0])].into_iter(), [r, 0.0]);
+        });
     }
 }
 
@@ -276,20 +317,17 @@ impl Block for HingeBlock<'_> {
         }
     }
     fn energy(&self, phi: &[f64]) -> f64 {
-        self.rows
-            .iter()
-            .map(|&i| {
-                let r = self.hinge.residual(phi, i as usize);
-                r * r
-            })
-            .sum()
+        chunked_sum(&self.rows, |&i| {
+            let r = self.hinge.residual(phi, i as usize);
+            r * r
+        })
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
-        let mut entries = Vec::new();
-        for &i in &self.rows {
+        acc.rows(&self.rows, |&i, local, col_of| {
+            let mut entries = Vec::with_capacity(16);
             let r = self.hinge.jacobian(phi, i as usize, &mut entries);
-            acc.push(entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
-        }
+            local.push(col_of, entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
+        });
     }
 }
 
@@ -303,19 +341,16 @@ impl Block for LockBlock {
         Term::Locks
     }
     fn energy(&self, phi: &[f64]) -> f64 {
-        self.locks
-            .iter()
-            .map(|&(i, a, s)| {
-                let r = lock_residual(phi[i as usize], a, s, self.k).0;
-                r * r
-            })
-            .sum()
+        chunked_sum(&self.locks, |&(i, a, s)| {
+            let r = lock_residual(phi[i as usize], a, s, self.k).0;
+            r * r
+        })
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
-        for &(i, a, s) in &self.locks {
+        acc.rows(&self.locks, |&(i, a, s), local, col_of| {
             let (r, d) = lock_residual(phi[i as usize], a, s, self.k);
-            acc.push(std::iter::once((i, [d, 0.0])), [r, 0.0]);
-        }
+            local.push(col_of, std::iter::once((i, [d, 0.0])), [r, 0.0]);
+        });
     }
 }
 
@@ -337,12 +372,8 @@ impl System<'_> {
     /// The lower triangle of JᵀJ as triplets (in an order that depends only on the mesh and the
     /// free set, so the pattern is fixed across iterations) and Jᵀr.
     fn normal_equations(&self, phi: &[f64]) -> (Vec<Triplet<usize, usize, f64>>, Vec<f64>) {
-        let mut acc = Assembler {
-            col_of: &self.col_of,
-            g: vec![0.0; self.free.len()],
-            trip: Vec::new(),
-            block: Vec::new(),
-        };
+        let mut acc =
+            Assembler { col_of: &self.col_of, g: vec![0.0; self.free.len()], trip: Vec::new() };
         for b in &self.blocks {
             b.assemble(phi, &mut acc);
         }
