@@ -90,6 +90,9 @@ pub struct UvFieldReport {
     pub seam_pairs: usize,
     /// UV vertices whose averaged direction vanished (the corners disagree: a singularity).
     pub vanishing_directions: usize,
+    /// The factor applied to the UV layout so one UV unit is about one scene unit on the
+    /// part (area-preserving on average): flat SVG and G-code coordinates are UV × this.
+    pub uv_scale: f64,
     /// For each UV vertex, the mesh vertex it lifts to.
     pub uv_to_vertex: Vec<u32>,
 }
@@ -189,6 +192,7 @@ pub fn field_mesh(
     // Per face: its UV vertex ids (None when skipped), for the seams.
     let mut face_uv: Vec<Option<[u32; 3]>> = vec![None; mesh.num_faces()];
     let mut acc: Vec<Vector2<f64>> = Vec::new();
+    let (mut surface_area, mut uv_area) = (0.0f64, 0.0f64);
 
     #[allow(clippy::needless_range_loop)] // f indexes the mesh, its UVs and face_uv
     for f in 0..mesh.num_faces() {
@@ -233,6 +237,8 @@ pub fn field_mesh(
             }
         }
         face_uv[f] = Some(t);
+        surface_area += 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
+        uv_area += 0.5 * area2.abs();
         tris.push(t);
         metrics.push(metric);
         jacobians.push(j);
@@ -299,6 +305,26 @@ pub fn field_mesh(
         }
     }
     report.seam_pairs = seams.len();
+    // One UV unit ≈ one scene unit on the part: a [0, 1]² layout would otherwise give a flat
+    // SVG / G-code of about a millimetre. The area-preserving scale keeps the metric exact
+    // (M' = M / s²), so spacing on the part is unchanged; UV = XY panels keep s = 1.
+    let mut scale = (surface_area / uv_area).sqrt();
+    if !(scale.is_finite() && scale > 0.0) || (scale - 1.0).abs() < 1e-6 {
+        scale = 1.0;
+    }
+    if scale != 1.0 {
+        for q in &mut uv_pos {
+            q[0] *= scale;
+            q[1] *= scale;
+        }
+        let s2 = scale * scale;
+        for m in &mut metrics {
+            m.e /= s2;
+            m.f /= s2;
+            m.g /= s2;
+        }
+    }
+    report.uv_scale = scale;
     report.uv_vertices = uv_pos.len();
     report.triangles = tris.len();
 

@@ -60,8 +60,10 @@ fn plane_constant_u_is_a_constant_uv_direction() {
             };
             assert!(err < 1e-9, "{d:?}");
         }
+        // The layout is scaled so one UV unit is one scene unit (s = 20): the metric becomes I.
+        assert!((rep.uv_scale - 20.0).abs() < 1e-9, "{}", rep.uv_scale);
         for m in fm.metric.as_ref().unwrap() {
-            assert!((m.e - 400.0).abs() < 1e-9 && m.f.abs() < 1e-9 && (m.g - 400.0).abs() < 1e-9);
+            assert!((m.e - 1.0).abs() < 1e-9 && m.f.abs() < 1e-9 && (m.g - 1.0).abs() < 1e-9);
         }
     }
 }
@@ -105,7 +107,8 @@ fn cylinder_axial_grain_runs_along_the_axis_at_the_requested_surface_spacing() {
         })
         .collect();
     s.sort_by(f64::total_cmp);
-    let mut gaps: Vec<f64> = s.windows(2).map(|w| (w[1] - w[0]) * 2.0 * PI * r).collect();
+    let mut gaps: Vec<f64> =
+        s.windows(2).map(|w| (w[1] - w[0]) / rep.uv_scale * 2.0 * PI * r).collect();
     gaps.sort_by(f64::total_cmp);
     assert!(gaps.len() >= 25, "{} strokes", s.len());
     let median = gaps[gaps.len() / 2];
@@ -151,8 +154,9 @@ fn around(p: &Vector3<f64>) -> Vector3<f64> {
 fn strokes_cross_the_seam_when_asked_and_stop_cleanly_otherwise() {
     let mesh = cylinder(10.0, 20.0, 48, 8);
     let (g, phi) = setup(&mesh, around);
-    let (fm, _) =
+    let (fm, rep) =
         field_mesh(&mesh, &g, &phi, Symmetry::Oriented, &UvFieldOptions::default()).unwrap();
+    let sc = rep.uv_scale;
     for d in vectors(&fm.directions) {
         let d = unit(*d);
         assert!((d[0] - 1.0).abs() < 1e-9, "circumferential is +U: {d:?}");
@@ -161,8 +165,9 @@ fn strokes_cross_the_seam_when_asked_and_stop_cleanly_otherwise() {
     let stop = generate(fm.clone(), &opts).unwrap();
     // Strokes on the rims (t = 0, 1) leave through the rim within a few mm: the geometry's
     // jet-refined rim normals tilt the field off the rim by µrad. The others go round once.
-    let interior =
-        |st: &grainline_toolpaths::Stroke| st.uv.iter().all(|p| p[1] > 0.02 && p[1] < 0.98);
+    let interior = |st: &grainline_toolpaths::Stroke| {
+        st.uv.iter().all(|p| p[1] > 0.02 * sc && p[1] < 0.98 * sc)
+    };
     let mut n_interior = 0;
     for st in &stop.placement.strokes {
         assert!(st.breaks.is_empty());
@@ -173,7 +178,7 @@ fn strokes_cross_the_seam_when_asked_and_stop_cleanly_otherwise() {
         n_interior += 1;
         // Ends on the two sides of the seam, s = 0 and s = 1.
         let (a, b) = (st.uv[0][0], st.uv[st.uv.len() - 1][0]);
-        assert!(a.min(b) < 1e-6 && a.max(b) > 1.0 - 1e-6, "{a} {b}");
+        assert!(a.min(b) < 1e-6 * sc && a.max(b) > (1.0 - 1e-6) * sc, "{a} {b}");
     }
     opts.placement.trace.cross_seams = true;
     let cross = generate(fm, &opts).unwrap();

@@ -71,6 +71,8 @@ pub struct ToolpathFigures {
     pub flipped_faces: usize,
     /// Seam pairs.
     pub seam_pairs: usize,
+    /// Scale from the mesh's UV layout to the flat SVG / G-code coordinates (scene units).
+    pub uv_scale: f64,
 }
 
 /// The as-brushed fidelity: the grain rebuilt from the strokes against the designed grain.
@@ -210,6 +212,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             degenerate_faces: uvr.degenerate_faces.len(),
             flipped_faces: uvr.flipped_faces,
             seam_pairs: uvr.seam_pairs,
+            uv_scale: uvr.uv_scale,
         });
     }
     let mut render_report = None;
