@@ -28,8 +28,8 @@ pub fn run(args: OptimizeArgs, quiet: bool) -> anyhow::Result<()> {
     let scene = LoadedScene::read(&args.scene)?;
     let spinner = Spinner::new(quiet);
     let mut stages = Stages::new(&spinner);
-    let prepared = prepare(&scene, &mut stages)?;
-    let optimized = optimize_stage(&scene, &prepared, &mut stages)?;
+    let prepared = prepare(&scene, &mut stages).map_err(|e| scene.wrap(e))?;
+    let optimized = optimize_stage(&scene, &prepared, &mut stages).map_err(|e| scene.wrap(e))?;
     stages.start("write");
     let file = optimized_field_file(&prepared, &optimized)?;
     grainline::output::write_json_compact_atomic(&args.out, &file)

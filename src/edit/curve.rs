@@ -398,6 +398,16 @@ pub(crate) fn apply(
     }
     report.vertices = count;
     report.critical_vertices = critical;
+    if count == 0 && critical == 0 {
+        return Err(Error::setting(
+            "radius",
+            format!(
+                "the curves come within {} of no vertex: check that they lie on the part \
+                 (UV curves: in the mesh's UV range) or increase the radius",
+                e.radius
+            ),
+        ));
+    }
     Ok(())
 }
 

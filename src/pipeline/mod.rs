@@ -149,7 +149,8 @@ pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
         return Err(Error::Scene {
             path: s.path.clone(),
             line: None,
-            message: "units: a panel from an outline is in millimetres; set `units` to \"mm\"".into(),
+            message: "units: a panel from an outline is in millimetres; set `units` to \"mm\""
+                .into(),
         });
     }
     let options = crate::panel::PanelOptions {

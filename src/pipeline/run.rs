@@ -178,14 +178,21 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     }
     let mut toolpaths = None;
     let mut brushed = None;
+    let mut gap: Option<Vec<f64>> = None;
     let mut strokes_3d: Vec<Vec<Vector3<f64>>> = Vec::new();
     if plan.trace {
         stages.start("toolpaths");
-        let section = scene.toolpaths.clone().unwrap_or_default();
+        let mut section = scene.toolpaths.clone().unwrap_or_default();
+        let want_gap = scene.render.as_ref().is_some_and(|r| r.effects.gap.is_some());
+        if want_gap {
+            let mut c = section.coverage.clone().unwrap_or_default();
+            c.keep_map = true;
+            section.coverage = Some(c);
+        }
         section.validate().map_err(|e| crate::scene::prefix("toolpaths", e))?;
         let (fm, uvr): (_, UvFieldReport) =
             field_mesh(&prepared.mesh, g, phi, symmetry, &section.uv_field)?;
-        let fm_copy = if plan.as_brushed { Some(fm.clone()) } else { None };
+        let fm_copy = if plan.as_brushed || want_gap { Some(fm.clone()) } else { None };
         let job =
             grainline_toolpaths::generate(fm, &section.job_options()).map_err(toolpath_error)?;
         strokes_3d =
@@ -200,7 +207,26 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
                 write_out(&mut outputs, &out(p), t.as_bytes())?;
             }
         }
-        if let Some(fm) = fm_copy {
+        if let (true, Some(fm), Some(map)) =
+            (want_gap, &fm_copy, job.coverage.as_ref().and_then(|c| c.map.as_ref()))
+        {
+            // The coverage gap map sampled at each mesh vertex's UV positions (the nearest
+            // pixel; the largest distance where a vertex has several UV positions).
+            let mut g = vec![0.0f64; prepared.mesh.num_vertices()];
+            for (k, q) in fm.uv.iter().enumerate() {
+                let px = ((q[0] - map.origin[0]) / map.pixel).floor();
+                let py = ((q[1] - map.origin[1]) / map.pixel).floor();
+                let (px, py) = (
+                    (px.max(0.0) as usize).min(map.width.saturating_sub(1)),
+                    (py.max(0.0) as usize).min(map.height.saturating_sub(1)),
+                );
+                let d = f64::from(map.distance[py * map.width + px]).max(0.0);
+                let v = uvr.uv_to_vertex[k] as usize;
+                g[v] = g[v].max(d);
+            }
+            gap = Some(g);
+        }
+        if let (true, Some(fm)) = (plan.as_brushed, fm_copy) {
             stages.start("as-brushed");
             let ab = as_brushed(&prepared.mesh, g, phi, symmetry, &fm, &uvr, &job.placement)?;
             brushed = Some(ab);
@@ -250,6 +276,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
                 .map(|(i, t)| (prepared.mesh.positions[i], t.expect("filtered")))
                 .collect(),
         });
+        if settings.effects.gap.is_some() {
+            input.gap = gap.as_deref();
+        }
         if settings.effects.edits.is_some() {
             input.edits = overlay.as_ref();
         }

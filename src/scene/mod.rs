@@ -167,6 +167,19 @@ impl LoadedScene {
         Ok(LoadedScene { path: path.to_path_buf(), scene, base })
     }
 
+    /// A setting error found while running (e.g. an edit whose support holds no vertex),
+    /// turned into an error that names the scene file.
+    pub fn wrap(&self, e: Error) -> Error {
+        match e {
+            Error::Setting { key, message } => Error::Scene {
+                path: self.path.clone(),
+                line: None,
+                message: format!("{key}: {message}"),
+            },
+            other => other,
+        }
+    }
+
     /// A path of the scene resolved against the scene file's directory.
     pub fn input(&self, p: &str) -> PathBuf {
         let p = Path::new(p);
