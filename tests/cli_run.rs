@@ -154,3 +154,47 @@ fn bad_sections_are_named_and_nothing_is_written() {
         assert!(!d.join("o").exists(), "nothing written after a failure");
     }
 }
+
+#[test]
+fn trace_writes_the_strokes_of_a_given_field_and_flags_override_the_scene() {
+    let d = dir("trace");
+    write_part(&d);
+    let sc = scene(&d, BEND, TOOLPATHS, "");
+    let field = d.join("f.json");
+    let o = run(&["--quiet", "optimize", sc.to_str().unwrap(), "--out", field.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (svg, rep) = (d.join("given.svg"), d.join("trace.json"));
+    let o = run(&[
+        "--quiet",
+        "trace",
+        sc.to_str().unwrap(),
+        "--field",
+        field.to_str().unwrap(),
+        "--svg",
+        svg.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    let r = report(&rep);
+    // The field came from the file: no edits and no solve ran.
+    assert_eq!(stage_names(&r), ["load", "field", "read field", "toolpaths", "write toolpaths"]);
+    // The same strokes as the scene's own solve (the FIELD.json holds that solve's grain).
+    let o = run(&[
+        "--quiet",
+        "trace",
+        sc.to_str().unwrap(),
+        "--svg",
+        d.join("own.svg").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let a = std::fs::read_to_string(&svg).unwrap();
+    let b = std::fs::read_to_string(d.join("own.svg")).unwrap();
+    assert!(a == b, "the FIELD.json round trip changed the strokes");
+    // Nothing to write is an error.
+    let bare = scene(&d, "[]", "", "");
+    let o = run(&["--quiet", "trace", bare.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nothing to write"));
+}

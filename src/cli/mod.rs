@@ -8,6 +8,7 @@ mod panel;
 mod progress;
 mod run;
 mod schema;
+mod trace;
 
 use clap::{Parser, Subcommand};
 
@@ -37,6 +38,8 @@ enum Command {
     Optimize(optimize::OptimizeArgs),
     /// The whole scene: edits, solve, strokes, SVG and G-code, preview — only what it asks for.
     Run(run::RunArgs),
+    /// The scene's strokes alone: SVG, G-code and strokes JSON (optionally from a FIELD.json).
+    Trace(trace::TraceArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
     /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
@@ -49,6 +52,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Inspect(a) => inspect::run(a, cli.quiet),
         Command::Field(a) => field::run(a, cli.quiet),
         Command::Schema(a) => schema::run(a),
+        Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Run(a) => run::run(a, cli.quiet),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
         Command::Panel(a) => panel::run(a, cli.quiet),

@@ -31,8 +31,9 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
         std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
     }
     let spinner = Spinner::new(quiet);
-    let report = run_scene(&scene, &RunOptions { out_dir: args.out_dir.clone() }, &spinner)
-        .map_err(|e| scene.wrap(e))?;
+    let report =
+        run_scene(&scene, &RunOptions { out_dir: args.out_dir.clone(), field: None }, &spinner)
+            .map_err(|e| scene.wrap(e))?;
     drop(spinner);
     let report_path = args.report.clone().unwrap_or_else(|| {
         args.out_dir.clone().unwrap_or_else(|| scene.base.clone()).join("run-report.json")

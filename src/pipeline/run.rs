@@ -21,6 +21,9 @@ pub struct RunOptions {
     /// Every relative output path of the scene lands under this directory (default: the scene
     /// file's directory).
     pub out_dir: Option<PathBuf>,
+    /// Take the grain from this FIELD.json (the output of `grainline optimize` or `grainline
+    /// field` on the same mesh) instead of computing it: no edits, no solve.
+    pub field: Option<PathBuf>,
 }
 
 /// Which stages a scene needs.
@@ -137,7 +140,10 @@ fn write_out(outs: &mut Vec<String>, path: &Path, bytes: &[u8]) -> Result<()> {
 pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Result<RunReport> {
     let start = Instant::now();
     let scene = &s.scene;
-    let plan = StagePlan::of(scene);
+    let mut plan = StagePlan::of(scene);
+    if options.field.is_some() {
+        plan.solve = false;
+    }
     let out = |p: &str| output_path(s, options.out_dir.as_deref(), p);
     let mut stages = Stages::new(observer);
     let mut outputs = Vec::new();
@@ -147,10 +153,30 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     // The field after edits and the solve, or the initial one.
     let optimized =
         if plan.solve { Some(optimize_stage(s, &prepared, &mut stages)?) } else { None };
+    let given_phi = match &options.field {
+        Some(path) => {
+            stages.start("read field");
+            let f = crate::field::FieldFile::read(path)?;
+            if f.u.len() != prepared.mesh.num_vertices() {
+                return Err(crate::Error::Parse {
+                    path: path.clone(),
+                    line: 0,
+                    message: format!(
+                        "has {} vertices, the scene's mesh has {}",
+                        f.u.len(),
+                        prepared.mesh.num_vertices()
+                    ),
+                });
+            }
+            let u: Vec<Vector3<f64>> = f.u.iter().map(|v| Vector3::from(*v)).collect();
+            Some(g.angles_of(&u))
+        }
+        None => None,
+    };
     let (phi, h, ell, critical, light) = match &optimized {
         Some(o) => (&o.phi, &o.h, &o.highlight.ell, &o.critical, o.lighting.light),
         None => (
-            &prepared.field.phi,
+            given_phi.as_ref().unwrap_or(&prepared.field.phi),
             &prepared.field.h,
             &prepared.field.highlight.ell,
             &prepared.field.critical,

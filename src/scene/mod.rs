@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 pub use sections::{
-    FieldSection, InitKind, MeshSection, OutlineSection, SymmetryKind, ViewModel, ViewSection,
+    FieldSection, InitKind, MeshFull, MeshSection, OutlineSection, SymmetryKind, ViewModel,
+    ViewSection,
 };
 
 use crate::{Error, Result};

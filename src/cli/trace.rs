@@ -1,0 +1,81 @@
+//! `grainline trace`: the scene's toolpath part alone — strokes, SVG, G-code, strokes JSON.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+use grainline::pipeline::run::{run as run_scene, RunOptions};
+use grainline::scene::LoadedScene;
+
+use super::progress::Spinner;
+
+/// Arguments of `grainline trace`.
+#[derive(Debug, Args)]
+pub struct TraceArgs {
+    /// The scene file (docs/scene.md); its `toolpaths` section sets the strokes and exports.
+    scene: PathBuf,
+    /// The grain from `grainline optimize` or `grainline field` on the same mesh (default:
+    /// the scene's field, after its edits and solve).
+    #[arg(long, value_name = "FIELD.json")]
+    field: Option<PathBuf>,
+    /// Write the SVG here (overrides the scene).
+    #[arg(long, value_name = "PATH")]
+    svg: Option<PathBuf>,
+    /// Write the G-code here (overrides the scene).
+    #[arg(long, value_name = "PATH")]
+    gcode: Option<PathBuf>,
+    /// Write the strokes JSON here (overrides the scene).
+    #[arg(long, value_name = "PATH")]
+    strokes: Option<PathBuf>,
+    /// The report: stroke count, lengths, coverage, stop reasons, time per phase.
+    #[arg(long, value_name = "PATH")]
+    report: Option<PathBuf>,
+}
+
+fn absolute(p: &Path) -> anyhow::Result<String> {
+    let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) };
+    Ok(p.display().to_string())
+}
+
+/// Runs `grainline trace`.
+pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
+    let mut scene = LoadedScene::read(&args.scene)?;
+    scene.scene.render = None;
+    let section = scene.scene.toolpaths.get_or_insert_with(Default::default);
+    if let Some(p) = &args.svg {
+        section.svg = Some(absolute(p)?);
+    }
+    if let Some(p) = &args.gcode {
+        section.gcode = Some(absolute(p)?);
+    }
+    if let Some(p) = &args.strokes {
+        section.strokes_json = Some(absolute(p)?);
+    }
+    if section.svg.is_none() && section.gcode.is_none() && section.strokes_json.is_none() {
+        anyhow::bail!(
+            "{}: nothing to write: give --svg, --gcode or --strokes, or set toolpaths.svg / \
+             toolpaths.gcode / toolpaths.strokes_json in the scene",
+            args.scene.display()
+        );
+    }
+    let spinner = Spinner::new(quiet);
+    let options = RunOptions { out_dir: None, field: args.field.clone() };
+    let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
+    drop(spinner);
+    if let Some(r) = &args.report {
+        grainline::output::write_json_atomic(r, &report)
+            .with_context(|| format!("writing {}", r.display()))?;
+    }
+    if !quiet {
+        for o in &report.outputs {
+            eprintln!("wrote {o}");
+        }
+        if let Some(t) = &report.toolpaths {
+            eprintln!(
+                "{} strokes, {:.0} mm brushed, {:.0} mm travel",
+                t.job.stroke_count, t.job.cut_length_mm, t.job.travel_length_mm
+            );
+        }
+    }
+    Ok(())
+}
