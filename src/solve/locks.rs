@@ -27,7 +27,8 @@ use crate::{Error, Result};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LockRegion {
-    /// Centre of the ball (scene units).
+    /// Centre of the ball (scene units); `centre` is accepted too, as in the edits.
+    #[serde(alias = "centre")]
     pub center: [f64; 3],
     /// Radius (> 0, scene units).
     pub radius: f64,
