@@ -55,6 +55,7 @@ pub fn run(args: OptimizeArgs, quiet: bool) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", r.display()))?;
     }
     drop(spinner);
+    super::progress::warn_about(&optimized.report);
     if !quiet {
         let s = &optimized.report.solver;
         eprintln!(

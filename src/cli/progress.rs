@@ -50,3 +50,32 @@ impl grainline::pipeline::Observer for Stages {
         Stages::stage(self, name);
     }
 }
+
+/// Warnings a designer should see even when the run succeeds: a light tool that could not reach
+/// the wanted ℓ, a solve that made no progress.
+pub fn warn_about(report: &grainline::pipeline::optimize::OptimizeStageReport) {
+    for e in &report.edits {
+        if let Some(err) = e.angle_error_deg.filter(|&a| a > 5.0) {
+            eprintln!(
+                "grainline: warning: edit [{}] ({}): the best light reaches the wanted highlight \
+                 direction only within {err:.1}°",
+                e.index, e.tool
+            );
+        }
+    }
+    let s = &report.solver;
+    if s.iterations.is_empty()
+        && matches!(
+            s.stop,
+            grainline::solve::StopReason::NoProgress | grainline::solve::StopReason::Gradient
+        )
+        && s.initial_energy.highlight > 1e-12
+    {
+        eprintln!(
+            "grainline: warning: the solver made no step ({:?}): where the grain is constant \
+             on a flat region ℓ = 0 and the highlight energy has no gradient; start from a \
+             varying field (e.g. a stencil) there",
+            s.stop
+        );
+    }
+}

@@ -35,6 +35,9 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
         run_scene(&scene, &RunOptions { out_dir: args.out_dir.clone(), field: None }, &spinner)
             .map_err(|e| scene.wrap(e))?;
     drop(spinner);
+    if let Some(o) = &report.optimize {
+        super::progress::warn_about(o);
+    }
     let report_path = args.report.clone().unwrap_or_else(|| {
         args.out_dir.clone().unwrap_or_else(|| scene.base.clone()).join("run-report.json")
     });
