@@ -31,6 +31,8 @@
 //! # Ok::<(), grainline::Error>(())
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod edit;
 pub mod error;
 pub mod field;

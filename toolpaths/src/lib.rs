@@ -26,6 +26,8 @@
 //! assert!(out.gcode.unwrap().contains("G21 G90 G17"));
 //! ```
 
+#![warn(missing_docs)]
+
 mod coverage;
 mod error;
 mod field;
