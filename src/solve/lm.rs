@@ -22,11 +22,14 @@
 
 use std::time::Instant;
 
-use faer::linalg::solvers::Solve;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::prelude::*;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Side;
+use faer::{Conj, Par, Side};
 use rayon::prelude::*;
 
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
@@ -524,12 +527,8 @@ pub fn solve(
         let assembly = t0.elapsed().as_secs_f64();
         loop {
             let t1 = Instant::now();
-            let symbolic = pat.symbolic.clone();
-            let a = pat.damped(lambda, &dscale);
-            let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower)
-                .map_err(|e| numerical(format!("{e:?}")))?;
             let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
-            llt.solve_in_place(rhs.as_mut());
+            pat.solve_damped(lambda, &dscale, rhs.as_mut()).map_err(numerical)?;
             let delta: Vec<f64> = (0..n).map(|c| rhs[(c, 0)]).collect();
             let mut trial = phi.clone();
             for (c, &v) in sys.free.iter().enumerate() {
@@ -591,13 +590,17 @@ pub fn solve(
 
 /// The lower triangle of JᵀJ in a sparsity pattern fixed for the whole solve: the matrix and its
 /// symbolic Cholesky analysis are built once, and each iteration refills the values in place
-/// (each triplet's value slot is found once).
+/// (each triplet's value slot is found once). The factor's values and the factorization's
+/// workspace are allocated once too; each damping try refactorizes in place, sequentially (so
+/// the result does not depend on the thread count).
 struct FixedPattern {
     matrix: SparseColMat<usize, f64>,
     slot: Vec<usize>,
     diag: Vec<usize>,
     base: Vec<f64>,
-    symbolic: SymbolicLlt<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    l_values: Vec<f64>,
+    workspace: MemBuffer,
 }
 
 impl FixedPattern {
@@ -613,10 +616,23 @@ impl FixedPattern {
         };
         let slot = trip.iter().map(|t| find(t.row, t.col)).collect();
         let diag = (0..n).map(|c| find(c, c)).collect();
-        let symbolic =
-            SymbolicLlt::try_new(matrix.symbolic(), Side::Lower).map_err(|e| format!("{e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(
+            matrix.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| format!("{e:?}"))?;
         let base = vec![0.0; matrix.val().len()];
-        Ok(FixedPattern { matrix, slot, diag, base, symbolic })
+        let l_values = vec![0.0; symbolic.len_val()];
+
+        let workspace = MemBuffer::try_new(
+            symbolic
+                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+                .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
+        )
+        .map_err(|e| format!("{e:?}"))?;
+        Ok(FixedPattern { matrix, slot, diag, base, symbolic, l_values, workspace })
     }
 
     /// Refills JᵀJ from triplets in the same order as the ones the pattern was built from.
@@ -633,13 +649,33 @@ impl FixedPattern {
         self.diag.iter().map(|&d| self.base[d]).collect()
     }
 
-    /// JᵀJ + λ diag(scale).
-    fn damped(&mut self, lambda: f64, scale: &[f64]) -> &SparseColMat<usize, f64> {
+    /// Solves (JᵀJ + λ diag(scale)) x = rhs in place: refills the damped matrix and its
+    /// Cholesky factor (symbolic analysis reused).
+    fn solve_damped(
+        &mut self,
+        lambda: f64,
+        scale: &[f64],
+        rhs: MatMut<'_, f64>,
+    ) -> std::result::Result<(), String> {
         let vals = self.matrix.val_mut();
         vals.copy_from_slice(&self.base);
         for (c, &d) in self.diag.iter().enumerate() {
             vals[d] += lambda * scale[c];
         }
-        &self.matrix
+        let stack = MemStack::new(&mut self.workspace);
+        let llt = self
+            .symbolic
+            .factorize_numeric_llt(
+                &mut self.l_values,
+                self.matrix.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            )
+            .map_err(|e| format!("{e:?}"))?;
+        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.workspace));
+        Ok(())
     }
 }
