@@ -371,6 +371,9 @@ impl Block for LockBlock {
     }
 }
 
+/// JᵀJ's lower-triangle product values, their positions (when recorded) and Jᵀr.
+type NormalEquations = (Vec<f64>, Option<Vec<(u32, u32)>>, Vec<f64>);
+
 struct System<'a> {
     col_of: Vec<Option<u32>>,
     free: Vec<u32>,
@@ -389,12 +392,7 @@ impl System<'_> {
     /// The lower triangle of JᵀJ as a list of product values (in an order that depends only on
     /// the mesh and the free set, so the pattern is fixed across iterations), their (row,
     /// column) positions if `record`, and Jᵀr. `capacity` pre-sizes the value list.
-    fn normal_equations(
-        &self,
-        phi: &[f64],
-        record: bool,
-        capacity: usize,
-    ) -> (Vec<f64>, Option<Vec<(u32, u32)>>, Vec<f64>) {
+    fn normal_equations(&self, phi: &[f64], record: bool, capacity: usize) -> NormalEquations {
         let mut acc = Assembler {
             col_of: &self.col_of,
             g: vec![0.0; self.free.len()],
