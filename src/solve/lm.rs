@@ -22,11 +22,14 @@
 
 use std::time::Instant;
 
-use faer::linalg::solvers::Solve;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::prelude::*;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Side;
+use faer::{Conj, Par, Side};
 use rayon::prelude::*;
 
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
@@ -182,11 +185,13 @@ enum Term {
 /// count (and to a serial run).
 const CHUNK: usize = 512;
 
-/// One chunk's contributions: triplets of JᵀJ's lower triangle and (column, value) terms of Jᵀr,
-/// in row order.
+/// One chunk's contributions: the values of JᵀJ's lower-triangle products and (column, value)
+/// terms of Jᵀr, in row order; the products' (row, column) positions only when the pattern is
+/// being recorded (first iteration), since they do not change.
 #[derive(Default)]
 struct Local {
-    trip: Vec<Triplet<usize, usize, f64>>,
+    vals: Vec<f64>,
+    idx: Option<Vec<(u32, u32)>>,
     g: Vec<(usize, f64)>,
     block: Vec<(usize, [f64; 2])>,
 }
@@ -207,7 +212,10 @@ impl Local {
             self.g.push((a, da[0] * r[0] + da[1] * r[1]));
             for &(b, db) in &self.block {
                 if a >= b {
-                    self.trip.push(Triplet::new(a, b, da[0] * db[0] + da[1] * db[1]));
+                    self.vals.push(da[0] * db[0] + da[1] * db[1]);
+                    if let Some(idx) = &mut self.idx {
+                        idx.push((a as u32, b as u32));
+                    }
                 }
             }
         }
@@ -218,17 +226,23 @@ impl Local {
 struct Assembler<'a> {
     col_of: &'a [Option<u32>],
     g: Vec<f64>,
-    trip: Vec<Triplet<usize, usize, f64>>,
+    vals: Vec<f64>,
+    idx: Option<Vec<(u32, u32)>>,
 }
 
 impl Assembler<'_> {
     /// Assembles `row(item, push)` for every item, in parallel chunks merged in order.
     fn rows<T: Sync>(&mut self, items: &[T], row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync) {
         let col_of = self.col_of;
+        let record = self.idx.is_some();
         let locals: Vec<Local> = items
             .par_chunks(CHUNK)
             .map(|chunk| {
-                let mut local = Local::default();
+                let mut local = Local {
+                    vals: Vec::with_capacity(64 * chunk.len()),
+                    idx: record.then(|| Vec::with_capacity(64 * chunk.len())),
+                    ..Local::default()
+                };
                 for it in chunk {
                     row(it, &mut local, col_of);
                 }
@@ -236,7 +250,10 @@ impl Assembler<'_> {
             })
             .collect();
         for local in locals {
-            self.trip.extend(local.trip);
+            self.vals.extend_from_slice(&local.vals);
+            if let (Some(all), Some(idx)) = (&mut self.idx, &local.idx) {
+                all.extend_from_slice(idx);
+            }
             for (c, v) in local.g {
                 self.g[c] += v;
             }
@@ -354,6 +371,9 @@ impl Block for LockBlock {
     }
 }
 
+/// JᵀJ's lower-triangle product values, their positions (when recorded) and Jᵀr.
+type NormalEquations = (Vec<f64>, Option<Vec<(u32, u32)>>, Vec<f64>);
+
 struct System<'a> {
     col_of: Vec<Option<u32>>,
     free: Vec<u32>,
@@ -369,15 +389,20 @@ impl System<'_> {
         e
     }
 
-    /// The lower triangle of JᵀJ as triplets (in an order that depends only on the mesh and the
-    /// free set, so the pattern is fixed across iterations) and Jᵀr.
-    fn normal_equations(&self, phi: &[f64]) -> (Vec<Triplet<usize, usize, f64>>, Vec<f64>) {
-        let mut acc =
-            Assembler { col_of: &self.col_of, g: vec![0.0; self.free.len()], trip: Vec::new() };
+    /// The lower triangle of JᵀJ as a list of product values (in an order that depends only on
+    /// the mesh and the free set, so the pattern is fixed across iterations), their (row,
+    /// column) positions if `record`, and Jᵀr. `capacity` pre-sizes the value list.
+    fn normal_equations(&self, phi: &[f64], record: bool, capacity: usize) -> NormalEquations {
+        let mut acc = Assembler {
+            col_of: &self.col_of,
+            g: vec![0.0; self.free.len()],
+            vals: Vec::with_capacity(capacity),
+            idx: record.then(Vec::new),
+        };
         for b in &self.blocks {
             b.assemble(phi, &mut acc);
         }
-        (acc.trip, acc.g)
+        (acc.vals, acc.idx, acc.g)
     }
 }
 
@@ -507,29 +532,27 @@ pub fn solve(
     let mut stop = StopReason::IterationCap;
     'outer: for _ in 0..options.max_iterations {
         let t0 = Instant::now();
-        let (trip, grad) = sys.normal_equations(&phi);
+        let capacity = pattern.as_ref().map_or(0, |p| p.slot.len());
+        let (vals, idx, grad) = sys.normal_equations(&phi, pattern.is_none(), capacity);
         let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         if gmax.is_nan() || gmax <= options.gradient_tolerance {
             stop = StopReason::Gradient;
             break;
         }
         if pattern.is_none() {
-            pattern = Some(FixedPattern::new(n, &trip).map_err(numerical)?);
+            let idx = idx.expect("recorded when there is no pattern");
+            pattern = Some(FixedPattern::new(n, &idx).map_err(numerical)?);
         }
         let pat = pattern.as_mut().expect("just built");
-        pat.fill(&trip);
+        pat.fill(&vals);
         let diag = pat.diagonal();
         let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
         let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
         let assembly = t0.elapsed().as_secs_f64();
         loop {
             let t1 = Instant::now();
-            let symbolic = pat.symbolic.clone();
-            let a = pat.damped(lambda, &dscale);
-            let llt = Llt::try_new_with_symbolic(symbolic, a.as_ref(), Side::Lower)
-                .map_err(|e| numerical(format!("{e:?}")))?;
             let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
-            llt.solve_in_place(rhs.as_mut());
+            pat.solve_damped(lambda, &dscale, rhs.as_mut()).map_err(numerical)?;
             let delta: Vec<f64> = (0..n).map(|c| rhs[(c, 0)]).collect();
             let mut trial = phi.clone();
             for (c, &v) in sys.free.iter().enumerate() {
@@ -591,18 +614,23 @@ pub fn solve(
 
 /// The lower triangle of JᵀJ in a sparsity pattern fixed for the whole solve: the matrix and its
 /// symbolic Cholesky analysis are built once, and each iteration refills the values in place
-/// (each triplet's value slot is found once).
+/// (each triplet's value slot is found once). The factor's values and the factorization's
+/// workspace are allocated once too; each damping try refactorizes in place, sequentially (so
+/// the result does not depend on the thread count).
 struct FixedPattern {
     matrix: SparseColMat<usize, f64>,
     slot: Vec<usize>,
     diag: Vec<usize>,
     base: Vec<f64>,
-    symbolic: SymbolicLlt<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    l_values: Vec<f64>,
+    workspace: MemBuffer,
 }
 
 impl FixedPattern {
-    fn new(n: usize, trip: &[Triplet<usize, usize, f64>]) -> std::result::Result<Self, String> {
-        let mut all = trip.to_vec();
+    fn new(n: usize, idx: &[(u32, u32)]) -> std::result::Result<Self, String> {
+        let mut all: Vec<Triplet<usize, usize, f64>> =
+            idx.iter().map(|&(r, c)| Triplet::new(r as usize, c as usize, 0.0)).collect();
         all.extend((0..n).map(|c| Triplet::new(c, c, 0.0)));
         let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &all)
             .map_err(|e| format!("{e:?}"))?;
@@ -611,20 +639,34 @@ impl FixedPattern {
             let (start, end) = (sym.col_ptr()[c], sym.col_ptr()[c + 1]);
             start + sym.row_idx()[start..end].binary_search(&r).expect("entry in the pattern")
         };
-        let slot = trip.iter().map(|t| find(t.row, t.col)).collect();
+        let slot = idx.iter().map(|&(r, c)| find(r as usize, c as usize)).collect();
         let diag = (0..n).map(|c| find(c, c)).collect();
-        let symbolic =
-            SymbolicLlt::try_new(matrix.symbolic(), Side::Lower).map_err(|e| format!("{e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(
+            matrix.symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| format!("{e:?}"))?;
         let base = vec![0.0; matrix.val().len()];
-        Ok(FixedPattern { matrix, slot, diag, base, symbolic })
+        let l_values = vec![0.0; symbolic.len_val()];
+
+        let workspace = MemBuffer::try_new(
+            symbolic
+                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
+                .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
+        )
+        .map_err(|e| format!("{e:?}"))?;
+        Ok(FixedPattern { matrix, slot, diag, base, symbolic, l_values, workspace })
     }
 
-    /// Refills JᵀJ from triplets in the same order as the ones the pattern was built from.
-    fn fill(&mut self, trip: &[Triplet<usize, usize, f64>]) {
-        debug_assert_eq!(trip.len(), self.slot.len());
+    /// Refills JᵀJ from product values in the same order as the positions the pattern was built
+    /// from (summed in that fixed order, so deterministic).
+    fn fill(&mut self, vals: &[f64]) {
+        debug_assert_eq!(vals.len(), self.slot.len());
         self.base.iter_mut().for_each(|v| *v = 0.0);
-        for (t, &s) in trip.iter().zip(&self.slot) {
-            self.base[s] += t.val;
+        for (&v, &s) in vals.iter().zip(&self.slot) {
+            self.base[s] += v;
         }
     }
 
@@ -633,13 +675,33 @@ impl FixedPattern {
         self.diag.iter().map(|&d| self.base[d]).collect()
     }
 
-    /// JᵀJ + λ diag(scale).
-    fn damped(&mut self, lambda: f64, scale: &[f64]) -> &SparseColMat<usize, f64> {
+    /// Solves (JᵀJ + λ diag(scale)) x = rhs in place: refills the damped matrix and its
+    /// Cholesky factor (symbolic analysis reused).
+    fn solve_damped(
+        &mut self,
+        lambda: f64,
+        scale: &[f64],
+        rhs: MatMut<'_, f64>,
+    ) -> std::result::Result<(), String> {
         let vals = self.matrix.val_mut();
         vals.copy_from_slice(&self.base);
         for (c, &d) in self.diag.iter().enumerate() {
             vals[d] += lambda * scale[c];
         }
-        &self.matrix
+        let stack = MemStack::new(&mut self.workspace);
+        let llt = self
+            .symbolic
+            .factorize_numeric_llt(
+                &mut self.l_values,
+                self.matrix.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            )
+            .map_err(|e| format!("{e:?}"))?;
+        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.workspace));
+        Ok(())
     }
 }
