@@ -124,14 +124,28 @@ pub(crate) fn downsample<const N: usize>(
     out
 }
 
-/// Encodes opaque 8-bit sRGB pixels as PNG bytes with tiny-skia.
+/// Encodes opaque 8-bit sRGB pixels as an RGB PNG with the `png` crate's fast setting
+/// (fdeflate, fixed filter): deterministic, faster than tiny-skia's default level (which also
+/// copies to premultiplied RGBA), for a somewhat larger file.
 pub(crate) fn encode_png(rgb: &[[u8; 3]], w: usize, h: usize) -> Result<Vec<u8>> {
-    let mut pm = tiny_skia::Pixmap::new(w as u32, h as u32)
-        .ok_or_else(|| Error::setting("width", format!("image {w} × {h} cannot be allocated")))?;
-    for (px, c) in pm.data_mut().chunks_exact_mut(4).zip(rgb) {
-        px.copy_from_slice(&[c[0], c[1], c[2], 255]);
+    let err = |e: png::EncodingError| Error::Numerical {
+        stage: "PNG encoding",
+        message: e.to_string(),
+    };
+    let (Ok(pw), Ok(ph)) = (u32::try_from(w), u32::try_from(h)) else {
+        return Err(Error::setting("width", format!("image {w} × {h} cannot be encoded")));
+    };
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, pw, ph);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
+        let mut writer = enc.write_header().map_err(err)?;
+        writer.write_image_data(rgb.as_flattened()).map_err(err)?;
+        writer.finish().map_err(err)?;
     }
-    pm.encode_png().map_err(|e| Error::Numerical { stage: "PNG encoding", message: e.to_string() })
+    Ok(out)
 }
 
 /// A little-endian colour PFM of linear radiance (rows bottom to top, as the format says).
