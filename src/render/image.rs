@@ -128,10 +128,8 @@ pub(crate) fn downsample<const N: usize>(
 /// (fdeflate, fixed filter): deterministic, faster than tiny-skia's default level (which also
 /// copies to premultiplied RGBA), for a somewhat larger file.
 pub(crate) fn encode_png(rgb: &[[u8; 3]], w: usize, h: usize) -> Result<Vec<u8>> {
-    let err = |e: png::EncodingError| Error::Numerical {
-        stage: "PNG encoding",
-        message: e.to_string(),
-    };
+    let err =
+        |e: png::EncodingError| Error::Numerical { stage: "PNG encoding", message: e.to_string() };
     let (Ok(pw), Ok(ph)) = (u32::try_from(w), u32::try_from(h)) else {
         return Err(Error::setting("width", format!("image {w} × {h} cannot be encoded")));
     };

@@ -171,6 +171,9 @@ pub struct RenderOutput {
 /// Radiance and overlay layer of one half of the image, per sample.
 type Half = (Vec<[f32; 3]>, Vec<[f32; 4]>);
 
+/// A [`Half`] resolved to pixels: borrowed at supersample 1, box-filtered otherwise.
+type HalfRef<'a> = (std::borrow::Cow<'a, [[f32; 3]]>, std::borrow::Cow<'a, [[f32; 4]]>);
+
 /// Times passes into the report.
 struct Timer<'r> {
     report: &'r mut RenderReport,
@@ -433,7 +436,7 @@ pub fn render(
                     .collect::<Vec<_>>(),
             )
         });
-        let resolved: Vec<(std::borrow::Cow<[[f32; 3]]>, std::borrow::Cow<[[f32; 4]]>)> = halves
+        let resolved: Vec<HalfRef> = halves
             .iter()
             .map(|(rad, layer)| {
                 if s == 1 {
