@@ -102,6 +102,11 @@ fn timed(
         let passes: Vec<String> =
             out.report.passes.iter().map(|p| format!("{} {:.0}", p.name, p.ms)).collect();
         println!("    last run passes (ms): {}", passes.join(", "));
+        let c = &out.report.counters;
+        println!(
+            "    triangles in {}, culled {}, screen {}",
+            c.triangles_in, c.triangles_culled, c.screen_triangles
+        );
     }
 }
 

@@ -171,6 +171,9 @@ pub struct RenderOutput {
 /// Radiance and overlay layer of one half of the image, per sample.
 type Half = (Vec<[f32; 3]>, Vec<[f32; 4]>);
 
+/// A [`Half`] resolved to pixels: borrowed at supersample 1, box-filtered otherwise.
+type HalfRef<'a> = (std::borrow::Cow<'a, [[f32; 3]]>, std::borrow::Cow<'a, [[f32; 4]]>);
+
 /// Times passes into the report.
 struct Timer<'r> {
     report: &'r mut RenderReport,
@@ -418,33 +421,67 @@ pub fn render(
         }
     }
 
-    // Resolve: box filter, tone map, LIC modulation, overlays, background.
+    // Resolve: box filter, tone map, LIC modulation, overlays, background. At supersample 1
+    // the buffers are used as they are (no copies); a covered pixel without overlay or LIC is
+    // encoded through the exact threshold table.
     let out_w = w * halves.len();
-    let cover: Vec<[f32; 1]> =
-        vis.samples.iter().map(|x| [f32::from(u8::from(x.face != raster::EMPTY))]).collect();
+    let want_linear = settings.linear.is_some();
     let (rgb8, linear_px) = timer.run("resolve", || {
-        let coverage = image::downsample(&cover, w, h, s);
-        let resolved: Vec<Half> = halves
+        let boxed = |v: &[[f32; 1]]| image::downsample(v, w, h, s);
+        let coverage: Option<Vec<[f32; 1]>> = (s > 1).then(|| {
+            boxed(
+                &vis.samples
+                    .iter()
+                    .map(|x| [f32::from(u8::from(x.face != raster::EMPTY))])
+                    .collect::<Vec<_>>(),
+            )
+        });
+        let resolved: Vec<HalfRef> = halves
             .iter()
             .map(|(rad, layer)| {
-                (image::downsample(rad, w, h, s), image::downsample(layer, w, h, s))
+                if s == 1 {
+                    (rad[..].into(), layer[..].into())
+                } else {
+                    (
+                        image::downsample(rad, w, h, s).into(),
+                        image::downsample(layer, w, h, s).into(),
+                    )
+                }
             })
             .collect();
+        let table = image::Srgb8Table::new(settings.tone_map, settings.exposure);
         let mut rgb8 = vec![[0u8; 3]; out_w * h];
-        let mut linear_px = vec![[0.0f32; 3]; out_w * h];
-        rgb8.par_chunks_mut(out_w).zip(linear_px.par_chunks_mut(out_w)).enumerate().for_each(
+        let mut linear_px = vec![[0.0f32; 3]; if want_linear { out_w * h } else { 0 }];
+        let lin_row = if want_linear { out_w } else { 1 };
+        let mut lin_chunks: Vec<&mut [[f32; 3]]> = if want_linear {
+            linear_px.chunks_mut(lin_row).collect()
+        } else {
+            (0..h).map(|_| &mut [][..]).collect()
+        };
+        rgb8.par_chunks_mut(out_w).zip(lin_chunks.par_iter_mut()).enumerate().for_each(
             |(y, (row8, rowl))| {
                 for (hi, (rad, layer)) in resolved.iter().enumerate() {
                     for x in 0..w {
                         let k = y * w + x;
                         let o = hi * w + x;
-                        rowl[o] = rad[k];
+                        if want_linear {
+                            rowl[o] = rad[k];
+                        }
                         let lic = lic_values.as_ref().filter(|_| hi == 0).map(|v| v[k][0]);
-                        row8[o] = resolve_pixel(rad[k], layer[k], coverage[k][0], lic, settings);
+                        let cov = match &coverage {
+                            Some(c) => c[k][0],
+                            None => f32::from(u8::from(vis.samples[k].face != raster::EMPTY)),
+                        };
+                        row8[o] = if cov == 1.0 && lic.is_none() && layer[k] == [0.0; 4] {
+                            rad[k].map(|v| table.encode(v))
+                        } else {
+                            resolve_pixel(rad[k], layer[k], cov, lic, settings)
+                        };
                     }
                 }
             },
         );
+        drop(lin_chunks);
         (rgb8, linear_px)
     });
 

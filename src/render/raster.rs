@@ -68,19 +68,22 @@ pub(crate) fn rasterize(
     height: usize,
 ) -> (VisBuffer, RasterStats) {
     let cam_pos: Vec<Vector3<f64>> = positions.par_iter().map(|p| cam.camera_coords(p)).collect();
+    let clipped = faces
+        .par_iter()
+        .filter(|tri| tri.iter().any(|&i| cam_pos[i as usize].z <= cam.near))
+        .count();
+    // Back faces are skipped only when they can never be seen (see `closed_outside`).
+    let cull = clipped == 0 && closed_outside(positions, faces, &cam.eye);
     // Screen triangles in face order (rayon's collect keeps the order), without a per-face
     // slot for the faces that give none.
     let tris: Vec<ScreenTri> = faces
         .par_iter()
         .enumerate()
+        .filter(|(_, tri)| !(cull && faces_away(positions, tri, &cam.eye)))
         .flat_map_iter(|(f, tri)| {
             setup(cam, &cam_pos, f as u32, tri, width, height).0.into_iter().flatten()
         })
         .collect();
-    let clipped = faces
-        .par_iter()
-        .filter(|tri| tri.iter().any(|&i| cam_pos[i as usize].z <= cam.near))
-        .count();
     let mut stats =
         RasterStats { triangles_in: faces.len(), triangles_clipped: clipped, ..Default::default() };
     let nbands = height.div_ceil(BAND);
@@ -108,6 +111,103 @@ pub(crate) fn rasterize(
         },
     );
     (VisBuffer { width, height, samples }, stats)
+}
+
+/// Whether the face's outward side (counter-clockwise corners) faces away from the eye.
+#[inline]
+fn faces_away(positions: &[Vector3<f64>], tri: &[u32; 3], eye: &Vector3<f64>) -> bool {
+    let [a, b, c] = tri.map(|i| positions[i as usize]);
+    (b - a).cross(&(c - a)).dot(&(a - eye)) > 0.0
+}
+
+/// Whether every back face is hidden, so skipping them leaves the visibility buffer unchanged:
+/// the mesh is closed and consistently oriented (every directed edge appears once and its
+/// reverse once), each edge-connected component has positive signed volume (its faces wind
+/// outwards) and the eye lies outside each component (winding number 0, from the solid angles
+/// of Van Oosterom & Strackee 1983). For components that are embedded surfaces the first
+/// surface a ray from the eye meets is then a front face. The caller also requires that no
+/// face reaches the near plane (a cut would show the inside).
+pub(crate) fn closed_outside(
+    positions: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    eye: &Vector3<f64>,
+) -> bool {
+    if faces.is_empty() || faces.iter().any(|f| f[0] == f[1] || f[1] == f[2] || f[2] == f[0]) {
+        return false;
+    }
+    // Outgoing directed edges per vertex (compressed rows): (head, face).
+    let n = positions.len();
+    let mut start = vec![0u32; n + 1];
+    for t in faces {
+        for &a in t {
+            start[a as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![(0u32, 0u32); 3 * faces.len()];
+    for (f, t) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3]);
+            out[fill[a] as usize] = (b, f as u32);
+            fill[a] += 1;
+        }
+    }
+    let row = |v: u32| &out[start[v as usize] as usize..start[v as usize + 1] as usize];
+    // Each directed edge once, and its reverse once: the face across it.
+    let twins: Option<Vec<(u32, u32)>> = (0..n as u32)
+        .into_par_iter()
+        .flat_map_iter(|a| row(a).iter().map(move |&(b, f)| (a, b, f)))
+        .map(|(a, b, f)| {
+            let once = row(a).iter().filter(|e| e.0 == b).count() == 1;
+            let mut rev = row(b).iter().filter(|e| e.0 == a);
+            match (once, rev.next(), rev.next()) {
+                (true, Some(&(_, g)), None) => Some((f, g)),
+                _ => None,
+            }
+        })
+        .collect();
+    let Some(twins) = twins else {
+        return false;
+    };
+    // Edge-connected components (union–find, sequential so the labels are fixed).
+    let mut parent: Vec<u32> = (0..faces.len() as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    for &(a, b) in &twins {
+        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb) as usize] = ra.min(rb);
+        }
+    }
+    // Per face: 6 × signed volume of the tetrahedron (eye, a, b, c) and its solid angle.
+    let per_face: Vec<(f64, f64)> = faces
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize] - eye);
+            let det = a.dot(&b.cross(&c));
+            let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+            let den = la * lb * lc + a.dot(&b) * lc + a.dot(&c) * lb + b.dot(&c) * la;
+            (det, 2.0 * det.atan2(den))
+        })
+        .collect();
+    let mut sums: std::collections::BTreeMap<u32, (f64, f64)> = Default::default();
+    for (f, (vol, omega)) in per_face.iter().enumerate() {
+        let r = find(&mut parent, f as u32);
+        let e = sums.entry(r).or_insert((0.0, 0.0));
+        e.0 += vol;
+        e.1 += omega;
+    }
+    sums.values().all(|&(vol, omega)| {
+        vol > 0.0 && vol.is_finite() && omega.is_finite() && omega.abs() < std::f64::consts::TAU
+    })
 }
 
 /// Clips a face against the near plane and projects it; returns the (at most two) screen
