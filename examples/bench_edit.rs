@@ -55,7 +55,7 @@ fn main() {
         direction: None,
         weight: 1.0,
     };
-    let edits = vec![
+    let edits = [
         ("bend", Edit::Bend(warp.clone())),
         ("expand", Edit::Expand(WarpEdit { centre: Centre::Point([-0.4, 0.3, 0.5]), ..warp })),
         (
