@@ -546,3 +546,62 @@ fn geodesic_support_on_a_cylinder_matches_the_developed_distance() {
     );
     assert!(missed * 20 < inside);
 }
+
+#[test]
+fn curve_and_stencil_on_a_cylinder() {
+    // UV (s, t) ↦ (cos 2πs, sin 2πs, 2(t − ½)): the UV line t = ½, s ∈ [0.1, 0.4] is the arc of
+    // the equator between angles 0.2π and 0.8π; its tangent at angle α is (−sin α, cos α, 0) and
+    // the distance of a vertex above it is |z|.
+    let (na, nz) = (96, 64);
+    let mesh = generate::cylinder(1.0, 2.0, na, nz);
+    let hvec = Vector3::new(1.0, 0.3, 0.2).normalize();
+    let s = Setup::new(mesh, hvec, |p| Vector3::new(-p.y, p.x, 0.0));
+    let radius = 0.1;
+    let curve = CurveEdit {
+        svg: None,
+        uv: Some(vec![vec![[0.1, 0.5], [0.4, 0.5]]]),
+        points: None,
+        radius,
+        weight: 1.0,
+        tolerance: 1e-3,
+    };
+    let r = s.apply(&[Edit::Curve(curve)]);
+    let mut count = 0;
+    for (i, p) in s.mesh.positions.iter().enumerate() {
+        let alpha = p.y.atan2(p.x);
+        let inner =
+            alpha > 0.2 * std::f64::consts::PI + 1e-9 && alpha < 0.8 * std::f64::consts::PI - 1e-9;
+        if inner && p.z.abs() < radius - 1e-9 {
+            count += 1;
+            let tangent = Vector3::new(-alpha.sin(), alpha.cos(), 0.0);
+            assert!(line_angle(&r.target_ell[i].unwrap(), &tangent) < 1e-6);
+            let w = (1.0 - (p.z / radius).powi(2)).powi(2);
+            assert!((r.weight[i] - w).abs() < 1e-6, "vertex {i}: {} vs {w}", r.weight[i]);
+        }
+        if p.z.abs() > radius + 1e-9 {
+            assert!(!r.support[i]);
+        }
+    }
+    assert!(count > 50, "{count}");
+    // The stencil makes u ⟂ h inside its support.
+    let stencil = StencilEdit {
+        centre: Centre::Vertex(((nz / 2) * na + 5) as u32),
+        radius: 0.3,
+        metric: Metric::Geodesic,
+        blend: 0.5,
+        weight: 1.0,
+    };
+    let r = s.apply(&[Edit::Stencil(stencil)]);
+    let c = s.mesh.positions[(nz / 2) * na + 5];
+    let mut inside = 0;
+    for (i, p) in s.mesh.positions.iter().enumerate() {
+        // Geodesic distance on the developed cylinder.
+        let da = wrap_angle(p.y.atan2(p.x) - c.y.atan2(c.x));
+        if da.hypot(p.z - c.z) < 0.3 * 0.98 {
+            inside += 1;
+            let u = s.geom.frames[i].direction(r.phi[i]);
+            assert!(hvec.dot(&u).abs() < 1e-9, "vertex {i}: hᵀu = {}", hvec.dot(&u));
+        }
+    }
+    assert!(inside > 50);
+}

@@ -44,7 +44,7 @@ pub enum WarpKind {
 }
 
 /// The admissible strengths: W stays a bijection of the unit disk (min ∂y′/∂y > 0, with a
-/// margin). Bend: max |∂d/∂y| = 4/(3√3)·… = 0.770 at (0, ∓1/√3), so |s| < 1.299; expand: ∂d/∂y
+/// margin). Bend: max |∂d/∂y| = 4/(3√3) = 0.770 at (0, ±1/√3), so |s| < 1.299; expand: ∂d/∂y
 /// ranges over [−0.511, 3.54] (δ = 0.02), so −0.283 < s < 1.957.
 pub fn strength_range(kind: WarpKind) -> (f64, f64) {
     match kind {
