@@ -137,6 +137,32 @@ fn write_out(outs: &mut Vec<String>, path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Runs the scene: the stages its outputs need, each timed; writes every output atomically.
+///
+/// ```
+/// use grainline::pipeline::{run::{run, RunOptions}, Silent};
+/// use grainline::scene::LoadedScene;
+///
+/// let dir = std::env::temp_dir().join(format!("grainline-doc-run-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir).unwrap();
+/// let cylinder = grainline::generate::cylinder(30.0, 80.0, 32, 8);
+/// std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&cylinder, "doc")).unwrap();
+/// std::fs::write(
+///     dir.join("scene.json"),
+///     r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
+///         "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+///         "field": {"init": "uv"},
+///         "toolpaths": {"svg": "strokes.svg", "placement": {"width": 5}}}"#,
+/// )
+/// .unwrap();
+/// let scene = LoadedScene::read(&dir.join("scene.json"))?;
+/// let report = run(&scene, &RunOptions::default(), &Silent)?;
+/// // No edits and no render section: no solve and no preview, only the strokes.
+/// let stages: Vec<&str> = report.stages.iter().map(|s| s.stage.as_str()).collect();
+/// assert_eq!(stages, ["load", "field", "toolpaths", "write toolpaths"]);
+/// assert!(dir.join("strokes.svg").exists());
+/// # std::fs::remove_dir_all(&dir).ok();
+/// # Ok::<(), grainline::Error>(())
+/// ```
 pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Result<RunReport> {
     let start = Instant::now();
     let scene = &s.scene;

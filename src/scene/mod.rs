@@ -64,6 +64,28 @@ pub struct Scene {
 
 impl Scene {
     /// Parses a scene from JSON text. `path` is only used in messages.
+    ///
+    /// ```
+    /// use std::path::Path;
+    /// use grainline::scene::Scene;
+    ///
+    /// let ok = Scene::from_str(
+    ///     r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 100]},
+    ///         "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}]}"#,
+    ///     Path::new("scene.json"),
+    /// )?;
+    /// assert_eq!(ok.view.fov_deg, 35.0); // a documented default
+    ///
+    /// // Unknown keys are refused with their key path and line.
+    /// let err = Scene::from_str(
+    ///     "{\"mesh\": {\"path\": \"part.obj\",\n \"sclae\": 2}, \"view\": {\"eye\": [0, -3, 1]}}",
+    ///     Path::new("scene.json"),
+    /// )
+    /// .unwrap_err()
+    /// .to_string();
+    /// assert!(err.starts_with("scene.json:2: mesh.sclae: unknown field `sclae`"), "{err}");
+    /// # Ok::<(), grainline::Error>(())
+    /// ```
     pub fn from_str(text: &str, path: &Path) -> Result<Scene> {
         let mut de = serde_json::Deserializer::from_str(text);
         let scene: Scene = serde_path_to_error::deserialize(&mut de).map_err(|e| {
