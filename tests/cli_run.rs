@@ -38,7 +38,7 @@ fn scene(d: &Path, edits: &str, toolpaths: &str, render: &str) -> PathBuf {
 const BEND: &str =
     r#"[{"tool": "bend", "centre": {"point": [0, -36, 30]}, "radius": 15, "strength": 0.5}]"#;
 const TOOLPATHS: &str = r#",
-  "toolpaths": {"svg": "o/v.svg", "gcode": "o/v.ngc", "placement": {"width": 3}}"#;
+  "toolpaths": {"svg": "o/v.svg", "gcode": "o/v.ngc", "strokes_json": "o/v.json", "placement": {"width": 3}}"#;
 const RENDER: &str = r#",
   "render": {"width": 96, "height": 96, "output": "o/v.png", "effects": {"strokes": {}}}"#;
 
@@ -72,7 +72,7 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
             out.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let files: Vec<Vec<u8>> = ["o/v.svg", "o/v.ngc", "o/v.png"]
+        let files: Vec<Vec<u8>> = ["o/v.svg", "o/v.ngc", "o/v.json", "o/v.png"]
             .iter()
             .map(|f| std::fs::read(out.join(f)).unwrap())
             .collect();
