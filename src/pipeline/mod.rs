@@ -102,13 +102,7 @@ pub fn key_light(scene: &crate::scene::Scene) -> Result<Vector3<f64>> {
 /// Loads the part and computes the geometry, the initial field and its highlights.
 pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
-    let in_scene = |e: Error| match e {
-        Error::Setting { key, message } => {
-            Error::Scene { path: s.path.clone(), line: None, message: format!("{key}: {message}") }
-        }
-        other => other,
-    };
-    let lighting = Lighting::new(key_light(scene).map_err(in_scene)?, scene.view.view())?;
+    let lighting = Lighting::new(key_light(scene).map_err(|e| s.wrap(e))?, scene.view.view())?;
     stages.start("load");
     let (mesh, mesh_name) = load_part(s)?;
     stages.start("field");
@@ -119,7 +113,7 @@ pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
     let mut field_options = FieldOptions::new(lighting);
     field_options.init = scene.field.initial_field(directions);
     if matches!(field_options.init, InitialField::Uv) && mesh.uv.is_none() {
-        return Err(in_scene(Error::setting(
+        return Err(s.wrap(Error::setting(
             "field.init",
             format!("\"uv\" needs UVs, and {mesh_name} has none"),
         )));

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::optimize::{optimize_stage, optimized_field_file, OptimizeStageReport};
 use super::{output_path, prepare, Observer, StageTime, Stages};
-use crate::highlight::{highlight_field, Symmetry};
+use crate::highlight::highlight_field;
 use crate::output::{write_atomic, write_json_compact_atomic};
 use crate::render::{render, Camera, EditOverlay, RenderInput, RenderReport};
 use crate::scene::LoadedScene;
@@ -367,8 +367,8 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
                 other => other.clone(),
             })
             .collect();
-        let r = render(&input, &scene.material, &lights, &camera, settings)
-            .map_err(|e| in_scene(s, e))?;
+        let r =
+            render(&input, &scene.material, &lights, &camera, settings).map_err(|e| s.wrap(e))?;
         stages.start("write render");
         write_out(&mut outputs, &out(&settings.output), &r.png)?;
         if let (Some(p), Some(bytes)) = (&settings.linear, &r.linear) {
@@ -400,20 +400,4 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         render: render_report,
         outputs,
     })
-}
-
-fn in_scene(s: &LoadedScene, e: crate::Error) -> crate::Error {
-    match e {
-        crate::Error::Setting { key, message } => crate::Error::Scene {
-            path: s.path.clone(),
-            line: None,
-            message: format!("{key}: {message}"),
-        },
-        other => other,
-    }
-}
-
-/// Whether a symmetry renders as a line field.
-pub fn is_line(s: Symmetry) -> bool {
-    s == Symmetry::Line
 }

@@ -1,0 +1,397 @@
+//! Flat sheet-metal panels: a closed outline (with holes) read from an SVG, meshed with a
+//! refined constrained Delaunay triangulation, UV = XY in millimetres.
+//!
+//! * **SVG geometry.** `path` (every command of SVG 1.1 §8.3, absolute and relative),
+//!   `polygon`, `rect` (square corners), `circle` and `ellipse` elements give closed loops;
+//!   `line` and `polyline` are open and refused. `transform` attributes (on the element and
+//!   its ancestor groups) are applied. Anything inside `defs`, `clipPath`, `mask`, `symbol`,
+//!   `pattern` and `marker` is ignored.
+//! * **Units.** The root's `width`/`height` (with `mm`, `cm`, `in`, `pt`, `pc`, `px` or no
+//!   unit = px at 96 per inch) and `viewBox` give millimetres per user unit (uniform scale,
+//!   the `xMidYMid meet` default when the aspect ratios differ); without a `viewBox` one user
+//!   unit is one px. The panel's X is the SVG x, its Y points up: `Y = (bottom of the
+//!   viewport) − y`, so the part is not mirrored and its faces are counter-clockwise seen from
+//!   +Z.
+//! * **Curves** are flattened to within `tolerance` mm: Béziers with Wang's bound on the
+//!   number of chords (`n = ⌈√(d(d−1)/8 · max‖Δ²P‖ / tol)⌉`; Wang, Zheng & Sederberg,
+//!   *Computer Graphics and Geometric Modeling*, 2nd ed., §10.5), arcs and circles with the
+//!   sagitta bound `Δθ ≤ 2 acos(1 − tol / r)`.
+//! * **Inside/outside** is the even-odd rule: a loop inside an outline is a hole, a loop inside
+//!   a hole is an island. Loops may not touch or cross themselves or each other; open,
+//!   self-intersecting and zero-area loops, and a file without any, are errors naming the file
+//!   and the element.
+//! * **Meshing.** Boundary segments are split to at most `max_edge`, inserted as constraint
+//!   edges of spade's `ConstrainedDelaunayTriangulation`, and refined (Ruppert/Chew,
+//!   `RefinementParameters` with the angle limit and an area bound of ½ · √3/4 · max_edge²,
+//!   outer faces excluded). Interior edges still longer than `max_edge` get their midpoint
+//!   inserted and the refinement is repeated, until none is left.
+
+use std::collections::HashSet;
+use std::path::Path;
+
+use nalgebra::{Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+use spade::handles::FixedVertexHandle;
+use spade::{
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+};
+
+use crate::mesh::{CornerAttribute, Mesh, Units};
+use crate::{Error, Result};
+
+mod svg;
+
+pub use svg::read_svg_loops;
+
+/// Options of the panel mesher (a scene section when a scene names an outline).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct PanelOptions {
+    /// Longest triangle edge, mm; `None` (the default) lets the angle criterion alone decide.
+    pub max_edge: Option<f64>,
+    /// Smallest triangle angle the refinement aims for, degrees, in [0, 34]. Default 25.
+    /// Angles of the outline itself below this cannot be improved.
+    pub min_angle_deg: f64,
+    /// Curve flattening tolerance, mm (> 0). Default 0.01.
+    pub tolerance: f64,
+    /// Most vertices the refinement may add (a guard against runaway refinement).
+    /// Default 2 000 000.
+    pub max_added_vertices: usize,
+}
+
+impl Default for PanelOptions {
+    fn default() -> Self {
+        PanelOptions {
+            max_edge: None,
+            min_angle_deg: 25.0,
+            tolerance: 0.01,
+            max_added_vertices: 2_000_000,
+        }
+    }
+}
+
+impl PanelOptions {
+    /// Range-checks every number; keys are relative to this section.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(m) = self.max_edge {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(Error::setting("max_edge", format!("must be > 0, got {m}")));
+            }
+        }
+        let a = self.min_angle_deg;
+        if !(a.is_finite() && (0.0..=34.0).contains(&a)) {
+            return Err(Error::setting(
+                "min_angle_deg",
+                format!("must be in [0, 34] degrees (refinement may not terminate above), got {a}"),
+            ));
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(Error::setting(
+                "tolerance",
+                format!("must be > 0, got {}", self.tolerance),
+            ));
+        }
+        if self.max_added_vertices == 0 {
+            return Err(Error::setting("max_added_vertices", "must be > 0, got 0"));
+        }
+        Ok(())
+    }
+}
+
+/// The meshed panel.
+#[derive(Clone, Debug)]
+pub struct PanelResult {
+    /// The mesh: z = 0, UV = XY, units mm, faces counter-clockwise seen from +Z.
+    pub mesh: Mesh,
+    /// Closed loops read (outlines and holes).
+    pub loops: usize,
+    /// Area enclosed by the flattened loops (even-odd), mm².
+    pub outline_area: f64,
+    /// Smallest triangle angle, degrees.
+    pub min_angle_deg: f64,
+    /// Longest triangle edge, mm.
+    pub max_edge: f64,
+    /// False when spade ran out of `max_added_vertices` (the angle goal may be missed).
+    pub refinement_complete: bool,
+}
+
+/// One closed, flattened loop in mm, and the element it came from (for messages).
+#[derive(Clone, Debug)]
+pub struct Loop {
+    /// Points in mm (not repeated at the end).
+    pub points: Vec<[f64; 2]>,
+    /// "path element #3 (id \"hole\")".
+    pub element: String,
+}
+
+fn signed_area(p: &[[f64; 2]]) -> f64 {
+    let n = p.len();
+    0.5 * (0..n).map(|i| p[i][0] * p[(i + 1) % n][1] - p[(i + 1) % n][0] * p[i][1]).sum::<f64>()
+}
+
+fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+fn on_segment(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> bool {
+    p[0] >= a[0].min(b[0])
+        && p[0] <= a[0].max(b[0])
+        && p[1] >= a[1].min(b[1])
+        && p[1] <= a[1].max(b[1])
+}
+
+/// Whether closed segments ab and cd share a point.
+fn segments_touch(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+    let (d1, d2) = (orient(c, d, a), orient(c, d, b));
+    let (d3, d4) = (orient(a, b, c), orient(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    (d1 == 0.0 && on_segment(c, d, a))
+        || (d2 == 0.0 && on_segment(c, d, b))
+        || (d3 == 0.0 && on_segment(a, b, c))
+        || (d4 == 0.0 && on_segment(a, b, d))
+}
+
+/// Refuses loops that cross or touch themselves or each other (sweep over x).
+fn check_simple(loops: &[Loop], name: &Path) -> Result<()> {
+    struct Seg {
+        a: [f64; 2],
+        b: [f64; 2],
+        lp: usize,
+        i: usize,
+    }
+    let mut segs: Vec<Seg> = Vec::new();
+    for (lp, l) in loops.iter().enumerate() {
+        let n = l.points.len();
+        for i in 0..n {
+            segs.push(Seg { a: l.points[i], b: l.points[(i + 1) % n], lp, i });
+        }
+    }
+    segs.sort_by(|s, t| s.a[0].min(s.b[0]).total_cmp(&t.a[0].min(t.b[0])));
+    let mut active: Vec<usize> = Vec::new();
+    for k in 0..segs.len() {
+        let s = &segs[k];
+        let x0 = s.a[0].min(s.b[0]);
+        active.retain(|&j| segs[j].a[0].max(segs[j].b[0]) >= x0);
+        for &j in &active {
+            let t = &segs[j];
+            if s.lp == t.lp {
+                let n = loops[s.lp].points.len();
+                let adjacent = (s.i + 1) % n == t.i || (t.i + 1) % n == s.i;
+                if adjacent {
+                    // Neighbours share one end; they may not overlap beyond it (a spike).
+                    let (p, q, r) =
+                        if (s.i + 1) % n == t.i { (s.a, s.b, t.b) } else { (t.a, t.b, s.b) };
+                    let back = orient(p, q, r) == 0.0
+                        && (r[0] - q[0]) * (p[0] - q[0]) + (r[1] - q[1]) * (p[1] - q[1]) > 0.0;
+                    if !back || n < 3 {
+                        continue;
+                    }
+                } else if !segments_touch(s.a, s.b, t.a, t.b) {
+                    continue;
+                }
+            } else if !segments_touch(s.a, s.b, t.a, t.b) {
+                continue;
+            }
+            let at = s.a;
+            let what = if s.lp == t.lp {
+                format!("{} crosses or touches itself", loops[s.lp].element)
+            } else {
+                let (x, y) = (s.lp.min(t.lp), s.lp.max(t.lp));
+                format!("{} crosses or touches {}", loops[x].element, loops[y].element)
+            };
+            return Err(Error::Parse {
+                path: name.to_path_buf(),
+                line: 0,
+                message: format!("{what} near ({:.3}, {:.3}) mm", at[0], at[1]),
+            });
+        }
+        active.push(k);
+    }
+    Ok(())
+}
+
+/// Area enclosed by the loops under the even-odd rule (holes subtract, islands add): each
+/// loop's |area| with the sign of its nesting depth.
+fn even_odd_area(loops: &[Loop]) -> f64 {
+    let inside = |p: [f64; 2], poly: &[[f64; 2]]| {
+        let mut c = false;
+        let n = poly.len();
+        for i in 0..n {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            if (a[1] > p[1]) != (b[1] > p[1])
+                && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+            {
+                c = !c;
+            }
+        }
+        c
+    };
+    loops
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let depth = loops
+                .iter()
+                .enumerate()
+                .filter(|&(j, o)| j != i && inside(l.points[0], &o.points))
+                .count();
+            let a = signed_area(&l.points).abs();
+            if depth % 2 == 0 {
+                a
+            } else {
+                -a
+            }
+        })
+        .sum()
+}
+
+/// Meshes closed loops (in mm; even-odd inside) into a flat panel.
+pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<PanelResult> {
+    opts.validate()?;
+    if loops.is_empty() {
+        return Err(Error::Parse {
+            path: name.to_path_buf(),
+            line: 0,
+            message: "no closed outline".into(),
+        });
+    }
+    check_simple(loops, name)?;
+    if let Some(l) = loops.iter().find(|l| signed_area(&l.points).abs() <= 1e-12) {
+        return Err(Error::Parse {
+            path: name.to_path_buf(),
+            line: 0,
+            message: format!("{}: a subpath encloses no area", l.element),
+        });
+    }
+    let numerical = |m: String| Error::Numerical { stage: "panel triangulation", message: m };
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::new();
+    let max_edge = opts.max_edge.unwrap_or(f64::INFINITY);
+    for l in loops {
+        let n = l.points.len();
+        let mut handles: Vec<FixedVertexHandle> = Vec::new();
+        for i in 0..n {
+            let (a, b) = (l.points[i], l.points[(i + 1) % n]);
+            let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+            let k =
+                if max_edge.is_finite() { (len / max_edge).ceil().max(1.0) as usize } else { 1 };
+            for j in 0..k {
+                let t = j as f64 / k as f64;
+                let p = Point2::new(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
+                handles
+                    .push(cdt.insert(p).map_err(|e| numerical(format!("{}: {e:?}", l.element)))?);
+            }
+        }
+        let m = handles.len();
+        for i in 0..m {
+            let (a, b) = (handles[i], handles[(i + 1) % m]);
+            if a != b && !cdt.can_add_constraint(a, b) {
+                return Err(numerical(format!("{}: a boundary edge could not be kept", l.element)));
+            }
+            cdt.add_constraint(a, b);
+        }
+    }
+    let params = || {
+        let mut p = RefinementParameters::<f64>::new()
+            .exclude_outer_faces(true)
+            .with_angle_limit(AngleLimit::from_deg(opts.min_angle_deg))
+            .with_max_additional_vertices(opts.max_added_vertices);
+        if max_edge.is_finite() {
+            p = p.with_max_allowed_area(0.5 * 3f64.sqrt() / 4.0 * max_edge * max_edge);
+        }
+        p
+    };
+    let mut result = cdt.refine(params());
+    let mut complete = result.refinement_complete;
+    for _ in 0..50 {
+        if !max_edge.is_finite() {
+            break;
+        }
+        let outer: HashSet<_> = result.excluded_faces.iter().copied().collect();
+        let mut mids: Vec<Point2<f64>> = Vec::new();
+        for f in cdt.inner_faces() {
+            if outer.contains(&f.fix()) {
+                continue;
+            }
+            let v = f.vertices().map(|v| v.position());
+            for i in 0..3 {
+                let (a, b) = (v[i], v[(i + 1) % 3]);
+                if (b.x - a.x).hypot(b.y - a.y) > max_edge {
+                    mids.push(Point2::new(0.5 * (a.x + b.x), 0.5 * (a.y + b.y)));
+                }
+            }
+        }
+        if mids.is_empty() {
+            break;
+        }
+        for p in mids {
+            cdt.insert(p).map_err(|e| numerical(format!("{e:?}")))?;
+        }
+        result = cdt.refine(params());
+        complete &= result.refinement_complete;
+    }
+    let outer: HashSet<_> = result.excluded_faces.iter().copied().collect();
+    let mut index = vec![u32::MAX; cdt.num_vertices()];
+    let mut positions: Vec<Vector3<f64>> = Vec::new();
+    let mut uvs: Vec<Vector2<f64>> = Vec::new();
+    let mut faces: Vec<[u32; 3]> = Vec::new();
+    let (mut min_angle, mut longest) = (f64::INFINITY, 0.0f64);
+    for f in cdt.inner_faces() {
+        if outer.contains(&f.fix()) {
+            continue;
+        }
+        let vs = f.vertices();
+        let mut t = [0u32; 3];
+        let mut pts = [[0.0; 2]; 3];
+        for (k, v) in vs.iter().enumerate() {
+            let i = v.fix().index();
+            let p = v.position();
+            pts[k] = [p.x, p.y];
+            if index[i] == u32::MAX {
+                index[i] = positions.len() as u32;
+                positions.push(Vector3::new(p.x, p.y, 0.0));
+                uvs.push(Vector2::new(p.x, p.y));
+            }
+            t[k] = index[i];
+        }
+        if orient(pts[0], pts[1], pts[2]) < 0.0 {
+            t.swap(1, 2);
+            pts.swap(1, 2);
+        }
+        for k in 0..3 {
+            let (a, b, c) = (pts[k], pts[(k + 1) % 3], pts[(k + 2) % 3]);
+            let (u, w) = ([b[0] - a[0], b[1] - a[1]], [c[0] - a[0], c[1] - a[1]]);
+            let ang = (u[0] * w[1] - u[1] * w[0]).abs().atan2(u[0] * w[0] + u[1] * w[1]);
+            min_angle = min_angle.min(ang.to_degrees());
+            longest = longest.max(u[0].hypot(u[1]));
+        }
+        faces.push(t);
+    }
+    if faces.is_empty() {
+        return Err(numerical("the outline produced no triangles".into()));
+    }
+    let mut mesh = Mesh::from_triangles(positions, faces.clone());
+    mesh.uv = Some(CornerAttribute { values: uvs, corners: faces });
+    mesh.units = Units::Mm;
+    Ok(PanelResult {
+        mesh,
+        loops: loops.len(),
+        outline_area: even_odd_area(loops),
+        min_angle_deg: min_angle,
+        max_edge: longest,
+        refinement_complete: complete,
+    })
+}
+
+/// Reads an outline SVG and meshes it (see the module documentation).
+pub fn panel_from_svg(path: &Path, opts: &PanelOptions) -> Result<PanelResult> {
+    opts.validate()?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let loops = read_svg_loops(&text, path, opts.tolerance)?;
+    mesh_loops(&loops, path, opts)
+}
