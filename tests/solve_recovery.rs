@@ -105,3 +105,46 @@ fn recovers_on_a_sphere() {
         recover(&mesh, sym, centre, 0.3);
     }
 }
+
+/// The harmonic fill (`solve::fill`) of an axial field on a cylinder: the axial field is parallel
+/// (the discrete transport between two tangent planes of a cylinder is a rotation about its
+/// axis), so it is the exact minimizer of the connection Dirichlet energy with its own boundary
+/// values, whatever the start inside — for k = 1, and for k = 2 with the fixed vertices' signs
+/// flipped at random (a line field does not see them).
+#[test]
+fn harmonic_fill_restores_a_parallel_field() {
+    use grainline::geometry::laplacian::cotan_weights;
+    use grainline::solve::fill::harmonic_fill;
+    let mesh = generate::cylinder(1.0, 2.0, 48, 24);
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let n = mesh.num_vertices();
+    let axial: Vec<f64> =
+        (0..n).map(|i| g.frames[i].angle_of(&Vector3::new(0.0, 0.0, 1.0))).collect();
+    let free: Vec<u32> =
+        (0..n as u32).filter(|&i| mesh.positions[i as usize].z.abs() < 0.5).collect();
+    assert!(free.len() > 100);
+    let w = cotan_weights(&mesh, &g.adjacency);
+    for k in [1u32, 2] {
+        let start: Vec<f64> = (0..n)
+            .map(|i| {
+                let scramble = if free.binary_search(&(i as u32)).is_ok() {
+                    1.3 * (7.1 * i as f64).sin()
+                } else if k == 2 && i % 3 == 0 {
+                    std::f64::consts::PI
+                } else {
+                    0.0
+                };
+                axial[i] + scramble
+            })
+            .collect();
+        let fill = harmonic_fill(&g, &w, &start, &free, k).expect("factorizable");
+        let kf = k as f64;
+        for &i in &free {
+            let e = wrap_angle(kf * (fill[i as usize] - axial[i as usize])) / kf;
+            assert!(e.abs() < 1e-9, "k = {k}, vertex {i}: error {e}");
+        }
+        for i in (0..n).filter(|i| free.binary_search(&(*i as u32)).is_err()) {
+            assert_eq!(fill[i], start[i], "fixed vertex {i} moved");
+        }
+    }
+}

@@ -3,6 +3,7 @@
 //! fabrication constraints, and the entry point [`optimize()`].
 
 pub mod fabrication;
+pub mod fill;
 pub mod highlight_term;
 pub mod lm;
 pub mod locks;
@@ -15,6 +16,6 @@ pub use fabrication::{GradientHinge, HingeKind};
 pub use highlight_term::{HighlightTerm, VertexJacobian};
 pub use lm::{solve, Energies, HingeOptions, Iteration, LmOptions, LmResult, StopReason};
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
-pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult};
+pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};
 pub use settings::{Constraints, SolverSettings, Splay, TurningRadius};
 pub use singularities::{singularities, Singularity};

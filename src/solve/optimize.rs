@@ -15,12 +15,14 @@
 use serde::Serialize;
 
 use super::fabrication::{GradientHinge, HingeKind};
+use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
 use super::lm::{solve, Energies, HingeOptions, Iteration, LmOptions, StopReason};
 use super::locks::{angle_difference, resolve_locks, LockConflict};
 use super::settings::SolverSettings;
 use super::singularities::{singularities, Singularity};
 use crate::geometry::connection::wrap_angle;
+use crate::geometry::laplacian::cotan_weights;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 
@@ -44,6 +46,39 @@ pub struct ConstraintViolations {
     pub max_lock_error: f64,
 }
 
+/// A run from one start whose final energy is at most this fraction of its initial energy
+/// has reached the exact fit; no other start is tried.
+const NEGLIGIBLE_ENERGY: f64 = 1e-12;
+
+/// One solve (all continuation stages) from one start.
+struct Run {
+    phi: Vec<f64>,
+    iterations: Vec<Iteration>,
+    initial: Option<Energies>,
+    stop: StopReason,
+}
+
+impl Run {
+    fn final_energy(&self) -> f64 {
+        self.iterations
+            .last()
+            .map(|i| i.energies.total())
+            .or(self.initial.map(|e| e.total()))
+            .unwrap_or(0.0)
+    }
+}
+
+/// The start of the solve (see [`SolverSettings::harmonic_start`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StartChoice {
+    /// The given field (after the hard locks).
+    Given,
+    /// The connection-harmonic fill of the free region ([`super::fill::harmonic_fill`]), whose
+    /// energy was lower.
+    HarmonicFill,
+}
+
 /// What [`optimize`] did.
 #[derive(Clone, Debug, Serialize)]
 pub struct OptimizeReport {
@@ -65,6 +100,11 @@ pub struct OptimizeReport {
     pub smoothness_weight: f64,
     /// Whether the interleaved smoothing pass ran.
     pub interleaved_smoothing: bool,
+    /// Which start the kept solve began from.
+    pub start: StartChoice,
+    /// How many starts were solved from (1 or 2; the second only when the first did not reach
+    /// a negligible energy).
+    pub starts_tried: usize,
     /// Constraint violations of the result.
     pub violations: ConstraintViolations,
     /// Vertices where locks disagree, with the angles asked for and the one used.
@@ -167,26 +207,67 @@ pub fn optimize(
     } else {
         vec![1.0]
     };
-    let mut out = start;
-    let (mut iterations, mut initial_energy, mut stop) =
-        (Vec::new(), None, StopReason::IterationCap);
-    for (stage, factor) in stages.iter().enumerate() {
-        let last = stage + 1 == stages.len();
-        let left = settings.max_iterations.saturating_sub(iterations.len());
-        let opts = LmOptions {
-            smoothness: factor * options.smoothness,
-            max_iterations: if last { left } else { left.min(5) },
-            ..options.clone()
+    let run_from = |start: Vec<f64>| -> Result<Run> {
+        let mut run = Run {
+            phi: start,
+            iterations: Vec::new(),
+            initial: None,
+            stop: StopReason::IterationCap,
         };
-        let lm = solve(mesh, term, &out, &free_list, &opts)?;
-        initial_energy.get_or_insert(lm.initial_energy);
-        iterations.extend(lm.iterations.into_iter().map(|mut it| {
-            it.stage = stage;
-            it
-        }));
-        out = lm.phi;
-        stop = lm.stop;
+        for (stage, factor) in stages.iter().enumerate() {
+            let last = stage + 1 == stages.len();
+            let left = settings.max_iterations.saturating_sub(run.iterations.len());
+            let opts = LmOptions {
+                smoothness: factor * options.smoothness,
+                max_iterations: if last { left } else { left.min(5) },
+                ..options.clone()
+            };
+            let lm = solve(mesh, term, &run.phi, &free_list, &opts)?;
+            run.initial.get_or_insert(lm.initial_energy);
+            run.iterations.extend(lm.iterations.into_iter().map(|mut it| {
+                it.stage = stage;
+                it
+            }));
+            run.phi = lm.phi;
+            run.stop = lm.stop;
+        }
+        Ok(run)
+    };
+    // Candidate starts: the given field and, when asked, the harmonic fill; the one of lower
+    // energy first. The second runs only if the first does not reach (near) zero energy, and
+    // the run with the lower final energy is kept.
+    let mut candidates = vec![(StartChoice::Given, start)];
+    if settings.harmonic_start && !settings.whole_mesh && !free_list.is_empty() {
+        let w = cotan_weights(mesh, &g.adjacency);
+        if let Some(fill) = harmonic_fill(g, &w, &candidates[0].1, &free_list, k) {
+            let probe = LmOptions { max_iterations: 0, ..options.clone() };
+            let e_given =
+                solve(mesh, term, &candidates[0].1, &free_list, &probe)?.initial_energy.total();
+            let e_fill = solve(mesh, term, &fill, &free_list, &probe)?.initial_energy.total();
+            let fill = (StartChoice::HarmonicFill, fill);
+            if e_fill < e_given {
+                candidates.insert(0, fill);
+            } else {
+                candidates.push(fill);
+            }
+        }
     }
+    let mut best: Option<(StartChoice, Run)> = None;
+    let mut starts_tried = 0;
+    for (choice, start) in candidates {
+        let run = run_from(start)?;
+        starts_tried += 1;
+        let e0 = run.initial.map_or(0.0, |e| e.total());
+        let e1 = run.final_energy();
+        if best.as_ref().is_none_or(|(_, b)| e1 < b.final_energy()) {
+            best = Some((choice, run));
+        }
+        if e1 <= NEGLIGIBLE_ENERGY * e0 {
+            break;
+        }
+    }
+    let (start_choice, run) = best.expect("at least the given start");
+    let Run { phi: mut out, iterations, initial: initial_energy, stop } = run;
     let initial_energy = initial_energy.unwrap_or_default();
     for p in out.iter_mut() {
         *p = wrap_angle(*p);
@@ -240,6 +321,8 @@ pub fn optimize(
         soft_locked: locks.soft.len(),
         smoothness_weight: options.smoothness,
         interleaved_smoothing: options.interleaved_smoothing,
+        start: start_choice,
+        starts_tried,
         violations,
         conflicting_locks: locks.conflicts,
         degenerate_lock_vertices: locks.degenerate,

@@ -66,8 +66,8 @@ impl Default for Constraints {
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSettings {
     /// Smoothness weight λ_s (≥ 0; default 0, which turns the interleaved smoothing pass on:
-    /// on spot this recovered 11 of 22 perturbed brushes exactly, against 1 of 10 with 1e-6 and
-    /// 0 of 22 with 1e-4; docs/benchmarks.md). **Relative**: the connection Dirichlet energy
+    /// on spot this recovered 16 of 22 perturbed brushes exactly with the harmonic-fill start,
+    /// against 1 of 10 with 1e-6 and 0 of 22 with 1e-4; docs/benchmarks.md). **Relative**: the connection Dirichlet energy
     /// Σ wᵢⱼ|…|² (scale-free) is multiplied by λ_s × the surface area, so that it scales like
     /// the highlight energy Σ Aᵢ‖Lᵢ − Lᵢ*‖² and λ_s means the same on a part in mm or in m.
     pub smoothness: f64,
@@ -90,6 +90,11 @@ pub struct SolverSettings {
     pub continuation: bool,
     /// Free every vertex instead of the edits' support (default false).
     pub whole_mesh: bool,
+    /// Also consider the connection-harmonic fill of the free region from its fixed
+    /// neighbours as a start, and start from it when its energy is lower than the given
+    /// field's (default true; `solve::fill`). It keeps the solve out of the other minima of
+    /// the data term (math.md §3).
+    pub harmonic_start: bool,
     /// The free set is the edits' support dilated by this many rings of neighbours (default 2).
     pub margin_rings: u32,
     /// Weight of the "keep the current ℓ" targets of vertices outside every edit (≥ 0, default
@@ -110,6 +115,7 @@ impl Default for SolverSettings {
             interleaved_smoothing: None,
             continuation: false,
             whole_mesh: false,
+            harmonic_start: true,
             margin_rings: 2,
             outside_weight: 1.0,
             constraints: Constraints::default(),
