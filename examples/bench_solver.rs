@@ -18,12 +18,21 @@
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
 use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
-use grainline::solve::{solve, HighlightTerm, LmOptions};
+use grainline::solve::{solve, HighlightTerm, LinearSolver, LmOptions};
 use nalgebra::Vector3;
 
+/// `GRAINLINE_LM_SOLVER=direct|cg` forces a linear solver (default: auto).
+fn linear_solver() -> LinearSolver {
+    match std::env::var("GRAINLINE_LM_SOLVER").as_deref() {
+        Ok("direct") => LinearSolver::Direct,
+        Ok("cg") => LinearSolver::ConjugateGradient,
+        _ => LinearSolver::Auto,
+    }
+}
+
 fn whole_mesh(targets: &[usize]) {
-    println!("| vertices | free | iterations | assembly s/it (min/median/max) | solve s/it (min/median/max) | total s/it (median) |");
-    println!("|---:|---:|---:|---:|---:|---:|");
+    println!("| vertices | free | iterations | energy by iteration | wall s/it incl. setup and rejected tries (min/median/max) | assembly s/it (min/median/max) | solve s/it (min/median/max) | total s/it (median) |");
+    println!("|---:|---:|---:|---|---:|---:|---:|---:|");
     for &nv in targets {
         let minor = ((nv as f64 / 4.0).sqrt()).round().max(3.0) as usize;
         let major = (nv / minor).max(3);
@@ -57,11 +66,20 @@ fn whole_mesh(targets: &[usize]) {
             smoothness: 1e-6 * g.areas.iter().sum::<f64>(),
             max_iterations: 3,
             turning: Some(grainline::solve::HingeOptions { bound: 2.0, weight: 1.0 }),
+            linear_solver: linear_solver(),
             ..Default::default()
         };
-        let (mut a, mut s, mut its) = (Vec::new(), Vec::new(), 0);
+        let (mut a, mut s, mut its, mut wall) = (Vec::new(), Vec::new(), 0, Vec::new());
+        let mut energies = String::new();
         for _ in 0..3 {
+            let t = std::time::Instant::now();
             let r = solve(&mesh, &term, &phi, &free, &opts).unwrap();
+            wall.push(t.elapsed().as_secs_f64() / opts.max_iterations as f64);
+            energies = std::iter::once(r.initial_energy.total())
+                .chain(r.iterations.iter().map(|i| i.energies.total()))
+                .map(|e| format!("{e:.2e}"))
+                .collect::<Vec<_>>()
+                .join(" → ");
             let k = r.iterations.len().max(1) as f64;
             its = r.iterations.len();
             a.push(r.iterations.iter().map(|i| i.assembly_seconds).sum::<f64>() / k);
@@ -71,9 +89,12 @@ fn whole_mesh(targets: &[usize]) {
             v.sort_by(f64::total_cmp);
             (v[0], v[v.len() / 2], v[v.len() - 1])
         };
-        let (sa, ss) = (stats(&mut a), stats(&mut s));
+        let (sa, ss, sw) = (stats(&mut a), stats(&mut s), stats(&mut wall));
         println!(
-            "| {n} | {n} | {its} | {:.3}/{:.3}/{:.3} | {:.3}/{:.3}/{:.3} | {:.3} |",
+            "| {n} | {n} | {its} | {energies} | {:.3}/{:.3}/{:.3} | {:.3}/{:.3}/{:.3} | {:.3}/{:.3}/{:.3} | {:.3} |",
+            sw.0,
+            sw.1,
+            sw.2,
             sa.0,
             sa.1,
             sa.2,

@@ -71,6 +71,84 @@ pub struct LmOptions {
     pub soft_locks: Vec<(u32, f64, f64)>,
     /// Run the interleaved Laplacian smoothing pass after each accepted step.
     pub interleaved_smoothing: bool,
+    /// How each damped system is solved.
+    pub linear_solver: LinearSolver,
+}
+
+/// The linear solver of each damped step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LinearSolver {
+    /// Direct below [`CG_THRESHOLD`] unknowns, conjugate gradients from there.
+    #[default]
+    Auto,
+    /// Sparse Cholesky of JᵀJ + λD (symbolic analysis once per solve).
+    Direct,
+    /// Matrix-free Jacobi-preconditioned conjugate gradients on the Jacobian's rows, to a
+    /// relative residual of at most [`CG_FORCING`] (an inexact Levenberg–Marquardt step; the gain
+    /// ratio uses the model decrease of the step actually taken).
+    ConjugateGradient,
+}
+
+/// From this many unknowns, [`LinearSolver::Auto`] uses conjugate gradients: the Cholesky
+/// factor of the 2-ring pattern fills in superlinearly (×21 at 100k), CG stays linear per
+/// iteration.
+pub const CG_THRESHOLD: usize = 20_000;
+
+/// Largest relative residual ‖b − Ax‖/‖b‖ at which the conjugate gradients stop (the forcing
+/// term of the inexact step; it tightens to ‖g‖/‖g₀‖ as the gradient falls, so the final
+/// iterations are as exact as the direct ones).
+pub const CG_FORCING: f64 = 0.3;
+
+/// Cap on conjugate-gradient iterations per damped system.
+pub const CG_MAX_ITERATIONS: usize = 2000;
+
+/// Jacobi-preconditioned conjugate gradients for (JᵀJ + diag(shift)) x = b, from x = 0,
+/// stopping at ‖b − Ax‖ ≤ tol ‖b‖ or [`CG_MAX_ITERATIONS`]. Returns x and the iterations used.
+/// The products run in parallel chunks whose sums have a fixed order, and the dot products are
+/// sequential, so the result is the same at any thread count.
+fn conjugate_gradient(
+    j: &JacobianProduct,
+    shift: &[f64],
+    precond: &[f64],
+    b: &[f64],
+    tol: f64,
+) -> (Vec<f64>, usize) {
+    let n = b.len();
+    let dot = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(x, y)| x * y).sum::<f64>();
+    let inv: Vec<f64> = precond.iter().map(|&p| if p > 0.0 { 1.0 / p } else { 0.0 }).collect();
+    let mut x = vec![0.0; n];
+    let mut r = b.to_vec();
+    let mut z: Vec<f64> = r.iter().zip(&inv).map(|(a, m)| a * m).collect();
+    let mut p = z.clone();
+    let mut ap = vec![0.0; n];
+    let mut t = Vec::new();
+    let mut rz = dot(&r, &z);
+    let target = tol * dot(b, b).sqrt();
+    let mut used = 0;
+    for _ in 0..CG_MAX_ITERATIONS {
+        if dot(&r, &r).sqrt() <= target || rz <= 0.0 {
+            break;
+        }
+        j.apply(&p, shift, &mut t, &mut ap);
+        let pap = dot(&p, &ap);
+        if pap <= 0.0 || !pap.is_finite() {
+            break;
+        }
+        used += 1;
+        let alpha = rz / pap;
+        for c in 0..n {
+            x[c] += alpha * p[c];
+            r[c] -= alpha * ap[c];
+            z[c] = r[c] * inv[c];
+        }
+        let rz_new = dot(&r, &z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for c in 0..n {
+            p[c] = z[c] + beta * p[c];
+        }
+    }
+    (x, used)
 }
 
 impl Default for LmOptions {
@@ -85,6 +163,7 @@ impl Default for LmOptions {
             splay: None,
             soft_locks: Vec::new(),
             interleaved_smoothing: false,
+            linear_solver: LinearSolver::Auto,
         }
     }
 }
@@ -194,6 +273,108 @@ struct Local {
     idx: Option<Vec<(u32, u32)>>,
     g: Vec<(usize, f64)>,
     block: Vec<(usize, [f64; 2])>,
+    /// Matrix-free mode: the Jacobian's rows themselves instead of JᵀJ's products.
+    rows: Option<JacobianRows>,
+}
+
+/// The stacked Jacobian J by row blocks (one block per residual of up to two components): the
+/// free columns and their two derivatives, for the matrix-free (conjugate gradient) solve.
+#[derive(Default)]
+struct JacobianRows {
+    /// Block b's entries are `ptr[b]..ptr[b + 1]`.
+    ptr: Vec<u32>,
+    col: Vec<u32>,
+    d: Vec<[f64; 2]>,
+}
+
+/// J by rows and by columns, for y = (JᵀJ + diag(shift)) x in two parallel passes: t = Jx by
+/// row blocks, then y = Jᵀt gathered by columns (each column's terms in row order).
+struct JacobianProduct<'a> {
+    rows: &'a JacobianRows,
+    /// Row block of each entry.
+    block_of: Vec<u32>,
+    /// Column c's entries (indices into `rows`) are `by_col[col_ptr[c]..col_ptr[c + 1]]`.
+    col_ptr: Vec<u32>,
+    by_col: Vec<u32>,
+}
+
+impl<'a> JacobianProduct<'a> {
+    fn new(rows: &'a JacobianRows, n: usize) -> Self {
+        let blocks = rows.ptr.len().saturating_sub(1);
+        let mut block_of = vec![0u32; rows.col.len()];
+        for b in 0..blocks {
+            for e in rows.ptr[b]..rows.ptr[b + 1] {
+                block_of[e as usize] = b as u32;
+            }
+        }
+        let mut col_ptr = vec![0u32; n + 1];
+        for &c in &rows.col {
+            col_ptr[c as usize + 1] += 1;
+        }
+        for c in 0..n {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let mut next = col_ptr.clone();
+        let mut by_col = vec![0u32; rows.col.len()];
+        for (e, &c) in rows.col.iter().enumerate() {
+            by_col[next[c as usize] as usize] = e as u32;
+            next[c as usize] += 1;
+        }
+        JacobianProduct { rows, block_of, col_ptr, by_col }
+    }
+
+    /// y = (JᵀJ + diag(shift)) x.
+    fn apply(&self, x: &[f64], shift: &[f64], t: &mut Vec<[f64; 2]>, y: &mut [f64]) {
+        let r = self.rows;
+        let blocks = r.ptr.len().saturating_sub(1);
+        t.resize(blocks, [0.0; 2]);
+        t.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
+            for (i, tb) in chunk.iter_mut().enumerate() {
+                let b = k * 4096 + i;
+                let (mut t0, mut t1) = (0.0, 0.0);
+                for e in r.ptr[b] as usize..r.ptr[b + 1] as usize {
+                    let xc = x[r.col[e] as usize];
+                    t0 += r.d[e][0] * xc;
+                    t1 += r.d[e][1] * xc;
+                }
+                *tb = [t0, t1];
+            }
+        });
+        let t = &*t;
+        y.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
+            for (i, yc) in chunk.iter_mut().enumerate() {
+                let c = k * 4096 + i;
+                let mut acc = shift[c] * x[c];
+                for &e in &self.by_col[self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize] {
+                    let e = e as usize;
+                    let tb = t[self.block_of[e] as usize];
+                    acc += r.d[e][0] * tb[0] + r.d[e][1] * tb[1];
+                }
+                *yc = acc;
+            }
+        });
+    }
+}
+
+impl JacobianRows {
+    fn append(&mut self, other: &JacobianRows) {
+        let base = self.col.len() as u32;
+        if self.ptr.is_empty() {
+            self.ptr.push(0);
+        }
+        self.ptr.extend(other.ptr.iter().skip(1).map(|&p| p + base));
+        self.col.extend_from_slice(&other.col);
+        self.d.extend_from_slice(&other.d);
+    }
+
+    /// diag(JᵀJ).
+    fn diagonal(&self, n: usize) -> Vec<f64> {
+        let mut out = vec![0.0; n];
+        for (c, d) in self.col.iter().zip(&self.d) {
+            out[*c as usize] += d[0] * d[0] + d[1] * d[1];
+        }
+        out
+    }
 }
 
 impl Local {
@@ -208,6 +389,18 @@ impl Local {
     ) {
         self.block.clear();
         self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
+        if let Some(rows) = &mut self.rows {
+            if self.block.is_empty() {
+                return;
+            }
+            for &(a, da) in &self.block {
+                self.g.push((a, da[0] * r[0] + da[1] * r[1]));
+                rows.col.push(a as u32);
+                rows.d.push(da);
+            }
+            rows.ptr.push(rows.col.len() as u32);
+            return;
+        }
         for &(a, da) in &self.block {
             self.g.push((a, da[0] * r[0] + da[1] * r[1]));
             for &(b, db) in &self.block {
@@ -228,6 +421,7 @@ struct Assembler<'a> {
     g: Vec<f64>,
     vals: Vec<f64>,
     idx: Option<Vec<(u32, u32)>>,
+    rows: Option<JacobianRows>,
 }
 
 impl Assembler<'_> {
@@ -235,24 +429,43 @@ impl Assembler<'_> {
     fn rows<T: Sync>(&mut self, items: &[T], row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync) {
         let col_of = self.col_of;
         let record = self.idx.is_some();
-        let locals: Vec<Local> = items
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                let mut local = Local {
+        let matrix_free = self.rows.is_some();
+        let make = |chunk: &[T]| {
+            let mut local = if matrix_free {
+                Local {
+                    rows: Some(JacobianRows {
+                        ptr: vec![0],
+                        col: Vec::with_capacity(8 * chunk.len()),
+                        d: Vec::with_capacity(8 * chunk.len()),
+                    }),
+                    ..Local::default()
+                }
+            } else {
+                Local {
                     vals: Vec::with_capacity(64 * chunk.len()),
                     idx: record.then(|| Vec::with_capacity(64 * chunk.len())),
                     ..Local::default()
-                };
-                for it in chunk {
-                    row(it, &mut local, col_of);
                 }
-                local
-            })
-            .collect();
+            };
+            for it in chunk {
+                row(it, &mut local, col_of);
+            }
+            local
+        };
+        // Small blocks (one chunk) run on the calling thread: waking the pool costs more than
+        // the rows. Same chunks either way, so the sums are identical.
+        let locals: Vec<Local> = if items.len() <= CHUNK {
+            items.chunks(CHUNK).map(make).collect()
+        } else {
+            items.par_chunks(CHUNK).map(make).collect()
+        };
         for local in locals {
             self.vals.extend_from_slice(&local.vals);
             if let (Some(all), Some(idx)) = (&mut self.idx, &local.idx) {
                 all.extend_from_slice(idx);
+            }
+            if let (Some(all), Some(rows)) = (&mut self.rows, &local.rows) {
+                all.append(rows);
             }
             for (c, v) in local.g {
                 self.g[c] += v;
@@ -263,7 +476,12 @@ impl Assembler<'_> {
 
 /// Σ f(item) over `items`, in parallel chunks added in order (deterministic).
 fn chunked_sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
-    let parts: Vec<f64> = items.par_chunks(CHUNK).map(|c| c.iter().map(&f).sum::<f64>()).collect();
+    let sum = |c: &[T]| c.iter().map(&f).sum::<f64>();
+    let parts: Vec<f64> = if items.len() <= CHUNK {
+        items.chunks(CHUNK).map(sum).collect()
+    } else {
+        items.par_chunks(CHUNK).map(sum).collect()
+    };
     parts.iter().sum()
 }
 
@@ -398,11 +616,27 @@ impl System<'_> {
             g: vec![0.0; self.free.len()],
             vals: Vec::with_capacity(capacity),
             idx: record.then(Vec::new),
+            rows: None,
         };
         for b in &self.blocks {
             b.assemble(phi, &mut acc);
         }
         (acc.vals, acc.idx, acc.g)
+    }
+
+    /// The Jacobian's rows (matrix-free mode) and Jᵀr.
+    fn jacobian_rows(&self, phi: &[f64]) -> (JacobianRows, Vec<f64>) {
+        let mut acc = Assembler {
+            col_of: &self.col_of,
+            g: vec![0.0; self.free.len()],
+            vals: Vec::new(),
+            idx: None,
+            rows: Some(JacobianRows { ptr: vec![0], ..Default::default() }),
+        };
+        for b in &self.blocks {
+            b.assemble(phi, &mut acc);
+        }
+        (acc.rows.expect("matrix-free mode"), acc.g)
     }
 }
 
@@ -526,43 +760,84 @@ pub fn solve(
     }
     let mut energy = initial_energy.total();
     let mut pattern: Option<FixedPattern> = None;
+    let matrix_free = match options.linear_solver {
+        LinearSolver::Direct => false,
+        LinearSolver::ConjugateGradient => true,
+        LinearSolver::Auto => n >= CG_THRESHOLD,
+    };
+    let mut jacobian = JacobianRows::default();
+    let mut first_gradient: Option<f64> = None;
     let mut lambda = options.initial_damping;
     let mut nu = 2.0;
     let mut iterations = Vec::new();
     let mut stop = StopReason::IterationCap;
     'outer: for _ in 0..options.max_iterations {
         let t0 = Instant::now();
-        let capacity = pattern.as_ref().map_or(0, |p| p.slot.len());
-        let (vals, idx, grad) = sys.normal_equations(&phi, pattern.is_none(), capacity);
+        let (grad, diag) = if matrix_free {
+            let (rows, grad) = sys.jacobian_rows(&phi);
+            let diag = rows.diagonal(n);
+            jacobian = rows;
+            (grad, diag)
+        } else {
+            let capacity = pattern.as_ref().map_or(0, |p| p.slot.len());
+            let (vals, idx, grad) = sys.normal_equations(&phi, pattern.is_none(), capacity);
+            let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            if gmax.is_nan() || gmax <= options.gradient_tolerance {
+                stop = StopReason::Gradient;
+                break;
+            }
+            if pattern.is_none() {
+                let idx = idx.expect("recorded when there is no pattern");
+                pattern = Some(FixedPattern::new(n, &idx).map_err(numerical)?);
+            }
+            let pat = pattern.as_mut().expect("just built");
+            pat.fill(&vals);
+            (grad, pat.diagonal())
+        };
         let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         if gmax.is_nan() || gmax <= options.gradient_tolerance {
             stop = StopReason::Gradient;
             break;
         }
-        if pattern.is_none() {
-            let idx = idx.expect("recorded when there is no pattern");
-            pattern = Some(FixedPattern::new(n, &idx).map_err(numerical)?);
-        }
-        let pat = pattern.as_mut().expect("just built");
-        pat.fill(&vals);
-        let diag = pat.diagonal();
+        let gnorm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+        let g0 = *first_gradient.get_or_insert(gnorm);
+        let forcing = CG_FORCING.min(gnorm / g0.max(f64::MIN_POSITIVE));
         let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
         let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
+        let product = matrix_free.then(|| JacobianProduct::new(&jacobian, n));
         let assembly = t0.elapsed().as_secs_f64();
         loop {
             let t1 = Instant::now();
-            let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
-            pat.solve_damped(lambda, &dscale, rhs.as_mut()).map_err(numerical)?;
-            let delta: Vec<f64> = (0..n).map(|c| rhs[(c, 0)]).collect();
+            let (delta, predicted) = if let Some(product) = &product {
+                let shift: Vec<f64> = dscale.iter().map(|&d| lambda * d).collect();
+                let precond: Vec<f64> = diag.iter().zip(&shift).map(|(d, s)| d + s).collect();
+                let b: Vec<f64> = grad.iter().map(|g| -g).collect();
+                let (delta, _) = conjugate_gradient(product, &shift, &precond, &b, forcing);
+                // Predicted decrease of the Gauss–Newton model for an inexact step, on the
+                // scale of the direct branch's ½δᵀ(λDδ − g): ½(−2gᵀδ − δᵀJᵀJδ).
+                let mut jtj = vec![0.0; n];
+                product.apply(&delta, &vec![0.0; n], &mut Vec::new(), &mut jtj);
+                let pred = 0.5
+                    * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>();
+                (delta, pred)
+            } else {
+                let pat = pattern.as_mut().expect("built in the assembly");
+                let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
+                pat.solve_damped(lambda, &dscale, rhs.as_mut()).map_err(numerical)?;
+                let delta: Vec<f64> = (0..n).map(|c| rhs[(c, 0)]).collect();
+                // Predicted decrease of the quadratic model: ½δᵀ(λDδ − g).
+                let pred: f64 = 0.5
+                    * (0..n)
+                        .map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c]))
+                        .sum::<f64>();
+                (delta, pred)
+            };
             let mut trial = phi.clone();
             for (c, &v) in sys.free.iter().enumerate() {
                 trial[v as usize] += delta[c];
             }
             let mut new = sys.energy(&trial);
             let new_energy = new.total();
-            // Predicted decrease of the quadratic model: ½δᵀ(λDδ − g).
-            let predicted: f64 = 0.5
-                * (0..n).map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c])).sum::<f64>();
             let rho = if predicted > 0.0 { (energy - new_energy) / predicted } else { -1.0 };
             if new_energy.is_finite() && new_energy < energy && rho > 0.0 {
                 let step_norm = delta.iter().fold(0.0f64, |a, b| a.max(b.abs()));

@@ -14,7 +14,9 @@ pub mod smoothness;
 
 pub use fabrication::{GradientHinge, HingeKind};
 pub use highlight_term::{HighlightTerm, VertexJacobian};
-pub use lm::{solve, Energies, HingeOptions, Iteration, LmOptions, LmResult, StopReason};
+pub use lm::{
+    solve, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, LmResult, StopReason,
+};
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
 pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};
 pub use settings::{Constraints, SolverSettings, Splay, TurningRadius};

@@ -17,7 +17,7 @@ use serde::Serialize;
 use super::fabrication::{GradientHinge, HingeKind};
 use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
-use super::lm::{solve, Energies, HingeOptions, Iteration, LmOptions, StopReason};
+use super::lm::{solve, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, StopReason};
 use super::locks::{angle_difference, resolve_locks, LockConflict};
 use super::settings::SolverSettings;
 use super::singularities::{singularities, Singularity};
@@ -201,6 +201,7 @@ pub fn optimize(
         splay: c.splay.as_ref().map(|s| HingeOptions { bound: s.max, weight: s.weight }),
         soft_locks: locks.soft.clone(),
         interleaved_smoothing: settings.smoothing_pass(),
+        linear_solver: LinearSolver::Auto,
     };
     let stages: Vec<f64> = if settings.continuation && settings.smoothness > 0.0 {
         vec![1000.0, 100.0, 10.0, 1.0]
