@@ -18,8 +18,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::geom::{norm, sub, Vec2};
-use crate::grid::PointGrid;
-use crate::improve::{or_opt, rotate_rings, two_opt};
+use crate::buckets::Buckets;
+use crate::improve::Search;
 
 /// Global stroke orientation (the brushing direction is a process choice).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -167,10 +167,14 @@ pub fn order_strokes(ends: &[Ends], flip: bool, opts: &OrderOptions) -> Ordering
     let mut tour = Tour::new(ends);
     let mut order = greedy(&mut tour, flip, opts.home);
     let travel_greedy = tour.length(&order, opts.home);
-    for _ in 0..2 {
-        two_opt(&mut tour, &mut order, flip, opts);
-        or_opt(&mut tour, &mut order, opts);
-        rotate_rings(&mut tour, &order, opts.home);
+    if opts.two_opt_passes > 0 && n >= 2 {
+        let max_moves = opts.two_opt_passes.saturating_mul(n);
+        let mut search = Search::new(&mut tour, &order, flip, opts.home, opts.neighbours);
+        search.run(max_moves);
+        // Second round: lists rebuilt at the loops' new entry vertices.
+        search.restart();
+        search.run(max_moves);
+        order = search.order();
     }
     let travel = tour.length(&order, opts.home);
     let first = tour.ent[order[0]];
@@ -193,77 +197,48 @@ pub fn tour_length(e: &[Ends], order: &[usize], flipped: &[bool], home: Vec2) ->
     tour.length(order, home)
 }
 
-fn bbox(e: &[Ends], home: Vec2) -> [Vec2; 2] {
-    let mut b = [home, home];
-    for x in e {
-        for p in [x.start, x.end].iter().chain(&x.ring) {
-            for k in 0..2 {
-                b[0][k] = b[0][k].min(p[k]);
-                b[1][k] = b[1][k].max(p[k]);
-            }
-        }
-    }
-    b
-}
-
 const START: u32 = u32::MAX;
 const END: u32 = u32::MAX - 1;
 
-/// Greedy nearest neighbour with a grid of unvisited entry points (ties: lowest id).
+/// Greedy nearest neighbour from `home`: always go to the nearest entry point of an unused
+/// stroke (ties: lowest candidate id). Used strokes' candidates leave the buckets, so each
+/// step costs about one ring search.
 fn greedy(tour: &mut Tour, flip: bool, home: Vec2) -> Vec<usize> {
     let e = tour.e;
     let n = e.len();
-    let b = bbox(e, home);
-    // Entry candidates: (stroke, START | END | ring vertex).
-    let mut cand: Vec<(u32, u32, Vec2)> = Vec::new();
+    // Entry candidates: (stroke, START | END | ring vertex); `first[s]..first[s + 1]` are
+    // stroke s's.
+    let mut cand: Vec<(u32, u32)> = Vec::new();
+    let mut pts: Vec<Vec2> = Vec::new();
+    let mut first = Vec::with_capacity(n + 1);
     for (s, x) in e.iter().enumerate() {
+        first.push(cand.len());
         if x.ring.is_empty() {
-            cand.push((s as u32, START, x.start));
+            cand.push((s as u32, START));
+            pts.push(x.start);
             if flip {
-                cand.push((s as u32, END, x.end));
+                cand.push((s as u32, END));
+                pts.push(x.end);
             }
         } else {
             for (k, p) in x.ring.iter().enumerate() {
-                cand.push((s as u32, k as u32, *p));
+                cand.push((s as u32, k as u32));
+                pts.push(*p);
             }
         }
     }
-    let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
-    let cell = (area / cand.len() as f64).sqrt().max(1e-9);
-    let mut grid = PointGrid::new(b, cell);
-    for (id, c) in cand.iter().enumerate() {
-        grid.insert(c.2, id as u32);
-    }
-    let mut used = vec![false; n];
+    first.push(cand.len());
+    let cell = cell_size(&pts, n);
+    let mut grid = Buckets::new(pts, cell);
     let mut order = Vec::with_capacity(n);
     let mut pos = home;
-    let span = (b[1][0] - b[0][0]).max(b[1][1] - b[0][1]) + 2.0 * cell;
     for _ in 0..n {
-        let mut r = cell;
-        let mut best: Option<(f64, u32)> = None;
-        loop {
-            grid.visit(pos, r, |id| {
-                let (s, _, p) = cand[id as usize];
-                if !used[s as usize] {
-                    let dd = d(pos, p);
-                    if dd <= r && best.is_none_or(|(bd, bid)| dd < bd || (dd == bd && id < bid)) {
-                        best = Some((dd, id));
-                    }
-                }
-                true
-            });
-            if best.is_some() || r > 2.0 * span {
-                break;
-            }
-            r *= 2.0;
-        }
-        let id = match best {
-            Some((_, id)) => id as usize,
-            None => cand.iter().position(|c| !used[c.0 as usize]).unwrap_or(0),
-        };
-        let (s, code, _) = cand[id];
+        let Some((_, id)) = grid.nearest(pos, |_| true) else { break };
+        let (s, code) = cand[id as usize];
         let s = s as usize;
-        used[s] = true;
+        for c in first[s]..first[s + 1] {
+            grid.remove(c as u32);
+        }
         match code {
             START => tour.set_flip(s, false),
             END => tour.set_flip(s, true),
@@ -273,4 +248,17 @@ fn greedy(tour: &mut Tour, flip: bool, home: Vec2) -> Vec<usize> {
         pos = tour.ext[s];
     }
     order
+}
+
+/// Bucket size for `items` points spread over their bounding box: about `per` items a cell.
+pub(crate) fn cell_size(pts: &[Vec2], items: usize) -> f64 {
+    let mut b = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+    for p in pts {
+        for k in 0..2 {
+            b[0][k] = b[0][k].min(p[k]);
+            b[1][k] = b[1][k].max(p[k]);
+        }
+    }
+    let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
+    (2.0 * area / items.max(1) as f64).sqrt().max(1e-9)
 }
