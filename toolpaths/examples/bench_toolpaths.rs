@@ -110,6 +110,19 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
         o.travel_between,
         plan.travel_between,
     );
+    if !flip {
+        let t = Instant::now();
+        let b = travel_bound(&ends, &BoundOptions::default());
+        let a = b.assignment.unwrap_or(f64::NAN);
+        println!(
+            "  lower bound on travel between strokes (any --no-flip order): nearest {:.1} mm, \
+             assignment {a:.1} mm (primal on lists {:.1} mm) [{:.3} s]; ours is {:+.1} % above it",
+            b.nearest,
+            b.assignment_primal.unwrap_or(f64::NAN),
+            secs(t),
+            100.0 * (o.travel_between / a - 1.0),
+        );
+    }
     // vpype sees the same oriented strokes twice: in our order, and in placement order (so
     // its `linesort --no-flip` starts from scratch rather than from our tour).
     let svg_opts = SvgOptions { outlines: false, ..Default::default() };

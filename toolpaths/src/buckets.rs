@@ -68,11 +68,6 @@ impl Buckets {
         g
     }
 
-    /// Position of item `id`.
-    pub(crate) fn point(&self, id: u32) -> Vec2 {
-        self.pts[id as usize]
-    }
-
     fn cell_of(&self, p: Vec2) -> (usize, usize) {
         let f = |x: f64, o: f64, n: usize| {
             let i = ((x - o) / self.cell).floor();
@@ -138,6 +133,19 @@ impl Buckets {
                 }
             }
         }
+    }
+
+    /// Call `f(id, distance)` for every live item within distance `r` of `p` (and possibly a
+    /// few beyond it).
+    pub(crate) fn within(&self, p: Vec2, r: f64, mut f: impl FnMut(u32, f64)) {
+        if r.is_nan() || r < 0.0 {
+            return;
+        }
+        self.rings(p, |lb| lb > r, |id, dd| {
+            if dd <= r {
+                f(id, dd)
+            }
+        });
     }
 
     /// The nearest live item to `p` accepted by `keep` (ties: lowest id), with its distance.

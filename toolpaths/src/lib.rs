@@ -28,6 +28,7 @@
 
 #![warn(missing_docs)]
 
+mod bound;
 mod buckets;
 mod coverage;
 mod error;
@@ -52,6 +53,7 @@ mod svg_out;
 mod topology;
 mod trace;
 
+pub use bound::{travel_bound, BoundOptions, TravelBound};
 pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};
 pub use error::{Result, ToolpathError};
 pub use field::{singularities, Singularity};
