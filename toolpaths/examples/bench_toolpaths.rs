@@ -110,7 +110,7 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
         o.travel_between,
         plan.travel_between,
     );
-    if !flip {
+    if !flip && std::env::var_os("BENCH_NO_BOUND").is_none() {
         let t = Instant::now();
         let b = travel_bound(&ends, &BoundOptions::default());
         let a = b.assignment.unwrap_or(f64::NAN);

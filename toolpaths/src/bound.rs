@@ -100,7 +100,7 @@ pub fn travel_bound(ends: &[Ends], opts: &BoundOptions) -> TravelBound {
     let grid = Buckets::new(pts, cell);
     let home_cost = |c: usize| opts.home.map_or(0.0, |h| dist_to(h, entries(&ends[c])));
     // Candidate lists grow (×4) while no perfect assignment exists on them or the dual
-    // lost more than 0.1 % to pairs outside them; at k ≥ n − 1 they are complete.
+    // lost more than 1 % to pairs outside them; at k ≥ n − 1 they are complete.
     let mut k = opts.neighbours.max(1);
     loop {
         let (rows, nearest) = candidates(ends, &grid, &owner, k, &home_cost, opts.home.is_some());
@@ -116,7 +116,7 @@ pub fn travel_bound(ends: &[Ends], opts: &BoundOptions) -> TravelBound {
             .map(|r| rows[r].iter().find(|e| e.0 == col_of_row[r]).map_or(0.0, |e| e.1))
             .sum();
         let dual = repaired_dual(ends, &grid, &owner, &rows, &v, &col_of_row, &home_cost);
-        if complete || primal - dual <= 1e-3 * primal {
+        if complete || primal - dual <= 1e-2 * primal {
             return TravelBound { nearest, assignment: Some(dual), assignment_primal: Some(primal) };
         }
         k = (4 * k).min(n);

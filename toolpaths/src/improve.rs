@@ -35,14 +35,6 @@ const EPS: f64 = 1e-9;
 /// Edges per block of the prefix sums.
 const BLOCK: usize = 128;
 
-/// Counts of applied moves.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct MoveCounts {
-    pub(crate) two_opt: usize,
-    pub(crate) swap: usize,
-    pub(crate) ring: usize,
-}
-
 /// A candidate move and its gain.
 #[derive(Clone, Copy, Debug)]
 enum Move {
@@ -66,6 +58,7 @@ pub(crate) struct Search<'t, 'e> {
     /// strokes and a start the nearest ends; with flips, the nearest endpoints of either kind.
     nb: Vec<u32>,
     k: usize,
+    stride: usize,
     /// No flips: per-edge forward / reverse travel (see the module docs) and their prefix
     /// sums in blocks of `BLOCK` edges: within the block (`pf`, `pr`) and of whole blocks
     /// before it (`bf`, `br`), so an update costs O(changed + BLOCK + n / BLOCK).
@@ -77,7 +70,6 @@ pub(crate) struct Search<'t, 'e> {
     br: Vec<f64>,
     queue: VecDeque<usize>,
     queued: Vec<bool>,
-    pub(crate) moves: MoveCounts,
 }
 
 impl<'t, 'e> Search<'t, 'e> {
@@ -108,6 +100,7 @@ impl<'t, 'e> Search<'t, 'e> {
             pos,
             nb: Vec::new(),
             k,
+            stride: k,
             f: Vec::new(),
             r: Vec::new(),
             pf: Vec::new(),
@@ -116,7 +109,6 @@ impl<'t, 'e> Search<'t, 'e> {
             br: Vec::new(),
             queue: (0..n).map(|p| order[p]).collect(),
             queued: vec![true; n + 1],
-            moves: MoveCounts::default(),
         };
         s.queued[n] = false;
         s.build_lists();
@@ -138,12 +130,22 @@ impl<'t, 'e> Search<'t, 'e> {
     }
 
     fn build_lists(&mut self) {
-        let (n, k) = (self.n, self.k);
+        let n = self.n;
+        let k = self.k;
+        // As many again of the other kind: without flips an end also lists the strokes that
+        // end near it (their successors are candidates for the same return move).
+        let extra = k;
+        let stride = k + extra;
         let t = &*self.tour;
-        let mut nb = vec![u32::MAX; (2 * n + 1) * k];
-        let mut put = |id: usize, list: Vec<(f64, u32)>| {
-            for (slot, (_, s)) in list.into_iter().enumerate() {
-                nb[id * k + slot] = s;
+        let mut nb = vec![u32::MAX; (2 * n + 1) * stride];
+        let mut put = |id: usize, list: Vec<(f64, u32)>, more: Vec<(f64, u32)>| {
+            let slots = &mut nb[id * stride..(id + 1) * stride];
+            let mut m = 0;
+            for (_, s) in list.into_iter().chain(more) {
+                if m < stride && !slots[..m].contains(&s) {
+                    slots[m] = s;
+                    m += 1;
+                }
             }
         };
         if self.flip {
@@ -153,24 +155,26 @@ impl<'t, 'e> Search<'t, 'e> {
             for id in 0..2 * n {
                 let own = (id / 2) as u32;
                 let key = |o: u32| (o / 2 != own).then_some(o / 2);
-                put(id, g.k_nearest(endpoint(t, id), k, key));
+                put(id, g.k_nearest(endpoint(t, id), stride, key), vec![]);
             }
-            put(2 * n, g.k_nearest(self.home, k, |o| Some(o / 2)));
+            put(2 * n, g.k_nearest(self.home, stride, |o| Some(o / 2)), vec![]);
         } else {
             let starts = Buckets::new(t.ent.clone(), cell_size(&t.ent, n));
             let ends = Buckets::new(t.ext.clone(), cell_size(&t.ext, n));
             for s in 0..n {
                 let other = |o: u32| (o as usize != s).then_some(o);
-                put(2 * s + 1, starts.k_nearest(t.ext[s], k, other));
-                put(2 * s, ends.k_nearest(t.ent[s], k, other));
+                let (x, y) = (t.ext[s], t.ent[s]);
+                put(2 * s + 1, starts.k_nearest(x, k, other), ends.k_nearest(x, extra, other));
+                put(2 * s, ends.k_nearest(y, k, other), starts.k_nearest(y, extra, other));
             }
-            put(2 * n, starts.k_nearest(self.home, k, Some));
+            put(2 * n, starts.k_nearest(self.home, stride, Some), vec![]);
         }
         self.nb = nb;
+        self.stride = stride;
     }
 
     fn list(&self, id: usize) -> impl Iterator<Item = usize> + '_ {
-        self.nb[id * self.k..(id + 1) * self.k]
+        self.nb[id * self.stride..(id + 1) * self.stride]
             .iter()
             .take_while(|&&s| s != u32::MAX)
             .map(|&s| s as usize)
@@ -284,7 +288,6 @@ impl<'t, 'e> Search<'t, 'e> {
 
     /// Best move removing an edge at the entry or exit of the stroke at position `p`.
     fn best_move(&self, p: usize) -> Option<(f64, Move)> {
-        let n = self.n;
         let mut best = None;
         for i1 in [p - 1, p] {
             let t1 = self.seq[i1];
@@ -377,7 +380,6 @@ impl<'t, 'e> Search<'t, 'e> {
                 Self::consider(&mut best, now - cost(pt), Move::Ring(p, v));
             }
         }
-        let _ = n;
         best
     }
 
@@ -399,7 +401,6 @@ impl<'t, 'e> Search<'t, 'e> {
                 for k in [i - 1, i, j, j + 1] {
                     self.push(k);
                 }
-                self.moves.two_opt += 1;
             }
             Move::Swap(a, b, c) => {
                 self.seq[a + 1..=c].rotate_left(b - a);
@@ -411,7 +412,6 @@ impl<'t, 'e> Search<'t, 'e> {
                 for k in [a, a + 1, mid, mid + 1, c, c + 1] {
                     self.push(k);
                 }
-                self.moves.swap += 1;
             }
             Move::Ring(k, v) => {
                 self.tour.set_vertex(self.seq[k], v);
@@ -419,7 +419,6 @@ impl<'t, 'e> Search<'t, 'e> {
                 for q in [k - 1, k + 1] {
                     self.push(q);
                 }
-                self.moves.ring += 1;
             }
         }
     }
@@ -440,15 +439,6 @@ impl<'t, 'e> Search<'t, 'e> {
         }
         self.queue.clear();
         self.queued.iter_mut().for_each(|q| *q = false);
-    }
-
-    /// Queue every stroke again and rebuild the neighbour lists at the current entry/exit
-    /// points (loops may have been re-entered elsewhere).
-    pub(crate) fn restart(&mut self) {
-        self.build_lists();
-        for k in 1..=self.n {
-            self.push(k);
-        }
     }
 }
 

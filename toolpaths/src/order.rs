@@ -171,9 +171,6 @@ pub fn order_strokes(ends: &[Ends], flip: bool, opts: &OrderOptions) -> Ordering
         let max_moves = opts.two_opt_passes.saturating_mul(n);
         let mut search = Search::new(&mut tour, &order, flip, opts.home, opts.neighbours);
         search.run(max_moves);
-        // Second round: lists rebuilt at the loops' new entry vertices.
-        search.restart();
-        search.run(max_moves);
         order = search.order();
     }
     let travel = tour.length(&order, opts.home);
@@ -196,6 +193,9 @@ pub fn tour_length(e: &[Ends], order: &[usize], flipped: &[bool], home: Vec2) ->
     }
     tour.length(order, home)
 }
+
+/// Most entry vertices of a loop offered to the greedy phase.
+const GREEDY_RING_POINTS: usize = 16;
 
 const START: u32 = u32::MAX;
 const END: u32 = u32::MAX - 1;
@@ -221,7 +221,10 @@ fn greedy(tour: &mut Tour, flip: bool, home: Vec2) -> Vec<usize> {
                 pts.push(x.end);
             }
         } else {
-            for (k, p) in x.ring.iter().enumerate() {
+            // A loop offers a few evenly spaced vertices; the local search re-chooses among
+            // all of them.
+            let step = x.ring.len().div_ceil(GREEDY_RING_POINTS).max(1);
+            for (k, p) in x.ring.iter().enumerate().step_by(step) {
                 cand.push((s as u32, k as u32));
                 pts.push(*p);
             }
