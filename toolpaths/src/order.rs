@@ -1,19 +1,16 @@
 //! Stroke orientation and ordering to minimize travel.
 //!
 //! Ordering is an open asymmetric travelling-salesman problem over strokes with fixed entry
-//! and exit points: greedy nearest neighbour from the home position, then 2-opt with
-//! neighbour lists (Johnson & McGeoch, *The TSP: a case study in local optimization*, 1997,
-//! §3). Reversing a run of strokes that may not be flipped changes the travel *inside* the
-//! run, so the 2-opt gain uses prefix sums of forward (`exit_k → entry_{k+1}`) and backward
-//! (`exit_{k+1} → entry_k`) travel, making every candidate move O(1). Only `alternate` lets
-//! the orderer flip strokes. No randomness: the result depends only on the input order.
-//!
-//! After 2-opt, Or-opt moves runs of one to three consecutive strokes, unreversed, to the
-//! neighbour-list position that saves the most travel (Or, 1976).
+//! and exit points (only `alternate` lets the orderer flip strokes): greedy nearest neighbour
+//! from the home position, then a queue-driven local search with neighbour lists — 2-opt,
+//! segment swaps (asymmetric 3-opt / Or-opt) and re-choosing loop entries — see
+//! `improve.rs` (Johnson & McGeoch, *The TSP: a case study in local optimization*,
+//! 1997, §3; Or, 1976). No randomness: the result depends only on the input.
 //!
 //! Closed loops may be entered at any of their vertices (they exit where they entered):
-//! greedy picks the nearest vertex, and after 2-opt each loop's entry is re-chosen to
-//! minimize `d(previous exit, x) + d(x, next entry)`. This is a rotation, not a flip.
+//! greedy picks the nearest of up to 16 of them and the local search moves the entry to the
+//! vertex that minimizes `d(previous exit, x) + d(x, next entry)`. This is a rotation, not a
+//! flip.
 
 use serde::{Deserialize, Serialize};
 
@@ -44,9 +41,12 @@ pub enum Direction {
 pub struct OrderOptions {
     /// Where the tool starts (machine XY, mm). Default [0, 0].
     pub home: Vec2,
-    /// Most 2-opt sweeps over the tour. Default 50.
+    /// Local-search effort: at most this many improving moves per stroke (0: greedy only).
+    /// Default 50 (never reached in practice: the search stops at a local optimum).
     pub two_opt_passes: usize,
-    /// Candidate neighbours per endpoint for 2-opt. Default 10.
+    /// Candidate neighbours per endpoint: the nearest entries to an exit (and exits to an
+    /// entry), plus as many of the same kind; with flips, twice this many endpoints of either
+    /// kind. Default 10.
     pub neighbours: usize,
 }
 
@@ -93,7 +93,7 @@ pub struct Ordering {
     pub travel: f64,
     /// Travel between strokes only (excluding the first move from home), mm.
     pub travel_between: f64,
-    /// Travel after the greedy phase, before 2-opt (from home), mm.
+    /// Travel after the greedy phase, before the local search (from home), mm.
     pub travel_greedy: f64,
 }
 
