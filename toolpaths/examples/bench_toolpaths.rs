@@ -82,7 +82,8 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
     // Ordering alone, on exactly the planned entry/exit points, repeated in-process.
     let ends = ordering_ends(dom, pl, &plan_opts).unwrap();
     let flip = direction == Direction::Alternate;
-    let runs: usize = std::env::var("BENCH_ORDER_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(7);
+    let runs: usize =
+        std::env::var("BENCH_ORDER_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(7);
     let (mut wall, mut cpus) = (Vec::new(), Vec::new());
     let mut o = None;
     for _ in 0..runs.max(1) {

@@ -117,7 +117,11 @@ pub fn travel_bound(ends: &[Ends], opts: &BoundOptions) -> TravelBound {
             .sum();
         let dual = repaired_dual(ends, &grid, &owner, &rows, &v, &col_of_row, &home_cost);
         if complete || primal - dual <= 1e-2 * primal {
-            return TravelBound { nearest, assignment: Some(dual), assignment_primal: Some(primal) };
+            return TravelBound {
+                nearest,
+                assignment: Some(dual),
+                assignment_primal: Some(primal),
+            };
         }
         k = (4 * k).min(n);
     }

@@ -141,11 +141,15 @@ impl Buckets {
         if r.is_nan() || r < 0.0 {
             return;
         }
-        self.rings(p, |lb| lb > r, |id, dd| {
-            if dd <= r {
-                f(id, dd)
-            }
-        });
+        self.rings(
+            p,
+            |lb| lb > r,
+            |id, dd| {
+                if dd <= r {
+                    f(id, dd)
+                }
+            },
+        );
     }
 
     /// The nearest live item to `p` accepted by `keep` (ties: lowest id), with its distance.

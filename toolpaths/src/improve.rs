@@ -245,7 +245,11 @@ impl<'t, 'e> Search<'t, 'e> {
         }
         for b in b0 + 1..self.bf.len() {
             let last = (b * BLOCK - 1).min(self.n);
-            let (tf, tr) = if last + 1 > (b - 1) * BLOCK { (self.pf[last], self.pr[last]) } else { (0.0, 0.0) };
+            let (tf, tr) = if last + 1 > (b - 1) * BLOCK {
+                (self.pf[last], self.pr[last])
+            } else {
+                (0.0, 0.0)
+            };
             self.bf[b] = self.bf[b - 1] + tf;
             self.br[b] = self.br[b - 1] + tr;
         }
@@ -286,10 +290,12 @@ impl<'t, 'e> Search<'t, 'e> {
         }
     }
 
-    /// Best move removing an edge at the entry or exit of the stroke at position `p`.
+    /// Best move removing the exit edge of the stroke at position `p` (and loop entries).
     fn best_move(&self, p: usize) -> Option<(f64, Move)> {
         let mut best = None;
-        for i1 in [p - 1, p] {
+        // Moves are found from the tail of a removed edge: every changed edge queues its tail,
+        // so a stroke only looks at its own exit (the first stroke also at home's).
+        for i1 in if p == 1 { 0..=1 } else { p..=p } {
             let t1 = self.seq[i1];
             let x1 = self.x(i1);
             for t3 in self.list(self.exit_list(t1)) {
@@ -298,16 +304,25 @@ impl<'t, 'e> Search<'t, 'e> {
                     // 2-opt, new edge X(i1) → (new entry of) seq[q].
                     let ok = i1 + 1 < q || (self.flip && !self.is_ring(q));
                     if ok {
-                        Self::consider(&mut best, self.reverse_gain(i1 + 1, q), Move::Reverse(i1 + 1, q));
+                        Self::consider(
+                            &mut best,
+                            self.reverse_gain(i1 + 1, q),
+                            Move::Reverse(i1 + 1, q),
+                        );
                     }
                     // 2-opt, new edge X(i1) → N(q): seq[i1] keeps its direction.
                     if !self.flip && i1 >= 1 && i1 + 1 < q {
-                        Self::consider(&mut best, self.reverse_gain(i1, q - 1), Move::Reverse(i1, q - 1));
+                        Self::consider(
+                            &mut best,
+                            self.reverse_gain(i1, q - 1),
+                            Move::Reverse(i1, q - 1),
+                        );
                     }
                     if q >= i1 + 2 {
                         // Swap, new edge a → b' with a = i1, b' = q.
                         let (a, b) = (i1, q - 1);
-                        let g1 = d(x1, self.en(a + 1)) + d(self.x(b), self.en(q)) - d(x1, self.en(q));
+                        let g1 =
+                            d(x1, self.en(a + 1)) + d(self.x(b), self.en(q)) - d(x1, self.en(q));
                         if g1 > EPS {
                             for c in self.list(self.entry_list(self.seq[a + 1])) {
                                 let kc = self.pos[c];
@@ -324,7 +339,8 @@ impl<'t, 'e> Search<'t, 'e> {
                         // Swap, new edge b → c' with b = i1, c' = q.
                         if i1 >= 1 {
                             let (b, c) = (i1, q - 1);
-                            let g1 = d(x1, self.en(b + 1)) + d(self.x(c), self.en(q)) - d(x1, self.en(q));
+                            let g1 = d(x1, self.en(b + 1)) + d(self.x(c), self.en(q))
+                                - d(x1, self.en(q));
                             if g1 > EPS {
                                 let entry = self.seq[b + 1];
                                 let mut try_a = |ka: usize| {
@@ -355,7 +371,8 @@ impl<'t, 'e> Search<'t, 'e> {
                                 continue;
                             }
                             let xb = self.x(kb - 1);
-                            let gain = g1 + d(xb, self.en(kb)) - d(xa, self.en(kb)) - self.dn(xb, c + 1);
+                            let gain =
+                                g1 + d(xb, self.en(kb)) - d(xa, self.en(kb)) - self.dn(xb, c + 1);
                             Self::consider(&mut best, gain, Move::Swap(a, kb - 1, c));
                         }
                     }
@@ -366,7 +383,11 @@ impl<'t, 'e> Search<'t, 'e> {
                 for t3 in self.list(self.entry_list(t1)) {
                     let q = self.pos[t3];
                     if q > i1 && (i1 + 1 < q || !self.is_ring(i1)) {
-                        Self::consider(&mut best, self.reverse_gain(i1, q - 1), Move::Reverse(i1, q - 1));
+                        Self::consider(
+                            &mut best,
+                            self.reverse_gain(i1, q - 1),
+                            Move::Reverse(i1, q - 1),
+                        );
                     }
                 }
             }

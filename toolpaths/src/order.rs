@@ -14,8 +14,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::geom::{norm, sub, Vec2};
 use crate::buckets::Buckets;
+use crate::geom::{norm, sub, Vec2};
 use crate::improve::Search;
 
 /// Global stroke orientation (the brushing direction is a process choice).
