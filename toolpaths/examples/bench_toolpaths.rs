@@ -54,7 +54,7 @@ fn cpu() -> f64 {
 
 fn check_svg(svg: &str, name: &str) -> Option<String> {
     let tool = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/tools/check-svg");
-    if !tool.exists() {
+    if !tool.exists() || std::env::var_os("BENCH_NO_VPYPE").is_some() {
         return None;
     }
     let dir = std::env::temp_dir().join("grainline-bench");
@@ -65,36 +65,65 @@ fn check_svg(svg: &str, name: &str) -> Option<String> {
     Some(String::from_utf8_lossy(&out.stdout).trim().to_string())
 }
 
+/// min / median / max of a sample.
+fn stats(mut v: Vec<f64>) -> (f64, f64, f64) {
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2], v[v.len() - 1])
+}
+
 fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Direction) {
-    let plan_opts = PlanOptions { direction, ..Default::default() };
+    let mut plan_opts = PlanOptions { direction, ..Default::default() };
+    if let Some(k) = std::env::var("BENCH_K").ok().and_then(|v| v.parse().ok()) {
+        plan_opts.order.neighbours = k;
+    }
     let t = Instant::now();
     let plan = plan_toolpath(dom, pl, &plan_opts).unwrap();
     let t_plan = secs(t);
-    // Ordering alone, on the same entry/exit points.
-    let ends: Vec<Ends> = plan
-        .passes
-        .iter()
-        .map(|p| {
-            let a = &p.uv[0];
-            let b = p.uv.last().unwrap();
-            if p.stops[0] == StopReason::ClosedLoop && a.len() > 3 {
-                Ends::ring(a[..a.len() - 1].to_vec())
-            } else {
-                Ends::open(a[0], b[b.len() - 1])
-            }
-        })
-        .collect();
-    let (t, c) = (Instant::now(), cpu());
-    let o = order_strokes(&ends, direction == Direction::Alternate, &OrderOptions::default());
-    let (t_order, c_order) = (secs(t), cpu() - c);
+    // Ordering alone, on exactly the planned entry/exit points, repeated in-process.
+    let ends = ordering_ends(dom, pl, &plan_opts).unwrap();
+    let flip = direction == Direction::Alternate;
+    let runs: usize =
+        std::env::var("BENCH_ORDER_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(7);
+    let (mut wall, mut cpus) = (Vec::new(), Vec::new());
+    let mut o = None;
+    for _ in 0..runs.max(1) {
+        let (t, c) = (Instant::now(), cpu());
+        let r = order_strokes(&ends, flip, &plan_opts.order);
+        wall.push(secs(t));
+        cpus.push(cpu() - c);
+        if let Some(prev) = &o {
+            assert_eq!(prev, &r, "ordering is not deterministic");
+        }
+        o = Some(r);
+    }
+    let o = o.unwrap();
+    let (w0, w1, w2) = stats(wall);
+    let (c0, c1, c2) = stats(cpus);
     println!(
-        "{label}: {} strokes; plan {t_plan:.3} s (ordering alone {t_order:.3} s wall, {c_order:.2} s CPU); travel between \
-         strokes: greedy {:.1} mm -> greedy+2-opt {:.1} mm (as planned {:.1} mm)",
+        "{label}: {} strokes ({} loops); plan {t_plan:.3} s; ordering x{runs}: wall min/median/max \
+         {w0:.3}/{w1:.3}/{w2:.3} s, CPU {c0:.2}/{c1:.2}/{c2:.2} s",
         ends.len(),
+        ends.iter().filter(|e| !e.ring.is_empty()).count(),
+    );
+    println!(
+        "  travel between strokes: greedy {:.1} mm -> ours {:.1} mm (plan {:.1} mm)",
         o.travel_greedy - o.travel + o.travel_between,
         o.travel_between,
         plan.travel_between,
     );
+    if !flip && std::env::var_os("BENCH_NO_BOUND").is_none() {
+        let t = Instant::now();
+        let b = travel_bound(&ends, &BoundOptions::default());
+        let a = b.assignment.unwrap_or(f64::NAN);
+        println!(
+            "  lower bound on travel between strokes (any --no-flip order): nearest {:.1} mm, \
+             assignment {a:.1} mm (primal on lists {:.1} mm) [{:.3} s]; ours is {:+.1} % above it",
+            b.nearest,
+            b.assignment_primal.unwrap_or(f64::NAN),
+            secs(t),
+            100.0 * (o.travel_between / a - 1.0),
+        );
+    }
     // vpype sees the same oriented strokes twice: in our order, and in placement order (so
     // its `linesort --no-flip` starts from scratch rather than from our tour).
     let svg_opts = SvgOptions { outlines: false, ..Default::default() };
@@ -109,7 +138,7 @@ fn ordering_report(label: &str, dom: &Domain, pl: &Placement, direction: Directi
     }
 }
 
-fn bench_cells(quick: bool, place_only: bool) {
+fn bench_cells(quick: bool, place_only: bool, order_only: bool) {
     let (n, cells) = if quick { (200, 10.0) } else { (707, 40.0) };
     let d_sep: f64 = std::env::var("BENCH_DSEP")
         .ok()
@@ -155,6 +184,10 @@ fn bench_cells(quick: bool, place_only: bool) {
     }
     println!("cells: stroke ends by stop reason: {stops:?}");
     if place_only {
+        return;
+    }
+    if order_only {
+        ordering_report("cells", &dom, &pl, Direction::Along);
         return;
     }
     let t = Instant::now();
@@ -234,13 +267,18 @@ fn bench_annulus() {
 }
 
 fn main() {
+    if std::env::args().any(|a| a == "--order-only") {
+        bench_cells(false, false, true);
+        bench_sheet();
+        return;
+    }
     let quick = std::env::args().any(|a| a == "--quick");
     if std::env::args().any(|a| a == "--annulus-only") {
         bench_annulus();
         return;
     }
     let place_only = std::env::args().any(|a| a == "--place-only");
-    bench_cells(quick, place_only);
+    bench_cells(quick, place_only, false);
     if place_only {
         return;
     }

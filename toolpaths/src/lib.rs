@@ -28,6 +28,8 @@
 
 #![warn(missing_docs)]
 
+mod bound;
+mod buckets;
 mod coverage;
 mod error;
 mod field;
@@ -51,6 +53,7 @@ mod svg_out;
 mod topology;
 mod trace;
 
+pub use bound::{travel_bound, BoundOptions, TravelBound};
 pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};
 pub use error::{Result, ToolpathError};
 pub use field::{singularities, Singularity};
@@ -61,7 +64,9 @@ pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};
 pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
 pub use order::{order_strokes, tour_length, Direction, Ends, OrderOptions, Ordering};
 pub use place::{place_strokes, Placement, PlacementOptions};
-pub use plan::{plan_toolpath, MoveKind, Pass, Plan, PlanOptions, TiltPolicy, ZMode};
+pub use plan::{
+    ordering_ends, plan_toolpath, MoveKind, Pass, Plan, PlanOptions, TiltPolicy, ZMode,
+};
 pub use report::{PhaseTime, Report};
 pub use simplify::{fit_moves, rdp_indices, Segment};
 pub use spacing::Spacing;

@@ -1,25 +1,22 @@
 //! Stroke orientation and ordering to minimize travel.
 //!
 //! Ordering is an open asymmetric travelling-salesman problem over strokes with fixed entry
-//! and exit points: greedy nearest neighbour from the home position, then 2-opt with
-//! neighbour lists (Johnson & McGeoch, *The TSP: a case study in local optimization*, 1997,
-//! §3). Reversing a run of strokes that may not be flipped changes the travel *inside* the
-//! run, so the 2-opt gain uses prefix sums of forward (`exit_k → entry_{k+1}`) and backward
-//! (`exit_{k+1} → entry_k`) travel, making every candidate move O(1). Only `alternate` lets
-//! the orderer flip strokes. No randomness: the result depends only on the input order.
-//!
-//! After 2-opt, Or-opt moves runs of one to three consecutive strokes, unreversed, to the
-//! neighbour-list position that saves the most travel (Or, 1976).
+//! and exit points (only `alternate` lets the orderer flip strokes): greedy nearest neighbour
+//! from the home position, then a queue-driven local search with neighbour lists — 2-opt,
+//! segment swaps (asymmetric 3-opt / Or-opt) and re-choosing loop entries — see
+//! `improve.rs` (Johnson & McGeoch, *The TSP: a case study in local optimization*,
+//! 1997, §3; Or, 1976). No randomness: the result depends only on the input.
 //!
 //! Closed loops may be entered at any of their vertices (they exit where they entered):
-//! greedy picks the nearest vertex, and after 2-opt each loop's entry is re-chosen to
-//! minimize `d(previous exit, x) + d(x, next entry)`. This is a rotation, not a flip.
+//! greedy picks the nearest of up to 16 of them and the local search moves the entry to the
+//! vertex that minimizes `d(previous exit, x) + d(x, next entry)`. This is a rotation, not a
+//! flip.
 
 use serde::{Deserialize, Serialize};
 
+use crate::buckets::Buckets;
 use crate::geom::{norm, sub, Vec2};
-use crate::grid::PointGrid;
-use crate::improve::{or_opt, rotate_rings, two_opt};
+use crate::improve::Search;
 
 /// Global stroke orientation (the brushing direction is a process choice).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -44,9 +41,12 @@ pub enum Direction {
 pub struct OrderOptions {
     /// Where the tool starts (machine XY, mm). Default [0, 0].
     pub home: Vec2,
-    /// Most 2-opt sweeps over the tour. Default 50.
+    /// Local-search effort: at most this many improving moves per stroke (0: greedy only).
+    /// Default 50 (never reached in practice: the search stops at a local optimum).
     pub two_opt_passes: usize,
-    /// Candidate neighbours per endpoint for 2-opt. Default 10.
+    /// Candidate neighbours per endpoint: the nearest entries to an exit (and exits to an
+    /// entry), plus as many of the same kind; with flips, twice this many endpoints of either
+    /// kind. Default 10.
     pub neighbours: usize,
 }
 
@@ -93,7 +93,7 @@ pub struct Ordering {
     pub travel: f64,
     /// Travel between strokes only (excluding the first move from home), mm.
     pub travel_between: f64,
-    /// Travel after the greedy phase, before 2-opt (from home), mm.
+    /// Travel after the greedy phase, before the local search (from home), mm.
     pub travel_greedy: f64,
 }
 
@@ -167,10 +167,11 @@ pub fn order_strokes(ends: &[Ends], flip: bool, opts: &OrderOptions) -> Ordering
     let mut tour = Tour::new(ends);
     let mut order = greedy(&mut tour, flip, opts.home);
     let travel_greedy = tour.length(&order, opts.home);
-    for _ in 0..2 {
-        two_opt(&mut tour, &mut order, flip, opts);
-        or_opt(&mut tour, &mut order, opts);
-        rotate_rings(&mut tour, &order, opts.home);
+    if opts.two_opt_passes > 0 && n >= 2 {
+        let max_moves = opts.two_opt_passes.saturating_mul(n);
+        let mut search = Search::new(&mut tour, &order, flip, opts.home, opts.neighbours);
+        search.run(max_moves);
+        order = search.order();
     }
     let travel = tour.length(&order, opts.home);
     let first = tour.ent[order[0]];
@@ -193,77 +194,54 @@ pub fn tour_length(e: &[Ends], order: &[usize], flipped: &[bool], home: Vec2) ->
     tour.length(order, home)
 }
 
-fn bbox(e: &[Ends], home: Vec2) -> [Vec2; 2] {
-    let mut b = [home, home];
-    for x in e {
-        for p in [x.start, x.end].iter().chain(&x.ring) {
-            for k in 0..2 {
-                b[0][k] = b[0][k].min(p[k]);
-                b[1][k] = b[1][k].max(p[k]);
-            }
-        }
-    }
-    b
-}
+/// Most entry vertices of a loop offered to the greedy phase.
+const GREEDY_RING_POINTS: usize = 16;
 
 const START: u32 = u32::MAX;
 const END: u32 = u32::MAX - 1;
 
-/// Greedy nearest neighbour with a grid of unvisited entry points (ties: lowest id).
+/// Greedy nearest neighbour from `home`: always go to the nearest entry point of an unused
+/// stroke (ties: lowest candidate id). Used strokes' candidates leave the buckets, so each
+/// step costs about one ring search.
 fn greedy(tour: &mut Tour, flip: bool, home: Vec2) -> Vec<usize> {
     let e = tour.e;
     let n = e.len();
-    let b = bbox(e, home);
-    // Entry candidates: (stroke, START | END | ring vertex).
-    let mut cand: Vec<(u32, u32, Vec2)> = Vec::new();
+    // Entry candidates: (stroke, START | END | ring vertex); `first[s]..first[s + 1]` are
+    // stroke s's.
+    let mut cand: Vec<(u32, u32)> = Vec::new();
+    let mut pts: Vec<Vec2> = Vec::new();
+    let mut first = Vec::with_capacity(n + 1);
     for (s, x) in e.iter().enumerate() {
+        first.push(cand.len());
         if x.ring.is_empty() {
-            cand.push((s as u32, START, x.start));
+            cand.push((s as u32, START));
+            pts.push(x.start);
             if flip {
-                cand.push((s as u32, END, x.end));
+                cand.push((s as u32, END));
+                pts.push(x.end);
             }
         } else {
-            for (k, p) in x.ring.iter().enumerate() {
-                cand.push((s as u32, k as u32, *p));
+            // A loop offers a few evenly spaced vertices; the local search re-chooses among
+            // all of them.
+            let step = x.ring.len().div_ceil(GREEDY_RING_POINTS).max(1);
+            for (k, p) in x.ring.iter().enumerate().step_by(step) {
+                cand.push((s as u32, k as u32));
+                pts.push(*p);
             }
         }
     }
-    let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
-    let cell = (area / cand.len() as f64).sqrt().max(1e-9);
-    let mut grid = PointGrid::new(b, cell);
-    for (id, c) in cand.iter().enumerate() {
-        grid.insert(c.2, id as u32);
-    }
-    let mut used = vec![false; n];
+    first.push(cand.len());
+    let cell = cell_size(&pts, n);
+    let mut grid = Buckets::new(pts, cell);
     let mut order = Vec::with_capacity(n);
     let mut pos = home;
-    let span = (b[1][0] - b[0][0]).max(b[1][1] - b[0][1]) + 2.0 * cell;
     for _ in 0..n {
-        let mut r = cell;
-        let mut best: Option<(f64, u32)> = None;
-        loop {
-            grid.visit(pos, r, |id| {
-                let (s, _, p) = cand[id as usize];
-                if !used[s as usize] {
-                    let dd = d(pos, p);
-                    if dd <= r && best.is_none_or(|(bd, bid)| dd < bd || (dd == bd && id < bid)) {
-                        best = Some((dd, id));
-                    }
-                }
-                true
-            });
-            if best.is_some() || r > 2.0 * span {
-                break;
-            }
-            r *= 2.0;
-        }
-        let id = match best {
-            Some((_, id)) => id as usize,
-            None => cand.iter().position(|c| !used[c.0 as usize]).unwrap_or(0),
-        };
-        let (s, code, _) = cand[id];
+        let Some((_, id)) = grid.nearest(pos, |_| true) else { break };
+        let (s, code) = cand[id as usize];
         let s = s as usize;
-        used[s] = true;
+        for c in first[s]..first[s + 1] {
+            grid.remove(c as u32);
+        }
         match code {
             START => tour.set_flip(s, false),
             END => tour.set_flip(s, true),
@@ -273,4 +251,17 @@ fn greedy(tour: &mut Tour, flip: bool, home: Vec2) -> Vec<usize> {
         pos = tour.ext[s];
     }
     order
+}
+
+/// Bucket size for `items` points spread over their bounding box: about `per` items a cell.
+pub(crate) fn cell_size(pts: &[Vec2], items: usize) -> f64 {
+    let mut b = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+    for p in pts {
+        for k in 0..2 {
+            b[0][k] = b[0][k].min(p[k]);
+            b[1][k] = b[1][k].max(p[k]);
+        }
+    }
+    let area = ((b[1][0] - b[0][0]) * (b[1][1] - b[0][1])).max(1e-12);
+    (2.0 * area / items.max(1) as f64).sqrt().max(1e-9)
 }

@@ -280,8 +280,10 @@ fn signed_area(p: &[Vec2]) -> f64 {
     (0..n).map(|i| cross(p[i], p[(i + 1) % n])).sum::<f64>() * 0.5
 }
 
-/// Build the ordered passes from a placement (see the module docs).
-pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Plan> {
+/// The oriented items of a placement (one per stroke piece) and the strokes skipped for tilt.
+type Items = (Vec<Item>, Vec<(usize, f64)>);
+
+fn plan_items(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Items> {
     opts.validate()?;
     let surface = matches!(opts.z_mode, ZMode::SurfaceFollowing { .. });
     if surface && !dom.has_lift() {
@@ -314,6 +316,20 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
         }
         items.extend(make_items(dom, si, s, rev, surface, opts));
     }
+    Ok((items, skipped_tilt))
+}
+
+/// What the orderer of [`plan_toolpath`] sees: the machine-XY entry and exit of every oriented
+/// stroke piece (closed loops: up to 64 candidate entry vertices), in the order it receives
+/// them. For benchmarks and travel bounds ([`crate::travel_bound`]) on exactly the planned
+/// problem.
+pub fn ordering_ends(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Vec<Ends>> {
+    Ok(plan_items(dom, placement, opts)?.0.iter().map(ends_of).collect())
+}
+
+/// Build the ordered passes from a placement (see the module docs).
+pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Plan> {
+    let (items, skipped_tilt) = plan_items(dom, placement, opts)?;
     let ends: Vec<Ends> = items.iter().map(ends_of).collect();
     let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &opts.order);
     let mut passes = Vec::with_capacity(items.len());

@@ -94,3 +94,177 @@ fn leads_and_overtravel_geometry() {
         }
     }
 }
+
+fn dist(a: Vec2, b: Vec2) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Travel of an ordering recomputed from its order, flips and loop entries (from `home`
+/// when given, else between strokes only).
+fn travel_of(e: &[Ends], o: &Ordering, home: Option<Vec2>) -> f64 {
+    let mut pos = home;
+    let mut t = 0.0;
+    for &s in &o.order {
+        let (a, b) = match o.entry[s] {
+            Some(v) => (e[s].ring[v], e[s].ring[v]),
+            None if o.flipped[s] => (e[s].end, e[s].start),
+            None => (e[s].start, e[s].end),
+        };
+        if let Some(p) = pos {
+            t += dist(p, a);
+        }
+        pos = Some(b);
+    }
+    t
+}
+
+/// All orders (and loop entry vertices) of a few strokes: the exact optimum.
+fn brute_force(e: &[Ends], home: Option<Vec2>) -> f64 {
+    fn rec(e: &[Ends], used: &mut Vec<bool>, pos: Option<Vec2>, acc: f64, best: &mut f64) {
+        if used.iter().all(|&u| u) {
+            *best = best.min(acc);
+            return;
+        }
+        for s in 0..e.len() {
+            if used[s] {
+                continue;
+            }
+            used[s] = true;
+            let ways: Vec<(Vec2, Vec2)> = if e[s].ring.is_empty() {
+                vec![(e[s].start, e[s].end)]
+            } else {
+                e[s].ring.iter().map(|&p| (p, p)).collect()
+            };
+            for (a, b) in ways {
+                let step = pos.map_or(0.0, |p| dist(p, a));
+                rec(e, used, Some(b), acc + step, best);
+            }
+            used[s] = false;
+        }
+    }
+    let mut best = f64::INFINITY;
+    rec(e, &mut vec![false; e.len()], home, 0.0, &mut best);
+    best
+}
+
+/// Hand case: ends (1, 0) and (1, 2) both lie √2 from the start (2, 1) of the third stroke,
+/// whose end (3, 1) is √10 from either other start. The nearest bound counts √2 twice
+/// (2√2 after dropping the largest term, √10); the assignment must send one of them
+/// elsewhere: √2 + √5, which is the optimum (orders 0-1-2 and 1-0-2). From home (0, −1)
+/// the optimum is 1 + √5 + √2 (order 0-1-2) and the assignment H→0, 0→1, 1→2, 2→Z is tight.
+#[test]
+fn travel_bound_hand_case() {
+    let e = vec![
+        Ends::open([0.0, 0.0], [1.0, 0.0]),
+        Ends::open([0.0, 2.0], [1.0, 2.0]),
+        Ends::open([2.0, 1.0], [3.0, 1.0]),
+    ];
+    let (r2, r5) = (2f64.sqrt(), 5f64.sqrt());
+    let b = travel_bound(&e, &BoundOptions::default());
+    assert!((b.nearest - 2.0 * r2).abs() < 1e-12, "{b:?}");
+    assert!((b.assignment.unwrap() - (r2 + r5)).abs() < 1e-9, "{b:?}");
+    assert!((brute_force(&e, None) - (r2 + r5)).abs() < 1e-12);
+    let home = BoundOptions { home: Some([0.0, -1.0]), ..Default::default() };
+    let b = travel_bound(&e, &home);
+    assert!((b.nearest - (2.0 * r2 + 1.0)).abs() < 1e-12, "{b:?}");
+    assert!((b.assignment.unwrap() - (1.0 + r2 + r5)).abs() < 1e-9, "{b:?}");
+    // The orderer finds that optimum.
+    let o = order_strokes(&e, false, &OrderOptions { home: [0.0, -1.0], ..Default::default() });
+    assert!((o.travel - (1.0 + r2 + r5)).abs() < 1e-9, "{o:?}");
+}
+
+fn lcg(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Random strokes, some of them closed loops: nearest ≤ assignment ≤ the brute-force optimum
+/// ≤ the orderer's travel, with and without a home; small lists (2 candidates) must still
+/// give a valid bound.
+#[test]
+fn travel_bound_is_below_the_optimum() {
+    let mut rnd = lcg(7);
+    for case in 0..40 {
+        let n = 2 + case % 5;
+        let e: Vec<Ends> = (0..n)
+            .map(|s| {
+                let p = [10.0 * rnd(), 10.0 * rnd()];
+                if s % 3 == 2 {
+                    Ends::ring((0..3).map(|k| [p[0] + k as f64, p[1] + rnd()]).collect())
+                } else {
+                    Ends::open(p, [p[0] + 8.0 * rnd() - 2.0, p[1] + 3.0 * rnd()])
+                }
+            })
+            .collect();
+        for home in [None, Some([rnd() * 10.0, -1.0])] {
+            for k in [2, 12] {
+                let b = travel_bound(&e, &BoundOptions { home, neighbours: k });
+                let opt = brute_force(&e, home);
+                let a = b.assignment.unwrap();
+                if k == 12 {
+                    // Complete lists: the assignment is exact (dual = primal) and so at
+                    // least the nearest bound, a feasible dual of the same problem.
+                    assert!((b.assignment_primal.unwrap() - a).abs() < 1e-9, "case {case}: {b:?}");
+                    assert!(b.nearest <= a + 1e-9, "case {case}: {b:?}");
+                }
+                assert!(a <= opt + 1e-9, "case {case} k {k}: bound {a} > optimum {opt}");
+                assert!(b.assignment_primal.unwrap() >= a - 1e-9);
+            }
+            let o = order_strokes(
+                &e,
+                false,
+                &OrderOptions { home: home.unwrap_or([0.0, 0.0]), ..Default::default() },
+            );
+            let t = travel_of(&e, &o, home.or(Some([0.0, 0.0])));
+            assert!((t - o.travel).abs() < 1e-9, "reported {} vs {t}", o.travel);
+            assert!(o.travel >= brute_force(&e, Some(home.unwrap_or([0.0, 0.0]))) - 1e-9);
+        }
+    }
+}
+
+/// A larger random field of open strokes and loops, with and without flips: the order is a
+/// permutation, the reported travel matches the order, fixed orientation is kept, local
+/// search never loses to greedy, the bound is below, and the result is reproducible.
+#[test]
+fn local_search_is_consistent_on_random_strokes() {
+    let mut rnd = lcg(99);
+    let e: Vec<Ends> = (0..600)
+        .map(|s| {
+            let p = [100.0 * rnd(), 60.0 * rnd()];
+            if s % 4 == 0 {
+                let r = 0.5 + rnd();
+                Ends::ring(
+                    (0..12)
+                        .map(|k| {
+                            let t = k as f64 * std::f64::consts::PI / 6.0;
+                            [p[0] + r * t.cos(), p[1] + r * t.sin()]
+                        })
+                        .collect(),
+                )
+            } else {
+                let a = 0.4 * rnd();
+                let l = 2.0 + 10.0 * rnd();
+                Ends::open(p, [p[0] + l * a.cos(), p[1] + l * a.sin()])
+            }
+        })
+        .collect();
+    for flip in [false, true] {
+        let opts = OrderOptions::default();
+        let o = order_strokes(&e, flip, &opts);
+        let mut seen = o.order.clone();
+        seen.sort();
+        assert_eq!(seen, (0..e.len()).collect::<Vec<_>>());
+        assert!((travel_of(&e, &o, Some(opts.home)) - o.travel).abs() < 1e-6);
+        assert!(o.travel <= o.travel_greedy + 1e-9);
+        assert!(o.travel < 0.9 * o.travel_greedy, "{} vs greedy {}", o.travel, o.travel_greedy);
+        if !flip {
+            assert!(o.flipped.iter().all(|&f| !f));
+            let b = travel_bound(&e, &BoundOptions { home: Some(opts.home), neighbours: 12 });
+            assert!(b.assignment.unwrap() <= o.travel + 1e-9);
+        }
+        assert_eq!(o, order_strokes(&e, flip, &opts));
+    }
+}
