@@ -153,6 +153,14 @@ fn main() {
         (420, (9.5, 55.2, 64.7)),
         (656, (14.2, 120.5, 134.7)),
     ] {
+        // BENCH_SIZES=656,420 runs only those rows; BENCH_REPS the repetitions (default 20).
+        if let Ok(only) = std::env::var("BENCH_SIZES") {
+            if !only.split(',').any(|x| x.trim().parse() == Ok(count)) {
+                continue;
+            }
+        }
+        let reps: usize =
+            std::env::var("BENCH_REPS").ok().and_then(|v| v.parse().ok()).unwrap_or(20);
         let radius = dist[count].0;
         let free: Vec<u32> = dist[..count].iter().map(|d| d.1).collect();
         let mut phi = phi_true.clone();
@@ -162,7 +170,7 @@ fn main() {
         }
         // Several repetitions, fastest kept, to damp the noise of a shared machine.
         let mut best = (f64::INFINITY, 0.0, 0.0, 0);
-        for _ in 0..20 {
+        for _ in 0..reps {
             let r = solve(
                 &mesh,
                 &term,
