@@ -107,4 +107,46 @@ impl Shader<'_> {
         }
         out.map(|c| if c.is_finite() { c.max(0.0) } else { 0.0 })
     }
+
+    /// [`Shader::shade`] with the frame and the BRDF in f32 ([`Brdf::eval_f32`]): the same
+    /// lights, visibility decisions and shadow rays (in f64), the sum over lights in f32.
+    pub fn shade_f32(&self, s: &Surf, u: &Vector3<f64>, count: &mut ShadeCount) -> [f32; 3] {
+        let f = |w: &Vector3<f64>| [w.x as f32, w.y as f32, w.z as f32];
+        let dot = |a: &[f32; 3], b: &[f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let (n, uf) = (f(&s.n), f(u));
+        let v =
+            [n[1] * uf[2] - n[2] * uf[1], n[2] * uf[0] - n[0] * uf[2], n[0] * uf[1] - n[1] * uf[0]];
+        let local = |w: &[f32; 3]| [dot(w, &uf), dot(w, &v), dot(w, &n)];
+        let wo = local(&f(&s.wo));
+        // Summed in f64: an environment adds thousands of terms.
+        let mut out = [0.0f64; 3];
+        let origin = s.p + s.n * self.eps;
+        let mut add = |wi: &Vector3<f64>, e: &[f64; 3], dist: f64, count: &mut ShadeCount| {
+            let wi32 = f(wi);
+            let cos = dot(&wi32, &n);
+            if cos <= 0.0 {
+                return;
+            }
+            if let Some(bvh) = self.bvh {
+                count.shadow_rays += 1;
+                if bvh.occluded(&origin, wi, dist) {
+                    return;
+                }
+            }
+            count.brdf_evals += 1;
+            let fr = self.brdf.eval_f32(local(&wi32), wo);
+            for c in 0..3 {
+                out[c] += f64::from(fr[c] * cos) * e[c];
+            }
+        };
+        for l in &self.lights {
+            if let Some((wi, e, dist)) = l.incident(&s.p) {
+                add(&wi, &e, dist, count);
+            }
+        }
+        for smp in self.env {
+            add(&smp.dir, &smp.weight, f64::INFINITY, count);
+        }
+        out.map(|c| if c.is_finite() { c.max(0.0) as f32 } else { 0.0 })
+    }
 }
