@@ -322,9 +322,11 @@ pub(crate) fn render_with(
     }
     let brdf = brdf::from_material(material);
     let diag = bbox_diagonal(input.positions);
+    let shade_lights: Vec<Light> = Light::prepare(lights).into_iter().flatten().collect();
     let shader = Shader {
         brdf: brdf.as_ref(),
-        lights: Light::prepare(lights).into_iter().flatten().collect(),
+        lights32: Shader::single_precision(&shade_lights),
+        lights: shade_lights,
         env: &env_samples,
         bvh: bvh.as_ref(),
         eps: 1e-4 * diag,

@@ -63,6 +63,24 @@ pub(crate) struct Shader<'a> {
     pub bvh: Option<&'a Bvh>,
     /// Offset of shadow-ray origins along n.
     pub eps: f64,
+    /// Per entry of `lights`: a directional light's direction and irradiance in f32 (for
+    /// [`Shader::shade_f32`]), `None` for a point light. See [`Shader::single_precision`].
+    pub lights32: Vec<Option<([f32; 3], [f32; 3])>>,
+}
+
+impl Shader<'_> {
+    /// The f32 copies of the directional lights, index-aligned with `lights`.
+    pub fn single_precision(lights: &[Light]) -> Vec<Option<([f32; 3], [f32; 3])>> {
+        lights
+            .iter()
+            .map(|l| match l {
+                Light::Directional { dir, e } => {
+                    Some(([dir.x as f32, dir.y as f32, dir.z as f32], e.map(|c| c as f32)))
+                }
+                Light::Point { .. } => None,
+            })
+            .collect()
+    }
 }
 
 /// Counts of one shading call.
@@ -121,9 +139,12 @@ impl Shader<'_> {
         // Summed in f64: an environment adds thousands of terms.
         let mut out = [0.0f64; 3];
         let origin = s.p + s.n * self.eps;
-        let mut add = |wi: &Vector3<f64>, e: &[f64; 3], dist: f64, count: &mut ShadeCount| {
-            let wi32 = f(wi);
-            let cos = dot(&wi32, &n);
+        let mut add = |wi: &Vector3<f64>,
+                       wi32: &[f32; 3],
+                       e: &[f32; 3],
+                       dist: f64,
+                       count: &mut ShadeCount| {
+            let cos = dot(wi32, &n);
             if cos <= 0.0 {
                 return;
             }
@@ -134,18 +155,25 @@ impl Shader<'_> {
                 }
             }
             count.brdf_evals += 1;
-            let fr = self.brdf.eval_f32(local(&wi32), wo);
+            let fr = self.brdf.eval_f32(local(wi32), wo);
             for c in 0..3 {
-                out[c] += f64::from(fr[c] * cos) * e[c];
+                out[c] += f64::from(fr[c] * cos * e[c]);
             }
         };
-        for l in &self.lights {
-            if let Some((wi, e, dist)) = l.incident(&s.p) {
-                add(&wi, &e, dist, count);
+        for (l, l32) in self.lights.iter().zip(&self.lights32) {
+            match (l, l32) {
+                (Light::Directional { dir, .. }, Some((d32, e32))) => {
+                    add(dir, d32, e32, f64::INFINITY, count);
+                }
+                _ => {
+                    if let Some((wi, e, dist)) = l.incident(&s.p) {
+                        add(&wi, &f(&wi), &e.map(|c| c as f32), dist, count);
+                    }
+                }
             }
         }
         for smp in self.env {
-            add(&smp.dir, &smp.weight, f64::INFINITY, count);
+            add(&smp.dir, &f(&smp.dir), &smp.weight.map(|c| c as f32), f64::INFINITY, count);
         }
         out.map(|c| if c.is_finite() { c.max(0.0) as f32 } else { 0.0 })
     }

@@ -13,7 +13,8 @@
 //!
 //! [`Brdf::eval_f32`] evaluates the same formula in f32 without cancellation near the lobe: with
 //! s = k₁ + k₂ (unnormalized), 1 − h·n = (s_u² + s_v²) / (|s| (|s| + s_n)) exactly, so
-//! (h·n)^e = exp(e · ln_1p(−(1 − h·n))) keeps its relative accuracy (≈ e · 2⁻²⁴) where h ≈ n.
+//! (h·n)^e = exp(e · ln(1 − δ)), δ = 1 − h·n, keeps its relative accuracy where h ≈ n (ln(1 − δ)
+//! by its series for δ < 2⁻⁷).
 
 use nalgebra::Vector3;
 
@@ -75,8 +76,15 @@ impl Brdf for AshikhminShirley {
             // (h·n)^e with e = (n_u h_u² + n_v h_v²)/(h_u² + h_v²) (scale-free in s); 1 at h = n.
             let pow = if t2 > 0.0 {
                 let e = (self.nu as f32 * s[0] * s[0] + self.nv as f32 * s[1] * s[1]) / t2;
-                let one_minus = t2 / (l * (l + s[2]));
-                (e * (-one_minus).ln_1p()).exp()
+                let delta = t2 / (l * (l + s[2]));
+                // ln(1 − δ): its series where δ is small (truncation ≈ δ⁵/5, below 1e-9
+                // relative), else ln directly (there (h·n)^e is small wherever e is large).
+                let ln_hn = if delta < 1.0 / 128.0 {
+                    -delta * (1.0 + delta * (0.5 + delta * (1.0 / 3.0 + delta * 0.25)))
+                } else {
+                    (1.0 - delta).ln()
+                };
+                (e * ln_hn).exp()
             } else {
                 1.0
             };
