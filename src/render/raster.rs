@@ -213,13 +213,13 @@ fn closed_components(n: usize, faces: &[[u32; 3]]) -> Option<(Vec<u32>, usize)> 
     let mut label = vec![u32::MAX; faces.len()];
     let mut count = 0usize;
     let mut comp = vec![0u32; faces.len()];
-    for f in 0..faces.len() {
+    for (f, c) in comp.iter_mut().enumerate() {
         let r = find(&mut parent, f as u32) as usize;
         if label[r] == u32::MAX {
             label[r] = count as u32;
             count += 1;
         }
-        comp[f] = label[r];
+        *c = label[r];
     }
     Some((comp, count))
 }
