@@ -69,6 +69,24 @@ fn three_lights() -> Vec<LightSpec> {
     ]
 }
 
+/// CPU time of the whole process (all threads, user + system) in ms, from /proc/self/stat
+/// (clock ticks of 10 ms); `None` where unavailable.
+fn cpu_ms() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which is in parentheses): utime and stime are 14 and 15.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let (u, s): (f64, f64) = (f.get(11)?.parse().ok()?, f.get(12)?.parse().ok()?);
+    Some((u + s) * 10.0)
+}
+
+/// The 1-minute load average.
+fn load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|l| l.split_whitespace().next().unwrap_or("?").to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
 fn stats(mut v: Vec<f64>) -> (f64, f64, f64) {
     v.sort_by(f64::total_cmp);
     (v[0], v[v.len() / 2], v[v.len() - 1])
@@ -81,19 +99,32 @@ fn timed(
     pass: Option<&str>,
 ) {
     let mut total = Vec::new();
+    let mut cpu = Vec::new();
     let mut pass_ms = Vec::new();
     let mut last = None;
+    let load_before = load();
     for _ in 0..runs {
+        let c0 = cpu_ms();
         let t = Instant::now();
         let out = f();
         total.push(t.elapsed().as_secs_f64() * 1e3);
+        if let (Some(a), Some(b)) = (c0, cpu_ms()) {
+            cpu.push(b - a);
+        }
         if let Some(p) = pass {
             pass_ms.push(out.report.passes.iter().find(|x| x.name == p).map_or(0.0, |x| x.ms));
         }
         last = Some(out);
     }
     let (a, b, c) = stats(total);
-    println!("{label}: total min {a:.0} / median {b:.0} / max {c:.0} ms");
+    println!(
+        "{label}: total min {a:.0} / median {b:.0} / max {c:.0} ms (load {load_before} → {})",
+        load()
+    );
+    if cpu.len() == runs {
+        let (a, b, c) = stats(cpu);
+        println!("    CPU time, all threads: min {a:.0} / median {b:.0} / max {c:.0} ms");
+    }
     if let Some(p) = pass {
         let (a, b, c) = stats(pass_ms);
         println!("    pass `{p}`: min {a:.0} / median {b:.0} / max {c:.0} ms");

@@ -199,6 +199,28 @@ pub fn render(
     camera: &Camera,
     settings: &RenderSettings,
 ) -> Result<RenderOutput> {
+    render_with(input, material, lights, camera, settings, Precision::Fast)
+}
+
+/// How the shading pass evaluates the BRDF.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Precision {
+    /// Frame and BRDF in f32 ([`brdf::Brdf::eval_f32`]), what [`render`] uses.
+    Fast,
+    /// Everything in f64 ([`brdf::Brdf::eval`]): the reference the fast path is tested against.
+    #[cfg_attr(not(test), allow(dead_code))]
+    Reference,
+}
+
+/// [`render`] with the shading precision chosen.
+pub(crate) fn render_with(
+    input: &RenderInput,
+    material: &Material,
+    lights: &[LightSpec],
+    camera: &Camera,
+    settings: &RenderSettings,
+    precision: Precision,
+) -> Result<RenderOutput> {
     let start = Instant::now();
     material.validate().map_err(|e| prefix(e, "material"))?;
     validate_lights(lights).map_err(|e| prefix(e, "lights"))?;
@@ -300,9 +322,11 @@ pub fn render(
     }
     let brdf = brdf::from_material(material);
     let diag = bbox_diagonal(input.positions);
+    let shade_lights: Vec<Light> = Light::prepare(lights).into_iter().flatten().collect();
     let shader = Shader {
         brdf: brdf.as_ref(),
-        lights: Light::prepare(lights).into_iter().flatten().collect(),
+        lights32: Shader::single_precision(&shade_lights),
+        lights: shade_lights,
         env: &env_samples,
         bvh: bvh.as_ref(),
         eps: 1e-4 * diag,
@@ -319,14 +343,18 @@ pub fn render(
                 let mut c = ShadeCount::default();
                 for (x, o) in row.iter_mut().enumerate() {
                     if let Some(surf) = ctx.surf(y * w_ + x) {
-                        let l = if fx.shading {
+                        *o = if fx.shading {
                             let u = ctx.grain(&surf, grain);
-                            shader.shade(&surf, &u, &mut c)
+                            match precision {
+                                Precision::Fast => shader.shade_f32(&surf, &u, &mut c),
+                                Precision::Reference => {
+                                    shader.shade(&surf, &u, &mut c).map(|v| v as f32)
+                                }
+                            }
                         } else {
                             // Clay: a grey Lambert surface lit from the eye.
-                            [0.18 * surf.n.dot(&surf.wo).max(0.0); 3]
+                            [(0.18 * surf.n.dot(&surf.wo).max(0.0)) as f32; 3]
                         };
-                        *o = l.map(|v| v as f32);
                     }
                 }
                 c
@@ -685,4 +713,103 @@ fn resolve_pixel(
     let c = [0, 1, 2].map(|i| c[i] + (1.0 - a) * bg[i]);
     let c = [0, 1, 2].map(|i| f64::from(layer[i]) + c[i] * (1.0 - f64::from(layer[3])));
     c.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bench scene (docs/benchmarks.md, "Render") at a quarter of the size: a torus with a
+    /// grain winding around the tube, three directional lights, Ashikhmin–Shirley n_u = 1000.
+    fn bench_like(
+        precision: Precision,
+        symmetry: Symmetry,
+        material: &Material,
+        s: u32,
+    ) -> (Vec<[u8; 3]>, Vec<[f32; 3]>) {
+        let m = crate::generate::torus(2.0, 0.7, 128, 66);
+        let normals: Vec<Vector3<f64>> = m
+            .positions
+            .iter()
+            .map(|p| (p - Vector3::new(p.x, p.y, 0.0).normalize() * 2.0).normalize())
+            .collect();
+        let u: Vec<Vector3<f64>> = m
+            .positions
+            .iter()
+            .zip(&normals)
+            .map(|(p, n)| {
+                let t = Vector3::new(-p.y, p.x, 0.0).normalize();
+                (t * 0.8 + n.cross(&t) * 0.6).normalize()
+            })
+            .collect();
+        let input = RenderInput::new(&m.positions, &m.faces, &normals, &u, symmetry);
+        let d = |direction: [f64; 3], irradiance: f64, key: bool| LightSpec::Directional {
+            direction,
+            irradiance,
+            colour: [1.0; 3],
+            key,
+        };
+        let lights = [
+            d([0.3, -0.6, 1.0], 2.0, true),
+            d([-1.0, 0.2, 0.4], 0.8, false),
+            d([0.6, 0.8, -0.2], 0.5, false),
+        ];
+        let camera = Camera {
+            eye: Vector3::new(0.0, -5.5, 3.5),
+            target: Vector3::zeros(),
+            up: Vector3::z(),
+            fov_deg: 45.0,
+        };
+        let st = RenderSettings {
+            width: 256,
+            height: 256,
+            supersample: s,
+            tone_map: ToneMap::Reinhard,
+            linear: Some("x.pfm".into()),
+            ..Default::default()
+        };
+        let out = render_with(&input, material, &lights, &camera, &st, precision).unwrap();
+        let pm = tiny_skia::Pixmap::decode_png(&out.png).unwrap();
+        let rgb = pm.data().chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
+        let (_, _, lin) = image::decode_pfm(out.linear.as_ref().unwrap()).unwrap();
+        (rgb, lin)
+    }
+
+    /// The f32 shading path against the f64 one on the bench scene: every 8-bit code within 1,
+    /// and the linear radiance within a relative 1e-4 (absolute 1e-6 near black).
+    #[test]
+    fn fast_shading_matches_the_f64_reference() {
+        let ward = Material {
+            brdf: BrdfSpec::Ward { alpha_x: 0.05, alpha_y: 0.3, rho_s: 0.8 },
+            fresnel: Fresnel::Aluminium,
+            diffuse: [0.05; 3],
+        };
+        for (name, m, k, s) in [
+            ("AS, k = 2, ss 1", Material::default(), Symmetry::Line, 1),
+            ("AS, k = 1, ss 2", Material::default(), Symmetry::Oriented, 2),
+            ("Ward (f64 inside), k = 2, ss 1", ward, Symmetry::Line, 1),
+        ] {
+            let (a8, alin) = bench_like(Precision::Fast, k, &m, s);
+            let (b8, blin) = bench_like(Precision::Reference, k, &m, s);
+            let max8 = a8
+                .iter()
+                .zip(&b8)
+                .flat_map(|(x, y)| (0..3).map(move |c| x[c].abs_diff(y[c])))
+                .max()
+                .unwrap();
+            let off8 = a8.iter().zip(&b8).filter(|(x, y)| x != y).count();
+            let mut worst = 0.0f64;
+            for (x, y) in alin.iter().zip(&blin) {
+                for c in 0..3 {
+                    let (x, y) = (f64::from(x[c]), f64::from(y[c]));
+                    worst = worst.max((x - y).abs() / y.abs().max(1e-2));
+                }
+            }
+            let lit = blin.iter().filter(|p| p[0] > 0.01).count();
+            eprintln!("{name}: max |Δ8| {max8} ({off8} pixels differ), max rel {worst:.2e}");
+            assert!(lit > 5000, "{name}: the scene should cover the image ({lit} lit pixels)");
+            assert!(max8 <= 1, "{name}: max |Δ| {max8} codes");
+            assert!(worst <= 1e-4, "{name}: linear radiance off by a relative {worst:.2e}");
+        }
+    }
 }

@@ -49,14 +49,16 @@ impl MeshData<'_> {
         let ps = [self.positions[i0], self.positions[i1], self.positions[i2]];
         let p = ps[0] * w[0] + ps[1] * w[1] + ps[2] * w[2];
         let to_eye = eye - p;
-        let wo = if to_eye.norm() > 0.0 { to_eye.normalize() } else { Vector3::z() };
-        let mut geo = (ps[1] - ps[0]).cross(&(ps[2] - ps[0]));
-        geo = if geo.norm() > 0.0 { geo.normalize() } else { wo };
+        let d2 = to_eye.norm_squared();
+        let wo = if d2 > 0.0 { to_eye / d2.sqrt() } else { Vector3::z() };
+        // The geometric normal is needed only for its side (and as a fallback normal).
+        let geo = (ps[1] - ps[0]).cross(&(ps[2] - ps[0]));
+        let unit_geo = || if geo.norm() > 0.0 { geo.normalize() } else { wo };
         let ns = self.normals[i0] * w[0] + self.normals[i1] * w[1] + self.normals[i2] * w[2];
         let mut n = if ns.norm() > 1e-12 && ns.iter().all(|c| c.is_finite()) {
             ns.normalize()
         } else {
-            geo
+            unit_geo()
         };
         // Two-sided: a face seen from behind shades with its flipped normal.
         if geo.dot(&wo) < 0.0 {
@@ -111,16 +113,61 @@ impl Surf {
             zy += self.w[k] * 2.0 * x * y / r2.sqrt();
             mag += self.w[k] * r2.sqrt();
         }
-        let z = zx.hypot(zy);
+        let z = (zx * zx + zy * zy).sqrt();
         if z.is_nan() || z <= 1e-9 * mag.max(1e-300) || !z.is_finite() {
             return None;
         }
-        let phi = 0.5 * zy.atan2(zx);
-        Some((self.t * phi.cos() + self.b * phi.sin(), mag))
+        // Half the angle of (zx, zy), φ = ½·atan2(zy, zx) ∈ (−π/2, π/2], without trigonometry:
+        // (cos φ, sin φ) ∝ (z + zx, zy) when zx ≥ 0, else ∝ (zy, z − zx) (the same line, better
+        // conditioned; its sign chosen so cos φ ≥ 0, as atan2 gives).
+        let (c, s) = if zx >= 0.0 {
+            (z + zx, zy)
+        } else if zy >= 0.0 {
+            (zy, z - zx)
+        } else {
+            (-zy, zx - z)
+        };
+        let r = (c * c + s * s).sqrt();
+        Some((self.t * (c / r) + self.b * (s / r), mag))
     }
 
     /// Barycentric interpolation of a per-vertex scalar.
     pub fn scalar(&self, corner: [f64; 3]) -> f64 {
         corner[0] * self.w[0] + corner[1] * self.w[1] + corner[2] * self.w[2]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The half-angle reconstruction of `line` against φ = ½·atan2 with cos and sin.
+    #[test]
+    fn line_direction_is_half_the_doubled_angle() {
+        let n = Vector3::new(0.2, -0.3, 0.9).normalize();
+        let (t, b) = tangent_frame(&n);
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..20000 {
+            let corner = [0; 3].map(|_| t * rnd() + b * rnd() + n * rnd());
+            let (w1, w2) = (rnd().abs(), rnd().abs());
+            let (w1, w2) = if w1 + w2 > 1.0 { (1.0 - w1, 1.0 - w2) } else { (w1, w2) };
+            let s =
+                Surf { face: 0, w: [1.0 - w1 - w2, w1, w2], p: Vector3::zeros(), n, wo: n, t, b };
+            let (mut zx, mut zy) = (0.0, 0.0);
+            for (k, c) in corner.iter().enumerate() {
+                let (x, y) = (c.dot(&t), c.dot(&b));
+                let r = x.hypot(y);
+                zx += s.w[k] * (x * x - y * y) / r;
+                zy += s.w[k] * 2.0 * x * y / r;
+            }
+            let phi = 0.5 * zy.atan2(zx);
+            let want = t * phi.cos() + b * phi.sin();
+            let (got, _) = s.line(corner).expect("defined");
+            assert!((got - want).norm() < 1e-12, "{got:?} vs {want:?} at φ = {phi}");
+        }
     }
 }

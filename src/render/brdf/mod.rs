@@ -17,6 +17,14 @@ use super::settings::{BrdfSpec, Material};
 pub trait Brdf: Send + Sync {
     /// f in linear RGB (1/sr). Zero when either direction is below the surface. Never NaN.
     fn eval(&self, wi: &Vector3<f64>, wo: &Vector3<f64>) -> [f64; 3];
+
+    /// [`Brdf::eval`] in single precision, for the shading pass (docs/render.md, "Precision").
+    /// The default widens to [`Brdf::eval`]; a model may override it with an f32 evaluation that
+    /// stays within a relative 1e-4 of the f64 one wherever f is not negligible.
+    fn eval_f32(&self, wi: [f32; 3], wo: [f32; 3]) -> [f32; 3] {
+        let w = |v: [f32; 3]| Vector3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]));
+        self.eval(&w(wi), &w(wo)).map(|c| c as f32)
+    }
 }
 
 /// The BRDF of a (validated) material, diffuse term included.
