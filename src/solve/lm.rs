@@ -292,22 +292,17 @@ struct JacobianRows {
 /// row blocks, then y = Jᵀt gathered by columns (each column's terms in row order).
 struct JacobianProduct<'a> {
     rows: &'a JacobianRows,
-    /// Row block of each entry.
-    block_of: Vec<u32>,
-    /// Column c's entries (indices into `rows`) are `by_col[col_ptr[c]..col_ptr[c + 1]]`.
+    /// Column c's entries are `col_ptr[c]..col_ptr[c + 1]` of `t_block` (their row block) and
+    /// `t_d` (their derivatives): J's entries copied in column order, so that the Jᵀ pass
+    /// streams through memory instead of gathering.
     col_ptr: Vec<u32>,
-    by_col: Vec<u32>,
+    t_block: Vec<u32>,
+    t_d: Vec<[f64; 2]>,
 }
 
 impl<'a> JacobianProduct<'a> {
     fn new(rows: &'a JacobianRows, n: usize) -> Self {
         let blocks = rows.ptr.len().saturating_sub(1);
-        let mut block_of = vec![0u32; rows.col.len()];
-        for b in 0..blocks {
-            for e in rows.ptr[b]..rows.ptr[b + 1] {
-                block_of[e as usize] = b as u32;
-            }
-        }
         let mut col_ptr = vec![0u32; n + 1];
         for &c in &rows.col {
             col_ptr[c as usize + 1] += 1;
@@ -316,12 +311,17 @@ impl<'a> JacobianProduct<'a> {
             col_ptr[c + 1] += col_ptr[c];
         }
         let mut next = col_ptr.clone();
-        let mut by_col = vec![0u32; rows.col.len()];
-        for (e, &c) in rows.col.iter().enumerate() {
-            by_col[next[c as usize] as usize] = e as u32;
-            next[c as usize] += 1;
+        let mut t_block = vec![0u32; rows.col.len()];
+        let mut t_d = vec![[0.0; 2]; rows.col.len()];
+        for b in 0..blocks {
+            for e in rows.ptr[b] as usize..rows.ptr[b + 1] as usize {
+                let slot = &mut next[rows.col[e] as usize];
+                t_block[*slot as usize] = b as u32;
+                t_d[*slot as usize] = rows.d[e];
+                *slot += 1;
+            }
         }
-        JacobianProduct { rows, block_of, col_ptr, by_col }
+        JacobianProduct { rows, col_ptr, t_block, t_d }
     }
 
     /// y = (JᵀJ + diag(shift)) x.
@@ -346,10 +346,9 @@ impl<'a> JacobianProduct<'a> {
             for (i, yc) in chunk.iter_mut().enumerate() {
                 let c = k * 4096 + i;
                 let mut acc = shift[c] * x[c];
-                for &e in &self.by_col[self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize] {
-                    let e = e as usize;
-                    let tb = t[self.block_of[e] as usize];
-                    acc += r.d[e][0] * tb[0] + r.d[e][1] * tb[1];
+                for e in self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize {
+                    let tb = t[self.t_block[e] as usize];
+                    acc += self.t_d[e][0] * tb[0] + self.t_d[e][1] * tb[1];
                 }
                 *yc = acc;
             }
