@@ -131,13 +131,13 @@ fn generate(s: &Spec) -> String {
                 vertices.push_str(" 0.1 0.2 0.3");
             }
             if s.defect == 1 && k == n + 1 {
-                vertices.push_str("x");
+                vertices.push('x');
             }
             if s.defect == 4 && k == 2 {
                 vertices = vertices.trim_end_matches(|c: char| c != ' ' && c != '\t').to_string();
                 vertices.push_str("NaN");
             }
-            end_line(&mut vertices, s.crlf && k % 2 == 0);
+            end_line(&mut vertices, s.crlf && k.is_multiple_of(2));
             if seed(k) % 11 == 0 {
                 vertices.push_str("# comment v 1 2\n\n");
             }
@@ -233,7 +233,7 @@ fn generate(s: &Spec) -> String {
         out.push_str(&vertices);
         out.push_str(&attrs);
     }
-    if s.defect == 9 && s.objects % 2 == 0 {
+    if s.defect == 9 && s.objects.is_multiple_of(2) {
         out.push_str(&attrs);
     }
     out

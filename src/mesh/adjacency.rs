@@ -177,31 +177,6 @@ impl Adjacency {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn two_triangles() {
-        let adj = Adjacency::from_faces(4, &[[0, 1, 2], [0, 2, 3]]);
-        assert_eq!(adj.neighbors(0), &[1, 2, 3]);
-        assert_eq!(adj.neighbors(1), &[0, 2]);
-        assert_eq!(adj.num_edges(), 5);
-        let s = adj.slot(0, 2).unwrap();
-        assert_eq!(adj.edge_face_count(s), 2);
-        assert_eq!(adj.target(adj.reverse(s)), 0);
-        assert!(adj.is_boundary_slot(adj.slot(0, 1).unwrap()));
-        assert!(adj.is_boundary_vertex(0));
-        assert!(adj.nonmanifold_edges().is_empty());
-    }
-
-    #[test]
-    fn nonmanifold_fin() {
-        let adj = Adjacency::from_faces(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]);
-        assert_eq!(adj.nonmanifold_edges(), vec![(0, 1)]);
-    }
-}
-
 /// Calls `f(i, a_i, b_i, scratch)` for every vertex `i`, where `a_i` and `b_i` are the parts of
 /// `a` and `b` (one entry per slot) that belong to vertex `i`; in parallel over fixed chunks of
 /// vertices, with one scratch buffer per chunk.
@@ -231,4 +206,29 @@ fn par_vertex_slices<A: Send, B: Send>(
             f(i, &mut sa[r.clone()], &mut sb[r], &mut scratch);
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_triangles() {
+        let adj = Adjacency::from_faces(4, &[[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(adj.neighbors(0), &[1, 2, 3]);
+        assert_eq!(adj.neighbors(1), &[0, 2]);
+        assert_eq!(adj.num_edges(), 5);
+        let s = adj.slot(0, 2).unwrap();
+        assert_eq!(adj.edge_face_count(s), 2);
+        assert_eq!(adj.target(adj.reverse(s)), 0);
+        assert!(adj.is_boundary_slot(adj.slot(0, 1).unwrap()));
+        assert!(adj.is_boundary_vertex(0));
+        assert!(adj.nonmanifold_edges().is_empty());
+    }
+
+    #[test]
+    fn nonmanifold_fin() {
+        let adj = Adjacency::from_faces(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]);
+        assert_eq!(adj.nonmanifold_edges(), vec![(0, 1)]);
+    }
 }
