@@ -1,4 +1,4 @@
-//! Loading OBJ files (via tobj) into a validated [`Mesh`].
+//! Loading OBJ files (tobj, or a parallel reader for large files) into a validated [`Mesh`].
 //!
 //! # What the loaded mesh is
 //!
