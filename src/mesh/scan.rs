@@ -204,10 +204,9 @@ impl Scanner<'_> {
         }
         let mut toks = tokens(line);
         let Some(kw) = toks.next() else { return Ok(()) };
-        let n_args = || tokens(line).count() - 1;
         match kw {
             b"v" => {
-                let n = n_args();
+                let n = toks.count();
                 if !matches!(n, 3 | 4 | 6) {
                     return Err(self.truncated(line_no, "vertex", "3 coordinates", n));
                 }
@@ -216,14 +215,14 @@ impl Scanner<'_> {
                 self.out.num_v += 1;
             }
             b"vt" => {
-                let n = n_args();
+                let n = toks.count();
                 if !(2..=3).contains(&n) {
                     return Err(self.truncated(line_no, "texture coordinate", "2 values", n));
                 }
                 self.out.num_vt += 1;
             }
             b"vn" => {
-                let n = n_args();
+                let n = toks.count();
                 if n != 3 {
                     return Err(self.truncated(line_no, "normal", "3 components", n));
                 }
