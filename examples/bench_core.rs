@@ -8,6 +8,7 @@
 //! in a child process (so its memory is not counted), then times, in this process: loading the
 //! OBJ, the geometry (adjacency, normals, jet fit, areas, connection, Eq. 10 stencils), and the
 //! highlight field ℓ of a world-direction initial field. Peak memory is the process's VmHWM.
+//! `BENCH_TOBJ=1` loads with tobj (the reference reader) instead of the parallel parser.
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -17,7 +18,7 @@ use std::time::Instant;
 
 use grainline::field::{compute_field, FieldOptions};
 use grainline::highlight::{InitialField, Lighting, View};
-use grainline::mesh::load::{load_obj, LoadOptions};
+use grainline::mesh::load::{load_obj_with, LoadOptions, ObjParser};
 use nalgebra::Vector3;
 
 fn write_heightfield(path: &std::path::Path, n: usize) {
@@ -76,9 +77,11 @@ fn main() {
     let mut runs = Vec::new();
     let mut summary = None;
     let mut peak = 0;
+    let parser =
+        if std::env::var_os("BENCH_TOBJ").is_some() { ObjParser::Tobj } else { ObjParser::Auto };
     for run in 0..5 {
         let t0 = Instant::now();
-        let loaded = load_obj(&path, &LoadOptions::default()).expect("load");
+        let loaded = load_obj_with(&path, &LoadOptions::default(), parser).expect("load");
         let t_load = t0.elapsed().as_secs_f64();
         if run == 0 && std::env::var_os("BENCH_PEAK_AFTER_LOAD").is_some() {
             println!("peak after load     {:.0} MB", peak_rss_kb() as f64 / 1024.0);
@@ -104,6 +107,7 @@ fn main() {
     println!("faces               {nf}");
     println!("OBJ size            {:.1} MB", size as f64 / 1e6);
     println!("threads             {}", rayon::current_num_threads());
+    println!("OBJ reader          {parser:?}");
     println!("load_obj            {}", stat(0));
     println!("geometry + init + ℓ {}", stat(1));
     println!("total               {}", stat(2));

@@ -6,7 +6,7 @@
 use std::io::Write;
 use std::time::Instant;
 
-use grainline::mesh::load::{load_obj, LoadOptions};
+use grainline::mesh::load::{load_obj, load_obj_with, LoadOptions, ObjParser};
 use grainline::mesh::topology::Topology;
 use grainline::mesh::uv_charts::UvCharts;
 
@@ -52,6 +52,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t_tobj = t0.elapsed();
         drop(tobj_only);
         let t0 = Instant::now();
+        let reference = load_obj_with(&path, &LoadOptions::default(), ObjParser::Tobj)?;
+        let t_reference = t0.elapsed();
+        drop(reference);
+        let t0 = Instant::now();
         let loaded = load_obj(&path, &LoadOptions::default())?;
         let t_load = t0.elapsed();
         let t1 = Instant::now();
@@ -61,9 +65,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
         let t_uv = t2.elapsed();
         println!(
-            "run {run}: tobj alone {:.0} ms | load_obj {:.0} ms | topology {:.0} ms | uv charts {:.0} ms | \
+            "run {run}: tobj alone {:.0} ms | load_obj with tobj {:.0} ms | load_obj {:.0} ms | topology {:.0} ms | uv charts {:.0} ms | \
              load+topology+charts {:.0} ms  ({} V, {} F, genus {:?}, {} loops, {} charts)",
             t_tobj.as_secs_f64() * 1e3,
+            t_reference.as_secs_f64() * 1e3,
             t_load.as_secs_f64() * 1e3,
             t_topo.as_secs_f64() * 1e3,
             t_uv.as_secs_f64() * 1e3,

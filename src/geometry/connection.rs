@@ -9,7 +9,6 @@
 //! angle defect exactly).
 
 use nalgebra::Vector3;
-use rayon::prelude::*;
 
 use super::frames::Frame;
 use crate::mesh::Adjacency;
@@ -42,19 +41,16 @@ pub fn transport_angle(fi: &Frame, fj: &Frame) -> f64 {
 
 /// ρᵢⱼ for every directed edge (adjacency slot) `i → j`, with ρⱼᵢ = −ρᵢⱼ exactly.
 pub fn edge_transport(adj: &Adjacency, frames: &[Frame]) -> Vec<f64> {
-    (0..adj.num_vertices())
-        .into_par_iter()
-        .flat_map_iter(|i| {
-            adj.slots(i).map(move |s| {
-                let j = adj.target(s);
-                if i < j {
-                    transport_angle(&frames[i], &frames[j])
-                } else {
-                    -transport_angle(&frames[j], &frames[i])
-                }
-            })
-        })
-        .collect()
+    let mut out = vec![0.0; adj.num_slots()];
+    adj.fill_slots(&mut out, |i, s| {
+        let j = adj.target(s);
+        if i < j {
+            transport_angle(&frames[i], &frames[j])
+        } else {
+            -transport_angle(&frames[j], &frames[i])
+        }
+    });
+    out
 }
 
 /// Wraps an angle to (−π, π].

@@ -68,32 +68,43 @@ impl GradientStencil {
         frames: &[Frame],
         transport: &[f64],
     ) -> Self {
-        let per_vertex: Vec<StencilEntries> = (0..positions.len())
+        // Fixed chunks of vertices, each filling flat arrays, joined in vertex order: the same
+        // stencil at any thread count, without one allocation per vertex.
+        let n = positions.len();
+        let parts: Vec<Part> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
-            .map_init(Scratch::default, |scratch, i| {
-                stencil_at(positions, adj, frames, transport, i, scratch)
+            .map_init(Scratch::default, |scratch, c| {
+                let mut part = Part::default();
+                for i in c * CHUNK..(n.min((c + 1) * CHUNK)) {
+                    let depth =
+                        stencil_at(positions, adj, frames, transport, i, scratch, &mut part);
+                    part.depth.push(depth);
+                    part.ends.push(part.neighbor.len() as u32);
+                }
+                part
             })
             .collect();
-        let mut offsets = Vec::with_capacity(positions.len() + 1);
+        let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0u32);
         let (mut extended, mut empty) = (0, 0);
-        for (entries, depth) in &per_vertex {
-            match depth {
-                0 => empty += 1,
-                1 => {}
-                _ => extended += 1,
+        for part in &parts {
+            let base = *offsets.last().unwrap_or(&0);
+            offsets.extend(part.ends.iter().map(|&e| base + e));
+            for &depth in &part.depth {
+                match depth {
+                    0 => empty += 1,
+                    1 => {}
+                    _ => extended += 1,
+                }
             }
-            offsets.push(offsets.last().copied().unwrap_or(0) + entries.len() as u32);
         }
         let total = *offsets.last().unwrap_or(&0) as usize;
         let (mut neighbor, mut rho, mut pinv) =
             (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
-        for (entries, _) in per_vertex {
-            for (j, r, col) in entries {
-                neighbor.push(j);
-                rho.push(r);
-                pinv.push(col);
-            }
+        for part in parts {
+            neighbor.extend_from_slice(&part.neighbor);
+            rho.extend_from_slice(&part.rho);
+            pinv.extend_from_slice(&part.pinv);
         }
         GradientStencil { offsets, neighbor, rho, pinv, extended, empty }
     }
@@ -134,7 +145,20 @@ impl GradientStencil {
     }
 }
 
-type StencilEntries = (Vec<(u32, f64, [f64; 2])>, u8);
+/// Vertices per chunk of [`GradientStencil::new`].
+const CHUNK: usize = 4096;
+
+/// The stencils of one chunk of vertices, flat.
+#[derive(Default)]
+struct Part {
+    /// End of each vertex's entries (relative to the chunk).
+    ends: Vec<u32>,
+    /// Ring depth used by each vertex (0: none).
+    depth: Vec<u8>,
+    neighbor: Vec<u32>,
+    rho: Vec<f64>,
+    pinv: Vec<[f64; 2]>,
+}
 
 #[derive(Default)]
 struct Scratch {
@@ -150,7 +174,8 @@ fn stencil_at(
     transport: &[f64],
     i: usize,
     scratch: &mut Scratch,
-) -> StencilEntries {
+    out: &mut Part,
+) -> u8 {
     let f = &frames[i];
     for depth in 1..=3usize {
         if depth == 1 {
@@ -164,24 +189,20 @@ fn stencil_at(
             continue;
         };
         let slots = adj.slots(i);
-        let entries = scratch
-            .ring
-            .iter()
-            .zip(&scratch.rows)
-            .enumerate()
-            .map(|(k, (&j, r))| {
-                let rho = if depth == 1 {
-                    transport[slots.start + k]
-                } else {
-                    transport_angle(f, &frames[j as usize])
-                };
-                let c = inv * r;
-                (j, rho, [c.x, c.y])
-            })
-            .collect();
-        return (entries, depth as u8);
+        for (k, (&j, r)) in scratch.ring.iter().zip(&scratch.rows).enumerate() {
+            let rho = if depth == 1 {
+                transport[slots.start + k]
+            } else {
+                transport_angle(f, &frames[j as usize])
+            };
+            let c = inv * r;
+            out.neighbor.push(j);
+            out.rho.push(rho);
+            out.pinv.push([c.x, c.y]);
+        }
+        return depth as u8;
     }
-    (Vec::new(), 0)
+    0
 }
 
 /// (PᵀP)⁻¹ for the projected neighbour positions (left in `rows`), or `None` when PᵀP is

@@ -55,33 +55,42 @@ impl Adjacency {
         for v in 0..num_vertices {
             offsets.push(offsets[v] + valence[v]);
         }
-        let entries: Vec<(u32, u16)> = (0..num_vertices)
-            .into_par_iter()
-            .map_init(Vec::new, |buf, v| {
-                ring(v, buf);
-                let mut out: Vec<(u32, u16)> = Vec::with_capacity(valence[v] as usize);
-                for &w in buf.iter() {
-                    match out.last_mut() {
-                        Some(last) if last.0 == w => last.1 = last.1.saturating_add(1),
-                        _ => out.push((w, 1)),
-                    }
+        let total = offsets[num_vertices] as usize;
+        let (mut neighbors, mut edge_faces) = (vec![0u32; total], vec![0u16; total]);
+        par_vertex_slices(&offsets, &mut neighbors, &mut edge_faces, |v, nb, ef, buf| {
+            ring(v, buf);
+            let mut k = 0;
+            for (m, &w) in buf.iter().enumerate() {
+                if m > 0 && buf[m - 1] == w {
+                    ef[k - 1] = ef[k - 1].saturating_add(1);
+                } else {
+                    (nb[k], ef[k]) = (w, 1);
+                    k += 1;
                 }
-                out
-            })
-            .flatten_iter()
-            .collect();
-        let (neighbors, edge_faces): (Vec<u32>, Vec<u16>) = entries.into_iter().unzip();
+            }
+        });
         let mut adj = Adjacency { offsets, neighbors, edge_faces, reverse: Vec::new() };
-        adj.reverse = (0..num_vertices)
-            .into_par_iter()
-            .flat_map_iter(|i| {
-                let adj = &adj;
-                adj.slots(i).map(move |s| {
-                    adj.slot(adj.target(s), i as u32).expect("adjacency is symmetric") as u32
-                })
-            })
-            .collect();
+        let mut reverse = vec![0u32; total];
+        let none: &mut [()] = &mut vec![(); total];
+        par_vertex_slices(&adj.offsets, &mut reverse, none, |i, rev, _, _| {
+            for (r, s) in rev.iter_mut().zip(adj.slots(i)) {
+                *r = adj.slot(adj.target(s), i as u32).expect("adjacency is symmetric") as u32;
+            }
+        });
+        adj.reverse = reverse;
         adj
+    }
+
+    /// Fills `out` (one value per slot) with `f(i, s)` for every slot `s` of every vertex `i`,
+    /// in parallel over fixed chunks of vertices (the result does not depend on the threads).
+    pub fn fill_slots<T: Send>(&self, out: &mut [T], f: impl Fn(usize, usize) -> T + Sync) {
+        assert_eq!(out.len(), self.num_slots(), "one value per slot");
+        let none: &mut [()] = &mut vec![(); out.len()];
+        par_vertex_slices(&self.offsets, out, none, |i, vals, _, _| {
+            for (x, s) in vals.iter_mut().zip(self.slots(i)) {
+                *x = f(i, s);
+            }
+        });
     }
 
     /// Number of vertices.
@@ -166,6 +175,37 @@ impl Adjacency {
             })
             .collect()
     }
+}
+
+/// Calls `f(i, a_i, b_i, scratch)` for every vertex `i`, where `a_i` and `b_i` are the parts of
+/// `a` and `b` (one entry per slot) that belong to vertex `i`; in parallel over fixed chunks of
+/// vertices, with one scratch buffer per chunk.
+fn par_vertex_slices<A: Send, B: Send>(
+    offsets: &[u32],
+    a: &mut [A],
+    b: &mut [B],
+    f: impl Fn(usize, &mut [A], &mut [B], &mut Vec<u32>) + Sync,
+) {
+    const CHUNK: usize = 4096;
+    let nv = offsets.len().saturating_sub(1);
+    let mut pieces = Vec::with_capacity(nv.div_ceil(CHUNK));
+    let (mut rest_a, mut rest_b) = (a, b);
+    for c in 0..nv.div_ceil(CHUNK) {
+        let (v0, v1) = (c * CHUNK, nv.min((c + 1) * CHUNK));
+        let len = (offsets[v1] - offsets[v0]) as usize;
+        let (head_a, tail_a) = std::mem::take(&mut rest_a).split_at_mut(len);
+        let (head_b, tail_b) = std::mem::take(&mut rest_b).split_at_mut(len);
+        pieces.push((v0, v1, head_a, head_b));
+        (rest_a, rest_b) = (tail_a, tail_b);
+    }
+    pieces.into_par_iter().for_each(|(v0, v1, sa, sb)| {
+        let base = offsets[v0] as usize;
+        let mut scratch = Vec::new();
+        for i in v0..v1 {
+            let r = offsets[i] as usize - base..offsets[i + 1] as usize - base;
+            f(i, &mut sa[r.clone()], &mut sb[r], &mut scratch);
+        }
+    });
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! Loading OBJ files (via tobj) into a validated [`Mesh`].
+//! Loading OBJ files (tobj, or a parallel reader for large files) into a validated [`Mesh`].
 //!
 //! # What the loaded mesh is
 //!
@@ -20,7 +20,7 @@
 //!   aspect up to ~1e11 are kept). Dropped and counted, or an error, by [`DegeneratePolicy`].
 //! * **Units**: positions are multiplied by `scale` and are then in `units`.
 //!
-//! tobj reads numbers as `f32`; the loader widens them to `f64`.
+//! Numbers are read as `f64` (tobj's `use_f64`).
 //!
 //! # How
 //!
@@ -28,6 +28,13 @@
 //! scanner (`scan.rs`) that checks every statement with its line number and records the
 //! file index of every face corner (tobj renumbers positions per object by first use). The
 //! corners of the two agree one to one, which is checked.
+//!
+//! Files of [`PARALLEL_MIN_BYTES`] or more that stay within what it reproduces exactly (ASCII,
+//! no forward face indices, no `l` statements, no vertex colours) have their numbers read by a
+//! parallel parser (`parse.rs`) instead of tobj, and their objects formed by the scanner the way
+//! tobj forms them ([`ObjParser`]); the mesh, the report and every error are the same
+//! (tests/mesh_parser_equivalence.rs). When the parallel parser meets a number it cannot read,
+//! tobj reads the file and reports it.
 
 use std::path::Path;
 
@@ -35,6 +42,7 @@ use nalgebra::{Vector2, Vector3};
 use rayon::prelude::*;
 
 use super::halfedge::HalfEdges;
+use super::parse::{self, Values};
 use super::scan::{self, Kind, Scan, NONE};
 use super::validate::{self, FileNames};
 use super::{weld, CornerAttribute, Mesh, Units};
@@ -137,22 +145,105 @@ pub struct LoadedMesh {
     pub report: LoadReport,
 }
 
-/// One tobj model and the range of corners it covers in the file's corner list.
+/// One object and the range of corners it covers in the file's corner list, with tobj's
+/// values for it (`None`: the values come from the parallel parser, by file index).
 struct Model {
     name: String,
-    mesh: tobj::Mesh,
+    mesh: Option<tobj::Mesh>,
     start: usize,
+    len: usize,
 }
+
+/// Which reader parses the numbers of an OBJ file (the scanner always checks its syntax).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ObjParser {
+    /// The parallel parser for files of [`PARALLEL_MIN_BYTES`] or more, tobj below (the default).
+    #[default]
+    Auto,
+    /// tobj, the reference reader.
+    Tobj,
+    /// The parallel parser whenever the file allows it (tobj otherwise).
+    Parallel,
+}
+
+/// Files of at least this many bytes are read by the parallel parser under [`ObjParser::Auto`].
+pub const PARALLEL_MIN_BYTES: usize = 4 << 20;
 
 /// Loads and validates an OBJ file (see the module documentation for what the mesh is).
 pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
+    load_obj_with(path, options, ObjParser::Auto)
+}
+
+/// [`load_obj`] with a choice of number reader; every choice gives the same mesh, report and
+/// errors (the parallel parser is only faster).
+pub fn load_obj_with(path: &Path, options: &LoadOptions, parser: ObjParser) -> Result<LoadedMesh> {
     check_options(options)?;
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
-    let (scanned, parsed) = rayon::join(|| scan::scan(path, &bytes), || run_tobj(&bytes));
+    let parallel = match parser {
+        ObjParser::Auto => bytes.len() >= PARALLEL_MIN_BYTES,
+        ObjParser::Tobj => false,
+        ObjParser::Parallel => true,
+    };
+    let (scanned, numbers) = rayon::join(
+        || scan::scan(path, &bytes),
+        || match parallel {
+            true => Numbers::Parallel(parse::values(&bytes)),
+            false => Numbers::Tobj(run_tobj(&bytes)),
+        },
+    );
     let scanned = scanned?;
-    let models = parsed.map_err(|e| scan::locate_tobj_error(path, &bytes, e))?;
-    let models = align(path, &scanned, models)?;
-    Builder { path, bytes: &bytes, scan: &scanned, models: &models, options }.build()
+    let parsed = match numbers {
+        Numbers::Parallel(Some(v)) if parallel_fits(&scanned, &v) => Ok(v),
+        Numbers::Parallel(_) => Err(run_tobj(&bytes)),
+        Numbers::Tobj(t) => Err(t),
+    };
+    let (models, values) = match parsed {
+        Ok(values) => (scanned_models(&scanned), Some(values)),
+        Err(tobj) => {
+            let models = tobj.map_err(|e| scan::locate_tobj_error(path, &bytes, e))?;
+            (align(path, &scanned, models)?, None)
+        }
+    };
+    Builder {
+        path,
+        bytes: &bytes,
+        scan: &scanned,
+        models: &models,
+        values: values.as_ref(),
+        options,
+    }
+    .build()
+}
+
+/// The numbers of a file as one of the two readers gives them.
+enum Numbers {
+    Parallel(Option<Values>),
+    Tobj(std::result::Result<Vec<tobj::Model>, tobj::LoadError>),
+}
+
+/// Whether the parallel parser's values (and the scanner's objects) are what tobj would give:
+/// the file stays within what they reproduce, and every object with faces that uses `vt`
+/// (`vn`) comes after at least one `vt` (`vn`) statement, as tobj requires.
+fn parallel_fits(scan: &Scan, values: &Values) -> bool {
+    let counts = values.v.len() == scan.num_v
+        && values.vt.len() == scan.num_vt
+        && values.vn.len() == scan.num_vn;
+    let attrs = scan.models.iter().all(|m| {
+        m.len == 0
+            || ((scan.corner_vt.is_empty() || m.vt_at_end > 0)
+                && (scan.corner_vn.is_empty() || m.vn_at_end > 0))
+    });
+    scan.parallel_ok && counts && attrs
+}
+
+fn scanned_models(scan: &Scan) -> Vec<Model> {
+    let m = |m: &scan::ScanModel| Model {
+        name: m.name.clone(),
+        mesh: None,
+        start: m.start,
+        len: m.len,
+    };
+    scan.models.iter().map(m).collect()
 }
 
 fn check_options(o: &LoadOptions) -> Result<()> {
@@ -194,7 +285,7 @@ fn align(path: &Path, scan: &Scan, models: Vec<tobj::Model>) -> Result<Vec<Model
         if !ok_vt || !ok_vn {
             return Err(internal(path, "tobj returned attribute indices of the wrong length"));
         }
-        out.push(Model { name: m.name, mesh: m.mesh, start });
+        out.push(Model { name: m.name, mesh: Some(m.mesh), start, len: n });
         start += n;
     }
     if start != scan.corner_v.len() {
@@ -215,10 +306,56 @@ struct Builder<'a> {
     bytes: &'a [u8],
     scan: &'a Scan,
     models: &'a [Model],
+    /// The parallel parser's values, for models without tobj's.
+    values: Option<&'a Values>,
     options: &'a LoadOptions,
 }
 
 impl Builder<'_> {
+    /// The position of corner `k` of model `m`.
+    fn position(&self, m: &Model, k: usize) -> Vector3<f64> {
+        match (&m.mesh, self.values) {
+            (Some(mesh), _) => {
+                let (l, p) = (3 * mesh.indices[k] as usize, &mesh.positions);
+                Vector3::new(p[l], p[l + 1], p[l + 2])
+            }
+            (None, Some(v)) => Vector3::from(v.v[self.scan.corner_v[m.start + k] as usize]),
+            (None, None) => Vector3::repeat(f64::NAN),
+        }
+    }
+
+    /// The texture coordinates of model `m` by corner: how many corners have one, and the value
+    /// of corner `k` (tobj's count is 0 for an object read before any `vt`).
+    fn texcoord_count(&self, m: &Model) -> usize {
+        m.mesh.as_ref().map_or(m.len, |mesh| mesh.texcoord_indices.len())
+    }
+
+    fn texcoord(&self, m: &Model, k: usize) -> Vector2<f64> {
+        match (&m.mesh, self.values) {
+            (Some(mesh), _) => {
+                let (l, tc) = (2 * mesh.texcoord_indices[k] as usize, &mesh.texcoords);
+                Vector2::new(tc[l], tc[l + 1])
+            }
+            (None, Some(v)) => Vector2::from(v.vt[self.scan.corner_vt[m.start + k] as usize]),
+            (None, None) => Vector2::repeat(f64::NAN),
+        }
+    }
+
+    fn normal_count(&self, m: &Model) -> usize {
+        m.mesh.as_ref().map_or(m.len, |mesh| mesh.normal_indices.len())
+    }
+
+    fn normal(&self, m: &Model, k: usize) -> Vector3<f64> {
+        match (&m.mesh, self.values) {
+            (Some(mesh), _) => {
+                let (l, n) = (3 * mesh.normal_indices[k] as usize, &mesh.normals);
+                Vector3::new(n[l], n[l + 1], n[l + 2])
+            }
+            (None, Some(v)) => Vector3::from(v.vn[self.scan.corner_vn[m.start + k] as usize]),
+            (None, None) => Vector3::repeat(f64::NAN),
+        }
+    }
+
     fn build(&self) -> Result<LoadedMesh> {
         let mut report = LoadReport {
             file_vertices: self.scan.num_v,
@@ -270,7 +407,7 @@ impl Builder<'_> {
     fn object_names(&self) -> Vec<String> {
         let mut names: Vec<String> = Vec::new();
         for m in self.models {
-            if !m.mesh.indices.is_empty() && !names.contains(&m.name) {
+            if m.len > 0 && !names.contains(&m.name) {
                 names.push(m.name.clone());
             }
         }
@@ -299,10 +436,8 @@ impl Builder<'_> {
         let mut pos = vec![Vector3::repeat(f64::NAN); self.scan.num_v];
         for &m in selected {
             let m = &self.models[m];
-            let p = &m.mesh.positions;
-            for (k, &local) in m.mesh.indices.iter().enumerate() {
-                let l = 3 * local as usize;
-                let v = Vector3::new(p[l], p[l + 1], p[l + 2]);
+            for k in 0..m.len {
+                let v = self.position(m, k);
                 if !v.iter().all(|x| x.is_finite()) {
                     let i = self.scan.corner_v[m.start + k] as usize;
                     return Err(self.non_finite(Kind::V, i, "vertex"));
@@ -344,7 +479,7 @@ impl Builder<'_> {
         let mut bad = Vec::new();
         for &m in selected {
             let m = &self.models[m];
-            let range = m.start / 3..(m.start + m.mesh.indices.len()) / 3;
+            let range = m.start / 3..(m.start + m.len) / 3;
             let flags: Vec<bool> = range
                 .clone()
                 .into_par_iter()
@@ -388,12 +523,10 @@ impl Builder<'_> {
         }
         let mut vals = vec![Vector2::repeat(f64::NAN); self.scan.num_vt];
         for m in self.models {
-            let tc = &m.mesh.texcoords;
-            for (k, &local) in m.mesh.texcoord_indices.iter().enumerate() {
+            for k in 0..self.texcoord_count(m) {
                 let i = cvt[m.start + k];
                 if i != NONE {
-                    let l = 2 * local as usize;
-                    vals[i as usize] = Vector2::new(tc[l], tc[l + 1]);
+                    vals[i as usize] = self.texcoord(m, k);
                 }
             }
         }
@@ -418,12 +551,10 @@ impl Builder<'_> {
         }
         let mut vals = vec![Vector3::repeat(f64::NAN); self.scan.num_vn];
         for m in self.models {
-            let n = &m.mesh.normals;
-            for (k, &local) in m.mesh.normal_indices.iter().enumerate() {
+            for k in 0..self.normal_count(m) {
                 let i = cvn[m.start + k];
                 if i != NONE {
-                    let l = 3 * local as usize;
-                    vals[i as usize] = Vector3::new(n[l], n[l + 1], n[l + 2]);
+                    vals[i as usize] = self.normal(m, k);
                 }
             }
         }
@@ -515,7 +646,7 @@ fn used_vertices(
     let mut used = vec![false; num_v];
     for &m in selected {
         let m = &models[m];
-        for &v in &corner_v[m.start..m.start + m.mesh.indices.len()] {
+        for &v in &corner_v[m.start..m.start + m.len] {
             used[v as usize] = true;
         }
     }
@@ -576,4 +707,28 @@ fn dedup_by_value(vals: &[Vector2<f64>]) -> Vec<u32> {
         k = j;
     }
     canon
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fits(text: &str) -> bool {
+        let scan = scan::scan(Path::new("t.obj"), text.as_bytes()).unwrap();
+        parse::values(text.as_bytes()).is_some_and(|v| parallel_fits(&scan, &v))
+    }
+
+    #[test]
+    fn parallel_reader_takes_plain_files_only() {
+        let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+        assert!(fits(&format!("{tri}o a\nf 1 2 3\ng b\nf -3 -2 -1\n")));
+        assert!(fits(&format!("{tri}vt 0 0\nf 1/1 2/1 3/1\r\n")));
+        // A forward index, a polyline, vertex colours, non-ASCII text, and an object with faces
+        // before the first `vt` of a file whose faces use `vt`: tobj reads these.
+        assert!(!fits(&format!("f 1 2 3\n{tri}")));
+        assert!(!fits(&format!("{tri}l 1 2\nf 1 2 3\n")));
+        assert!(!fits("v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+        assert!(!fits(&format!("# \u{e9}\n{tri}f 1 2 3\n")));
+        assert!(!fits(&format!("{tri}f 1 2 3\no b\nvt 0 0\nf 1/1 2/1 3/1\n")));
+    }
 }

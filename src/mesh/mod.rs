@@ -8,6 +8,7 @@
 pub mod adjacency;
 pub mod halfedge;
 pub mod load;
+mod parse;
 pub mod report;
 mod scan;
 pub mod topology;

@@ -6,6 +6,10 @@
 //! index (`v`, `vt`, `vn`) of every triangle corner after the same fan triangulation tobj does
 //! (`(c0, c1, c2), (c0, c2, c3), …`), the line of every face, and one-line errors naming the
 //! line. It runs beside tobj on another thread.
+//!
+//! It also records the objects as tobj forms them ([`ScanModel`]) and whether the file stays
+//! within what the parallel number parser ([`super::parse`]) reproduces bit for bit
+//! ([`Scan::parallel_ok`]).
 
 use std::path::Path;
 
@@ -29,6 +33,26 @@ pub(crate) struct Scan {
     pub face_line: Vec<u32>,
     /// Statements with an unknown keyword (ignored, as OBJ readers do).
     pub ignored_statements: usize,
+    /// The objects as tobj forms them, in file order (always at least one).
+    pub models: Vec<ScanModel>,
+    /// False when the file has something only tobj handles exactly: non-ASCII bytes, face
+    /// indices that refer forward, `l` statements, or vertex colours.
+    pub parallel_ok: bool,
+}
+
+/// An object as tobj forms it: the faces from one `o`/`g` statement that follows a face (or
+/// from the start of the file) to the next such statement (or the end).
+#[derive(Debug, Default)]
+pub(crate) struct ScanModel {
+    /// The name of the last `o`/`g` statement before the faces (`unnamed_object` if none).
+    pub name: String,
+    /// First triangle corner (index into the corner lists).
+    pub start: usize,
+    /// Number of triangle corners.
+    pub len: usize,
+    /// Number of `vt` and `vn` statements before the object ends.
+    pub vt_at_end: usize,
+    pub vn_at_end: usize,
 }
 
 /// Which of the three index lists a face index refers to.
@@ -57,8 +81,8 @@ fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
     line.split(|&b| is_space(b)).filter(|t| !t.is_empty())
 }
 
-/// Checks that a line is text: no control characters, valid UTF-8.
-fn check_text(path: &Path, line_no: usize, line: &[u8]) -> Result<()> {
+/// Checks that a line is text: no control characters, valid UTF-8. True if it is not ASCII.
+fn check_text(path: &Path, line_no: usize, line: &[u8]) -> Result<bool> {
     let mut non_ascii = false;
     for &b in line {
         if b < 0x20 && !is_space(b) {
@@ -73,7 +97,7 @@ fn check_text(path: &Path, line_no: usize, line: &[u8]) -> Result<()> {
     if non_ascii && std::str::from_utf8(line).is_err() {
         return Err(parse_err(path, line_no, "invalid UTF-8; not an OBJ text file".into()));
     }
-    Ok(())
+    Ok(non_ascii)
 }
 
 pub(crate) fn parse_err(path: &Path, line: usize, message: String) -> Error {
@@ -110,16 +134,30 @@ struct Scanner<'a> {
     out: Scan,
     corners: Vec<[u32; 3]>,
     forward: Vec<Forward>,
+    /// The object being read: its name, first corner and whether it has a face yet.
+    model_name: String,
+    model_start: usize,
+    model_has_faces: bool,
 }
 
 /// Runs the pass over a whole file.
 pub(crate) fn scan(path: &Path, bytes: &[u8]) -> Result<Scan> {
-    let mut s = Scanner { path, out: Scan::default(), corners: Vec::new(), forward: Vec::new() };
+    let mut s = Scanner {
+        path,
+        out: Scan { parallel_ok: true, ..Default::default() },
+        corners: Vec::new(),
+        forward: Vec::new(),
+        model_name: UNNAMED.into(),
+        model_start: 0,
+        model_has_faces: false,
+    };
     s.out.corner_v.reserve(bytes.len() / 8);
     for (line_no, line) in lines(bytes) {
         s.statement(line_no, line)?;
     }
     s.check_forward()?;
+    s.end_model();
+    s.out.parallel_ok &= s.forward.is_empty();
     let need_vt = s.out.corner_vt.iter().any(|&t| t != NONE);
     let need_vn = s.out.corner_vn.iter().any(|&t| t != NONE);
     if !need_vt {
@@ -131,36 +169,72 @@ pub(crate) fn scan(path: &Path, bytes: &[u8]) -> Result<Scan> {
     Ok(s.out)
 }
 
+/// tobj's name of an object without one.
+const UNNAMED: &str = "unnamed_object";
+
 impl Scanner<'_> {
+    /// Closes the current object (tobj's `pop_model`).
+    fn end_model(&mut self) {
+        let end = self.out.corner_v.len();
+        self.out.models.push(ScanModel {
+            name: self.model_name.clone(),
+            start: self.model_start,
+            len: end - self.model_start,
+            vt_at_end: self.out.num_vt,
+            vn_at_end: self.out.num_vn,
+        });
+        self.model_start = end;
+        self.model_has_faces = false;
+    }
+
+    /// An `o` or `g` statement: tobj names the object by the rest of the line after its first
+    /// character, trimmed.
+    fn object(&mut self, line: &[u8]) {
+        if self.model_has_faces {
+            self.end_model();
+        }
+        let name = String::from_utf8_lossy(line.get(1..).unwrap_or_default());
+        let name = name.trim();
+        self.model_name = if name.is_empty() { UNNAMED.into() } else { name.into() };
+    }
+
     fn statement(&mut self, line_no: usize, line: &[u8]) -> Result<()> {
-        check_text(self.path, line_no, line)?;
+        if check_text(self.path, line_no, line)? {
+            self.out.parallel_ok = false;
+        }
         let mut toks = tokens(line);
         let Some(kw) = toks.next() else { return Ok(()) };
-        let n_args = || tokens(line).count() - 1;
         match kw {
             b"v" => {
-                let n = n_args();
+                let n = toks.count();
                 if !matches!(n, 3 | 4 | 6) {
                     return Err(self.truncated(line_no, "vertex", "3 coordinates", n));
                 }
+                // Vertex colours: tobj's handling of partial colours is not reproduced.
+                self.out.parallel_ok &= n != 6;
                 self.out.num_v += 1;
             }
             b"vt" => {
-                let n = n_args();
+                let n = toks.count();
                 if !(2..=3).contains(&n) {
                     return Err(self.truncated(line_no, "texture coordinate", "2 values", n));
                 }
                 self.out.num_vt += 1;
             }
             b"vn" => {
-                let n = n_args();
+                let n = toks.count();
                 if n != 3 {
                     return Err(self.truncated(line_no, "normal", "3 components", n));
                 }
                 self.out.num_vn += 1;
             }
-            b"f" => self.face(line_no, toks)?,
+            b"f" => {
+                self.face(line_no, toks)?;
+                self.model_has_faces = true;
+            }
             b"l" => {
+                self.out.parallel_ok = false;
+                self.model_has_faces = true;
                 self.corners_of(line_no, toks)?;
                 if self.corners.len() > 2 {
                     return Err(parse_err(
@@ -173,6 +247,7 @@ impl Scanner<'_> {
             b"usemtl" if toks.next().is_none() => {
                 return Err(parse_err(self.path, line_no, "usemtl without a name".into()));
             }
+            b"o" | b"g" => self.object(line),
             _ if kw[0] == b'#' => {}
             _ if is_ignored_keyword(kw) => {
                 if !matches!(kw, b"o" | b"g" | b"s" | b"usemtl" | b"mtllib") {
