@@ -4,6 +4,7 @@
 //! ```text
 //! cargo run --release --example bench_solver
 //! cargo run --release --example bench_solver -- --whole-mesh [VERTICES...]
+//! BENCH_SIZES=656 BENCH_REPS=100 BENCH_DEBUG=1 cargo run --release --example bench_solver
 //! ```
 //!
 //! With `--whole-mesh`, every vertex of a torus of about 100k (or the given) vertices is free
@@ -182,6 +183,14 @@ fn main() {
             let its = r.iterations.len().max(1) as f64;
             let a: f64 = r.iterations.iter().map(|i| i.assembly_seconds).sum::<f64>() / its * 1e3;
             let s: f64 = r.iterations.iter().map(|i| i.solve_seconds).sum::<f64>() / its * 1e3;
+            if std::env::var("BENCH_DEBUG").is_ok() {
+                let per: Vec<String> = r
+                    .iterations
+                    .iter()
+                    .map(|i| format!("{:.3}+{:.3}", i.assembly_seconds * 1e3, i.solve_seconds * 1e3))
+                    .collect();
+                eprintln!("{count}: {}", per.join(" "));
+            }
             if a + s < best.0 {
                 best = (a + s, a, s, r.iterations.len());
             }

@@ -265,6 +265,11 @@ enum Term {
 /// count (and to a serial run).
 const CHUNK: usize = 512;
 
+/// Blocks of at most this many rows are assembled and summed on the calling thread (same
+/// chunks, so the same sums): below it, waking the thread pool costs more than it saves
+/// (perf on Fig. 12a's 656-vertex brush: 17 % of the time in the kernel's thread switches).
+const SEQUENTIAL_ROWS: usize = 8 * CHUNK;
+
 /// One chunk's contributions: the values of JᵀJ's lower-triangle products and (column, value)
 /// terms of Jᵀr, in row order; the products' (row, column) positions only when the pattern is
 /// being recorded (first iteration), since they do not change.
@@ -452,9 +457,9 @@ impl Assembler<'_> {
             }
             local
         };
-        // Small blocks (one chunk) run on the calling thread: waking the pool costs more than
-        // the rows. Same chunks either way, so the sums are identical.
-        let locals: Vec<Local> = if items.len() <= CHUNK {
+        // Small blocks run on the calling thread (see SEQUENTIAL_ROWS). Same chunks either
+        // way, so the sums are identical.
+        let locals: Vec<Local> = if items.len() <= SEQUENTIAL_ROWS {
             items.chunks(CHUNK).map(make).collect()
         } else {
             items.par_chunks(CHUNK).map(make).collect()
@@ -477,7 +482,7 @@ impl Assembler<'_> {
 /// Σ f(item) over `items`, in parallel chunks added in order (deterministic).
 fn chunked_sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
     let sum = |c: &[T]| c.iter().map(&f).sum::<f64>();
-    let parts: Vec<f64> = if items.len() <= CHUNK {
+    let parts: Vec<f64> = if items.len() <= SEQUENTIAL_ROWS {
         items.chunks(CHUNK).map(sum).collect()
     } else {
         items.par_chunks(CHUNK).map(sum).collect()
