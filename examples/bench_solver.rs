@@ -187,7 +187,9 @@ fn main() {
                 let per: Vec<String> = r
                     .iterations
                     .iter()
-                    .map(|i| format!("{:.3}+{:.3}", i.assembly_seconds * 1e3, i.solve_seconds * 1e3))
+                    .map(|i| {
+                        format!("{:.3}+{:.3}", i.assembly_seconds * 1e3, i.solve_seconds * 1e3)
+                    })
                     .collect();
                 eprintln!("{count}: {}", per.join(" "));
             }
