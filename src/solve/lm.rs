@@ -294,19 +294,26 @@ struct JacobianRows {
 }
 
 /// J by rows and by columns, for y = (JᵀJ + diag(shift)) x in two parallel passes: t = Jx by
-/// row blocks, then y = Jᵀt gathered by columns (each column's terms in row order).
-struct JacobianProduct<'a> {
-    rows: &'a JacobianRows,
+/// row blocks, then y = Jᵀt by columns (each column's terms in row order).
+///
+/// The entries are stored in f32 (mixed precision: the vectors, sums, gradient, diagonal and
+/// energies stay f64). The products only steer the inexact CG step, whose quality the gain ratio
+/// checks against the true energy; halving the bytes streamed per product is what makes the
+/// memory-bound CG iterations cheaper (math.md §7).
+struct JacobianProduct {
+    ptr: Vec<u32>,
+    col: Vec<u32>,
+    d: Vec<[f32; 2]>,
     /// Column c's entries are `col_ptr[c]..col_ptr[c + 1]` of `t_block` (their row block) and
     /// `t_d` (their derivatives): J's entries copied in column order, so that the Jᵀ pass
     /// streams through memory instead of gathering.
     col_ptr: Vec<u32>,
     t_block: Vec<u32>,
-    t_d: Vec<[f64; 2]>,
+    t_d: Vec<[f32; 2]>,
 }
 
-impl<'a> JacobianProduct<'a> {
-    fn new(rows: &'a JacobianRows, n: usize) -> Self {
+impl JacobianProduct {
+    fn new(rows: JacobianRows, n: usize) -> Self {
         let blocks = rows.ptr.len().saturating_sub(1);
         let mut col_ptr = vec![0u32; n + 1];
         for &c in &rows.col {
@@ -317,21 +324,22 @@ impl<'a> JacobianProduct<'a> {
         }
         let mut next = col_ptr.clone();
         let mut t_block = vec![0u32; rows.col.len()];
-        let mut t_d = vec![[0.0; 2]; rows.col.len()];
+        let mut t_d = vec![[0.0f32; 2]; rows.col.len()];
+        let d: Vec<[f32; 2]> = rows.d.iter().map(|v| [v[0] as f32, v[1] as f32]).collect();
         for b in 0..blocks {
             for e in rows.ptr[b] as usize..rows.ptr[b + 1] as usize {
                 let slot = &mut next[rows.col[e] as usize];
                 t_block[*slot as usize] = b as u32;
-                t_d[*slot as usize] = rows.d[e];
+                t_d[*slot as usize] = d[e];
                 *slot += 1;
             }
         }
-        JacobianProduct { rows, col_ptr, t_block, t_d }
+        JacobianProduct { ptr: rows.ptr, col: rows.col, d, col_ptr, t_block, t_d }
     }
 
     /// y = (JᵀJ + diag(shift)) x.
     fn apply(&self, x: &[f64], shift: &[f64], t: &mut Vec<[f64; 2]>, y: &mut [f64]) {
-        let r = self.rows;
+        let r = self;
         let blocks = r.ptr.len().saturating_sub(1);
         t.resize(blocks, [0.0; 2]);
         t.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
@@ -340,8 +348,8 @@ impl<'a> JacobianProduct<'a> {
                 let (mut t0, mut t1) = (0.0, 0.0);
                 for e in r.ptr[b] as usize..r.ptr[b + 1] as usize {
                     let xc = x[r.col[e] as usize];
-                    t0 += r.d[e][0] * xc;
-                    t1 += r.d[e][1] * xc;
+                    t0 += r.d[e][0] as f64 * xc;
+                    t1 += r.d[e][1] as f64 * xc;
                 }
                 *tb = [t0, t1];
             }
@@ -353,7 +361,7 @@ impl<'a> JacobianProduct<'a> {
                 let mut acc = shift[c] * x[c];
                 for e in self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize {
                     let tb = t[self.t_block[e] as usize];
-                    acc += self.t_d[e][0] * tb[0] + self.t_d[e][1] * tb[1];
+                    acc += self.t_d[e][0] as f64 * tb[0] + self.t_d[e][1] as f64 * tb[1];
                 }
                 *yc = acc;
             }
@@ -770,7 +778,7 @@ pub fn solve(
         LinearSolver::ConjugateGradient => true,
         LinearSolver::Auto => n >= CG_THRESHOLD,
     };
-    let mut jacobian = JacobianRows::default();
+    let mut product: Option<JacobianProduct> = None;
     let mut first_gradient: Option<f64> = None;
     let mut lambda = options.initial_damping;
     let mut nu = 2.0;
@@ -781,7 +789,7 @@ pub fn solve(
         let (grad, diag) = if matrix_free {
             let (rows, grad) = sys.jacobian_rows(&phi);
             let diag = rows.diagonal(n);
-            jacobian = rows;
+            product = Some(JacobianProduct::new(rows, n));
             (grad, diag)
         } else {
             let capacity = pattern.as_ref().map_or(0, |p| p.slot.len());
@@ -809,7 +817,6 @@ pub fn solve(
         let forcing = CG_FORCING.min(gnorm / g0.max(f64::MIN_POSITIVE));
         let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
         let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
-        let product = matrix_free.then(|| JacobianProduct::new(&jacobian, n));
         let assembly = t0.elapsed().as_secs_f64();
         loop {
             let t1 = Instant::now();
