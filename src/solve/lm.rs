@@ -74,6 +74,9 @@ pub struct LmOptions {
     pub interleaved_smoothing: bool,
     /// How each damped system is solved.
     pub linear_solver: LinearSolver,
+    /// The clamped cotangent weights of the mesh, one per adjacency slot, when the caller has
+    /// them (several solves on one mesh share them); computed when `None`.
+    pub cotan_weights: Option<std::sync::Arc<Vec<f64>>>,
 }
 
 /// The linear solver of each damped step.
@@ -165,6 +168,7 @@ impl Default for LmOptions {
             soft_locks: Vec::new(),
             interleaved_smoothing: false,
             linear_solver: LinearSolver::Auto,
+            cotan_weights: None,
         }
     }
 }
@@ -715,7 +719,10 @@ pub fn solve(
         })
         .collect();
     let k = term.symmetry.k();
-    let w = cotan_weights(mesh, &g.adjacency);
+    let w = match &options.cotan_weights {
+        Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
+        _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
+    };
     let mut blocks: Vec<Box<dyn Block>> = Vec::new();
     let rows = touched.iter().copied().filter(|&i| term.target_q[i as usize].is_some()).collect();
     blocks.push(Box::new(HighlightBlock { term, rows }));

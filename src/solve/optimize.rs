@@ -202,6 +202,7 @@ pub fn optimize(
         soft_locks: locks.soft.clone(),
         interleaved_smoothing: settings.smoothing_pass(),
         linear_solver: LinearSolver::Auto,
+        cotan_weights: Some(std::sync::Arc::new(cotan_weights(mesh, &g.adjacency))),
     };
     let stages: Vec<f64> = if settings.continuation && settings.smoothness > 0.0 {
         vec![1000.0, 100.0, 10.0, 1.0]
@@ -239,7 +240,7 @@ pub fn optimize(
     // the run with the lower final energy is kept.
     let mut candidates = vec![(StartChoice::Given, start)];
     if settings.harmonic_start && !settings.whole_mesh && !free_list.is_empty() {
-        let w = cotan_weights(mesh, &g.adjacency);
+        let w = options.cotan_weights.clone().expect("set above");
         if let Some(fill) = harmonic_fill(g, &w, &candidates[0].1, &free_list, k) {
             let probe = LmOptions { max_iterations: 0, ..options.clone() };
             let e_given =
