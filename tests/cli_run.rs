@@ -198,3 +198,54 @@ fn trace_writes_the_strokes_of_a_given_field_and_flags_override_the_scene() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("nothing to write"));
 }
+
+/// `grainline render`: the preview alone. `--out` and `--linear` override the scene; the
+/// strokes are traced for the strokes overlay but no toolpath file is written; the PFM holds
+/// width × height × 3 finite floats; a missing scene is a one-line error naming it.
+#[test]
+fn render_command_writes_only_the_preview() {
+    let d = dir("render");
+    write_part(&d);
+    let s = scene(&d, "[]", TOOLPATHS, RENDER);
+    let (png, pfm, rep) = (d.join("alt/p.png"), d.join("alt/p.pfm"), d.join("alt/rep.json"));
+    let args = [
+        "--quiet",
+        "render",
+        s.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+        "--linear",
+        pfm.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ];
+    let out = run(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(png.exists() && pfm.exists());
+    for f in ["o/v.svg", "o/v.ngc", "o/v.json", "o/v.png"] {
+        assert!(!d.join(f).exists(), "{f} written by `render`");
+    }
+    let r = report(&rep);
+    assert_eq!(
+        stage_names(&r),
+        ["load", "field", "toolpaths", "write toolpaths", "render", "write render"]
+    );
+    assert_eq!(r["outputs"].as_array().unwrap().len(), 2, "{}", r["outputs"]);
+    assert!(r["toolpaths"]["job"]["stroke_count"].as_u64().unwrap() > 0);
+    // PFM: "PF\n96 96\n-1.0\n" then 96·96·3 little-endian f32.
+    let bytes = std::fs::read(&pfm).unwrap();
+    let header_end = bytes.iter().enumerate().filter(|(_, &b)| b == b'\n').nth(2).unwrap().0 + 1;
+    let header = String::from_utf8_lossy(&bytes[..header_end]);
+    assert!(header.starts_with("PF\n96 96\n-"), "{header}");
+    let data = &bytes[header_end..];
+    assert_eq!(data.len(), 96 * 96 * 3 * 4);
+    assert!(data.chunks(4).all(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]).is_finite()));
+
+    let missing = d.join("missing.json");
+    let out = run(&["--quiet", "render", missing.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("missing.json"), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "cause printed twice: {err}");
+}

@@ -6,6 +6,7 @@ mod mesh_args;
 mod optimize;
 mod panel;
 mod progress;
+mod render;
 mod run;
 mod schema;
 mod trace;
@@ -40,6 +41,9 @@ enum Command {
     Run(run::RunArgs),
     /// The scene's strokes alone: SVG, G-code and strokes JSON (optionally from a FIELD.json).
     Trace(trace::TraceArgs),
+    /// The scene's preview alone: PNG and optional linear PFM (strokes traced only if an effect
+    /// needs them).
+    Render(render::RenderArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
     /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
@@ -53,6 +57,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Field(a) => field::run(a, cli.quiet),
         Command::Schema(a) => schema::run(a),
         Command::Trace(a) => trace::run(a, cli.quiet),
+        Command::Render(a) => render::run(a, cli.quiet),
         Command::Run(a) => run::run(a, cli.quiet),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
         Command::Panel(a) => panel::run(a, cli.quiet),

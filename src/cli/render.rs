@@ -1,0 +1,74 @@
+//! `grainline render`: the scene's preview alone — the PNG and, on request, the linear PFM.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use clap::Args;
+use grainline::pipeline::run::{run as run_scene, RunOptions};
+use grainline::scene::LoadedScene;
+
+use super::progress::Spinner;
+
+/// Arguments of `grainline render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scene file (docs/scene.md); its `render` section sets the image, the tone mapping
+    /// and the effects (its `toolpaths` section is used only when an effect needs the strokes).
+    scene: PathBuf,
+    /// Write the PNG here (overrides `render.output`).
+    #[arg(long, value_name = "PNG")]
+    out: Option<PathBuf>,
+    /// Also write the linear radiance as PFM here (overrides `render.linear`).
+    #[arg(long, value_name = "PFM")]
+    linear: Option<PathBuf>,
+    /// The grain from `grainline optimize` or `grainline field` on the same mesh (default:
+    /// the scene's field, after its edits and solve).
+    #[arg(long, value_name = "FIELD.json")]
+    field: Option<PathBuf>,
+    /// The report: the passes that ran with their times and what was not computed.
+    #[arg(long, value_name = "PATH")]
+    report: Option<PathBuf>,
+}
+
+fn absolute(p: &Path) -> anyhow::Result<String> {
+    let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) };
+    Ok(p.display().to_string())
+}
+
+/// Runs `grainline render`.
+pub fn run(args: RenderArgs, quiet: bool) -> anyhow::Result<()> {
+    let mut scene = LoadedScene::read(&args.scene)?;
+    let settings = scene.scene.render.get_or_insert_with(Default::default);
+    if let Some(p) = &args.out {
+        settings.output = absolute(p)?;
+    }
+    if let Some(p) = &args.linear {
+        settings.linear = Some(absolute(p)?);
+    }
+    // Only the preview is written: the toolpath exports are dropped (the strokes are still
+    // traced when an effect needs them).
+    if let Some(t) = scene.scene.toolpaths.as_mut() {
+        t.svg = None;
+        t.gcode = None;
+        t.strokes_json = None;
+    }
+    let spinner = Spinner::new(quiet);
+    let options = RunOptions { out_dir: None, field: args.field.clone() };
+    let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
+    drop(spinner);
+    if let Some(r) = &args.report {
+        grainline::output::write_json_atomic(r, &report)
+            .with_context(|| format!("writing {}", r.display()))?;
+    }
+    if !quiet {
+        for o in &report.outputs {
+            eprintln!("wrote {o}");
+        }
+        if let Some(r) = &report.render {
+            let passes: Vec<String> =
+                r.passes.iter().map(|p| format!("{} {:.0} ms", p.name, p.ms)).collect();
+            eprintln!("render passes: {}", passes.join(", "));
+        }
+    }
+    Ok(())
+}
