@@ -59,8 +59,18 @@ pub fn fit_quadric(
         let d = (positions[j as usize] - pi) * inv_h;
         let (x, y, z) = (frame.t.dot(&d), frame.b.dot(&d), frame.n.dot(&d));
         let row = SVector::<f64, 5>::new(x, y, 0.5 * x * x, x * y, 0.5 * y * y);
-        ata += row * row.transpose();
+        // Lower triangle only; mirrored below (the same sums, in the same order).
+        for c in 0..5 {
+            for r in c..5 {
+                ata[(r, c)] += row[r] * row[c];
+            }
+        }
         atb += row * z;
+    }
+    for c in 1..5 {
+        for r in 0..c {
+            ata[(r, c)] = ata[(c, r)];
+        }
     }
     // Reject rank-deficient systems: a pivot tiny against the diagonal means the neighbours
     // do not span the quadric's monomials.
