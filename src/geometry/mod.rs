@@ -161,9 +161,15 @@ impl Geometry {
         // curvatures, written straight into the output arrays (no intermediate per-vertex
         // tuple array, no second pass).
         let nv = normals.len();
-        let mut frames = vec![Frame::from_normal(FALLBACK_NORMAL); nv];
-        let mut weingarten = vec![Matrix2::zeros(); nv];
-        let mut principal = vec![Principal { k1: 0.0, k2: 0.0, d1: [1.0, 0.0] }; nv];
+        // Placeholders written in parallel (first-touch page faults are costly on one thread).
+        let placeholder = Frame::from_normal(FALLBACK_NORMAL);
+        let mut frames: Vec<Frame> = (0..nv).into_par_iter().map(|_| placeholder).collect();
+        let mut weingarten: Vec<Matrix2<f64>> =
+            (0..nv).into_par_iter().map(|_| Matrix2::zeros()).collect();
+        let mut principal: Vec<Principal> = (0..nv)
+            .into_par_iter()
+            .map(|_| Principal { k1: 0.0, k2: 0.0, d1: [1.0, 0.0] })
+            .collect();
         let mut rings = vec![0u8; nv];
         frames
             .par_chunks_mut(FIT_CHUNK)
