@@ -63,7 +63,7 @@ fn twist_angle(seed: u64, i: usize) -> f64 {
 const FIT_CHUNK: usize = 4096;
 
 /// The jet fit at vertex `i` from initial normal `n`: `refinements` normal refinements, then the
-/// optional frame twist (math.md §2).
+/// optional frame twist (math.md §2). The rings and their scaled offsets are gathered once.
 fn fit_vertex(
     mesh: &Mesh,
     adjacency: &Adjacency,
@@ -71,21 +71,22 @@ fn fit_vertex(
     refinements: u32,
     n: &Vector3<f64>,
     i: usize,
-    bufs: &mut (Vec<u32>, Vec<u32>),
+    rings: &mut curvature::JetRings,
 ) -> (Frame, curvature::JetFit) {
+    rings.start(i);
     let mut frame = Frame::from_normal(*n);
-    let mut fit = curvature::jet_fit(&mesh.positions, adjacency, i, &frame, bufs);
+    let mut fit = rings.fit(&mesh.positions, adjacency, &frame);
     for _ in 0..refinements {
         if fit.ring == 0 {
             break;
         }
         let tilted = frame.n - frame.t * fit.slope[0] - frame.b * fit.slope[1];
         frame = Frame::from_normal(normals::normalize_or(tilted, frame.n));
-        fit = curvature::jet_fit(&mesh.positions, adjacency, i, &frame, bufs);
+        fit = rings.fit(&mesh.positions, adjacency, &frame);
     }
     if let Some(seed) = options.frame_twist_seed {
         frame = Frame::with_tangent(frame.n, frame.direction(twist_angle(seed, i)));
-        fit = curvature::jet_fit(&mesh.positions, adjacency, i, &frame, bufs);
+        fit = rings.fit(&mesh.positions, adjacency, &frame);
     }
     (frame, fit)
 }
@@ -177,27 +178,17 @@ impl Geometry {
             .zip(principal.par_chunks_mut(FIT_CHUNK))
             .zip(rings.par_chunks_mut(FIT_CHUNK))
             .enumerate()
-            .for_each_init(
-                || (Vec::new(), Vec::new()),
-                |bufs, (c, (((fr, w), pr), rg))| {
-                    for k in 0..fr.len() {
-                        let i = c * FIT_CHUNK + k;
-                        let (frame, fit) = fit_vertex(
-                            mesh,
-                            &adjacency,
-                            options,
-                            refinements,
-                            &normals[i],
-                            i,
-                            bufs,
-                        );
-                        fr[k] = frame;
-                        w[k] = fit.w;
-                        pr[k] = Principal::from_weingarten(&fit.w);
-                        rg[k] = fit.ring;
-                    }
-                },
-            );
+            .for_each_init(curvature::JetRings::default, |bufs, (c, (((fr, w), pr), rg))| {
+                for k in 0..fr.len() {
+                    let i = c * FIT_CHUNK + k;
+                    let (frame, fit) =
+                        fit_vertex(mesh, &adjacency, options, refinements, &normals[i], i, bufs);
+                    fr[k] = frame;
+                    w[k] = fit.w;
+                    pr[k] = Principal::from_weingarten(&fit.w);
+                    rg[k] = fit.ring;
+                }
+            });
         drop(normals);
         let extended_jet_rings = rings.iter().filter(|&&r| r > 1).count();
         let failed_jet_fits = rings.iter().filter(|&&r| r == 0).count();
