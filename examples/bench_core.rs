@@ -117,8 +117,37 @@ fn main() {
         peak as f64 * 1024.0 / nv as f64
     );
     println!("all ℓ finite        {finite}");
+    stage_breakdown(&path, &options);
     std::fs::remove_dir_all(&dir).ok();
     curvature_anchor();
+}
+
+/// One more load + field, timed stage by stage (Geometry::compute_timed, then the field's steps as
+/// compute_field runs them).
+fn stage_breakdown(path: &std::path::Path, options: &FieldOptions) {
+    use grainline::geometry::Geometry;
+    use grainline::highlight::{half_vectors, highlight_field, initial_field};
+    let loaded = load_obj_with(path, &LoadOptions::default(), ObjParser::Auto).expect("load");
+    let mesh = &loaded.mesh;
+    let t0 = Instant::now();
+    let (geometry, mut stages) = Geometry::compute_timed(mesh, &options.geometry);
+    let mut clock = Instant::now();
+    let mut lap = |stages: &mut Vec<(&'static str, f64)>, name: &'static str| {
+        let now = Instant::now();
+        stages.push((name, now.duration_since(clock).as_secs_f64()));
+        clock = now;
+    };
+    let init = initial_field(mesh, &geometry, &options.init, options.symmetry).expect("init");
+    lap(&mut stages, "init");
+    let normals: Vec<Vector3<f64>> = geometry.frames.iter().map(|f| f.n).collect();
+    let h = half_vectors(&options.lighting, &mesh.positions, &normals);
+    lap(&mut stages, "h");
+    let ell = highlight_field(&geometry, &init.phi, options.symmetry, options.gradient_form, &h);
+    lap(&mut stages, "gradient + ell");
+    let total = t0.elapsed().as_secs_f64();
+    let parts: Vec<String> = stages.iter().map(|(n, s)| format!("{n} {:.3}", s)).collect();
+    println!("stages (one run, s) {} | sum {total:.3}", parts.join(", "));
+    drop(ell);
 }
 
 /// The curvature anchor: libigl's principal_curvature (radius 2) takes 2.1 s on a

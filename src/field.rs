@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Geometry, GeometryDiagnostics, GeometryOptions, GradientForm};
@@ -70,7 +71,7 @@ pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult>
     }
     let geometry = Geometry::compute(mesh, &options.geometry);
     let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
-    let normals: Vec<Vector3<f64>> = geometry.frames.iter().map(|f| f.n).collect();
+    let normals: Vec<Vector3<f64>> = geometry.frames.par_iter().map(|f| f.n).collect();
     let h = half_vectors(&options.lighting, &mesh.positions, &normals);
     let highlight =
         highlight_field(&geometry, &init.phi, options.symmetry, options.gradient_form, &h);

@@ -41,15 +41,28 @@ pub fn transport_angle(fi: &Frame, fj: &Frame) -> f64 {
 
 /// ρᵢⱼ for every directed edge (adjacency slot) `i → j`, with ρⱼᵢ = −ρᵢⱼ exactly.
 pub fn edge_transport(adj: &Adjacency, frames: &[Frame]) -> Vec<f64> {
-    let mut out = vec![0.0; adj.num_slots()];
-    adj.fill_slots(&mut out, |i, s| {
+    // Each undirected edge is evaluated once (i < j); the reverse slot takes the exact negation
+    // (ρⱼᵢ = −ρᵢⱼ), so the cost is half of evaluating every slot.
+    let mut forward = vec![0.0; adj.num_slots()];
+    adj.fill_slots(&mut forward, |i, s| {
         let j = adj.target(s);
         if i < j {
             transport_angle(&frames[i], &frames[j])
         } else {
-            -transport_angle(&frames[j], &frames[i])
+            0.0
         }
     });
+    let mut out = vec![0.0; adj.num_slots()];
+    adj.fill_slots(
+        &mut out,
+        |i, s| {
+            if i < adj.target(s) {
+                forward[s]
+            } else {
+                -forward[adj.reverse(s)]
+            }
+        },
+    );
     out
 }
 

@@ -40,6 +40,21 @@ pub fn fit_quadric(
     frame: &Frame,
     ring: &[u32],
 ) -> Option<(Matrix2<f64>, [f64; 2])> {
+    let mut d = Vec::new();
+    let inv_h = scaled_offsets(positions, i, ring, &mut d)?;
+    fit_scaled(&d, inv_h, frame)
+}
+
+/// The neighbours' offsets pⱼ − pᵢ divided by the ring radius h into `out`; returns 1/h, or
+/// `None` when the ring is too small or h is not a positive finite number. Independent of the
+/// frame, so the normal-refinement refit reuses it.
+fn scaled_offsets(
+    positions: &[Vector3<f64>],
+    i: usize,
+    ring: &[u32],
+    out: &mut Vec<Vector3<f64>>,
+) -> Option<f64> {
+    out.clear();
     if ring.len() < 5 {
         return None;
     }
@@ -53,14 +68,29 @@ pub fn fit_quadric(
         return None;
     }
     let inv_h = 1.0 / h;
+    out.extend(ring.iter().map(|&j| (positions[j as usize] - pi) * inv_h));
+    Some(inv_h)
+}
+
+/// The least-squares quadric over scaled offsets `d` (from [`scaled_offsets`]) in `frame`.
+fn fit_scaled(d: &[Vector3<f64>], inv_h: f64, frame: &Frame) -> Option<(Matrix2<f64>, [f64; 2])> {
     let mut ata = SMatrix::<f64, 5, 5>::zeros();
     let mut atb = SVector::<f64, 5>::zeros();
-    for &j in ring {
-        let d = (positions[j as usize] - pi) * inv_h;
-        let (x, y, z) = (frame.t.dot(&d), frame.b.dot(&d), frame.n.dot(&d));
+    for d in d {
+        let (x, y, z) = (frame.t.dot(d), frame.b.dot(d), frame.n.dot(d));
         let row = SVector::<f64, 5>::new(x, y, 0.5 * x * x, x * y, 0.5 * y * y);
-        ata += row * row.transpose();
+        // Lower triangle only; mirrored below (the same sums, in the same order).
+        for c in 0..5 {
+            for r in c..5 {
+                ata[(r, c)] += row[r] * row[c];
+            }
+        }
         atb += row * z;
+    }
+    for c in 1..5 {
+        for r in 0..c {
+            ata[(r, c)] = ata[(c, r)];
+        }
     }
     // Reject rank-deficient systems: a pivot tiny against the diagonal means the neighbours
     // do not span the quadric's monomials.
@@ -78,6 +108,52 @@ pub fn fit_quadric(
     // Undo the scaling: x' = x/h, z' = z/h ⇒ slopes unchanged, second derivatives × 1/h.
     let w = Matrix2::new(c[2], c[3], c[3], c[4]) * inv_h;
     Some((w, [c[0], c[1]]))
+}
+
+/// Per-vertex scratch of [`JetRings::fit`]: the scaled offsets of each ring depth tried so far
+/// at the current vertex (they do not depend on the frame).
+#[derive(Default)]
+pub(crate) struct JetRings {
+    vertex: usize,
+    /// Depths 1..=4 → (1/h or None, scaled offsets); `valid[k]` says whether depth k+1 is cached.
+    valid: [bool; 4],
+    inv_h: [Option<f64>; 4],
+    offsets: [Vec<Vector3<f64>>; 4],
+    ring: Vec<u32>,
+    grow: Vec<u32>,
+}
+
+impl JetRings {
+    /// Forgets the cached rings; the next fits are at vertex `i`.
+    pub(crate) fn start(&mut self, i: usize) {
+        self.vertex = i;
+        self.valid = [false; 4];
+    }
+
+    /// Exactly [`jet_fit`] at the current vertex, reusing the rings gathered by earlier fits at it.
+    pub(crate) fn fit(
+        &mut self,
+        positions: &[Vector3<f64>],
+        adj: &Adjacency,
+        frame: &Frame,
+    ) -> JetFit {
+        let i = self.vertex;
+        let start = if adj.valence(i) >= 6 && !adj.is_boundary_vertex(i) { 1 } else { 2 };
+        for depth in start..=4 {
+            let k = depth - 1;
+            if !self.valid[k] {
+                gather_ring(adj, i, depth, &mut self.ring, &mut self.grow);
+                self.inv_h[k] = scaled_offsets(positions, i, &self.ring, &mut self.offsets[k]);
+                self.valid[k] = true;
+            }
+            if let Some(inv_h) = self.inv_h[k] {
+                if let Some((w, slope)) = fit_scaled(&self.offsets[k], inv_h, frame) {
+                    return JetFit { w, slope, ring: depth as u8 };
+                }
+            }
+        }
+        JetFit { w: Matrix2::zeros(), slope: [0.0; 2], ring: 0 }
+    }
 }
 
 /// Jet fit at vertex `i`, growing the ring as needed (see the module docs).

@@ -74,8 +74,17 @@ impl GradientStencil {
         let parts: Vec<Part> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map_init(Scratch::default, |scratch, c| {
-                let mut part = Part::default();
-                for i in c * CHUNK..(n.min((c + 1) * CHUNK)) {
+                let (v0, v1) = (c * CHUNK, n.min((c + 1) * CHUNK));
+                // The 1-ring sizes: exact unless a stencil has to grow.
+                let cap = if v1 > v0 { adj.slots(v1 - 1).end - adj.slots(v0).start } else { 0 };
+                let mut part = Part {
+                    ends: Vec::with_capacity(v1 - v0),
+                    depth: Vec::with_capacity(v1 - v0),
+                    neighbor: Vec::with_capacity(cap),
+                    rho: Vec::with_capacity(cap),
+                    pinv: Vec::with_capacity(cap),
+                };
+                for i in v0..v1 {
                     let depth =
                         stencil_at(positions, adj, frames, transport, i, scratch, &mut part);
                     part.depth.push(depth);
@@ -99,13 +108,28 @@ impl GradientStencil {
             }
         }
         let total = *offsets.last().unwrap_or(&0) as usize;
+        // Join the parts in parallel, each into its own disjoint range of the outputs.
         let (mut neighbor, mut rho, mut pinv) =
-            (Vec::with_capacity(total), Vec::with_capacity(total), Vec::with_capacity(total));
-        for part in parts {
-            neighbor.extend_from_slice(&part.neighbor);
-            rho.extend_from_slice(&part.rho);
-            pinv.extend_from_slice(&part.pinv);
+            (vec![0u32; total], vec![0.0f64; total], vec![[0.0f64; 2]; total]);
+        {
+            let mut pieces = Vec::with_capacity(parts.len());
+            let (mut rest_n, mut rest_r, mut rest_p) =
+                (&mut neighbor[..], &mut rho[..], &mut pinv[..]);
+            for part in &parts {
+                let len = part.neighbor.len();
+                let (head_n, tail_n) = std::mem::take(&mut rest_n).split_at_mut(len);
+                let (head_r, tail_r) = std::mem::take(&mut rest_r).split_at_mut(len);
+                let (head_p, tail_p) = std::mem::take(&mut rest_p).split_at_mut(len);
+                pieces.push((part, head_n, head_r, head_p));
+                (rest_n, rest_r, rest_p) = (tail_n, tail_r, tail_p);
+            }
+            pieces.into_par_iter().for_each(|(part, n, r, p)| {
+                n.copy_from_slice(&part.neighbor);
+                r.copy_from_slice(&part.rho);
+                p.copy_from_slice(&part.pinv);
+            });
         }
+        drop(parts);
         GradientStencil { offsets, neighbor, rho, pinv, extended, empty }
     }
 

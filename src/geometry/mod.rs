@@ -20,6 +20,7 @@ use rayon::prelude::*;
 pub use curvature::Principal;
 pub use frames::Frame;
 pub use gradient::{GradientForm, GradientStencil};
+use normals::FALLBACK_NORMAL;
 pub use normals::{NormalSource, VertexFaces};
 
 use crate::mesh::{Adjacency, Mesh};
@@ -55,6 +56,39 @@ fn twist_angle(seed: u64, i: usize) -> f64 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^= z >> 31;
     std::f64::consts::TAU * ((z >> 11) as f64 / (1u64 << 53) as f64)
+}
+
+/// Vertices per parallel work item of the jet-fit pass (fixed: the same result at any thread
+/// count).
+const FIT_CHUNK: usize = 4096;
+
+/// The jet fit at vertex `i` from initial normal `n`: `refinements` normal refinements, then the
+/// optional frame twist (math.md §2). The rings and their scaled offsets are gathered once.
+fn fit_vertex(
+    mesh: &Mesh,
+    adjacency: &Adjacency,
+    options: &GeometryOptions,
+    refinements: u32,
+    n: &Vector3<f64>,
+    i: usize,
+    rings: &mut curvature::JetRings,
+) -> (Frame, curvature::JetFit) {
+    rings.start(i);
+    let mut frame = Frame::from_normal(*n);
+    let mut fit = rings.fit(&mesh.positions, adjacency, &frame);
+    for _ in 0..refinements {
+        if fit.ring == 0 {
+            break;
+        }
+        let tilted = frame.n - frame.t * fit.slope[0] - frame.b * fit.slope[1];
+        frame = Frame::from_normal(normals::normalize_or(tilted, frame.n));
+        fit = rings.fit(&mesh.positions, adjacency, &frame);
+    }
+    if let Some(seed) = options.frame_twist_seed {
+        frame = Frame::with_tangent(frame.n, frame.direction(twist_angle(seed, i)));
+        fit = rings.fit(&mesh.positions, adjacency, &frame);
+    }
+    (frame, fit)
 }
 
 /// Counts of vertices where a fallback was used, so degenerate input is visible, never silent.
@@ -96,49 +130,77 @@ pub struct Geometry {
 impl Geometry {
     /// Computes everything for `mesh`. Every output is finite for any finite input mesh.
     pub fn compute(mesh: &Mesh, options: &GeometryOptions) -> Self {
+        Self::compute_timed(mesh, options).0
+    }
+
+    /// [`Geometry::compute`], also returning the wall time of each stage in seconds, in order
+    /// (`adjacency`, `vertex_faces`, `normals`, `jet_fits`, `areas`, `transport`, `stencils`).
+    /// The outputs are identical to `compute`'s.
+    pub fn compute_timed(
+        mesh: &Mesh,
+        options: &GeometryOptions,
+    ) -> (Self, Vec<(&'static str, f64)>) {
+        let mut timings = Vec::with_capacity(7);
+        let mut clock = std::time::Instant::now();
+        let mut lap = |name: &'static str| {
+            let now = std::time::Instant::now();
+            timings.push((name, now.duration_since(clock).as_secs_f64()));
+            clock = now;
+        };
         let adjacency = Adjacency::from_faces(mesh.num_vertices(), &mesh.faces);
+        lap("adjacency");
         let vf = VertexFaces::new(mesh);
+        lap("vertex_faces");
         let (normals, fallback_normals) = normals::vertex_normals(mesh, &vf, options.normals);
+        lap("normals");
         let refinements = if options.normals == NormalSource::File && mesh.normals.is_some() {
             0
         } else {
             options.normal_refinements
         };
-        let fits: Vec<(Frame, curvature::JetFit)> = normals
-            .par_iter()
-            .enumerate()
-            .map_init(
-                || (Vec::new(), Vec::new()),
-                |bufs, (i, n)| {
-                    let mut frame = Frame::from_normal(*n);
-                    let mut fit = curvature::jet_fit(&mesh.positions, &adjacency, i, &frame, bufs);
-                    for _ in 0..refinements {
-                        if fit.ring == 0 {
-                            break;
-                        }
-                        let tilted = frame.n - frame.t * fit.slope[0] - frame.b * fit.slope[1];
-                        frame = Frame::from_normal(normals::normalize_or(tilted, frame.n));
-                        fit = curvature::jet_fit(&mesh.positions, &adjacency, i, &frame, bufs);
-                    }
-                    if let Some(seed) = options.frame_twist_seed {
-                        frame = Frame::with_tangent(frame.n, frame.direction(twist_angle(seed, i)));
-                        fit = curvature::jet_fit(&mesh.positions, &adjacency, i, &frame, bufs);
-                    }
-                    (frame, fit)
-                },
-            )
+        // One pass per vertex: fit (math.md §2: refine the normal, refit), then the principal
+        // curvatures, written straight into the output arrays (no intermediate per-vertex
+        // tuple array, no second pass).
+        let nv = normals.len();
+        // Placeholders written in parallel (first-touch page faults are costly on one thread).
+        let placeholder = Frame::from_normal(FALLBACK_NORMAL);
+        let mut frames: Vec<Frame> = (0..nv).into_par_iter().map(|_| placeholder).collect();
+        let mut weingarten: Vec<Matrix2<f64>> =
+            (0..nv).into_par_iter().map(|_| Matrix2::zeros()).collect();
+        let mut principal: Vec<Principal> = (0..nv)
+            .into_par_iter()
+            .map(|_| Principal { k1: 0.0, k2: 0.0, d1: [1.0, 0.0] })
             .collect();
-        let frames: Vec<Frame> = fits.iter().map(|f| f.0).collect();
-        let weingarten: Vec<Matrix2<f64>> = fits.iter().map(|f| f.1.w).collect();
-        let extended_jet_rings = fits.iter().filter(|f| f.1.ring > 1).count();
-        let failed_jet_fits = fits.iter().filter(|f| f.1.ring == 0).count();
-        // Free the fits (128 MB at 1M vertices) before the stencils, where memory peaks.
-        drop(fits);
-        let principal = weingarten.par_iter().map(Principal::from_weingarten).collect();
+        let mut rings = vec![0u8; nv];
+        frames
+            .par_chunks_mut(FIT_CHUNK)
+            .zip(weingarten.par_chunks_mut(FIT_CHUNK))
+            .zip(principal.par_chunks_mut(FIT_CHUNK))
+            .zip(rings.par_chunks_mut(FIT_CHUNK))
+            .enumerate()
+            .for_each_init(curvature::JetRings::default, |bufs, (c, (((fr, w), pr), rg))| {
+                for k in 0..fr.len() {
+                    let i = c * FIT_CHUNK + k;
+                    let (frame, fit) =
+                        fit_vertex(mesh, &adjacency, options, refinements, &normals[i], i, bufs);
+                    fr[k] = frame;
+                    w[k] = fit.w;
+                    pr[k] = Principal::from_weingarten(&fit.w);
+                    rg[k] = fit.ring;
+                }
+            });
+        drop(normals);
+        let extended_jet_rings = rings.iter().filter(|&&r| r > 1).count();
+        let failed_jet_fits = rings.iter().filter(|&&r| r == 0).count();
+        drop(rings);
+        lap("jet_fits");
         let areas = areas::vertex_areas(mesh, &vf);
         drop(vf);
+        lap("areas");
         let transport = connection::edge_transport(&adjacency, &frames);
+        lap("transport");
         let stencil = GradientStencil::new(&mesh.positions, &adjacency, &frames, &transport);
+        lap("stencils");
         let diagnostics = GeometryDiagnostics {
             fallback_normals,
             extended_jet_rings,
@@ -146,7 +208,7 @@ impl Geometry {
             extended_gradient_stencils: stencil.extended,
             empty_gradient_stencils: stencil.empty,
         };
-        Geometry {
+        let geometry = Geometry {
             adjacency,
             frames,
             areas,
@@ -155,7 +217,8 @@ impl Geometry {
             transport,
             stencil,
             diagnostics,
-        }
+        };
+        (geometry, timings)
     }
 
     /// Number of vertices.

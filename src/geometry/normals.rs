@@ -97,6 +97,7 @@ pub fn vertex_normals(
         })
         .collect();
     let fallback = (0..mesh.num_vertices())
+        .into_par_iter()
         .filter(|&v| {
             vertex_faces.of(v).iter().all(|&(f, _)| face_n[f as usize] == Vector3::zeros())
         })
