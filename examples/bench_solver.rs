@@ -22,6 +22,25 @@ use grainline::highlight::Symmetry;
 use grainline::solve::{solve, HighlightTerm, LinearSolver, LmOptions};
 use nalgebra::Vector3;
 
+/// A line-field term whose targets are `phi_true`'s own highlights (so `phi_true` has zero
+/// highlight energy), every vertex weighted 1.
+fn own_targets<'a>(g: &'a Geometry, h: &'a [Vector3<f64>], phi_true: &[f64]) -> HighlightTerm<'a> {
+    let n = phi_true.len();
+    let mut term = HighlightTerm {
+        geometry: g,
+        h,
+        symmetry: Symmetry::Line,
+        form: GradientForm::Angle,
+        epsilon: 0.0,
+        target_q: vec![None; n],
+        weight: vec![1.0; n],
+    };
+    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(phi_true, i).norm()).collect();
+    term.epsilon = default_epsilon(&ms);
+    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(phi_true, i), term.epsilon))).collect();
+    term
+}
+
 /// `GRAINLINE_LM_SOLVER=direct|cg` forces a linear solver (default: auto).
 fn linear_solver() -> LinearSolver {
     match std::env::var("GRAINLINE_LM_SOLVER").as_deref() {
@@ -47,19 +66,7 @@ fn whole_mesh(targets: &[usize]) {
                 g.frames[i].angle_of(&Vector3::new(-p.y, p.x, 0.3 * p.z))
             })
             .collect();
-        let mut term = HighlightTerm {
-            geometry: &g,
-            h: &h,
-            symmetry: Symmetry::Line,
-            form: GradientForm::Angle,
-            epsilon: 0.0,
-            target_q: vec![None; n],
-            weight: vec![1.0; n],
-        };
-        let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
-        term.epsilon = default_epsilon(&ms);
-        term.target_q =
-            (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+        let term = own_targets(&g, &h, &phi_true);
         let phi: Vec<f64> =
             (0..n).map(|i| phi_true[i] + 0.2 * (3.0 * mesh.positions[i].x).sin()).collect();
         let free: Vec<u32> = (0..n as u32).collect();
@@ -128,18 +135,7 @@ fn main() {
             ))
         })
         .collect();
-    let mut term = HighlightTerm {
-        geometry: &g,
-        h: &h,
-        symmetry: Symmetry::Line,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
-    term.epsilon = default_epsilon(&ms);
-    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+    let term = own_targets(&g, &h, &phi_true);
     let centre = Vector3::new(0.0, 0.0, 1.0);
     let mut dist: Vec<(f64, u32)> =
         (0..n as u32).map(|i| ((mesh.positions[i as usize] - centre).norm(), i)).collect();

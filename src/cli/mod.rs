@@ -63,3 +63,10 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Panel(a) => panel::run(a, cli.quiet),
     }
 }
+
+/// A path given on the command line, made absolute against the working directory (scene paths
+/// are otherwise resolved against the scene file).
+fn absolute(p: &std::path::Path) -> anyhow::Result<String> {
+    let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) };
+    Ok(p.display().to_string())
+}

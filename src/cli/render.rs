@@ -1,12 +1,13 @@
 //! `grainline render`: the scene's preview alone — the PNG and, on request, the linear PFM.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
 use grainline::pipeline::run::{run as run_scene, RunOptions};
 use grainline::scene::LoadedScene;
 
+use super::absolute;
 use super::progress::Spinner;
 
 /// Arguments of `grainline render`.
@@ -28,11 +29,6 @@ pub struct RenderArgs {
     /// The report: the passes that ran with their times and what was not computed.
     #[arg(long, value_name = "PATH")]
     report: Option<PathBuf>,
-}
-
-fn absolute(p: &Path) -> anyhow::Result<String> {
-    let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) };
-    Ok(p.display().to_string())
 }
 
 /// Runs `grainline render`.

@@ -1,12 +1,13 @@
 //! `grainline trace`: the scene's toolpath part alone — strokes, SVG, G-code, strokes JSON.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
 use grainline::pipeline::run::{run as run_scene, RunOptions};
 use grainline::scene::LoadedScene;
 
+use super::absolute;
 use super::progress::Spinner;
 
 /// Arguments of `grainline trace`.
@@ -30,11 +31,6 @@ pub struct TraceArgs {
     /// The report: stroke count, lengths, coverage, stop reasons, time per phase.
     #[arg(long, value_name = "PATH")]
     report: Option<PathBuf>,
-}
-
-fn absolute(p: &Path) -> anyhow::Result<String> {
-    let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir()?.join(p) };
-    Ok(p.display().to_string())
 }
 
 /// Runs `grainline trace`.
