@@ -52,6 +52,8 @@ fn peak_rss_kb() -> u64 {
 }
 
 fn main() {
+    // As the `grainline` binary does (see grainline::allocator).
+    grainline::allocator::keep_freed_memory();
     let args: Vec<String> = std::env::args().collect();
     if args.len() == 4 && args[1] == "generate" {
         write_heightfield(std::path::Path::new(&args[2]), args[3].parse().unwrap());

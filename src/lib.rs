@@ -33,6 +33,7 @@
 
 #![warn(missing_docs)]
 
+pub mod allocator;
 pub mod edit;
 pub mod error;
 pub mod field;

@@ -8,11 +8,12 @@ use clap::Parser;
 
 // mimalloc instead of the system allocator: on the 1M-vertex core benchmark (examples/bench_core)
 // it halves load + geometry time (2.2–3.0 s → 1.5 s), which is dominated by large short-lived
-// allocations.
+// allocations; `keep_freed_memory` below saves the re-zeroing of freed pages (grainline::allocator).
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
+    grainline::allocator::keep_freed_memory();
     let args = cli::Cli::parse();
     // Sparse factorizations run sequentially: their rounding must not depend on the thread
     // count (outputs are byte-identical at any --threads).
