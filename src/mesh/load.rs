@@ -34,7 +34,9 @@
 //! parallel parser (`parse.rs`) instead of tobj, and their objects formed by the scanner the way
 //! tobj forms them ([`ObjParser`]); the mesh, the report and every error are the same
 //! (tests/mesh_parser_equivalence.rs). When the parallel parser meets a number it cannot read,
-//! tobj reads the file and reports it.
+//! tobj reads the file and reports it. Most such files need only one pass: a parallel scan that
+//! parses the numbers as it goes (`scan_parallel.rs`); it gives the two passes' result or gives
+//! way to them.
 
 use std::path::Path;
 
@@ -44,6 +46,7 @@ use rayon::prelude::*;
 use super::halfedge::HalfEdges;
 use super::parse::{self, Values};
 use super::scan::{self, Kind, Scan, NONE};
+use super::scan_parallel;
 use super::validate::{self, FileNames};
 use super::{weld, CornerAttribute, Mesh, Units};
 use crate::{Error, Result};
@@ -184,6 +187,23 @@ pub fn load_obj_with(path: &Path, options: &LoadOptions, parser: ObjParser) -> R
         ObjParser::Tobj => false,
         ObjParser::Parallel => true,
     };
+    // One parallel pass when the file allows it; otherwise the scanner beside a number reader.
+    if parallel {
+        if let Some((scanned, values)) = scan_parallel::scan_parallel(&bytes) {
+            if parallel_fits(&scanned, &values) {
+                let models = scanned_models(&scanned);
+                return Builder {
+                    path,
+                    bytes: &bytes,
+                    scan: &scanned,
+                    models: &models,
+                    values: Some(&values),
+                    options,
+                }
+                .build();
+            }
+        }
+    }
     let (scanned, numbers) = rayon::join(
         || scan::scan(path, &bytes),
         || match parallel {

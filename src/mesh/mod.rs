@@ -11,6 +11,7 @@ pub mod load;
 mod parse;
 pub mod report;
 mod scan;
+mod scan_parallel;
 pub mod topology;
 mod union_find;
 pub mod uv_charts;

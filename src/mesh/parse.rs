@@ -54,7 +54,7 @@ pub(crate) fn values(bytes: &[u8]) -> Option<Values> {
     Some(out)
 }
 
-fn number(tok: &[u8]) -> Option<f64> {
+pub(crate) fn number(tok: &[u8]) -> Option<f64> {
     std::str::from_utf8(tok).ok()?.parse().ok()
 }
 

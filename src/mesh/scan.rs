@@ -77,7 +77,7 @@ fn is_space(b: u8) -> bool {
     matches!(b, b' ' | b'\t' | b'\r' | 0x0b | 0x0c)
 }
 
-fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
+pub(crate) fn tokens(line: &[u8]) -> impl Iterator<Item = &[u8]> {
     line.split(|&b| is_space(b)).filter(|t| !t.is_empty())
 }
 
@@ -117,7 +117,7 @@ pub(crate) fn lines(bytes: &[u8]) -> impl Iterator<Item = (usize, &[u8])> {
 }
 
 /// Keywords of the OBJ format that carry no data grainline uses.
-fn is_ignored_keyword(kw: &[u8]) -> bool {
+pub(crate) fn is_ignored_keyword(kw: &[u8]) -> bool {
     kw.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_')
         && kw.first().is_some_and(|b| b.is_ascii_alphabetic())
 }
@@ -170,7 +170,7 @@ pub(crate) fn scan(path: &Path, bytes: &[u8]) -> Result<Scan> {
 }
 
 /// tobj's name of an object without one.
-const UNNAMED: &str = "unnamed_object";
+pub(crate) const UNNAMED: &str = "unnamed_object";
 
 impl Scanner<'_> {
     /// Closes the current object (tobj's `pop_model`).
@@ -377,7 +377,7 @@ fn out_of_range_msg(kind: Kind, x: i64, count: usize) -> String {
     format!("face refers to {kw} {x}, but the file has {count} `{kw}` entries")
 }
 
-fn parse_int(s: &[u8]) -> Option<i64> {
+pub(crate) fn parse_int(s: &[u8]) -> Option<i64> {
     let (neg, digits) = match s.first()? {
         b'-' => (true, &s[1..]),
         b'+' => (false, &s[1..]),
