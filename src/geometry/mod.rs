@@ -134,7 +134,7 @@ impl Geometry {
     }
 
     /// [`Geometry::compute`], also returning the wall time of each stage in seconds, in order
-    /// (`adjacency`, `vertex_faces`, `normals`, `jet_fits`, `areas`, `transport`, `stencils`).
+    /// (`vertex_faces`, `adjacency`, `normals`, `jet_fits`, `areas`, `transport`, `stencils`).
     /// The outputs are identical to `compute`'s.
     pub fn compute_timed(
         mesh: &Mesh,
@@ -147,10 +147,10 @@ impl Geometry {
             timings.push((name, now.duration_since(clock).as_secs_f64()));
             clock = now;
         };
-        let adjacency = Adjacency::from_faces(mesh.num_vertices(), &mesh.faces);
-        lap("adjacency");
         let vf = VertexFaces::new(mesh);
         lap("vertex_faces");
+        let adjacency = Adjacency::from_vertex_faces(&mesh.faces, &vf);
+        lap("adjacency");
         let (normals, fallback_normals) = normals::vertex_normals(mesh, &vf, options.normals);
         lap("normals");
         let refinements = if options.normals == NormalSource::File && mesh.normals.is_some() {

@@ -26,7 +26,12 @@ impl Adjacency {
     /// Linear time: a counting sort gives each vertex its faces, and each vertex then sorts its
     /// own few neighbours (in parallel). Deterministic whatever the thread count.
     pub fn from_faces(num_vertices: usize, faces: &[[u32; 3]]) -> Self {
-        let vf = super::VertexFaces::from_faces(num_vertices, faces);
+        Self::from_vertex_faces(faces, &super::VertexFaces::from_faces(num_vertices, faces))
+    }
+
+    /// [`Adjacency::from_faces`] reusing the vertex-to-face incidence `vf` of `faces`.
+    pub fn from_vertex_faces(faces: &[[u32; 3]], vf: &super::VertexFaces) -> Self {
+        let num_vertices = vf.offsets().len().saturating_sub(1);
         // Each vertex's sorted neighbours with multiplicity (= faces sharing the edge).
         let ring = |v: usize, buf: &mut Vec<u32>| {
             buf.clear();
