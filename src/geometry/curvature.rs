@@ -15,7 +15,7 @@
 //! whose ring is still degenerate (collinear neighbours, slivers) grows it up to the 4-ring.
 //! A vertex with no usable ring gets W = 0 and is counted.
 
-use nalgebra::{Matrix2, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix2, Vector3};
 
 use super::frames::Frame;
 use super::rings::gather_ring;
@@ -73,41 +73,77 @@ fn scaled_offsets(
 }
 
 /// The least-squares quadric over scaled offsets `d` (from [`scaled_offsets`]) in `frame`.
+///
+/// The 5×5 normal equations are accumulated in packed lower-triangular form and solved by a
+/// Cholesky factorization written out for this size (nalgebra's generic one was 11 % of the
+/// 1M-vertex core benchmark).
 fn fit_scaled(d: &[Vector3<f64>], inv_h: f64, frame: &Frame) -> Option<(Matrix2<f64>, [f64; 2])> {
-    let mut ata = SMatrix::<f64, 5, 5>::zeros();
-    let mut atb = SVector::<f64, 5>::zeros();
+    // a[tri(r, c)] = Σ row_r row_c for c ≤ r.
+    let mut a = [0.0; 15];
+    let mut b = [0.0; 5];
     for d in d {
         let (x, y, z) = (frame.t.dot(d), frame.b.dot(d), frame.n.dot(d));
-        let row = SVector::<f64, 5>::new(x, y, 0.5 * x * x, x * y, 0.5 * y * y);
-        // Lower triangle only; mirrored below (the same sums, in the same order).
-        for c in 0..5 {
-            for r in c..5 {
-                ata[(r, c)] += row[r] * row[c];
+        let row = [x, y, 0.5 * x * x, x * y, 0.5 * y * y];
+        let mut k = 0;
+        for r in 0..5 {
+            for c in 0..=r {
+                a[k] += row[r] * row[c];
+                k += 1;
             }
-        }
-        atb += row * z;
-    }
-    for c in 1..5 {
-        for r in 0..c {
-            ata[(r, c)] = ata[(c, r)];
+            b[r] += row[r] * z;
         }
     }
-    // Reject rank-deficient systems: a pivot tiny against the diagonal means the neighbours
-    // do not span the quadric's monomials.
-    let chol = ata.cholesky()?;
-    let l = chol.l_dirty();
-    for k in 0..5 {
-        if l[(k, k)] * l[(k, k)] < 1e-10 * ata[(k, k)].max(1e-300) {
-            return None;
-        }
-    }
-    let c = chol.solve(&atb);
-    if c.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
+    let c = solve_spd5(&a, &b)?;
     // Undo the scaling: x' = x/h, z' = z/h ⇒ slopes unchanged, second derivatives × 1/h.
     let w = Matrix2::new(c[2], c[3], c[3], c[4]) * inv_h;
     Some((w, [c[0], c[1]]))
+}
+
+/// Index of entry (r, c), c ≤ r, in a packed lower triangle stored row by row.
+#[inline(always)]
+const fn tri(r: usize, c: usize) -> usize {
+    r * (r + 1) / 2 + c
+}
+
+/// Solves `A x = b` for a symmetric 5×5 `A` given by its packed lower triangle, by Cholesky
+/// `A = LLᵀ`. `None` when `A` is rank-deficient: a pivot L_kk² below 1e-10 × A_kk means the
+/// neighbours do not span the quadric's monomials. Also `None` on a non-finite solution.
+fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
+    let mut l = [0.0; 15];
+    for j in 0..5 {
+        let mut djj = a[tri(j, j)];
+        for k in 0..j {
+            djj -= l[tri(j, k)] * l[tri(j, k)];
+        }
+        // (Also refuses a NaN pivot: the comparison is false.)
+        if !(djj >= 1e-10 * a[tri(j, j)].max(1e-300) && djj > 0.0) {
+            return None;
+        }
+        let ljj = djj.sqrt();
+        l[tri(j, j)] = ljj;
+        for i in j + 1..5 {
+            let mut s = a[tri(i, j)];
+            for k in 0..j {
+                s -= l[tri(i, k)] * l[tri(j, k)];
+            }
+            l[tri(i, j)] = s / ljj;
+        }
+    }
+    // L y = b, then Lᵀ x = y.
+    let mut x = *b;
+    for i in 0..5 {
+        for k in 0..i {
+            x[i] -= l[tri(i, k)] * x[k];
+        }
+        x[i] /= l[tri(i, i)];
+    }
+    for i in (0..5).rev() {
+        for k in i + 1..5 {
+            x[i] -= l[tri(k, i)] * x[k];
+        }
+        x[i] /= l[tri(i, i)];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Per-vertex scratch of [`JetRings::fit`]: the scaled offsets of each ring depth tried so far
@@ -215,6 +251,34 @@ mod tests {
         let p = Principal::from_weingarten(&Matrix2::new(-2.0, 0.0, 0.0, -0.5));
         assert!((p.k1 - 2.0).abs() < 1e-15 && (p.k2 - 0.5).abs() < 1e-15);
         assert!((p.d1[0].abs() - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn spd5_solves_and_refuses_rank_deficient_systems() {
+        // A = MᵀM + I for a fixed M, so A is SPD; x_true known, b = A x_true.
+        let m: [[f64; 5]; 5] = std::array::from_fn(|r| {
+            std::array::from_fn(|c| ((3 * r + 7 * c) % 11) as f64 / 5.0 - 1.0)
+        });
+        let full = |r: usize, c: usize| {
+            (0..5).map(|k| m[k][r] * m[k][c]).sum::<f64>() + if r == c { 1.0 } else { 0.0 }
+        };
+        let mut a = [0.0; 15];
+        for r in 0..5 {
+            for c in 0..=r {
+                a[tri(r, c)] = full(r, c);
+            }
+        }
+        let x_true = [1.0, -2.0, 0.5, 3.0, -0.25];
+        let b: [f64; 5] = std::array::from_fn(|r| (0..5).map(|c| full(r, c) * x_true[c]).sum());
+        let x = solve_spd5(&a, &b).unwrap();
+        for k in 0..5 {
+            assert!((x[k] - x_true[k]).abs() < 1e-12, "{x:?}");
+        }
+        // Neighbours on one line do not determine a quadric.
+        let pos: Vec<Vector3<f64>> =
+            (0..7).map(|k| Vector3::new(0.1 * k as f64, 0.05 * k as f64, 0.0)).collect();
+        let frame = Frame { t: Vector3::x(), b: Vector3::y(), n: Vector3::z() };
+        assert!(fit_quadric(&pos, 0, &frame, &(1..7).collect::<Vec<u32>>()).is_none());
     }
 
     #[test]
