@@ -110,6 +110,8 @@ const fn tri(r: usize, c: usize) -> usize {
 /// neighbours do not span the quadric's monomials. Also `None` on a non-finite solution.
 fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
     let mut l = [0.0; 15];
+    // 1 / L_jj: one division per column, multiplications elsewhere.
+    let mut inv = [0.0; 5];
     for j in 0..5 {
         let mut djj = a[tri(j, j)];
         for k in 0..j {
@@ -121,12 +123,13 @@ fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
         }
         let ljj = djj.sqrt();
         l[tri(j, j)] = ljj;
+        inv[j] = 1.0 / ljj;
         for i in j + 1..5 {
             let mut s = a[tri(i, j)];
             for k in 0..j {
                 s -= l[tri(i, k)] * l[tri(j, k)];
             }
-            l[tri(i, j)] = s / ljj;
+            l[tri(i, j)] = s * inv[j];
         }
     }
     // L y = b, then Lᵀ x = y.
@@ -135,13 +138,13 @@ fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
         for k in 0..i {
             x[i] -= l[tri(i, k)] * x[k];
         }
-        x[i] /= l[tri(i, i)];
+        x[i] *= inv[i];
     }
     for i in (0..5).rev() {
         for k in i + 1..5 {
             x[i] -= l[tri(k, i)] * x[k];
         }
-        x[i] /= l[tri(i, i)];
+        x[i] *= inv[i];
     }
     x.iter().all(|v| v.is_finite()).then_some(x)
 }

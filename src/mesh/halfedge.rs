@@ -72,10 +72,10 @@ impl HalfEdges {
     fn build_out_lists(&mut self, nv: usize) {
         // The outgoing half-edge of corner c of face f is 3f + c, towards the next corner.
         let vf = super::VertexFaces::from_faces(nv, &self.faces);
-        let edges = vf.entries().iter().map(|&(f, c)| 3 * f + c as u32).collect();
+        let edges = vf.entries().par_iter().map(|&(f, c)| 3 * f + c as u32).collect();
         let dest = vf
             .entries()
-            .iter()
+            .par_iter()
             .map(|&(f, c)| self.faces[f as usize][(c as usize + 1) % 3])
             .collect();
         (self.out_offsets, self.out_edges, self.out_dest) = (vf.offsets().to_vec(), edges, dest);
