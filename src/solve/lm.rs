@@ -168,10 +168,13 @@ pub struct Iteration {
     pub step_norm: f64,
     /// Whether an interleaved smoothing pass was kept after the step.
     pub smoothed: bool,
-    /// Seconds spent assembling residuals, Jacobian and normal equations.
+    /// Seconds spent before the tries: JᵀJ refilled from the Jacobian's rows (and, in the
+    /// first iteration, the rows assembled and the pattern, ordering and symbolic analysis
+    /// built, unless cached), or the matrix-free product built.
     pub assembly_seconds: f64,
-    /// Seconds spent in the damping, factorization, solve and trial energy of the accepted try
-    /// (rejected tries are not counted, as in the paper's Fig. 12a).
+    /// Seconds spent in the damping, factorization, solve and trial point of the accepted try
+    /// (rejected tries are not counted, as in the paper's Fig. 12a). The trial point's rows
+    /// and Jᵀr are assembled with its energy, and serve the next iteration.
     pub solve_seconds: f64,
 }
 
@@ -211,6 +214,8 @@ const SEQUENTIAL_ROWS: usize = 8 * CHUNK;
 /// (column, value) terms of Jᵀr, in row order.
 #[derive(Default)]
 struct Local {
+    /// Σ|r|² of the chunk's rows, in row order.
+    e: f64,
     g: Vec<(u32, f64)>,
     block: Vec<(u32, [f64; 2])>,
     rows: JacobianRows,
@@ -226,6 +231,7 @@ impl Local {
         entries: impl Iterator<Item = (u32, [f64; 2])>,
         r: [f64; 2],
     ) {
+        self.e += r[0] * r[0] + r[1] * r[1];
         self.block.clear();
         self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c, d))));
         if self.block.is_empty() {
@@ -271,22 +277,32 @@ impl<'a> Assembler<'a> {
     /// Assembles `row(item, push)` for every item: on the calling thread into the accumulator
     /// itself for small blocks, else in parallel chunks merged in order. Either way the rows
     /// come out in item order and Jᵀr's terms are added in item order, so the result is the
-    /// same bits at any thread count.
-    fn rows<T: Sync>(&mut self, items: &[T], row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync) {
+    /// same bits at any thread count. Returns the rows' energy Σ|r|², summed by chunks of
+    /// [`CHUNK`] rows as [`chunked_sum`] does (so it is the same bits as the block's `energy`).
+    fn rows<T: Sync>(
+        &mut self,
+        items: &[T],
+        row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync,
+    ) -> f64 {
         let col_of = self.col_of;
         if items.len() <= SEQUENTIAL_ROWS {
             let mut local = std::mem::take(&mut self.scratch);
             local.g.clear();
             local.rows = std::mem::take(&mut self.rows);
-            for it in items {
-                row(it, &mut local, col_of);
+            let mut energy = 0.0;
+            for chunk in items.chunks(CHUNK) {
+                local.e = 0.0;
+                for it in chunk {
+                    row(it, &mut local, col_of);
+                }
+                energy += local.e;
             }
             for &(c, v) in &local.g {
                 self.g[c as usize] += v;
             }
             self.rows = std::mem::take(&mut local.rows);
             self.scratch = local;
-            return;
+            return energy;
         }
         let make = |chunk: &[T]| {
             let mut local = Local {
@@ -303,12 +319,15 @@ impl<'a> Assembler<'a> {
             local
         };
         let locals: Vec<Local> = items.par_chunks(CHUNK).map(make).collect();
+        let mut energy = 0.0;
         for local in locals {
+            energy += local.e;
             self.rows.append(&local.rows);
             for (c, v) in local.g {
                 self.g[c as usize] += v;
             }
         }
+        energy
     }
 }
 
@@ -328,7 +347,8 @@ fn chunked_sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
 trait Block: Sync {
     fn term(&self) -> Term;
     fn energy(&self, phi: &[f64]) -> f64;
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler);
+    /// Pushes the block's rows into `acc`; returns its energy (the same bits as `energy`).
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64;
 }
 
 struct HighlightBlock<'a> {
@@ -346,11 +366,11 @@ impl Block for HighlightBlock<'_> {
             r[0] * r[0] + r[1] * r[1]
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.rows, |&i, local, col_of| {
             let jac = self.term.jacobian(phi, i as usize);
             local.push(col_of, jac.entries.iter().copied(), jac.residual);
-        });
+        })
     }
 }
 
@@ -369,11 +389,11 @@ impl Block for SmoothnessBlock {
             r * r
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.edges, |&(i, j, rho, w), local, col_of| {
             let (r, di, dj) = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k);
             local.push(col_of, [(i, [di, 0.0]), (j, [dj, 0.0])].into_iter(), [r, 0.0]);
-        });
+        })
     }
 }
 
@@ -395,12 +415,12 @@ impl Block for HingeBlock<'_> {
             r * r
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.rows, |&i, local, col_of| {
             let mut entries = Vec::with_capacity(16);
             let r = self.hinge.jacobian(phi, i as usize, &mut entries);
             local.push(col_of, entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
-        });
+        })
     }
 }
 
@@ -419,11 +439,11 @@ impl Block for LockBlock {
             r * r
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.locks, |&(i, a, s), local, col_of| {
             let (r, d) = lock_residual(phi[i as usize], a, s, self.k);
             local.push(col_of, std::iter::once((i, [d, 0.0])), [r, 0.0]);
-        });
+        })
     }
 }
 
@@ -445,11 +465,16 @@ impl System<'_> {
     /// Assembles the Jacobian's row blocks and Jᵀr at `phi` into `acc` (reset first). The
     /// blocks come in an order and with columns that depend only on the mesh and the free set,
     /// so their structure is the same at every iteration.
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    ///
+    /// Returns the energies at `phi` (the same bits as [`System::energy`]: the same residuals
+    /// summed in the same chunks).
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> Energies {
         acc.reset();
+        let mut e = Energies::default();
         for b in &self.blocks {
-            b.assemble(phi, acc);
+            e.add(b.term(), b.assemble(phi, acc));
         }
+        e
     }
 }
 
@@ -598,7 +623,12 @@ pub fn solve_cached(
     // The direct path's pattern: the cached one if it fits (checked in the first assembly).
     let mut direct: Option<DirectSystem> = if matrix_free { None } else { cache.direct.take() };
     let mut checked = false;
+    // `acc` holds the rows and Jᵀr at φ; each try assembles the trial point into `next` (its
+    // energies are the trial energy), and an accepted try's `next` becomes the next
+    // iteration's `acc` — so each accepted iteration evaluates its residuals once.
     let mut acc = Assembler::new(&sys.col_of, n);
+    let mut next = Assembler::new(&sys.col_of, n);
+    let mut assembled = false;
     let mut product: Option<JacobianProduct> = None;
     let mut first_gradient: Option<f64> = None;
     let mut lambda = options.initial_damping;
@@ -609,7 +639,9 @@ pub fn solve_cached(
     let mut saved = vec![0.0; n];
     'outer: for _ in 0..options.max_iterations {
         let t0 = Instant::now();
-        sys.assemble(&phi, &mut acc);
+        if !assembled {
+            sys.assemble(&phi, &mut acc);
+        }
         let gmax = acc.g.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         if gmax.is_nan() || gmax <= options.gradient_tolerance {
             stop = StopReason::Gradient;
@@ -667,13 +699,14 @@ pub fn solve_cached(
                 saved[c] = phi[v as usize];
                 phi[v as usize] += delta[c];
             }
-            let mut new = sys.energy(&phi);
+            let mut new = sys.assemble(&phi, &mut next);
             let new_energy = new.total();
             let rho = if predicted > 0.0 { (energy - new_energy) / predicted } else { -1.0 };
             if new_energy.is_finite() && new_energy < energy && rho > 0.0 {
                 let step_norm = delta.iter().fold(0.0f64, |a, b| a.max(b.abs()));
                 let mut after = new_energy;
                 let mut smoothed = false;
+                assembled = true;
                 if options.interleaved_smoothing {
                     for tau in [0.5, 0.25, 0.125] {
                         let s = smoothing_pass(&phi, &sys.free, term, &w, tau);
@@ -683,6 +716,7 @@ pub fn solve_cached(
                             new = es;
                             after = es.total();
                             smoothed = true;
+                            assembled = false;
                             break;
                         }
                     }
@@ -715,6 +749,9 @@ pub fn solve_cached(
                 stop = StopReason::NoProgress;
                 break 'outer;
             }
+        }
+        if assembled {
+            std::mem::swap(&mut acc, &mut next);
         }
     }
     if direct.is_some() {
