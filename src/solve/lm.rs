@@ -218,6 +218,10 @@ struct Local {
     e: f64,
     g: Vec<(u32, f64)>,
     block: Vec<(u32, [f64; 2])>,
+    /// A row's entries before the free-column filter (reused).
+    entries: Vec<(u32, [f64; 2])>,
+    /// A one-component row's entries (reused).
+    entries1: Vec<(u32, f64)>,
     rows: JacobianRows,
 }
 
@@ -368,8 +372,10 @@ impl Block for HighlightBlock<'_> {
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.rows, |&i, local, col_of| {
-            let jac = self.term.jacobian(phi, i as usize);
-            local.push(col_of, jac.entries.iter().copied(), jac.residual);
+            let mut entries = std::mem::take(&mut local.entries);
+            let r = self.term.jacobian_into(phi, i as usize, &mut entries);
+            local.push(col_of, entries.iter().copied(), r);
+            local.entries = entries;
         })
     }
 }
@@ -417,9 +423,10 @@ impl Block for HingeBlock<'_> {
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.rows, |&i, local, col_of| {
-            let mut entries = Vec::with_capacity(16);
+            let mut entries = std::mem::take(&mut local.entries1);
             let r = self.hinge.jacobian(phi, i as usize, &mut entries);
             local.push(col_of, entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
+            local.entries1 = entries;
         })
     }
 }
