@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::cg::{conjugate_gradient, JacobianProduct, JacobianRows};
+use super::cg::{conjugate_gradient, JacobianProduct, JacobianRows, ProductScratch};
 pub use super::cg::{CG_FORCING, CG_MAX_ITERATIONS, CG_THRESHOLD};
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
 use super::highlight_term::HighlightTerm;
@@ -276,6 +276,7 @@ impl<'a> Assembler<'a> {
         self.rows.ptr.push(0);
         self.rows.col.clear();
         self.rows.d.clear();
+        self.rows.split = 0;
     }
 
     /// Assembles `row(item, push)` for every item: on the calling thread into the accumulator
@@ -314,6 +315,7 @@ impl<'a> Assembler<'a> {
                     ptr: vec![0],
                     col: Vec::with_capacity(8 * chunk.len()),
                     d: Vec::with_capacity(8 * chunk.len()),
+                    split: 0,
                 },
                 ..Local::default()
             };
@@ -323,6 +325,12 @@ impl<'a> Assembler<'a> {
             local
         };
         let locals: Vec<Local> = items.par_chunks(CHUNK).map(make).collect();
+        let (blocks, entries) = locals
+            .iter()
+            .fold((0, 0), |(b, e), l| (b + l.rows.ptr.len() - 1, e + l.rows.col.len()));
+        self.rows.ptr.reserve(blocks);
+        self.rows.col.reserve(entries);
+        self.rows.d.reserve(entries);
         let mut energy = 0.0;
         for local in locals {
             energy += local.e;
@@ -480,6 +488,11 @@ impl System<'_> {
         let mut e = Energies::default();
         for b in &self.blocks {
             e.add(b.term(), b.assemble(phi, acc));
+            if matches!(b.term(), Term::Highlight) {
+                // Two-component rows (the others have one): every row so far counts as
+                // two-component.
+                acc.rows.split = acc.rows.ptr.len() - 1;
+            }
         }
         e
     }
@@ -688,7 +701,7 @@ pub fn solve_cached(
                 // Predicted decrease of the Gauss–Newton model for an inexact step, on the
                 // scale of the direct branch's ½δᵀ(λDδ − g): ½(−2gᵀδ − δᵀJᵀJδ).
                 let mut jtj = vec![0.0; n];
-                product.apply(&delta, &vec![0.0; n], &mut Vec::new(), &mut jtj);
+                product.apply(&delta, &vec![0.0; n], &mut ProductScratch::default(), &mut jtj);
                 0.5 * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>()
             } else {
                 let ds = direct.as_mut().expect("built in the assembly");
