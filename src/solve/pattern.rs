@@ -330,12 +330,6 @@ impl DirectSystem {
         }
         Ok(())
     }
-
-    /// Non-zeros of the lower triangle of JᵀJ and of its Cholesky factor.
-    #[allow(dead_code)]
-    pub(crate) fn nnz(&self) -> (usize, usize) {
-        (self.row_idx.len(), self.symbolic.len_val())
-    }
 }
 
 /// Reverse Cuthill–McKee order of the symmetric pattern given by its lower triangle.
