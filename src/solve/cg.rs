@@ -36,7 +36,7 @@ pub(crate) fn conjugate_gradient(
     let mut z: Vec<f64> = r.iter().zip(&inv).map(|(a, m)| a * m).collect();
     let mut p = z.clone();
     let mut ap = vec![0.0; n];
-    let mut t = Vec::new();
+    let mut t = ProductScratch::default();
     let mut rz = dot(&r, &z);
     let target = tol * dot(b, b).sqrt();
     let mut used = 0;
@@ -74,6 +74,9 @@ pub(crate) struct JacobianRows {
     pub(crate) ptr: Vec<u32>,
     pub(crate) col: Vec<u32>,
     pub(crate) d: Vec<[f64; 2]>,
+    /// The blocks from this one on have a single residual component (their second derivative
+    /// is zero); [`JacobianProduct`] stores them without it.
+    pub(crate) split: usize,
 }
 
 /// J by rows and by columns, for y = (JᵀJ + diag(shift)) x in two parallel passes: t = Jx by
@@ -83,68 +86,132 @@ pub(crate) struct JacobianRows {
 /// energies stay f64). The products only steer the inexact CG step, whose quality the gain ratio
 /// checks against the true energy. It halves the memory J holds during a whole-mesh iteration
 /// (640 → 320 MB at 1M vertices); the wall time did not change measurably (docs/benchmarks.md).
+///
+/// The row blocks from `split` on have one residual component (smoothness, hinges, locks: the
+/// blocks after the highlight rows), and are stored without the zero second component: a
+/// third less memory streamed per product on a whole mesh.
 pub(crate) struct JacobianProduct {
+    split: usize,
     ptr: Vec<u32>,
     col: Vec<u32>,
-    d: Vec<[f32; 2]>,
-    /// Column c's entries are `col_ptr[c]..col_ptr[c + 1]` of `t_block` (their row block) and
-    /// `t_d` (their derivatives): J's entries copied in column order, so that the Jᵀ pass
+    /// Derivatives of the two-component blocks' entries (entries before `ptr[split]`).
+    d2: Vec<[f32; 2]>,
+    /// Derivatives of the one-component blocks' entries (entries from `ptr[split]`).
+    d1: Vec<f32>,
+    /// Column c's two-component entries are `col_ptr2[c]..col_ptr2[c + 1]` of `t_block2`
+    /// (their row block) and `t_d2` (their derivatives), its one-component ones likewise (row
+    /// blocks counted from `split`): J's entries copied in column order, so that the Jᵀ pass
     /// streams through memory instead of gathering.
-    col_ptr: Vec<u32>,
-    t_block: Vec<u32>,
-    t_d: Vec<[f32; 2]>,
+    col_ptr2: Vec<u32>,
+    t_block2: Vec<u32>,
+    t_d2: Vec<[f32; 2]>,
+    col_ptr1: Vec<u32>,
+    t_block1: Vec<u32>,
+    t_d1: Vec<f32>,
+}
+
+/// The scratch of [`JacobianProduct::apply`]: t = Jx for the two- and one-component blocks.
+#[derive(Default)]
+pub(crate) struct ProductScratch {
+    t2: Vec<[f64; 2]>,
+    t1: Vec<f64>,
+}
+
+/// The column-ordered copy of the entries `range` of `rows` (blocks counted from `first`).
+fn by_column<T: Copy + Default>(
+    rows: &JacobianRows,
+    n: usize,
+    blocks: std::ops::Range<usize>,
+    value: impl Fn(usize) -> T,
+) -> (Vec<u32>, Vec<u32>, Vec<T>) {
+    let (first, entries) =
+        (blocks.start, rows.ptr[blocks.start] as usize..rows.ptr[blocks.end] as usize);
+    let mut col_ptr = vec![0u32; n + 1];
+    for &c in &rows.col[entries.clone()] {
+        col_ptr[c as usize + 1] += 1;
+    }
+    for c in 0..n {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    let mut next = col_ptr.clone();
+    let mut t_block = vec![0u32; entries.len()];
+    let mut t_d = vec![T::default(); entries.len()];
+    for b in blocks {
+        for e in rows.ptr[b] as usize..rows.ptr[b + 1] as usize {
+            let slot = &mut next[rows.col[e] as usize];
+            t_block[*slot as usize] = (b - first) as u32;
+            t_d[*slot as usize] = value(e);
+            *slot += 1;
+        }
+    }
+    (col_ptr, t_block, t_d)
 }
 
 impl JacobianProduct {
     pub(crate) fn new(rows: JacobianRows, n: usize) -> Self {
         let blocks = rows.ptr.len().saturating_sub(1);
-        let mut col_ptr = vec![0u32; n + 1];
-        for &c in &rows.col {
-            col_ptr[c as usize + 1] += 1;
+        let split = rows.split.min(blocks);
+        let e_split = rows.ptr[split] as usize;
+        let d2: Vec<[f32; 2]> =
+            rows.d[..e_split].iter().map(|v| [v[0] as f32, v[1] as f32]).collect();
+        let d1: Vec<f32> = rows.d[e_split..].iter().map(|v| v[0] as f32).collect();
+        let (col_ptr2, t_block2, t_d2) = by_column(&rows, n, 0..split, |e| d2[e]);
+        let (col_ptr1, t_block1, t_d1) = by_column(&rows, n, split..blocks, |e| d1[e - e_split]);
+        JacobianProduct {
+            split,
+            ptr: rows.ptr,
+            col: rows.col,
+            d2,
+            d1,
+            col_ptr2,
+            t_block2,
+            t_d2,
+            col_ptr1,
+            t_block1,
+            t_d1,
         }
-        for c in 0..n {
-            col_ptr[c + 1] += col_ptr[c];
-        }
-        let mut next = col_ptr.clone();
-        let mut t_block = vec![0u32; rows.col.len()];
-        let mut t_d = vec![[0.0f32; 2]; rows.col.len()];
-        let d: Vec<[f32; 2]> = rows.d.iter().map(|v| [v[0] as f32, v[1] as f32]).collect();
-        for b in 0..blocks {
-            for e in rows.ptr[b] as usize..rows.ptr[b + 1] as usize {
-                let slot = &mut next[rows.col[e] as usize];
-                t_block[*slot as usize] = b as u32;
-                t_d[*slot as usize] = d[e];
-                *slot += 1;
-            }
-        }
-        JacobianProduct { ptr: rows.ptr, col: rows.col, d, col_ptr, t_block, t_d }
     }
 
     /// y = (JᵀJ + diag(shift)) x.
-    pub(crate) fn apply(&self, x: &[f64], shift: &[f64], t: &mut Vec<[f64; 2]>, y: &mut [f64]) {
+    pub(crate) fn apply(&self, x: &[f64], shift: &[f64], t: &mut ProductScratch, y: &mut [f64]) {
         let r = self;
         let blocks = r.ptr.len().saturating_sub(1);
-        t.resize(blocks, [0.0; 2]);
-        t.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
+        let e_split = r.ptr[r.split] as usize;
+        t.t2.resize(r.split, [0.0; 2]);
+        t.t1.resize(blocks - r.split, 0.0);
+        t.t2.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
             for (i, tb) in chunk.iter_mut().enumerate() {
                 let b = k * 4096 + i;
                 let (mut t0, mut t1) = (0.0, 0.0);
                 for e in r.ptr[b] as usize..r.ptr[b + 1] as usize {
                     let xc = x[r.col[e] as usize];
-                    t0 += r.d[e][0] as f64 * xc;
-                    t1 += r.d[e][1] as f64 * xc;
+                    t0 += r.d2[e][0] as f64 * xc;
+                    t1 += r.d2[e][1] as f64 * xc;
                 }
                 *tb = [t0, t1];
             }
         });
-        let t = &*t;
+        t.t1.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
+            for (i, tb) in chunk.iter_mut().enumerate() {
+                let b = r.split + k * 4096 + i;
+                let mut t0 = 0.0;
+                for e in r.ptr[b] as usize..r.ptr[b + 1] as usize {
+                    t0 += r.d1[e - e_split] as f64 * x[r.col[e] as usize];
+                }
+                *tb = t0;
+            }
+        });
+        let (t2, t1) = (&t.t2, &t.t1);
         y.par_chunks_mut(4096).enumerate().for_each(|(k, chunk)| {
             for (i, yc) in chunk.iter_mut().enumerate() {
                 let c = k * 4096 + i;
                 let mut acc = shift[c] * x[c];
-                for e in self.col_ptr[c] as usize..self.col_ptr[c + 1] as usize {
-                    let tb = t[self.t_block[e] as usize];
-                    acc += self.t_d[e][0] as f64 * tb[0] + self.t_d[e][1] as f64 * tb[1];
+                for e in r.col_ptr2[c] as usize..r.col_ptr2[c + 1] as usize {
+                    let tb = t2[r.t_block2[e] as usize];
+                    acc += r.t_d2[e][0] as f64 * tb[0] + r.t_d2[e][1] as f64 * tb[1];
+                }
+                for e in r.col_ptr1[c] as usize..r.col_ptr1[c + 1] as usize {
+                    acc += r.t_d1[e] as f64 * t1[r.t_block1[e] as usize];
                 }
                 *yc = acc;
             }
@@ -170,5 +237,52 @@ impl JacobianRows {
             out[*c as usize] += d[0] * d[0] + d[1] * d[1];
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    /// (JᵀJ + diag(shift)) x through the stored product against nalgebra's dense product, with
+    /// two-component blocks first and one-component blocks (second derivative zero) after.
+    #[test]
+    fn product_matches_a_dense_one() {
+        let (n, blocks, split) = (50usize, 120usize, 70usize);
+        let mut x = 7u64;
+        let mut rnd = || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            // Values exact in f32, so the f32 storage is not the difference tested.
+            ((x >> 40) % 64) as f64 / 16.0 - 2.0
+        };
+        let mut rows = JacobianRows { ptr: vec![0], split, ..Default::default() };
+        let mut j = DMatrix::<f64>::zeros(2 * blocks, n);
+        for b in 0..blocks {
+            for k in 0..1 + b % 5 {
+                let c = (b * 13 + k * 7) % n;
+                let d = [rnd(), if b < split { rnd() } else { 0.0 }];
+                rows.col.push(c as u32);
+                rows.d.push(d);
+                j[(2 * b, c)] += d[0];
+                j[(2 * b + 1, c)] += d[1];
+            }
+            rows.ptr.push(rows.col.len() as u32);
+        }
+        let diag = rows.diagonal(n);
+        let jtj = j.transpose() * &j;
+        for c in 0..n {
+            assert_eq!(diag[c], jtj[(c, c)]);
+        }
+        let product = JacobianProduct::new(rows, n);
+        let xs: Vec<f64> = (0..n).map(|c| (c % 7) as f64 - 3.0).collect();
+        let shift: Vec<f64> = (0..n).map(|c| (c % 3) as f64).collect();
+        let mut y = vec![0.0; n];
+        product.apply(&xs, &shift, &mut ProductScratch::default(), &mut y);
+        let want = &jtj * DVector::from_vec(xs.clone());
+        for c in 0..n {
+            let w = want[c] + shift[c] * xs[c];
+            assert!((y[c] - w).abs() <= 1e-12 * w.abs().max(1.0), "{c}: {} against {w}", y[c]);
+        }
     }
 }

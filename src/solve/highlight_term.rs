@@ -76,7 +76,21 @@ impl HighlightTerm<'_> {
 
     /// Residual and analytic Jacobian entries of vertex `i`.
     pub fn jacobian(&self, phi: &[f64], i: usize) -> VertexJacobian {
-        let Some(tq) = self.target_q[i] else { return VertexJacobian::default() };
+        let mut entries = Vec::new();
+        let residual = self.jacobian_into(phi, i, &mut entries);
+        VertexJacobian { residual, entries }
+    }
+
+    /// [`HighlightTerm::jacobian`] into a caller's buffer (cleared first; no allocation once it
+    /// has grown): returns the residual, writes the entries.
+    pub fn jacobian_into(
+        &self,
+        phi: &[f64],
+        i: usize,
+        entries: &mut Vec<(u32, [f64; 2])>,
+    ) -> [f64; 2] {
+        entries.clear();
+        let Some(tq) = self.target_q[i] else { return [0.0; 2] };
         let g = self.geometry;
         let (frame, w) = (&g.frames[i], &g.weingarten[i]);
         let k = self.symmetry.k() as f64;
@@ -92,10 +106,8 @@ impl HighlightTerm<'_> {
         let s = (0.5 * self.weight[i] * g.areas[i]).max(0.0).sqrt();
         let residual = (qv - tq) * s;
         if dsq <= 0.0 {
-            return VertexJacobian {
-                residual: [residual.x, residual.y],
-                entries: vec![(i as u32, [0.0; 2])],
-            };
+            entries.push((i as u32, [0.0; 2]));
+            return [residual.x, residual.y];
         }
         // ∂q/∂ℓ̄ as a 2×2 matrix (rows q₁, q₂), then composed with the quarter turn.
         let dq = Matrix2::new(
@@ -105,7 +117,6 @@ impl HighlightTerm<'_> {
             2.0 * (ell.x - qv.y * ell.y) / dsq,
         ) * QUARTER_TURN
             * s;
-        let mut entries = Vec::with_capacity(g.stencil.range(i).len() + 1);
         let mut dgrad_self = Vector2::zeros();
         entries.push((i as u32, [0.0; 2]));
         for e in g.stencil.range(i) {
@@ -123,6 +134,6 @@ impl HighlightTerm<'_> {
         let dm_self = -grad * uh + dgrad_self * vh + w * v * nh;
         let dr = dq * dm_self;
         entries[0].1 = [dr.x, dr.y];
-        VertexJacobian { residual: [residual.x, residual.y], entries }
+        [residual.x, residual.y]
     }
 }

@@ -22,21 +22,14 @@
 
 use std::time::Instant;
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::prelude::*;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
-};
-use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, Par, Side};
 use rayon::prelude::*;
 
-use super::cg::{conjugate_gradient, JacobianProduct, JacobianRows};
+use super::cg::{conjugate_gradient, JacobianProduct, JacobianRows, ProductScratch};
 pub use super::cg::{CG_FORCING, CG_MAX_ITERATIONS, CG_THRESHOLD};
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
 use super::highlight_term::HighlightTerm;
+use super::pattern::DirectSystem;
+pub use super::pattern::SolveCache;
 use super::smoothness::edge_residual;
 use crate::geometry::laplacian::cotan_weights;
 use crate::mesh::Mesh;
@@ -175,10 +168,13 @@ pub struct Iteration {
     pub step_norm: f64,
     /// Whether an interleaved smoothing pass was kept after the step.
     pub smoothed: bool,
-    /// Seconds spent assembling residuals, Jacobian and normal equations.
+    /// Seconds spent before the tries: JᵀJ refilled from the Jacobian's rows (and, in the
+    /// first iteration, the rows assembled and the pattern, ordering and symbolic analysis
+    /// built, unless cached), or the matrix-free product built.
     pub assembly_seconds: f64,
-    /// Seconds spent in the damping, factorization, solve and trial energy of the accepted try
-    /// (rejected tries are not counted, as in the paper's Fig. 12a).
+    /// Seconds spent in the damping, factorization, solve and trial point of the accepted try
+    /// (rejected tries are not counted, as in the paper's Fig. 12a). The trial point's rows
+    /// and Jᵀr are assembled with its energy, and serve the next iteration.
     pub solve_seconds: f64,
 }
 
@@ -214,22 +210,24 @@ const CHUNK: usize = 512;
 /// (perf on Fig. 12a's 656-vertex brush: 17 % of the time in the kernel's thread switches).
 const SEQUENTIAL_ROWS: usize = 8 * CHUNK;
 
-/// One chunk's contributions: the values of JᵀJ's lower-triangle products and (column, value)
-/// terms of Jᵀr, in row order; the products' (row, column) positions only when the pattern is
-/// being recorded (first iteration), since they do not change.
+/// One chunk's contributions: the Jacobian's row blocks (free columns and derivatives) and the
+/// (column, value) terms of Jᵀr, in row order.
 #[derive(Default)]
 struct Local {
-    vals: Vec<f64>,
-    idx: Option<Vec<(u32, u32)>>,
-    g: Vec<(usize, f64)>,
-    block: Vec<(usize, [f64; 2])>,
-    /// Matrix-free mode: the Jacobian's rows themselves instead of JᵀJ's products.
-    rows: Option<JacobianRows>,
+    /// Σ|r|² of the chunk's rows, in row order.
+    e: f64,
+    g: Vec<(u32, f64)>,
+    block: Vec<(u32, [f64; 2])>,
+    /// A row's entries before the free-column filter (reused).
+    entries: Vec<(u32, [f64; 2])>,
+    /// A one-component row's entries (reused).
+    entries1: Vec<(u32, f64)>,
+    rows: JacobianRows,
 }
 
 impl Local {
     /// Adds one row block: residual `r` and its entries `(vertex, ∂r/∂φ_vertex)`; entries of
-    /// fixed vertices are dropped.
+    /// fixed vertices are dropped, and so is a block with no free entry.
     #[inline]
     fn push(
         &mut self,
@@ -237,90 +235,111 @@ impl Local {
         entries: impl Iterator<Item = (u32, [f64; 2])>,
         r: [f64; 2],
     ) {
+        self.e += r[0] * r[0] + r[1] * r[1];
         self.block.clear();
-        self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c as usize, d))));
-        if let Some(rows) = &mut self.rows {
-            if self.block.is_empty() {
-                return;
-            }
-            for &(a, da) in &self.block {
-                self.g.push((a, da[0] * r[0] + da[1] * r[1]));
-                rows.col.push(a as u32);
-                rows.d.push(da);
-            }
-            rows.ptr.push(rows.col.len() as u32);
+        self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c, d))));
+        if self.block.is_empty() {
             return;
         }
         for &(a, da) in &self.block {
             self.g.push((a, da[0] * r[0] + da[1] * r[1]));
-            for &(b, db) in &self.block {
-                if a >= b {
-                    self.vals.push(da[0] * db[0] + da[1] * db[1]);
-                    if let Some(idx) = &mut self.idx {
-                        idx.push((a as u32, b as u32));
-                    }
-                }
-            }
+            self.rows.col.push(a);
+            self.rows.d.push(da);
         }
+        self.rows.ptr.push(self.rows.col.len() as u32);
     }
 }
 
-/// Accumulates Jᵀr and the lower triangle of JᵀJ from rows of up to two residual components.
+/// Accumulates Jᵀr and the Jacobian's row blocks (of up to two residual components). Kept for
+/// the whole solve, so its buffers are allocated once.
 struct Assembler<'a> {
     col_of: &'a [Option<u32>],
     g: Vec<f64>,
-    vals: Vec<f64>,
-    idx: Option<Vec<(u32, u32)>>,
-    rows: Option<JacobianRows>,
+    rows: JacobianRows,
+    scratch: Local,
 }
 
-impl Assembler<'_> {
-    /// Assembles `row(item, push)` for every item, in parallel chunks merged in order.
-    fn rows<T: Sync>(&mut self, items: &[T], row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync) {
+impl<'a> Assembler<'a> {
+    fn new(col_of: &'a [Option<u32>], n: usize) -> Self {
+        Assembler {
+            col_of,
+            g: vec![0.0; n],
+            rows: JacobianRows { ptr: vec![0], ..Default::default() },
+            scratch: Local::default(),
+        }
+    }
+
+    /// Empties the rows and zeroes Jᵀr for a new assembly (buffers kept).
+    fn reset(&mut self) {
+        self.g.iter_mut().for_each(|v| *v = 0.0);
+        self.rows.ptr.clear();
+        self.rows.ptr.push(0);
+        self.rows.col.clear();
+        self.rows.d.clear();
+        self.rows.split = 0;
+    }
+
+    /// Assembles `row(item, push)` for every item: on the calling thread into the accumulator
+    /// itself for small blocks, else in parallel chunks merged in order. Either way the rows
+    /// come out in item order and Jᵀr's terms are added in item order, so the result is the
+    /// same bits at any thread count. Returns the rows' energy Σ|r|², summed by chunks of
+    /// [`CHUNK`] rows as [`chunked_sum`] does (so it is the same bits as the block's `energy`).
+    fn rows<T: Sync>(
+        &mut self,
+        items: &[T],
+        row: impl Fn(&T, &mut Local, &[Option<u32>]) + Sync,
+    ) -> f64 {
         let col_of = self.col_of;
-        let record = self.idx.is_some();
-        let matrix_free = self.rows.is_some();
+        if items.len() <= SEQUENTIAL_ROWS {
+            let mut local = std::mem::take(&mut self.scratch);
+            local.g.clear();
+            local.rows = std::mem::take(&mut self.rows);
+            let mut energy = 0.0;
+            for chunk in items.chunks(CHUNK) {
+                local.e = 0.0;
+                for it in chunk {
+                    row(it, &mut local, col_of);
+                }
+                energy += local.e;
+            }
+            for &(c, v) in &local.g {
+                self.g[c as usize] += v;
+            }
+            self.rows = std::mem::take(&mut local.rows);
+            self.scratch = local;
+            return energy;
+        }
         let make = |chunk: &[T]| {
-            let mut local = if matrix_free {
-                Local {
-                    rows: Some(JacobianRows {
-                        ptr: vec![0],
-                        col: Vec::with_capacity(8 * chunk.len()),
-                        d: Vec::with_capacity(8 * chunk.len()),
-                    }),
-                    ..Local::default()
-                }
-            } else {
-                Local {
-                    vals: Vec::with_capacity(64 * chunk.len()),
-                    idx: record.then(|| Vec::with_capacity(64 * chunk.len())),
-                    ..Local::default()
-                }
+            let mut local = Local {
+                rows: JacobianRows {
+                    ptr: vec![0],
+                    col: Vec::with_capacity(8 * chunk.len()),
+                    d: Vec::with_capacity(8 * chunk.len()),
+                    split: 0,
+                },
+                ..Local::default()
             };
             for it in chunk {
                 row(it, &mut local, col_of);
             }
             local
         };
-        // Small blocks run on the calling thread (see SEQUENTIAL_ROWS). Same chunks either
-        // way, so the sums are identical.
-        let locals: Vec<Local> = if items.len() <= SEQUENTIAL_ROWS {
-            items.chunks(CHUNK).map(make).collect()
-        } else {
-            items.par_chunks(CHUNK).map(make).collect()
-        };
+        let locals: Vec<Local> = items.par_chunks(CHUNK).map(make).collect();
+        let (blocks, entries) = locals
+            .iter()
+            .fold((0, 0), |(b, e), l| (b + l.rows.ptr.len() - 1, e + l.rows.col.len()));
+        self.rows.ptr.reserve(blocks);
+        self.rows.col.reserve(entries);
+        self.rows.d.reserve(entries);
+        let mut energy = 0.0;
         for local in locals {
-            self.vals.extend_from_slice(&local.vals);
-            if let (Some(all), Some(idx)) = (&mut self.idx, &local.idx) {
-                all.extend_from_slice(idx);
-            }
-            if let (Some(all), Some(rows)) = (&mut self.rows, &local.rows) {
-                all.append(rows);
-            }
+            energy += local.e;
+            self.rows.append(&local.rows);
             for (c, v) in local.g {
-                self.g[c] += v;
+                self.g[c as usize] += v;
             }
         }
+        energy
     }
 }
 
@@ -340,7 +359,8 @@ fn chunked_sum<T: Sync>(items: &[T], f: impl Fn(&T) -> f64 + Sync) -> f64 {
 trait Block: Sync {
     fn term(&self) -> Term;
     fn energy(&self, phi: &[f64]) -> f64;
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler);
+    /// Pushes the block's rows into `acc`; returns its energy (the same bits as `energy`).
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64;
 }
 
 struct HighlightBlock<'a> {
@@ -358,11 +378,13 @@ impl Block for HighlightBlock<'_> {
             r[0] * r[0] + r[1] * r[1]
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.rows, |&i, local, col_of| {
-            let jac = self.term.jacobian(phi, i as usize);
-            local.push(col_of, jac.entries.iter().copied(), jac.residual);
-        });
+            let mut entries = std::mem::take(&mut local.entries);
+            let r = self.term.jacobian_into(phi, i as usize, &mut entries);
+            local.push(col_of, entries.iter().copied(), r);
+            local.entries = entries;
+        })
     }
 }
 
@@ -381,11 +403,11 @@ impl Block for SmoothnessBlock {
             r * r
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.edges, |&(i, j, rho, w), local, col_of| {
             let (r, di, dj) = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k);
             local.push(col_of, [(i, [di, 0.0]), (j, [dj, 0.0])].into_iter(), [r, 0.0]);
-        });
+        })
     }
 }
 
@@ -407,12 +429,13 @@ impl Block for HingeBlock<'_> {
             r * r
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.rows, |&i, local, col_of| {
-            let mut entries = Vec::with_capacity(16);
+            let mut entries = std::mem::take(&mut local.entries1);
             let r = self.hinge.jacobian(phi, i as usize, &mut entries);
             local.push(col_of, entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
-        });
+            local.entries1 = entries;
+        })
     }
 }
 
@@ -431,16 +454,13 @@ impl Block for LockBlock {
             r * r
         })
     }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) {
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
         acc.rows(&self.locks, |&(i, a, s), local, col_of| {
             let (r, d) = lock_residual(phi[i as usize], a, s, self.k);
             local.push(col_of, std::iter::once((i, [d, 0.0])), [r, 0.0]);
-        });
+        })
     }
 }
-
-/// JᵀJ's lower-triangle product values, their positions (when recorded) and Jᵀr.
-type NormalEquations = (Vec<f64>, Option<Vec<(u32, u32)>>, Vec<f64>);
 
 struct System<'a> {
     col_of: Vec<Option<u32>>,
@@ -457,36 +477,24 @@ impl System<'_> {
         e
     }
 
-    /// The lower triangle of JᵀJ as a list of product values (in an order that depends only on
-    /// the mesh and the free set, so the pattern is fixed across iterations), their (row,
-    /// column) positions if `record`, and Jᵀr. `capacity` pre-sizes the value list.
-    fn normal_equations(&self, phi: &[f64], record: bool, capacity: usize) -> NormalEquations {
-        let mut acc = Assembler {
-            col_of: &self.col_of,
-            g: vec![0.0; self.free.len()],
-            vals: Vec::with_capacity(capacity),
-            idx: record.then(Vec::new),
-            rows: None,
-        };
+    /// Assembles the Jacobian's row blocks and Jᵀr at `phi` into `acc` (reset first). The
+    /// blocks come in an order and with columns that depend only on the mesh and the free set,
+    /// so their structure is the same at every iteration.
+    ///
+    /// Returns the energies at `phi` (the same bits as [`System::energy`]: the same residuals
+    /// summed in the same chunks).
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> Energies {
+        acc.reset();
+        let mut e = Energies::default();
         for b in &self.blocks {
-            b.assemble(phi, &mut acc);
+            e.add(b.term(), b.assemble(phi, acc));
+            if matches!(b.term(), Term::Highlight) {
+                // Two-component rows (the others have one): every row so far counts as
+                // two-component.
+                acc.rows.split = acc.rows.ptr.len() - 1;
+            }
         }
-        (acc.vals, acc.idx, acc.g)
-    }
-
-    /// The Jacobian's rows (matrix-free mode) and Jᵀr.
-    fn jacobian_rows(&self, phi: &[f64]) -> (JacobianRows, Vec<f64>) {
-        let mut acc = Assembler {
-            col_of: &self.col_of,
-            g: vec![0.0; self.free.len()],
-            vals: Vec::new(),
-            idx: None,
-            rows: Some(JacobianRows { ptr: vec![0], ..Default::default() }),
-        };
-        for b in &self.blocks {
-            b.assemble(phi, &mut acc);
-        }
-        (acc.rows.expect("matrix-free mode"), acc.g)
+        e
     }
 }
 
@@ -526,6 +534,21 @@ pub fn solve(
     phi: &[f64],
     free: &[u32],
     options: &LmOptions,
+) -> Result<LmResult> {
+    solve_cached(mesh, term, phi, free, options, &mut SolveCache::default())
+}
+
+/// [`solve`], reusing the direct path's pattern, ordering and symbolic analysis from `cache`
+/// when this solve's Jacobian has the same structure as the one they were built for (several
+/// solves over one free set: continuation stages, several starts), and leaving this solve's in
+/// it. The result is the same as [`solve`]'s.
+pub fn solve_cached(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    free: &[u32],
+    options: &LmOptions,
+    cache: &mut SolveCache,
 ) -> Result<LmResult> {
     let g = term.geometry;
     let nv = g.num_vertices();
@@ -612,46 +635,56 @@ pub fn solve(
         });
     }
     let mut energy = initial_energy.total();
-    let mut pattern: Option<FixedPattern> = None;
     let matrix_free = match options.linear_solver {
         LinearSolver::Direct => false,
         LinearSolver::ConjugateGradient => true,
         LinearSolver::Auto => n >= CG_THRESHOLD,
     };
+    // The direct path's pattern: the cached one if it fits (checked in the first assembly).
+    let mut direct: Option<DirectSystem> = if matrix_free { None } else { cache.direct.take() };
+    let mut checked = false;
+    // `acc` holds the rows and Jᵀr at φ; each try assembles the trial point into `next` (its
+    // energies are the trial energy), and an accepted try's `next` becomes the next
+    // iteration's `acc` — so each accepted iteration evaluates its residuals once.
+    let mut acc = Assembler::new(&sys.col_of, n);
+    let mut next = Assembler::new(&sys.col_of, n);
+    let mut assembled = false;
     let mut product: Option<JacobianProduct> = None;
     let mut first_gradient: Option<f64> = None;
     let mut lambda = options.initial_damping;
     let mut nu = 2.0;
     let mut iterations = Vec::new();
     let mut stop = StopReason::IterationCap;
+    let mut delta = vec![0.0; n];
+    let mut saved = vec![0.0; n];
     'outer: for _ in 0..options.max_iterations {
         let t0 = Instant::now();
-        let (grad, diag) = if matrix_free {
-            let (rows, grad) = sys.jacobian_rows(&phi);
-            let diag = rows.diagonal(n);
-            product = Some(JacobianProduct::new(rows, n));
-            (grad, diag)
-        } else {
-            let capacity = pattern.as_ref().map_or(0, |p| p.slot.len());
-            let (vals, idx, grad) = sys.normal_equations(&phi, pattern.is_none(), capacity);
-            let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-            if gmax.is_nan() || gmax <= options.gradient_tolerance {
-                stop = StopReason::Gradient;
-                break;
-            }
-            if pattern.is_none() {
-                let idx = idx.expect("recorded when there is no pattern");
-                pattern = Some(FixedPattern::new(n, &idx).map_err(numerical)?);
-            }
-            let pat = pattern.as_mut().expect("just built");
-            pat.fill(&vals);
-            (grad, pat.diagonal())
-        };
-        let gmax = grad.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        if !assembled {
+            sys.assemble(&phi, &mut acc);
+        }
+        let gmax = acc.g.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         if gmax.is_nan() || gmax <= options.gradient_tolerance {
             stop = StopReason::Gradient;
             break;
         }
+        let diag = if matrix_free {
+            let rows = std::mem::take(&mut acc.rows);
+            acc.rows.ptr.push(0);
+            let diag = rows.diagonal(n);
+            product = Some(JacobianProduct::new(rows, n));
+            diag
+        } else {
+            if !checked {
+                checked = true;
+                if !direct.as_ref().is_some_and(|d| d.matches(&acc.rows, n)) {
+                    direct = Some(DirectSystem::new(&acc.rows, n).map_err(numerical)?);
+                }
+            }
+            let ds = direct.as_mut().expect("built above");
+            ds.fill(&acc.rows);
+            ds.diagonal()
+        };
+        let grad = &acc.g;
         let gnorm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
         let g0 = *first_gradient.get_or_insert(gnorm);
         let forcing = CG_FORCING.min(gnorm / g0.max(f64::MIN_POSITIVE));
@@ -660,42 +693,40 @@ pub fn solve(
         let assembly = t0.elapsed().as_secs_f64();
         loop {
             let t1 = Instant::now();
-            let (delta, predicted) = if let Some(product) = &product {
+            let predicted = if let Some(product) = &product {
                 let shift: Vec<f64> = dscale.iter().map(|&d| lambda * d).collect();
                 let precond: Vec<f64> = diag.iter().zip(&shift).map(|(d, s)| d + s).collect();
                 let b: Vec<f64> = grad.iter().map(|g| -g).collect();
-                let (delta, _) = conjugate_gradient(product, &shift, &precond, &b, forcing);
+                delta = conjugate_gradient(product, &shift, &precond, &b, forcing).0;
                 // Predicted decrease of the Gauss–Newton model for an inexact step, on the
                 // scale of the direct branch's ½δᵀ(λDδ − g): ½(−2gᵀδ − δᵀJᵀJδ).
                 let mut jtj = vec![0.0; n];
-                product.apply(&delta, &vec![0.0; n], &mut Vec::new(), &mut jtj);
-                let pred = 0.5
-                    * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>();
-                (delta, pred)
+                product.apply(&delta, &vec![0.0; n], &mut ProductScratch::default(), &mut jtj);
+                0.5 * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>()
             } else {
-                let pat = pattern.as_mut().expect("built in the assembly");
-                let mut rhs = Mat::<f64>::from_fn(n, 1, |c, _| -grad[c]);
-                pat.solve_damped(lambda, &dscale, rhs.as_mut()).map_err(numerical)?;
-                let delta: Vec<f64> = (0..n).map(|c| rhs[(c, 0)]).collect();
+                let ds = direct.as_mut().expect("built in the assembly");
+                for (d, g) in delta.iter_mut().zip(grad) {
+                    *d = -g;
+                }
+                ds.solve_damped(lambda, &dscale, &mut delta).map_err(numerical)?;
                 // Predicted decrease of the quadratic model: ½δᵀ(λDδ − g).
-                let pred: f64 = 0.5
-                    * (0..n)
-                        .map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c]))
-                        .sum::<f64>();
-                (delta, pred)
+                0.5 * (0..n)
+                    .map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c]))
+                    .sum::<f64>()
             };
-            let mut trial = phi.clone();
+            // The trial point in place (the free angles saved to undo a rejected try).
             for (c, &v) in sys.free.iter().enumerate() {
-                trial[v as usize] += delta[c];
+                saved[c] = phi[v as usize];
+                phi[v as usize] += delta[c];
             }
-            let mut new = sys.energy(&trial);
+            let mut new = sys.assemble(&phi, &mut next);
             let new_energy = new.total();
             let rho = if predicted > 0.0 { (energy - new_energy) / predicted } else { -1.0 };
             if new_energy.is_finite() && new_energy < energy && rho > 0.0 {
                 let step_norm = delta.iter().fold(0.0f64, |a, b| a.max(b.abs()));
                 let mut after = new_energy;
-                phi = trial;
                 let mut smoothed = false;
+                assembled = true;
                 if options.interleaved_smoothing {
                     for tau in [0.5, 0.25, 0.125] {
                         let s = smoothing_pass(&phi, &sys.free, term, &w, tau);
@@ -705,6 +736,7 @@ pub fn solve(
                             new = es;
                             after = es.total();
                             smoothed = true;
+                            assembled = false;
                             break;
                         }
                     }
@@ -728,6 +760,9 @@ pub fn solve(
                 }
                 break;
             }
+            for (c, &v) in sys.free.iter().enumerate() {
+                phi[v as usize] = saved[c];
+            }
             lambda *= nu;
             nu *= 2.0;
             if lambda.is_nan() || lambda >= 1e16 {
@@ -735,106 +770,12 @@ pub fn solve(
                 break 'outer;
             }
         }
+        if assembled {
+            std::mem::swap(&mut acc, &mut next);
+        }
+    }
+    if direct.is_some() {
+        cache.direct = direct;
     }
     Ok(LmResult { phi, iterations, stop, initial_energy })
-}
-
-/// The lower triangle of JᵀJ in a sparsity pattern fixed for the whole solve: the matrix and its
-/// symbolic Cholesky analysis are built once, and each iteration refills the values in place
-/// (each triplet's value slot is found once). The factor's values and the factorization's
-/// workspace are allocated once too; each damping try refactorizes in place, sequentially (so
-/// the result does not depend on the thread count).
-struct FixedPattern {
-    matrix: SparseColMat<usize, f64>,
-    slot: Vec<usize>,
-    diag: Vec<usize>,
-    base: Vec<f64>,
-    symbolic: SymbolicCholesky<usize>,
-    l_values: Vec<f64>,
-    workspace: MemBuffer,
-}
-
-impl FixedPattern {
-    fn new(n: usize, idx: &[(u32, u32)]) -> std::result::Result<Self, String> {
-        let mut all: Vec<Triplet<usize, usize, f64>> =
-            idx.iter().map(|&(r, c)| Triplet::new(r as usize, c as usize, 0.0)).collect();
-        all.extend((0..n).map(|c| Triplet::new(c, c, 0.0)));
-        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &all)
-            .map_err(|e| format!("{e:?}"))?;
-        let find = |r: usize, c: usize| -> usize {
-            let sym = matrix.symbolic();
-            let (start, end) = (sym.col_ptr()[c], sym.col_ptr()[c + 1]);
-            start + sym.row_idx()[start..end].binary_search(&r).expect("entry in the pattern")
-        };
-        let slot = idx.iter().map(|&(r, c)| find(r as usize, c as usize)).collect();
-        let diag = (0..n).map(|c| find(c, c)).collect();
-        let symbolic = factorize_symbolic_cholesky(
-            matrix.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            // Supernodal even where faer's flop-ratio heuristic picks the simplicial
-            // (up-looking) factorization: on the 2-ring pattern of a brush of 200–700 vertices
-            // it took the numeric factorization from ~1.0 to ~0.6 ms (bench_solver, Fig. 12a).
-            CholeskySymbolicParams {
-                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-                ..Default::default()
-            },
-        )
-        .map_err(|e| format!("{e:?}"))?;
-        let base = vec![0.0; matrix.val().len()];
-        let l_values = vec![0.0; symbolic.len_val()];
-
-        let workspace = MemBuffer::try_new(
-            symbolic
-                .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-                .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
-        )
-        .map_err(|e| format!("{e:?}"))?;
-        Ok(FixedPattern { matrix, slot, diag, base, symbolic, l_values, workspace })
-    }
-
-    /// Refills JᵀJ from product values in the same order as the positions the pattern was built
-    /// from (summed in that fixed order, so deterministic).
-    fn fill(&mut self, vals: &[f64]) {
-        debug_assert_eq!(vals.len(), self.slot.len());
-        self.base.iter_mut().for_each(|v| *v = 0.0);
-        for (&v, &s) in vals.iter().zip(&self.slot) {
-            self.base[s] += v;
-        }
-    }
-
-    /// diag(JᵀJ) of the last fill.
-    fn diagonal(&self) -> Vec<f64> {
-        self.diag.iter().map(|&d| self.base[d]).collect()
-    }
-
-    /// Solves (JᵀJ + λ diag(scale)) x = rhs in place: refills the damped matrix and its
-    /// Cholesky factor (symbolic analysis reused).
-    fn solve_damped(
-        &mut self,
-        lambda: f64,
-        scale: &[f64],
-        rhs: MatMut<'_, f64>,
-    ) -> std::result::Result<(), String> {
-        let vals = self.matrix.val_mut();
-        vals.copy_from_slice(&self.base);
-        for (c, &d) in self.diag.iter().enumerate() {
-            vals[d] += lambda * scale[c];
-        }
-        let stack = MemStack::new(&mut self.workspace);
-        let llt = self
-            .symbolic
-            .factorize_numeric_llt(
-                &mut self.l_values,
-                self.matrix.as_ref(),
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                stack,
-                Default::default(),
-            )
-            .map_err(|e| format!("{e:?}"))?;
-        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.workspace));
-        Ok(())
-    }
 }

@@ -9,6 +9,7 @@ pub mod highlight_term;
 pub mod lm;
 pub mod locks;
 pub mod optimize;
+mod pattern;
 pub mod settings;
 pub mod singularities;
 pub mod smoothness;
@@ -16,7 +17,8 @@ pub mod smoothness;
 pub use fabrication::{GradientHinge, HingeKind};
 pub use highlight_term::{HighlightTerm, VertexJacobian};
 pub use lm::{
-    solve, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, LmResult, StopReason,
+    solve, solve_cached, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, LmResult,
+    SolveCache, StopReason,
 };
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
 pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};

@@ -17,7 +17,10 @@ use serde::Serialize;
 use super::fabrication::{GradientHinge, HingeKind};
 use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
-use super::lm::{solve, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, StopReason};
+use super::lm::{
+    solve, solve_cached, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, SolveCache,
+    StopReason,
+};
 use super::locks::{angle_difference, resolve_locks, LockConflict};
 use super::settings::SolverSettings;
 use super::singularities::{singularities, Singularity};
@@ -209,6 +212,9 @@ pub fn optimize(
     } else {
         vec![1.0]
     };
+    // One cache for every solve below: they share the free set, so the direct path's pattern,
+    // ordering and symbolic analysis are built once (rebuilt only if a stage's blocks differ).
+    let cache = std::cell::RefCell::new(SolveCache::default());
     let run_from = |start: Vec<f64>| -> Result<Run> {
         let mut run = Run {
             phi: start,
@@ -224,7 +230,8 @@ pub fn optimize(
                 max_iterations: if last { left } else { left.min(5) },
                 ..options.clone()
             };
-            let lm = solve(mesh, term, &run.phi, &free_list, &opts)?;
+            let lm =
+                solve_cached(mesh, term, &run.phi, &free_list, &opts, &mut cache.borrow_mut())?;
             run.initial.get_or_insert(lm.initial_energy);
             run.iterations.extend(lm.iterations.into_iter().map(|mut it| {
                 it.stage = stage;
