@@ -84,13 +84,25 @@ fn fit_scaled(d: &[Vector3<f64>], inv_h: f64, frame: &Frame) -> Option<(Matrix2<
     for d in d {
         let (x, y, z) = (frame.t.dot(d), frame.b.dot(d), frame.n.dot(d));
         let row = [x, y, 0.5 * x * x, x * y, 0.5 * y * y];
-        let mut k = 0;
-        for r in 0..5 {
-            for c in 0..=r {
-                a[k] += row[r] * row[c];
-                k += 1;
-            }
-            b[r] += row[r] * z;
+        // Written out (the loop over a triangle did not unroll).
+        let [r0, r1, r2, r3, r4] = row;
+        a[0] += r0 * r0;
+        a[1] += r1 * r0;
+        a[2] += r1 * r1;
+        a[3] += r2 * r0;
+        a[4] += r2 * r1;
+        a[5] += r2 * r2;
+        a[6] += r3 * r0;
+        a[7] += r3 * r1;
+        a[8] += r3 * r2;
+        a[9] += r3 * r3;
+        a[10] += r4 * r0;
+        a[11] += r4 * r1;
+        a[12] += r4 * r2;
+        a[13] += r4 * r3;
+        a[14] += r4 * r4;
+        for (b, r) in b.iter_mut().zip(row) {
+            *b += r * z;
         }
     }
     let c = solve_spd5(&a, &b)?;
