@@ -20,7 +20,7 @@
 use rayon::prelude::*;
 
 use super::parse::{number, Values};
-use super::scan::{is_ignored_keyword, parse_int, tokens, Scan, ScanModel, NONE, UNNAMED};
+use super::scan::{is_ignored_keyword, parse_int, Scan, ScanModel, NONE, UNNAMED};
 
 /// Bytes per chunk for a file of `len` bytes: about 64 chunks, between 64 bytes and 1 MiB. Small
 /// files are cut too, so the equivalence tests exercise the join.
@@ -83,29 +83,81 @@ struct Part {
     reach: [i64; 3],
 }
 
-/// Whether a byte may appear in a line the pass reads: printable ASCII or OBJ whitespace.
-fn plain(b: u8) -> bool {
-    (0x20..0x80).contains(&b) || matches!(b, b'\n' | b'\t' | b'\r' | 0x0b | 0x0c)
+/// Lines of a chunk and the whitespace-separated tokens of each, in one pass over the bytes,
+/// which also checks that every byte is printable ASCII or OBJ whitespace (`plain`). Lines are
+/// the scanner's: the text split at `\n` after dropping one final `\n`.
+struct Lines<'a> {
+    bytes: &'a [u8],
+    at: usize,
+    /// Line ends (`\n`) passed so far.
+    newlines: usize,
+    /// Whether a byte that is neither printable ASCII nor whitespace was seen.
+    bad: bool,
+}
+
+impl<'a> Lines<'a> {
+    /// The next line, its tokens as `(start, end)` within it in `toks`; `None` at the end.
+    fn next(&mut self, toks: &mut Vec<(usize, usize)>) -> Option<&'a [u8]> {
+        let bytes = self.bytes;
+        if self.at >= bytes.len() {
+            return None;
+        }
+        toks.clear();
+        let start = self.at;
+        let (mut i, mut tok, mut bad) = (start, usize::MAX, false);
+        while i < bytes.len() {
+            let c = bytes[i];
+            // Outside 0x20..0x80 and not one of \t \n 0x0b 0x0c \r.
+            bad |= (c.wrapping_sub(0x20) >= 0x60) & (c.wrapping_sub(9) >= 5);
+            if c == b'\n' {
+                self.newlines += 1;
+                break;
+            }
+            // The scanner's whitespace: space, \t, 0x0b, 0x0c, \r (\n is handled above).
+            if c == b' ' || c.wrapping_sub(9) < 5 {
+                if tok != usize::MAX {
+                    toks.push((tok - start, i - start));
+                    tok = usize::MAX;
+                }
+            } else if tok == usize::MAX {
+                tok = i;
+            }
+            i += 1;
+        }
+        if tok != usize::MAX {
+            toks.push((tok - start, i - start));
+        }
+        self.bad |= bad;
+        self.at = i + 1;
+        Some(&bytes[start..i])
+    }
 }
 
 impl Part {
     fn read(chunk: &[u8]) -> Option<Part> {
-        // Branch-free so it vectorizes: the whole chunk, then the statements.
-        if !chunk.iter().fold(true, |ok, &b| ok & plain(b)) {
+        let mut p = Part { reach: [i64::MIN; 3], ..Default::default() };
+        let mut lines = Lines { bytes: chunk, at: 0, newlines: 0, bad: false };
+        let (mut toks, mut corners) = (Vec::new(), Vec::new());
+        let mut line_no = 0;
+        while let Some(line) = lines.next(&mut toks) {
+            p.statement(line_no, line, &toks, &mut corners)?;
+            line_no += 1;
+        }
+        if lines.bad {
             return None;
         }
-        let mut p = Part { reach: [i64::MIN; 3], ..Default::default() };
-        let body = chunk.strip_suffix(b"\n").unwrap_or(chunk);
-        p.lines = chunk.iter().filter(|&&b| b == b'\n').count();
-        let mut corners: Vec<[u32; 3]> = Vec::new();
-        for (line_no, line) in body.split(|&b| b == b'\n').enumerate() {
-            p.statement(line_no as u32, line, &mut corners)?;
-        }
+        p.lines = lines.newlines;
         Some(p)
     }
 
-    fn statement(&mut self, line_no: u32, line: &[u8], corners: &mut Vec<[u32; 3]>) -> Option<()> {
-        let mut toks = tokens(line);
+    fn statement(
+        &mut self,
+        line_no: u32,
+        line: &[u8],
+        toks: &[(usize, usize)],
+        corners: &mut Vec<[u32; 3]>,
+    ) -> Option<()> {
+        let mut toks = toks.iter().map(|&(a, b)| &line[a..b]);
         let Some(kw) = toks.next() else { return Some(()) };
         match kw {
             b"v" => {
@@ -344,6 +396,7 @@ mod tests {
         let objects = "o a\no b\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no c\nvt 0 0\nf 3 2 1\n";
         check(objects, true);
         check("", true);
+        check("v 0 0 0\n   \n\t\n\nv 1 1 1\r\nv 2 2 2", true);
         check("v 0 0 0\n", true);
     }
 
