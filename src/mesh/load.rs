@@ -403,9 +403,9 @@ impl Builder<'_> {
         report.unreferenced_vertices = self.scan.num_v - source.len() - report.welded_vertices;
         let scale = self.options.scale;
         let mut mesh = Mesh {
-            positions: source.iter().map(|&i| positions[i as usize] * scale).collect(),
+            positions: source.par_iter().map(|&i| positions[i as usize] * scale).collect(),
             faces: tris
-                .iter()
+                .par_iter()
                 .map(|&t| {
                     let c = |k: usize| {
                         new_id[rep[self.scan.corner_v[3 * t as usize + k] as usize] as usize]
@@ -416,8 +416,8 @@ impl Builder<'_> {
             units: self.options.units,
             ..Default::default()
         };
-        report.face_line = tris.iter().map(|&t| self.scan.face_line[t as usize]).collect();
-        report.source_vertex = source.iter().map(|&i| i + 1).collect();
+        report.face_line = tris.par_iter().map(|&t| self.scan.face_line[t as usize]).collect();
+        report.source_vertex = source.par_iter().map(|&i| i + 1).collect();
         (mesh.uv, report.corners_without_uv) = self.uvs(&tris)?;
         mesh.normals = self.normals(&tris)?;
         self.validate(&mesh, &mut report)?;
