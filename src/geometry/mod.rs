@@ -134,7 +134,7 @@ impl Geometry {
     }
 
     /// [`Geometry::compute`], also returning the wall time of each stage in seconds, in order
-    /// (`vertex_faces`, `adjacency`, `normals`, `jet_fits`, `areas`, `transport`, `stencils`).
+    /// (`vertex_faces` (with the face normals), `adjacency`, `normals`, `jet_fits`, `areas`, `transport`, `stencils`).
     /// The outputs are identical to `compute`'s.
     pub fn compute_timed(
         mesh: &Mesh,
@@ -147,11 +147,14 @@ impl Geometry {
             timings.push((name, now.duration_since(clock).as_secs_f64()));
             clock = now;
         };
-        let vf = VertexFaces::new(mesh);
+        // The incidence is a sequential counting sort: the face normals use the other threads.
+        let (vf, face_n) = rayon::join(|| VertexFaces::new(mesh), || normals::face_normals(mesh));
         lap("vertex_faces");
         let adjacency = Adjacency::from_vertex_faces(&mesh.faces, &vf);
         lap("adjacency");
-        let (normals, fallback_normals) = normals::vertex_normals(mesh, &vf, options.normals);
+        let (normals, fallback_normals) =
+            normals::vertex_normals_from_faces(mesh, &vf, &face_n, options.normals);
+        drop(face_n);
         lap("normals");
         let refinements = if options.normals == NormalSource::File && mesh.normals.is_some() {
             0

@@ -72,7 +72,16 @@ pub fn vertex_normals(
     vertex_faces: &VertexFaces,
     source: NormalSource,
 ) -> (Vec<Vector3<f64>>, usize) {
-    let face_n = face_normals(mesh);
+    vertex_normals_from_faces(mesh, vertex_faces, &face_normals(mesh), source)
+}
+
+/// [`vertex_normals`] from the mesh's unit face normals `face_n` (as [`face_normals`] gives them).
+pub fn vertex_normals_from_faces(
+    mesh: &Mesh,
+    vertex_faces: &VertexFaces,
+    face_n: &[Vector3<f64>],
+    source: NormalSource,
+) -> (Vec<Vector3<f64>>, usize) {
     let file_avg = match (source, &mesh.normals) {
         (NormalSource::File, Some(_)) => Some(file_vertex_normals(mesh, vertex_faces)),
         _ => None,
