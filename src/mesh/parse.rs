@@ -21,16 +21,13 @@ pub(crate) struct Values {
     pub vn: Vec<[f64; 3]>,
 }
 
-fn is_space(b: u8) -> bool {
-    matches!(b, b' ' | b'\t' | b'\r' | 0x0b | 0x0c)
-}
-
-/// Reads every `v`, `vt` and `vn` statement; `None` if a number does not parse or `w` is 0.
-pub(crate) fn values(bytes: &[u8]) -> Option<Values> {
+/// Chunk boundaries of `bytes`: 0, then the end of the line that holds byte `at + chunk` for
+/// each chunk start `at` (so every chunk ends at a line end, the last at the end of the text).
+pub(crate) fn line_chunks(bytes: &[u8], chunk: usize) -> Vec<usize> {
     let mut bounds = vec![0];
     let mut at = 0;
     while at < bytes.len() {
-        let end = (at + CHUNK).min(bytes.len());
+        let end = (at + chunk.max(1)).min(bytes.len());
         let end = match bytes[end..].iter().position(|&b| b == b'\n') {
             Some(k) => end + k + 1,
             None => bytes.len(),
@@ -38,6 +35,16 @@ pub(crate) fn values(bytes: &[u8]) -> Option<Values> {
         bounds.push(end);
         at = end;
     }
+    bounds
+}
+
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | 0x0b | 0x0c)
+}
+
+/// Reads every `v`, `vt` and `vn` statement; `None` if a number does not parse or `w` is 0.
+pub(crate) fn values(bytes: &[u8]) -> Option<Values> {
+    let bounds = line_chunks(bytes, CHUNK);
     let parts: Vec<Option<Values>> =
         bounds.par_windows(2).map(|w| chunk_values(&bytes[w[0]..w[1]])).collect();
     let mut out = Values::default();

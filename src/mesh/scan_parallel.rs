@@ -19,7 +19,7 @@
 
 use rayon::prelude::*;
 
-use super::parse::{number, Values};
+use super::parse::{line_chunks, number, Values};
 use super::scan::{is_ignored_keyword, parse_int, Scan, ScanModel, NONE, UNNAMED};
 
 /// Bytes per chunk for a file of `len` bytes: about 64 chunks, between 64 bytes and 1 MiB. Small
@@ -35,17 +35,7 @@ pub(crate) fn scan_parallel(bytes: &[u8]) -> Option<(Scan, Values)> {
 
 /// [`scan_parallel`] with a given chunk size (at least 1 byte; chunks end at line ends).
 fn scan_chunks(bytes: &[u8], chunk: usize) -> Option<(Scan, Values)> {
-    let mut bounds = vec![0];
-    let mut at = 0;
-    while at < bytes.len() {
-        let end = (at + chunk.max(1)).min(bytes.len());
-        let end = match bytes[end..].iter().position(|&b| b == b'\n') {
-            Some(k) => end + k + 1,
-            None => bytes.len(),
-        };
-        bounds.push(end);
-        at = end;
-    }
+    let bounds = line_chunks(bytes, chunk);
     let parts: Vec<Option<Part>> =
         bounds.par_windows(2).map(|w| Part::read(&bytes[w[0]..w[1]])).collect();
     let parts: Vec<Part> = parts.into_iter().collect::<Option<_>>()?;
