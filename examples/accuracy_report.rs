@@ -20,7 +20,6 @@ use std::time::Instant;
 use grainline::generate::{self, Grid, GridPattern};
 use grainline::geometry::connection::wrap_angle;
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::q;
 use grainline::highlight::{highlight_field, initial_field, InitialField, Symmetry};
 use grainline::solve::{solve, HighlightTerm, LmOptions};
 use nalgebra::{Matrix2, Vector2, Vector3};
@@ -246,18 +245,7 @@ fn solver(out: &mut String, img: &Path) {
         |p: &Vector3<f64>| Vector3::new((0.8 * p.y).cos(), (0.8 * p.y).sin() + 0.3 * p.x, 0.1);
     let phi_true: Vec<f64> =
         (0..n).map(|i| g.frames[i].angle_of(&world(&mesh.positions[i]))).collect();
-    let mut term = HighlightTerm {
-        geometry: &g,
-        h: &hv,
-        symmetry: Symmetry::Line,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
-    term.epsilon = grainline::highlight::tensor::default_epsilon(&ms);
-    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+    let term = HighlightTerm::own_targets(&g, &hv, Symmetry::Line, GradientForm::Angle, &phi_true);
     let centre = Vector3::new(0.1, -0.1, 0.0);
     let brush: Vec<u32> =
         (0..n as u32).filter(|&i| (mesh.positions[i as usize] - centre).norm() < 0.45).collect();

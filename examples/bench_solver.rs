@@ -17,7 +17,6 @@
 //! highlights of a smooth field and the start is that field bumped inside the brush.
 
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
 use grainline::solve::{solve, HighlightTerm, LinearSolver, LmOptions};
 use nalgebra::Vector3;
@@ -25,20 +24,7 @@ use nalgebra::Vector3;
 /// A line-field term whose targets are `phi_true`'s own highlights (so `phi_true` has zero
 /// highlight energy), every vertex weighted 1.
 fn own_targets<'a>(g: &'a Geometry, h: &'a [Vector3<f64>], phi_true: &[f64]) -> HighlightTerm<'a> {
-    let n = phi_true.len();
-    let mut term = HighlightTerm {
-        geometry: g,
-        h,
-        symmetry: Symmetry::Line,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(phi_true, i).norm()).collect();
-    term.epsilon = default_epsilon(&ms);
-    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(phi_true, i), term.epsilon))).collect();
-    term
+    HighlightTerm::own_targets(g, h, Symmetry::Line, GradientForm::Angle, phi_true)
 }
 
 /// `GRAINLINE_LM_SOLVER=direct|cg` forces a linear solver (default: auto).

@@ -5,7 +5,6 @@
 use grainline::generate::{self, Grid};
 use grainline::geometry::connection::wrap_angle;
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
 use grainline::solve::{solve, solve_cached, HighlightTerm, LmOptions, SolveCache};
 use nalgebra::Vector3;
@@ -26,18 +25,7 @@ fn cached_solves_equal_fresh_ones() {
             ))
         })
         .collect();
-    let mut term = HighlightTerm {
-        geometry: &g,
-        h: &h,
-        symmetry: Symmetry::Line,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
-    term.epsilon = default_epsilon(&ms);
-    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+    let term = HighlightTerm::own_targets(&g, &h, Symmetry::Line, GradientForm::Angle, &phi_true);
     let brush = |centre: Vector3<f64>, radius: f64| -> (Vec<u32>, Vec<f64>) {
         let free: Vec<u32> = (0..n as u32)
             .filter(|&i| (mesh.positions[i as usize] - centre).norm() < radius)

@@ -3,7 +3,6 @@
 
 use grainline::generate::{self, Grid, GridPattern};
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
 use grainline::mesh::Mesh;
 use grainline::solve::fabrication::lock_residual;
@@ -107,20 +106,7 @@ fn plane_term<'a>(
     phi: &[f64],
     symmetry: Symmetry,
 ) -> HighlightTerm<'a> {
-    let n = phi.len();
-    let mut term = HighlightTerm {
-        geometry: g,
-        h,
-        symmetry,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(phi, i).norm()).collect();
-    term.epsilon = default_epsilon(&ms);
-    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(phi, i), term.epsilon))).collect();
-    term
+    HighlightTerm::own_targets(g, h, symmetry, GradientForm::Angle, phi)
 }
 
 fn monotone(report: &grainline::solve::OptimizeReport) {

@@ -7,7 +7,6 @@ use std::f64::consts::PI;
 use grainline::generate::{self, Grid};
 use grainline::geometry::connection::wrap_angle;
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
 use grainline::mesh::Mesh;
 use grainline::solve::{optimize, HighlightTerm, OptimizeReport, SolverSettings, StopReason};
@@ -29,20 +28,7 @@ fn targets<'a>(
     phi: &[f64],
     s: Symmetry,
 ) -> HighlightTerm<'a> {
-    let n = phi.len();
-    let mut t = HighlightTerm {
-        geometry: g,
-        h,
-        symmetry: s,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| t.ell_bar(phi, i).norm()).collect();
-    t.epsilon = default_epsilon(&ms);
-    t.target_q = (0..n).map(|i| Some(q(&t.ell_bar(phi, i), t.epsilon))).collect();
-    t
+    HighlightTerm::own_targets(g, h, s, GradientForm::Angle, phi)
 }
 
 fn sane(phi: &[f64], report: &OptimizeReport) {

@@ -5,7 +5,6 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use grainline::generate::{self, Grid};
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
 use grainline::mesh::topology::Topology;
 use grainline::solve::locks::{angle_difference, circular_mean, resolve_locks};
@@ -28,20 +27,7 @@ fn setup(n: usize) -> (grainline::mesh::Mesh, Geometry, Vec<Vector3<f64>>, Vec<f
 }
 
 fn term<'a>(g: &'a Geometry, h: &'a [Vector3<f64>], phi: &[f64], s: Symmetry) -> HighlightTerm<'a> {
-    let n = phi.len();
-    let mut t = HighlightTerm {
-        geometry: g,
-        h,
-        symmetry: s,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| t.ell_bar(phi, i).norm()).collect();
-    t.epsilon = default_epsilon(&ms);
-    t.target_q = (0..n).map(|i| Some(q(&t.ell_bar(phi, i), t.epsilon))).collect();
-    t
+    HighlightTerm::own_targets(g, h, s, GradientForm::Angle, phi)
 }
 
 #[test]

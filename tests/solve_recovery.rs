@@ -3,7 +3,6 @@
 use grainline::generate::{self, Grid};
 use grainline::geometry::connection::wrap_angle;
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
-use grainline::highlight::tensor::q;
 use grainline::highlight::Symmetry;
 use grainline::mesh::Mesh;
 use grainline::solve::{solve, HighlightTerm, LinearSolver, LmOptions};
@@ -43,18 +42,7 @@ fn recover_with(
     let n = mesh.num_vertices();
     let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); n];
     let phi_true = true_field(mesh, &g);
-    let mut term = HighlightTerm {
-        geometry: &g,
-        h: &h,
-        symmetry,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| term.ell_bar(&phi_true, i).norm()).collect();
-    term.epsilon = grainline::highlight::tensor::default_epsilon(&ms);
-    term.target_q = (0..n).map(|i| Some(q(&term.ell_bar(&phi_true, i), term.epsilon))).collect();
+    let term = HighlightTerm::own_targets(&g, &h, symmetry, GradientForm::Angle, &phi_true);
     let brush: Vec<u32> =
         (0..n as u32).filter(|&i| (mesh.positions[i as usize] - centre).norm() < radius).collect();
     assert!(brush.len() > 20);

@@ -11,7 +11,6 @@ mod common;
 use grainline::geometry::connection::wrap_angle;
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
 use grainline::highlight::smoothest::{smoothest_field, SmoothestOptions};
-use grainline::highlight::tensor::{default_epsilon, q};
 use grainline::highlight::Symmetry;
 use grainline::mesh::load::{load_obj, LoadOptions};
 use grainline::mesh::Mesh;
@@ -37,20 +36,7 @@ fn load() -> Option<Case> {
 }
 
 fn term<'a>(c: &'a Case, phi: &[f64], sym: Symmetry) -> HighlightTerm<'a> {
-    let n = phi.len();
-    let mut t = HighlightTerm {
-        geometry: &c.g,
-        h: &c.h,
-        symmetry: sym,
-        form: GradientForm::Angle,
-        epsilon: 0.0,
-        target_q: vec![None; n],
-        weight: vec![1.0; n],
-    };
-    let ms: Vec<f64> = (0..n).map(|i| t.ell_bar(phi, i).norm()).collect();
-    t.epsilon = default_epsilon(&ms);
-    t.target_q = (0..n).map(|i| Some(q(&t.ell_bar(phi, i), t.epsilon))).collect();
-    t
+    HighlightTerm::own_targets(&c.g, &c.h, sym, GradientForm::Angle, phi)
 }
 
 /// |hᵀv| at vertex i for the field φ.

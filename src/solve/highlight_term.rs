@@ -25,7 +25,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 
 use crate::geometry::{Geometry, GradientForm};
 use crate::highlight::ell::m_vector;
-use crate::highlight::tensor::q;
+use crate::highlight::tensor::{default_epsilon, q};
 use crate::highlight::Symmetry;
 
 /// The data of the highlight energy: geometry, half vectors, targets and weights.
@@ -57,6 +57,35 @@ pub struct VertexJacobian {
 }
 
 const QUARTER_TURN: Matrix2<f64> = Matrix2::new(0.0, -1.0, 1.0, 0.0);
+
+impl<'a> HighlightTerm<'a> {
+    /// The term whose targets are the highlights of `phi` itself at every vertex (weight 1,
+    /// ε from [`default_epsilon`] of those highlights), so `phi` has zero highlight energy:
+    /// the "keep the current ℓ" target, and the set-up of recovery tests and benchmarks.
+    pub fn own_targets(
+        geometry: &'a Geometry,
+        h: &'a [Vector3<f64>],
+        symmetry: Symmetry,
+        form: GradientForm,
+        phi: &[f64],
+    ) -> Self {
+        let n = phi.len();
+        let mut term = HighlightTerm {
+            geometry,
+            h,
+            symmetry,
+            form,
+            epsilon: 0.0,
+            target_q: vec![None; n],
+            weight: vec![1.0; n],
+        };
+        let ell: Vec<Vector2<f64>> = (0..n).map(|i| term.ell_bar(phi, i)).collect();
+        let norms: Vec<f64> = ell.iter().map(|l| l.norm()).collect();
+        term.epsilon = default_epsilon(&norms);
+        term.target_q = ell.iter().map(|l| Some(q(l, term.epsilon))).collect();
+        term
+    }
+}
 
 impl HighlightTerm<'_> {
     /// ℓ̄ᵢ (frame coordinates) of the field φ.
