@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::cg::{conjugate_gradient, JacobianProduct, JacobianRows, ProductScratch};
+use super::cg::{conjugate_gradient, JacobianRows, NormalMatrix};
 pub use super::cg::{CG_FORCING, CG_MAX_ITERATIONS, CG_THRESHOLD};
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
 use super::highlight_term::HighlightTerm;
@@ -82,7 +82,7 @@ pub enum LinearSolver {
     Auto,
     /// Sparse Cholesky of JᵀJ + λD (symbolic analysis once per solve).
     Direct,
-    /// Matrix-free Jacobi-preconditioned conjugate gradients on the Jacobian's rows, to a
+    /// Jacobi-preconditioned conjugate gradients on JᵀJ assembled in a fixed pattern, to a
     /// relative residual of at most [`CG_FORCING`] (an inexact Levenberg–Marquardt step; the gain
     /// ratio uses the model decrease of the step actually taken).
     ConjugateGradient,
@@ -170,7 +170,8 @@ pub struct Iteration {
     pub smoothed: bool,
     /// Seconds spent before the tries: JᵀJ refilled from the Jacobian's rows (and, in the
     /// first iteration, the rows assembled and the pattern, ordering and symbolic analysis
-    /// built, unless cached), or the matrix-free product built.
+    /// built, unless cached); on the conjugate-gradient path, JᵀJ refilled in its pattern (built
+    /// in the first iteration).
     pub assembly_seconds: f64,
     /// Seconds spent in the damping, factorization, solve and trial point of the accepted try
     /// (rejected tries are not counted, as in the paper's Fig. 12a). The trial point's rows
@@ -276,7 +277,6 @@ impl<'a> Assembler<'a> {
         self.rows.ptr.push(0);
         self.rows.col.clear();
         self.rows.d.clear();
-        self.rows.split = 0;
     }
 
     /// Assembles `row(item, push)` for every item: on the calling thread into the accumulator
@@ -315,7 +315,6 @@ impl<'a> Assembler<'a> {
                     ptr: vec![0],
                     col: Vec::with_capacity(8 * chunk.len()),
                     d: Vec::with_capacity(8 * chunk.len()),
-                    split: 0,
                 },
                 ..Local::default()
             };
@@ -488,11 +487,6 @@ impl System<'_> {
         let mut e = Energies::default();
         for b in &self.blocks {
             e.add(b.term(), b.assemble(phi, acc));
-            if matches!(b.term(), Term::Highlight) {
-                // Two-component rows (the others have one): every row so far counts as
-                // two-component.
-                acc.rows.split = acc.rows.ptr.len() - 1;
-            }
         }
         e
     }
@@ -649,7 +643,7 @@ pub fn solve_cached(
     let mut acc = Assembler::new(&sys.col_of, n);
     let mut next = Assembler::new(&sys.col_of, n);
     let mut assembled = false;
-    let mut product: Option<JacobianProduct> = None;
+    let mut product: Option<NormalMatrix> = None;
     let mut first_gradient: Option<f64> = None;
     let mut lambda = options.initial_damping;
     let mut nu = 2.0;
@@ -668,11 +662,12 @@ pub fn solve_cached(
             break;
         }
         let diag = if matrix_free {
-            let rows = std::mem::take(&mut acc.rows);
-            acc.rows.ptr.push(0);
-            let diag = rows.diagonal(n);
-            product = Some(JacobianProduct::new(rows, n));
-            diag
+            if !product.as_ref().is_some_and(|m| m.matches(&acc.rows, n)) {
+                product = Some(NormalMatrix::new(&acc.rows, n));
+            }
+            let m = product.as_mut().expect("built above");
+            m.fill(&acc.rows);
+            m.diagonal().to_vec()
         } else {
             if !checked {
                 checked = true;
@@ -701,7 +696,7 @@ pub fn solve_cached(
                 // Predicted decrease of the Gauss–Newton model for an inexact step, on the
                 // scale of the direct branch's ½δᵀ(λDδ − g): ½(−2gᵀδ − δᵀJᵀJδ).
                 let mut jtj = vec![0.0; n];
-                product.apply(&delta, &vec![0.0; n], &mut ProductScratch::default(), &mut jtj);
+                product.apply(&delta, None, &mut jtj);
                 0.5 * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>()
             } else {
                 let ds = direct.as_mut().expect("built in the assembly");
