@@ -10,11 +10,17 @@
 //! With `--whole-mesh`, every vertex of a torus of about 100k (or the given) vertices is free
 //! (λ_s relative 1e-6 plus the turning-radius hinge, so every block is assembled), and the
 //! seconds per iteration (assembly + solve) are reported as min/median/max over 3 runs of 3
-//! iterations.
+//! iterations (`BENCH_RUNS`, `BENCH_ITERATIONS`). The first run of a process also pays the first
+//! touch of the solve's memory (later runs reuse it: the allocator keeps freed memory).
 //!
 //! On an icosphere of 40,962 vertices, a brush around one point is made free with the brush
 //! radius chosen so it holds about 14, 32, 89, 217, 420 and 656 vertices; targets are the
 //! highlights of a smooth field and the start is that field bumped inside the brush.
+//!
+//! The allocator is the `grainline` binary's (mimalloc, freed memory kept: grainline::allocator).
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
 use grainline::highlight::Symmetry;
@@ -34,6 +40,10 @@ fn linear_solver() -> LinearSolver {
         Ok("cg") => LinearSolver::ConjugateGradient,
         _ => LinearSolver::Auto,
     }
+}
+
+fn env_usize(name: &str, default: usize) -> usize {
+    std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
 fn whole_mesh(targets: &[usize]) {
@@ -58,14 +68,14 @@ fn whole_mesh(targets: &[usize]) {
         let free: Vec<u32> = (0..n as u32).collect();
         let opts = LmOptions {
             smoothness: 1e-6 * g.areas.iter().sum::<f64>(),
-            max_iterations: 3,
+            max_iterations: env_usize("BENCH_ITERATIONS", 3),
             turning: Some(grainline::solve::HingeOptions { bound: 2.0, weight: 1.0 }),
             linear_solver: linear_solver(),
             ..Default::default()
         };
         let (mut a, mut s, mut its, mut wall) = (Vec::new(), Vec::new(), 0, Vec::new());
         let mut energies = String::new();
-        for _ in 0..3 {
+        for _ in 0..env_usize("BENCH_RUNS", 3) {
             let t = std::time::Instant::now();
             let r = solve(&mesh, &term, &phi, &free, &opts).unwrap();
             wall.push(t.elapsed().as_secs_f64() / opts.max_iterations as f64);
@@ -101,6 +111,8 @@ fn whole_mesh(targets: &[usize]) {
 }
 
 fn main() {
+    // As the `grainline` binary does (see grainline::allocator).
+    grainline::allocator::keep_freed_memory();
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.first().map(String::as_str) == Some("--whole-mesh") {
         let sizes: Vec<usize> = args[1..].iter().filter_map(|a| a.parse().ok()).collect();

@@ -212,12 +212,14 @@ const CHUNK: usize = 512;
 const SEQUENTIAL_ROWS: usize = 8 * CHUNK;
 
 /// One chunk's contributions: the Jacobian's row blocks (free columns and derivatives) and the
-/// (column, value) terms of Jᵀr, in row order.
+/// terms of Jᵀr, in row order.
 #[derive(Default)]
 struct Local {
     /// Σ|r|² of the chunk's rows, in row order.
     e: f64,
-    g: Vec<(u32, f64)>,
+    /// Each pushed entry's Jᵀr term dₑ·r, aligned with the entries of `rows` pushed since the
+    /// chunk began (their columns are in `rows.col`).
+    g: Vec<f64>,
     block: Vec<(u32, [f64; 2])>,
     /// A row's entries before the free-column filter (reused).
     entries: Vec<(u32, [f64; 2])>,
@@ -243,7 +245,7 @@ impl Local {
             return;
         }
         for &(a, da) in &self.block {
-            self.g.push((a, da[0] * r[0] + da[1] * r[1]));
+            self.g.push(da[0] * r[0] + da[1] * r[1]);
             self.rows.col.push(a);
             self.rows.d.push(da);
         }
@@ -302,7 +304,8 @@ impl<'a> Assembler<'a> {
                 }
                 energy += local.e;
             }
-            for &(c, v) in &local.g {
+            let first = local.rows.col.len() - local.g.len();
+            for (&c, &v) in local.rows.col[first..].iter().zip(&local.g) {
                 self.g[c as usize] += v;
             }
             self.rows = std::mem::take(&mut local.rows);
@@ -334,7 +337,7 @@ impl<'a> Assembler<'a> {
         for local in locals {
             energy += local.e;
             self.rows.append(&local.rows);
-            for (c, v) in local.g {
+            for (&c, &v) in local.rows.col.iter().zip(&local.g) {
                 self.g[c as usize] += v;
             }
         }
