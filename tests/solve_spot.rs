@@ -1,10 +1,12 @@
 //! Recovery on spot (../shared/meshes/spot_triangulated.obj): a smooth field's own highlights as
-//! targets, the field perturbed in a brush, the brush solved with the default settings.
+//! targets, the field perturbed in a brush, the brush solved with the default settings and at
+//! most 10 iterations (the bound: back to the true field within 1e-3 rad in ≤ 10
+//! iterations).
 //!
 //! Experiments (docs/benchmarks.md) through environment variables: SPOT_SMOOTHNESS (relative
 //! λ_s), SPOT_CENTRES (comma-separated vertices), SPOT_RADIUS (× bounding-box diagonal),
 //! SPOT_CONT (continuation on), SPOT_HTV_TAU (row weights (hᵀv)²/((hᵀv)² + τ²) from the start
-//! field), SPOT_DAMPING (initial LM damping).
+//! field), SPOT_DAMPING (initial LM damping), SPOT_MAXIT (iteration cap, default 10).
 
 mod common;
 
@@ -61,7 +63,10 @@ fn brushes_recover_the_true_field() {
         .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
         .unwrap_or(vec![250, 500, 750, 1000, 1250, 1500, 1750, 2000, 2250, 2500, 2750]);
     let mut failures = Vec::new();
-    let (mut total, mut recovered, mut within_10) = (0, 0, 0);
+    let (mut total, mut recovered) = (0, 0);
+    // Brushes where the data term's ODE is far from degenerate (min |hᵀv| ≥ 0.1 over the brush,
+    // math.md §3) and that did not recover: must stay empty.
+    let mut well_posed_failures = Vec::new();
     for sym in [Symmetry::Oriented, Symmetry::Line] {
         let phi_true =
             smoothest_field(&c.mesh, &c.g, sym, &SmoothestOptions::default()).unwrap().phi;
@@ -91,6 +96,7 @@ fn brushes_recover_the_true_field() {
                 margin_rings: 0,
                 continuation: std::env::var("SPOT_CONT").is_ok(),
                 initial_damping: env_f64("SPOT_DAMPING", SolverSettings::default().initial_damping),
+                max_iterations: env_f64("SPOT_MAXIT", 10.0) as usize,
                 ..Default::default()
             };
             let r = optimize(&c.mesh, &t, &phi, &support, &s).unwrap();
@@ -120,21 +126,22 @@ fn brushes_recover_the_true_field() {
                 e = it.energies.total();
             }
             total += 1;
-            if worst < 1e-3 && its <= 20 {
+            if worst < 1e-3 {
                 recovered += 1;
-                within_10 += usize::from(its <= 10);
             } else {
                 failures.push((sym, centre, worst, its));
+                if min_htv >= 0.1 {
+                    well_posed_failures.push((sym, centre, worst));
+                }
             }
         }
     }
-    eprintln!(
-        "recovered {recovered} of {total} ({within_10} within 10 iterations); not: {failures:?}"
-    );
+    eprintln!("recovered {recovered} of {total} within the iteration cap; not: {failures:?}");
     // Not every brush recovers: where the data ODE degenerates (hᵀv ≈ 0 inside the brush,
-    // math.md §3) the data term has other minima (docs/benchmarks.md lists them). This guards
-    // the measured rate of the default settings (16 of 22 since the harmonic-fill start; 11
-    // before) against regressions.
+    // math.md §3) the data term has other minima (docs/benchmarks.md lists them). Every brush
+    // away from that degeneracy must recover, and the overall rate of the default settings
+    // (16 of 22 within 10 iterations since the harmonic-fill start; 11 of 22 within 20 before)
+    // is guarded against regressions.
     let experiment = [
         "SPOT_SMOOTHNESS",
         "SPOT_CENTRES",
@@ -142,10 +149,15 @@ fn brushes_recover_the_true_field() {
         "SPOT_HTV_TAU",
         "SPOT_RADIUS",
         "SPOT_DAMPING",
+        "SPOT_MAXIT",
     ]
     .iter()
     .any(|v| std::env::var(v).is_ok());
     if !experiment {
+        assert!(
+            well_posed_failures.is_empty(),
+            "well-posed brushes failed: {well_posed_failures:?}"
+        );
         assert!(recovered >= 16, "{recovered} of {total} brushes recovered");
     }
 }

@@ -148,7 +148,7 @@ impl Geometry {
             clock = now;
         };
         // The incidence is a sequential counting sort: the face normals use the other threads.
-        let (vf, face_n) = rayon::join(|| VertexFaces::new(mesh), || normals::face_normals(mesh));
+        let (vf, face_n) = rayon::join(|| VertexFaces::new(mesh), || normals::face_data(mesh));
         lap("vertex_faces");
         let adjacency = Adjacency::from_vertex_faces(&mesh.faces, &vf);
         lap("adjacency");
