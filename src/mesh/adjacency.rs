@@ -13,6 +13,9 @@ use rayon::prelude::*;
 /// Vertices per parallel work item.
 const CHUNK: usize = 4096;
 
+/// The next corner of a triangle.
+const NEXT: [usize; 3] = [1, 2, 0];
+
 /// Vertex-to-vertex adjacency of a triangle mesh, in CSR form.
 #[derive(Clone, Debug, Default)]
 pub struct Adjacency {
@@ -46,8 +49,10 @@ impl Adjacency {
                 let (mut valence, mut buf) = (Vec::with_capacity(v1 - v0), Vec::new());
                 for v in v0..v1 {
                     buf.clear();
-                    for &(f, _) in vf.of(v) {
-                        for &w in &faces[f as usize] {
+                    for &(f, c) in vf.of(v) {
+                        // The other two corners (v is corner c; a face may repeat a vertex).
+                        let f = &faces[f as usize];
+                        for w in [f[NEXT[c as usize]], f[NEXT[NEXT[c as usize]]]] {
                             if w as usize != v {
                                 buf.push(w);
                             }
@@ -92,17 +97,15 @@ impl Adjacency {
         });
         drop(chunks);
         let mut adj = Adjacency { offsets, neighbors, edge_faces, reverse: Vec::new() };
+        // Rows by increasing i: the k-th slot towards j met is j's k-th smallest neighbour, i
+        // itself (the adjacency is symmetric and sorted), so one cursor per row gives the slot.
         let mut reverse = vec![0u32; total];
-        let none: &mut [()] = &mut vec![(); total];
-        par_vertex_slices(&adj.offsets, &mut reverse, none, |i, rev, _, _| {
-            for (r, s) in rev.iter_mut().zip(adj.slots(i)) {
-                // i is among the sorted neighbours of the target j (the adjacency is
-                // symmetric): its slot there is after the neighbours smaller than i.
-                let j = adj.target(s);
-                let nj = adj.neighbors(j);
-                *r = adj.offsets[j] + nj.iter().filter(|&&w| w < i as u32).count() as u32;
-            }
-        });
+        let mut cursor = adj.offsets[..num_vertices].to_vec();
+        for (s, r) in reverse.iter_mut().enumerate() {
+            let j = adj.neighbors[s] as usize;
+            *r = cursor[j];
+            cursor[j] += 1;
+        }
         adj.reverse = reverse;
         adj
     }
