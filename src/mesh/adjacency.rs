@@ -259,4 +259,25 @@ mod tests {
         let adj = Adjacency::from_faces(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]);
         assert_eq!(adj.nonmanifold_edges(), vec![(0, 1)]);
     }
+
+    #[test]
+    fn icosphere_valences_and_reverse_slots() {
+        // A k-times subdivided icosahedron has 10·4^k + 2 vertices, 30·4^k edges, the 12
+        // original vertices of valence 5 and all others of valence 6.
+        let m = crate::generate::icosphere(1.0, 2);
+        let adj = Adjacency::from_faces(m.num_vertices(), &m.faces);
+        assert_eq!(adj.num_vertices(), 162);
+        assert_eq!(adj.num_edges(), 480);
+        let fives = (0..162).filter(|&i| adj.valence(i) == 5).count();
+        assert_eq!((fives, (0..162).filter(|&i| adj.valence(i) == 6).count()), (12, 150));
+        for i in 0..adj.num_vertices() {
+            assert!(adj.neighbors(i).windows(2).all(|w| w[0] < w[1]));
+            for s in adj.slots(i) {
+                let r = adj.reverse(s);
+                assert!(adj.slots(adj.target(s)).contains(&r));
+                assert_eq!((adj.target(r), adj.reverse(r)), (i, s));
+                assert_eq!(adj.edge_face_count(s), 2);
+            }
+        }
+    }
 }

@@ -270,4 +270,24 @@ mod tests {
         assert_eq!(flip.edges_of_kind(EdgeKind::Inconsistent), vec![0]);
         assert!(HalfEdges::new(2, &[[0, 1, 2]]).is_err());
     }
+
+    #[test]
+    fn icosphere_is_closed_and_manifold() {
+        // 10·4^k + 2 vertices, 20·4^k faces, 30·4^k edges (k = 2); every edge has two faces.
+        let m = crate::generate::icosphere(1.0, 2);
+        let he = HalfEdges::new(m.num_vertices(), &m.faces).unwrap();
+        assert_eq!((he.num_vertices(), he.num_halfedges(), he.num_edges()), (162, 960, 480));
+        for h in 0..960 {
+            assert_eq!(he.kind(h), EdgeKind::Manifold);
+            let t = he.twin(h).unwrap();
+            assert_eq!((he.twin(t), he.origin(t), he.dest(t)), (Some(h), he.dest(h), he.origin(h)));
+            assert_eq!(he.is_representative(h), h < t);
+        }
+        for v in 0..162 {
+            let out = he.outgoing(v);
+            assert!(out.windows(2).all(|w| w[0] < w[1]));
+            assert!(out.iter().all(|&h| he.origin(h) == v));
+            assert_eq!(out.len(), if v < 12 { 5 } else { 6 });
+        }
+    }
 }
