@@ -10,6 +10,12 @@
 
 use rayon::prelude::*;
 
+/// Vertices per parallel work item.
+const CHUNK: usize = 4096;
+
+/// The next corner of a triangle.
+const NEXT: [usize; 3] = [1, 2, 0];
+
 /// Vertex-to-vertex adjacency of a triangle mesh, in CSR form.
 #[derive(Clone, Debug, Default)]
 pub struct Adjacency {
@@ -32,56 +38,74 @@ impl Adjacency {
     /// [`Adjacency::from_faces`] reusing the vertex-to-face incidence `vf` of `faces`.
     pub fn from_vertex_faces(faces: &[[u32; 3]], vf: &super::VertexFaces) -> Self {
         let num_vertices = vf.offsets().len().saturating_sub(1);
-        // Each vertex's sorted neighbours with multiplicity (= faces sharing the edge).
-        let ring = |v: usize, buf: &mut Vec<u32>| {
-            buf.clear();
-            for &(f, _) in vf.of(v) {
-                for &w in &faces[f as usize] {
-                    if w as usize != v {
-                        buf.push(w);
-                    }
-                }
-            }
-            buf.sort_unstable();
-        };
-        let valence: Vec<u32> = (0..num_vertices)
+        // Each vertex's neighbours sorted, with multiplicity (= faces sharing the edge), gathered
+        // once per fixed chunk of vertices into the chunk's own arrays.
+        let chunks: Vec<(Vec<u32>, Vec<u16>, Vec<u32>)> = (0..num_vertices.div_ceil(CHUNK))
             .into_par_iter()
-            .map_init(Vec::new, |buf, v| {
-                ring(v, buf);
-                let mut n = buf.len() as u32;
-                for k in 1..buf.len() {
-                    n -= (buf[k] == buf[k - 1]) as u32;
+            .map(|c| {
+                let (v0, v1) = (c * CHUNK, num_vertices.min((c + 1) * CHUNK));
+                let corners = (vf.offsets()[v1] - vf.offsets()[v0]) as usize;
+                let (mut nb, mut ef) = (Vec::with_capacity(corners), Vec::with_capacity(corners));
+                let (mut valence, mut buf) = (Vec::with_capacity(v1 - v0), Vec::new());
+                for v in v0..v1 {
+                    buf.clear();
+                    for &(f, c) in vf.of(v) {
+                        // The other two corners (v is corner c; a face may repeat a vertex).
+                        let f = &faces[f as usize];
+                        for w in [f[NEXT[c as usize]], f[NEXT[NEXT[c as usize]]]] {
+                            if w as usize != v {
+                                buf.push(w);
+                            }
+                        }
+                    }
+                    buf.sort_unstable();
+                    let start = nb.len();
+                    for (m, &w) in buf.iter().enumerate() {
+                        if m > 0 && buf[m - 1] == w {
+                            let last: &mut u16 = ef.last_mut().expect("a neighbour before");
+                            *last = last.saturating_add(1);
+                        } else {
+                            nb.push(w);
+                            ef.push(1u16);
+                        }
+                    }
+                    valence.push((nb.len() - start) as u32);
                 }
-                n
+                (nb, ef, valence)
             })
             .collect();
         let mut offsets = Vec::with_capacity(num_vertices + 1);
         offsets.push(0u32);
-        for v in 0..num_vertices {
-            offsets.push(offsets[v] + valence[v]);
+        for (_, _, valence) in &chunks {
+            for &n in valence {
+                offsets.push(offsets[offsets.len() - 1] + n);
+            }
         }
         let total = offsets[num_vertices] as usize;
         let (mut neighbors, mut edge_faces) = (vec![0u32; total], vec![0u16; total]);
-        par_vertex_slices(&offsets, &mut neighbors, &mut edge_faces, |v, nb, ef, buf| {
-            ring(v, buf);
-            let mut k = 0;
-            for (m, &w) in buf.iter().enumerate() {
-                if m > 0 && buf[m - 1] == w {
-                    ef[k - 1] = ef[k - 1].saturating_add(1);
-                } else {
-                    (nb[k], ef[k]) = (w, 1);
-                    k += 1;
-                }
-            }
+        let mut pieces = Vec::with_capacity(chunks.len());
+        let (mut rest_n, mut rest_e) = (&mut neighbors[..], &mut edge_faces[..]);
+        for chunk in &chunks {
+            let (head_n, tail_n) = std::mem::take(&mut rest_n).split_at_mut(chunk.0.len());
+            let (head_e, tail_e) = std::mem::take(&mut rest_e).split_at_mut(chunk.0.len());
+            pieces.push((chunk, head_n, head_e));
+            (rest_n, rest_e) = (tail_n, tail_e);
+        }
+        pieces.into_par_iter().for_each(|((nb, ef, _), n, e)| {
+            n.copy_from_slice(nb);
+            e.copy_from_slice(ef);
         });
+        drop(chunks);
         let mut adj = Adjacency { offsets, neighbors, edge_faces, reverse: Vec::new() };
+        // Rows by increasing i: the k-th slot towards j met is j's k-th smallest neighbour, i
+        // itself (the adjacency is symmetric and sorted), so one cursor per row gives the slot.
         let mut reverse = vec![0u32; total];
-        let none: &mut [()] = &mut vec![(); total];
-        par_vertex_slices(&adj.offsets, &mut reverse, none, |i, rev, _, _| {
-            for (r, s) in rev.iter_mut().zip(adj.slots(i)) {
-                *r = adj.slot(adj.target(s), i as u32).expect("adjacency is symmetric") as u32;
-            }
-        });
+        let mut cursor = adj.offsets[..num_vertices].to_vec();
+        for (s, r) in reverse.iter_mut().enumerate() {
+            let j = adj.neighbors[s] as usize;
+            *r = cursor[j];
+            cursor[j] += 1;
+        }
         adj.reverse = reverse;
         adj
     }
@@ -191,7 +215,6 @@ fn par_vertex_slices<A: Send, B: Send>(
     b: &mut [B],
     f: impl Fn(usize, &mut [A], &mut [B], &mut Vec<u32>) + Sync,
 ) {
-    const CHUNK: usize = 4096;
     let nv = offsets.len().saturating_sub(1);
     let mut pieces = Vec::with_capacity(nv.div_ceil(CHUNK));
     let (mut rest_a, mut rest_b) = (a, b);
@@ -235,5 +258,26 @@ mod tests {
     fn nonmanifold_fin() {
         let adj = Adjacency::from_faces(5, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]);
         assert_eq!(adj.nonmanifold_edges(), vec![(0, 1)]);
+    }
+
+    #[test]
+    fn icosphere_valences_and_reverse_slots() {
+        // A k-times subdivided icosahedron has 10·4^k + 2 vertices, 30·4^k edges, the 12
+        // original vertices of valence 5 and all others of valence 6.
+        let m = crate::generate::icosphere(1.0, 2);
+        let adj = Adjacency::from_faces(m.num_vertices(), &m.faces);
+        assert_eq!(adj.num_vertices(), 162);
+        assert_eq!(adj.num_edges(), 480);
+        let fives = (0..162).filter(|&i| adj.valence(i) == 5).count();
+        assert_eq!((fives, (0..162).filter(|&i| adj.valence(i) == 6).count()), (12, 150));
+        for i in 0..adj.num_vertices() {
+            assert!(adj.neighbors(i).windows(2).all(|w| w[0] < w[1]));
+            for s in adj.slots(i) {
+                let r = adj.reverse(s);
+                assert!(adj.slots(adj.target(s)).contains(&r));
+                assert_eq!((adj.target(r), adj.reverse(r)), (i, s));
+                assert_eq!(adj.edge_face_count(s), 2);
+            }
+        }
     }
 }
