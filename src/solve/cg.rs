@@ -146,22 +146,7 @@ impl NormalMatrix {
     pub(crate) fn new(rows: &JacobianRows, n: usize) -> Self {
         let (ptr, col) = (&rows.ptr, &rows.col);
         let blocks = ptr.len().saturating_sub(1);
-        let mut cb_ptr = vec![0u32; n + 1];
-        for &c in col.iter() {
-            cb_ptr[c as usize + 1] += 1;
-        }
-        for c in 0..n {
-            cb_ptr[c + 1] += cb_ptr[c];
-        }
-        let mut next = cb_ptr.clone();
-        let mut cb = vec![0u32; col.len()];
-        for b in 0..blocks {
-            for &c in &col[ptr[b] as usize..ptr[b + 1] as usize] {
-                cb[next[c as usize] as usize] = b as u32;
-                next[c as usize] += 1;
-            }
-        }
-        drop(next);
+        let (cb_ptr, cb) = rows.blocks_by_column(n);
         // Row c's columns: every column of every block holding c, gathered with a marker (one
         // per chunk of rows; a row's marks are its own index, so the marker is never reset).
         let parts: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(ROWS_PER_CHUNK))
@@ -299,6 +284,29 @@ impl NormalMatrix {
 }
 
 impl JacobianRows {
+    /// For each of the `n` columns, the row blocks that hold it, ascending (a block that lists
+    /// a column twice appears twice), by a counting sort: column c's blocks are
+    /// `cb[cb_ptr[c]..cb_ptr[c + 1]]`. Returns `(cb_ptr, cb)`.
+    pub(crate) fn blocks_by_column(&self, n: usize) -> (Vec<u32>, Vec<u32>) {
+        let (ptr, col) = (&self.ptr, &self.col);
+        let mut cb_ptr = vec![0u32; n + 1];
+        for &c in col.iter() {
+            cb_ptr[c as usize + 1] += 1;
+        }
+        for c in 0..n {
+            cb_ptr[c + 1] += cb_ptr[c];
+        }
+        let mut next = cb_ptr.clone();
+        let mut cb = vec![0u32; col.len()];
+        for b in 0..ptr.len().saturating_sub(1) {
+            for &c in &col[ptr[b] as usize..ptr[b + 1] as usize] {
+                cb[next[c as usize] as usize] = b as u32;
+                next[c as usize] += 1;
+            }
+        }
+        (cb_ptr, cb)
+    }
+
     pub(crate) fn append(&mut self, other: &JacobianRows) {
         let base = self.col.len() as u32;
         if self.ptr.is_empty() {

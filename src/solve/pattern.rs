@@ -78,21 +78,7 @@ impl DirectSystem {
         let blocks = ptr.len().saturating_sub(1);
         let range = |b: usize| ptr[b] as usize..ptr[b + 1] as usize;
         // Column → the row blocks that hold it (counting sort, blocks ascending).
-        let mut cb_ptr = vec![0usize; n + 1];
-        for &c in col {
-            cb_ptr[c as usize + 1] += 1;
-        }
-        for c in 0..n {
-            cb_ptr[c + 1] += cb_ptr[c];
-        }
-        let mut next = cb_ptr.clone();
-        let mut cb = vec![0u32; col.len()];
-        for b in 0..blocks {
-            for &c in &col[range(b)] {
-                cb[next[c as usize]] = b as u32;
-                next[c as usize] += 1;
-            }
-        }
+        let (cb_ptr, cb) = rows.blocks_by_column(n);
         // Lower triangle of JᵀJ in the original numbering (diagonal always present): the
         // columns sharing a row block, gathered with a marker.
         let mut mark = vec![usize::MAX; n];
@@ -103,7 +89,7 @@ impl DirectSystem {
             let start = li.len();
             mark[c] = c;
             li.push(c);
-            for &b in &cb[cb_ptr[c]..cb_ptr[c + 1]] {
+            for &b in &cb[cb_ptr[c] as usize..cb_ptr[c + 1] as usize] {
                 for &a in &col[range(b as usize)] {
                     let a = a as usize;
                     if a > c && mark[a] != c {
