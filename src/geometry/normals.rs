@@ -39,21 +39,9 @@ pub enum NormalSource {
 /// whose faces all have zero area): +Z. Such vertices are counted by [`vertex_normals`].
 pub const FALLBACK_NORMAL: Vector3<f64> = Vector3::new(0.0, 0.0, 1.0);
 
-/// Unit face normals (zero vector for a zero-area face).
+/// Unit face normals (zero vector for a zero-area face): the normals of [`face_data`].
 pub fn face_normals(mesh: &Mesh) -> Vec<Vector3<f64>> {
-    (0..mesh.num_faces())
-        .into_par_iter()
-        .map(|f| {
-            let [a, b, c] = mesh.face_positions(f);
-            let n = (b - a).cross(&(c - a));
-            let len = n.norm();
-            if len > 0.0 && len.is_finite() {
-                n / len
-            } else {
-                Vector3::zeros()
-            }
-        })
-        .collect()
+    face_data(mesh).into_iter().map(|f| f.normal).collect()
 }
 
 /// A face's unit normal (zero for a zero-area face) and its interior angles at its three
