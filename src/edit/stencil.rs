@@ -120,8 +120,9 @@ pub(crate) fn apply(
     }
     for &i in inside.iter().chain(&band) {
         if !st.critical[i] {
-            let ell = st.ell[i];
+            let (ell, g) = (st.ell[i], st.g[i]);
             st.set_target(i, ell, e.weight);
+            st.set_target_g(i, g, e.weight);
         }
         st.support[i] = true;
     }
