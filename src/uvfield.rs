@@ -68,7 +68,10 @@ impl UvFieldOptions {
         if !(self.degenerate_ratio.is_finite() && (0.0..=1e-3).contains(&self.degenerate_ratio)) {
             return Err(Error::setting(
                 "degenerate_ratio",
-                format!("must be in [0, 1e-3], got {}", self.degenerate_ratio),
+                format!(
+                    "must be in [0, 1e-3], got {}",
+                    crate::error::fmt_num(self.degenerate_ratio)
+                ),
             ));
         }
         Ok(())
@@ -615,10 +618,13 @@ pub fn toolpath_error(e: ToolpathError) -> Error {
             } else {
                 name.to_string()
             };
-            Error::setting(key, format!("{reason}, got {value}"))
+            Error::setting(key, format!("{reason}, got {}", crate::error::fmt_num(value)))
         }
-        e @ (ToolpathError::OutsideEnvelope { .. } | ToolpathError::BelowFloor { .. }) => {
+        e @ ToolpathError::OutsideEnvelope { .. } => {
             Error::setting("gcode_options.envelope", e.to_string())
+        }
+        e @ ToolpathError::BelowFloor { .. } => {
+            Error::setting("gcode_options.z_floor", e.to_string())
         }
         e @ ToolpathError::TiltExceeded { .. } => {
             Error::setting("plan.z_mode.max_tilt_deg", e.to_string())

@@ -88,7 +88,7 @@ impl CurveEdit {
         if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance <= 0.1) {
             return Err(Error::setting(
                 "tolerance",
-                format!("must be within (0, 0.1], got {}", self.tolerance),
+                format!("must be within (0, 0.1], got {}", crate::error::fmt_num(self.tolerance)),
             ));
         }
         if let Some(w) = self.width {

@@ -516,7 +516,10 @@ fn at_edit(k: usize, tool: &str, err: Error) -> Error {
 /// A weight must be finite and ≥ 0.
 pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
     if !(w.is_finite() && w >= 0.0) {
-        return Err(Error::setting(key, format!("must be a finite number ≥ 0, got {w}")));
+        return Err(Error::setting(
+            key,
+            format!("must be a finite number ≥ 0, got {}", crate::error::fmt_num(w)),
+        ));
     }
     Ok(())
 }
@@ -524,7 +527,10 @@ pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
 /// A radius must be finite and > 0.
 pub(crate) fn check_radius(key: &str, r: f64) -> Result<()> {
     if !(r.is_finite() && r > 0.0) {
-        return Err(Error::setting(key, format!("must be a finite number > 0, got {r}")));
+        return Err(Error::setting(
+            key,
+            format!("must be a finite number > 0, got {}", crate::error::fmt_num(r)),
+        ));
     }
     Ok(())
 }

@@ -346,9 +346,13 @@ impl Support {
             return Err(Error::setting(
                 "radius",
                 format!(
-                    "the support holds no vertex: no vertex is within {radius} of the centre \
-                     ({:?} distance); increase the radius or move the centre",
-                    metric
+                    "the support holds no vertex: no vertex is within {} of the centre \
+                     ({} distance); increase the radius or move the centre",
+                    crate::error::fmt_num(radius),
+                    match metric {
+                        Metric::Geodesic => "geodesic",
+                        Metric::Euclidean => "euclidean",
+                    }
                 ),
             ));
         }

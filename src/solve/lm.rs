@@ -122,6 +122,20 @@ pub enum StopReason {
     NothingToSolve,
 }
 
+impl std::fmt::Display for StopReason {
+    /// The name the reports use (`relative-decrease`, `gradient`, `iteration-cap`,
+    /// `no-progress`, `nothing-to-solve`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StopReason::RelativeDecrease => "relative-decrease",
+            StopReason::Gradient => "gradient",
+            StopReason::IterationCap => "iteration-cap",
+            StopReason::NoProgress => "no-progress",
+            StopReason::NothingToSolve => "nothing-to-solve",
+        })
+    }
+}
+
 /// The energy of each stacked term.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Energies {

@@ -43,7 +43,7 @@ pub enum ToolpathError {
     /// The program would move outside the configured machine envelope.
     #[error(
         "{axis} = {value:.3} mm leaves the machine envelope [{min:.3}, {max:.3}] mm by {by:.3} mm \
-         (stroke {stroke:?})"
+         ({})", move_of(*.stroke)
     )]
     OutsideEnvelope {
         /// Axis name (`X`, `Y` or `Z`).
@@ -61,7 +61,7 @@ pub enum ToolpathError {
     },
     /// The program would drive the tool below the Z floor.
     #[error(
-        "Z = {z:.3} mm goes below the Z floor {floor:.3} mm by {by:.3} mm (stroke {stroke:?})"
+        "Z = {z:.3} mm goes below the Z floor {floor:.3} mm by {by:.3} mm ({})", move_of(*.stroke)
     )]
     BelowFloor {
         /// Offending Z.
@@ -97,6 +97,14 @@ pub enum ToolpathError {
     /// A broken internal invariant; a bug in this crate.
     #[error("internal error: {0}")]
     Internal(String),
+}
+
+/// Where a move belongs, for messages: `stroke 3`, or a travel move.
+fn move_of(stroke: Option<usize>) -> String {
+    match stroke {
+        Some(i) => format!("stroke {i}"),
+        None => "a travel move".into(),
+    }
 }
 
 /// Result alias for this crate.
