@@ -37,6 +37,11 @@ fn panel_curve() {
 }
 
 #[test]
+fn dome_bend() {
+    run_example("dome", &["out/dome.svg", "out/dome.ngc", "out/dome.png"]);
+}
+
+#[test]
 fn light_tool() {
     run_example("light", &["out/light.svg", "out/light.ngc", "out/light.png"]);
 }
