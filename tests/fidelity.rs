@@ -10,8 +10,8 @@ use std::process::Command;
 use grainline::edit::{apply_edits, Centre, CurveEdit, Edit, EditInput, EditOptions, Metric};
 use grainline::edit::{WarpEdit, WarpKind};
 use grainline::fidelity::{
-    edit_fidelity, highlight_segments, lift_uv_polylines, EditFidelity, EditShape,
-    FidelityOptions, MAX_DISTANCE,
+    edit_fidelity, highlight_segments, lift_uv_polylines, EditFidelity, EditShape, FidelityOptions,
+    MAX_DISTANCE,
 };
 use grainline::generate::{self, Grid};
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
@@ -31,8 +31,9 @@ impl Plane {
     fn new() -> Self {
         let mesh = generate::plane(1.5, Grid::new(120, 120));
         let geom = Geometry::compute(&mesh, &GeometryOptions::default());
-        let h = (Vector3::new(0.3, -0.5, 1.0).normalize() + Vector3::new(0.0, -0.2, 1.0).normalize())
-            .normalize();
+        let h = (Vector3::new(0.3, -0.5, 1.0).normalize()
+            + Vector3::new(0.0, -0.2, 1.0).normalize())
+        .normalize();
         Plane { mesh, geom, h }
     }
 
@@ -154,9 +155,13 @@ fn segments_lie_on_the_known_circle_and_cover_it() {
 fn a_field_on_the_warped_line_lands() {
     let pl = Plane::new();
     let before = pl.field(|_, y| y - C);
-    for (kind, target) in
-        [(WarpKind::Bend, bent_line as fn(f64) -> f64), (WarpKind::Expand, expanded_line)]
-    {
+    // The largest displacement of the line: S(1 − C²)²/2 times 1 (bend) or g(C) (expand).
+    let g = C.sin() / (C.sin().powi(2) + 0.02f64.powi(2)).powf(0.25);
+    let most = S * (1.0 - C * C).powi(2) / 2.0;
+    for (kind, target, most) in [
+        (WarpKind::Bend, bent_line as fn(f64) -> f64, most),
+        (WarpKind::Expand, expanded_line, most * g),
+    ] {
         let after = pl.field(|x, y| y - target(x));
         let shape = warp(kind, S, pl.within(1.0, Vector2::zeros()));
         let f = pl.fidelity(Symmetry::Oriented, &before, &after, &shape);
@@ -167,9 +172,11 @@ fn a_field_on_the_warped_line_lands() {
         assert!(f.p95 < 0.005, "{kind:?}: {f:?}");
         assert_eq!((f.singular_before, f.singular_after), (0, 0));
         assert!(f.landed && f.note.is_none(), "{kind:?}: {f:?}");
-        // The unwarped line is not the target: the bend moves it by up to S/2 = 0.4.
+        // The unwarped line is not the target: the warp moves it by up to `most` (0.39 for
+        // the bend, 0.12 for the expand).
         let f = pl.fidelity(Symmetry::Oriented, &before, &before, &shape);
-        assert!(!f.landed && f.within < 0.5 && f.p95 > 0.2, "{kind:?}: {f:?}");
+        assert!(!f.landed && f.within < 0.5, "{kind:?}: {f:?}");
+        assert!(f.p95 > 0.7 * most && f.p95 < most + 0.005, "{kind:?} {most}: {f:?}");
         assert!(f.note.as_deref().unwrap().contains("within"), "{f:?}");
     }
 }
@@ -277,9 +284,15 @@ fn an_index_one_singularity_inside_the_support_is_counted() {
     for symmetry in [Symmetry::Oriented, Symmetry::Line] {
         let inside = radial(Vector2::new(0.0131, 0.0072));
         let f = pl.fidelity(symmetry, &before, &inside, &shape);
-        assert_eq!((f.singular_before, f.singular_after), (0, 1), "{symmetry:?}: {f:?}");
+        // Oriented: one face of index 1. A line field wraps differences to (−90°, 90°], and
+        // the face around p₀ spans more than 90° between two corners: the +1 then shows as two
+        // adjacent +½ faces.
+        let expected = if symmetry == Symmetry::Oriented { 1..=1 } else { 1..=2 };
+        assert_eq!(f.singular_before, 0, "{symmetry:?}: {f:?}");
+        assert!(expected.contains(&f.singular_after), "{symmetry:?}: {f:?}");
         assert!(!f.landed);
-        assert!(f.note.as_deref().unwrap().contains("singular triangles 0 → 1"), "{f:?}");
+        let note = format!("singular triangles 0 → {}", f.singular_after);
+        assert!(f.note.as_deref().unwrap().contains(&note), "{f:?}");
         let outside = radial(Vector2::new(0.9131, 0.0072));
         let f = pl.fidelity(symmetry, &before, &outside, &shape);
         assert_eq!((f.singular_before, f.singular_after), (0, 0), "{symmetry:?}: {f:?}");
@@ -326,7 +339,16 @@ fn nothing_to_compare_gives_a_note_and_no_nan() {
     assert!(e.is_err());
     let bad = FidelityOptions { tolerance: f64::NAN, ..FidelityOptions::default() };
     let e = edit_fidelity(
-        &pl.mesh, &pl.geom, &pl.hs(), Symmetry::Line, &line, &line, 0, "bend", &shape, &bad,
+        &pl.mesh,
+        &pl.geom,
+        &pl.hs(),
+        Symmetry::Line,
+        &line,
+        &line,
+        0,
+        "bend",
+        &shape,
+        &bad,
     );
     assert!(e.is_err());
 }
@@ -481,7 +503,8 @@ fn reports_carry_the_figures_and_the_cli_warns_about_misses() {
         }
         let within = f["within"].as_f64().unwrap();
         let p95 = f["p95"].as_f64().unwrap();
-        let (sb, sa) = (f["singular_before"].as_u64().unwrap(), f["singular_after"].as_u64().unwrap());
+        let (sb, sa) =
+            (f["singular_before"].as_u64().unwrap(), f["singular_after"].as_u64().unwrap());
         let landed = f["samples"].as_u64().unwrap() > 0 && within >= 0.9 && p95 <= 0.10 && sa <= sb;
         assert_eq!(f["landed"].as_bool().unwrap(), landed, "{f}");
         let head = format!("edit [{}] ({})", f["index"], f["tool"].as_str().unwrap());
