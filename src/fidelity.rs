@@ -32,6 +32,9 @@
 //! before and after. An edit has *landed* when within ≥ [`GOAL_WITHIN`], p95 ≤ [`GOAL_P95`]
 //! and it added no singular triangle.
 
+// `!(x > 0.0)` is how the measure rejects NaN along with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::collections::HashMap;
 
 use nalgebra::{Vector2, Vector3};

@@ -239,7 +239,7 @@ fn line_field_sign_flips_do_not_change_the_figures() {
         u.iter()
             .map(|v| {
                 state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                if (state >> 33) % 3 == 0 {
+                if (state >> 33).is_multiple_of(3) {
                     -v
                 } else {
                     *v
