@@ -55,6 +55,9 @@ impl grainline::pipeline::Observer for Stages {
 /// the wanted ℓ, a solve that made no progress.
 pub fn warn_about(report: &grainline::pipeline::optimize::OptimizeStageReport) {
     for e in &report.edits {
+        for note in &e.notes {
+            eprintln!("grainline: warning: edit [{}] ({}): {note}", e.index, e.tool);
+        }
         if let Some(err) = e.angle_error_deg.filter(|&a| a > 5.0) {
             eprintln!(
                 "grainline: warning: edit [{}] ({}): the best light reaches the wanted highlight \
@@ -73,9 +76,43 @@ pub fn warn_about(report: &grainline::pipeline::optimize::OptimizeStageReport) {
     {
         eprintln!(
             "grainline: warning: the solver made no step ({}): where the grain is constant \
-             on a flat region ℓ = 0 and the highlight energy has no gradient; start from a \
-             varying field (e.g. a stencil) there",
+             on a flat region ℓ = 0 and the tensor energy has no gradient; use \
+             `solver.highlight_energy: \"position\"` (the default)",
             s.stop
         );
     }
+}
+
+/// One warning per edit that did not land (issue 13's fidelity measure, src/fidelity.rs): the
+/// share of the target highlight within tolerance, the 95th-percentile distance and the singular
+/// triangles before and after, or why the edit could not be measured. Printed unless `--quiet`.
+pub fn warn_missed(report: &grainline::pipeline::optimize::OptimizeStageReport) {
+    for line in missed_lines(&report.fidelity) {
+        eprintln!("{line}");
+    }
+}
+
+/// The warning lines of [`warn_missed`].
+pub fn missed_lines(fidelity: &[grainline::fidelity::EditFidelity]) -> Vec<String> {
+    let tolerance = grainline::fidelity::FidelityOptions::default().tolerance;
+    fidelity
+        .iter()
+        .filter(|f| !f.landed)
+        .map(|f| {
+            let head = format!("grainline: warning: edit [{}] ({})", f.index, f.tool);
+            if f.samples == 0 {
+                let why = f.note.as_deref().unwrap_or("nothing to compare");
+                return format!("{head} could not be measured: {why}");
+            }
+            format!(
+                "{head} missed: {:.0} % of the target highlight within {tolerance} r (goal {:.0} \
+                 %), p95 {:.2} r, singular triangles {} → {}",
+                100.0 * f.within,
+                100.0 * grainline::fidelity::GOAL_WITHIN,
+                f.p95,
+                f.singular_before,
+                f.singular_after
+            )
+        })
+        .collect()
 }

@@ -44,6 +44,9 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     drop(spinner);
     if let Some(o) = &report.optimize {
         super::progress::warn_about(o);
+        if !quiet {
+            super::progress::warn_missed(o);
+        }
     }
     if !quiet {
         for o in &report.outputs {

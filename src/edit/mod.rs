@@ -210,6 +210,9 @@ pub struct EditReport {
     /// critical points in the support, a warp reaching beyond the part's boundary.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
+    /// What the edit asked for (bend, expand, curve), for [`crate::fidelity`].
+    #[serde(skip)]
+    pub shape: Option<crate::fidelity::EditShape>,
 }
 
 impl EditReport {

@@ -238,6 +238,7 @@ pub(crate) fn apply(
              highlight"
         ));
     }
+    report.shape = Some(crate::fidelity::warp_shape(kind, e.strength, &support));
     Ok(())
 }
 
