@@ -1,0 +1,1059 @@
+//! The acceptance corpus of issue 13 ("Edits that land"), shared by `tests/edit_fidelity.rs`
+//! and `examples/bench_fidelity.rs` (which includes this file with `#[path]`).
+//!
+//! - **Parts**: generated millimetre parts (a kettle-like body of revolution, a gently doubly
+//!   curved panel, a flat sheet seen by a near eye, and each with a 0.15 mm ripple of 8 mm
+//!   wavelength) and the meshes of `../shared/meshes` that have smooth regions, scaled to a
+//!   200 mm bounding-box diagonal.
+//! - **Lighting** (deterministic, from the part's bounding box; nothing tuned per edit): the
+//!   generated parts have a fixed eye and key light per family; a shared mesh is seen from its
+//!   thinnest bounding-box axis a₃ tilted towards the middle one a₂ (eye 1.5 diagonals away), lit
+//!   from a₃ + a₂, with the initial field along its longest axis a₁ (or its UVs). Then the key
+//!   highlight C0 = {hᵀu = 0} runs across the part's front.
+//! - **Placement** ([`place`]): C0 is chained into polylines; a *stretch* is a run of C0 facing
+//!   the eye, turning by less than 30° per segment, and at least one warp radius away from
+//!   boundaries, critical points, creases (dihedral > 45°) and the initial field's singular
+//!   triangles. On the longest stretch the brush centre is the point with the largest clearance
+//!   (capped at half the curve's length), preferring the middle. Bend and expand: strength 0.8,
+//!   radius 6 % of the diagonal, centred there, pushing across C0. Curve: an S-curve 25 % of the
+//!   diagonal long through the centre, crossing C0 at about 50°, radius 2 % of the diagonal, traced
+//!   on the surface as a 3D polyline.
+//! - **Measure**: [`highlight_segments`] and [`measure`] are stand-ins with the signatures of
+//!   `grainline::fidelity` (docs: the fidelity API), used until that module lands.
+#![allow(dead_code)]
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use grainline::edit::support::closest_point_on_triangle;
+use grainline::edit::{Centre, CurveEdit, Edit, Metric, WarpEdit, WarpKind};
+use grainline::generate::{curved_panel, kettle_body, Ripple};
+use grainline::geometry::Geometry;
+use grainline::highlight::Symmetry;
+use grainline::mesh::Mesh;
+use grainline::pipeline::optimize::optimize_stage;
+use grainline::pipeline::{prepare, Prepared, Silent, Stages};
+use grainline::scene::{LoadedScene, Scene};
+use grainline::solve::SolverSettings;
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+type V3 = Vector3<f64>;
+
+/// Warp brush radius, share of the bounding-box diagonal.
+pub const WARP_RADIUS: f64 = 0.06;
+/// Warp strength.
+pub const WARP_STRENGTH: f64 = 0.8;
+/// Curve length, share of the diagonal.
+pub const CURVE_LENGTH: f64 = 0.25;
+/// Curve brush radius, share of the diagonal.
+pub const CURVE_RADIUS: f64 = 0.02;
+
+/// How fine the generated parts are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Size {
+    /// 20k–60k vertices (the benchmark).
+    Full,
+    /// 5k–10k vertices (the test).
+    Small,
+}
+
+/// The initial field of a case.
+#[derive(Clone, Copy, Debug)]
+pub enum Init {
+    /// The part's UVs (`field.init: "uv"`).
+    Uv,
+    /// A world direction (`field.init: "world"`).
+    World(V3),
+}
+
+/// One part of the corpus with its lighting.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// Short name (the table's first column).
+    pub name: String,
+    /// The OBJ file.
+    pub obj: PathBuf,
+    /// `mesh.scale`.
+    pub scale: f64,
+    /// `mesh.weld`.
+    pub weld: Option<f64>,
+    /// The initial field.
+    pub init: Init,
+    /// The eye (scene units, after scaling).
+    pub eye: V3,
+    /// The point looked at.
+    pub target: V3,
+    /// Direction towards the key light.
+    pub light: V3,
+}
+
+/// A directory for the generated OBJ files (one per process).
+pub fn scratch_dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("grainline-corpus-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&d);
+    d
+}
+
+fn write_obj(mesh: &Mesh, name: &str) -> Result<PathBuf, String> {
+    let p = scratch_dir().join(format!("{name}.obj"));
+    std::fs::write(&p, grainline::mesh::write::obj_string(mesh, name))
+        .map_err(|e| format!("{}: {e}", p.display()))?;
+    Ok(p)
+}
+
+/// The generated parts: `body`, `panel`, `sheet` and their rippled variants `*-ripple`.
+pub fn generated_cases(size: Size, names: Option<&[String]>) -> Result<Vec<Case>, String> {
+    let wanted = |n: &str| names.is_none_or(|l| l.iter().any(|x| x == n));
+    let (around, profile, nx, ny) = match size {
+        Size::Full => (200, 200, 240, 180),
+        Size::Small => (80, 80, 100, 75),
+    };
+    let mut out = Vec::new();
+    for ripple in [None, Some(Ripple::CORPUS)] {
+        let tail = if ripple.is_some() { "-ripple" } else { "" };
+        // The body of revolution, UV field around it; eye in front, light above right.
+        let name = format!("body{tail}");
+        if wanted(&name) {
+            let mesh = kettle_body(around, profile, ripple);
+            out.push(Case {
+                obj: write_obj(&mesh, &name)?,
+                name,
+                scale: 1.0,
+                weld: None,
+                init: Init::Uv,
+                eye: V3::new(0.0, -420.0, 170.0),
+                target: V3::new(0.0, 0.0, 90.0),
+                light: V3::new(0.35, -0.6, 0.7),
+            });
+        }
+        // Panel and sheet: 200 × 150 mm, UV field along x, light from the front, eye 600 mm
+        // (panel) or 300 mm (sheet) away. On the panel the grain tilts with the slope x/R;
+        // seen from 300 mm that tilt cancels the view's change across the part and hᵀu has no
+        // zero on it (the highlight is off the panel), from 600 mm it is at x ≈ −26 mm.
+        for (base, r, eye) in [
+            ("panel", (600.0, 400.0), V3::new(21.0, -300.0, 520.0)),
+            ("sheet", (f64::INFINITY, f64::INFINITY), V3::new(21.0, -150.0, 260.0)),
+        ] {
+            let name = format!("{base}{tail}");
+            if wanted(&name) {
+                let mesh = curved_panel(200.0, 150.0, r.0, r.1, nx, ny, ripple);
+                out.push(Case {
+                    obj: write_obj(&mesh, &name)?,
+                    name,
+                    scale: 1.0,
+                    weld: None,
+                    init: Init::Uv,
+                    eye,
+                    target: V3::zeros(),
+                    light: V3::new(0.0, -0.35, 1.0),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The shared meshes of the corpus (file, whether it has UVs, weld distance in file units).
+pub const SHARED: [(&str, bool, Option<f64>); 6] = [
+    ("spot_triangulated.obj", true, None),
+    ("blub_quadrangulated.obj", true, None),
+    ("stanford-bunny.obj", false, None),
+    ("fandisk.obj", false, None),
+    ("rocker-arm.obj", false, None),
+    ("teapot.obj", false, Some(1e-6)),
+];
+
+/// `../shared/meshes` (or `$GRAINLINE_SHARED/meshes`), if present.
+pub fn shared_dir() -> Option<PathBuf> {
+    let root = std::env::var_os("GRAINLINE_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let d = root.join("meshes");
+    d.exists().then_some(d)
+}
+
+/// The shared meshes' cases (scaled to a 200 mm diagonal); a message when `../shared` is absent.
+pub fn shared_cases(names: Option<&[String]>) -> Result<Vec<Case>, String> {
+    let Some(dir) = shared_dir() else {
+        eprintln!("skipping the shared meshes: ../shared/meshes not found (set GRAINLINE_SHARED)");
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for (file, uv, weld) in SHARED {
+        let name = file.split(['_', '.']).next().unwrap_or(file).to_string();
+        let name = name.strip_prefix("stanford-").unwrap_or(&name).to_string();
+        if !names.is_none_or(|l| l.iter().any(|x| *x == name)) {
+            continue;
+        }
+        let path = dir.join(file);
+        let options = grainline::mesh::load::LoadOptions { weld, ..Default::default() };
+        let mesh = grainline::mesh::load::load_obj(&path, &options)
+            .map_err(|e| format!("{name}: {e}"))?
+            .mesh;
+        let (lo, hi) = bbox(&mesh.positions);
+        let scale = 200.0 / (hi - lo).norm();
+        let (lo, hi) = (lo * scale, hi * scale);
+        let (c, ext) = ((lo + hi) * 0.5, hi - lo);
+        let mut axes = [0usize, 1, 2];
+        axes.sort_by(|&a, &b| ext[b].total_cmp(&ext[a]).then(a.cmp(&b)));
+        let unit = |k: usize| {
+            let mut v = V3::zeros();
+            v[k] = 1.0;
+            v
+        };
+        let (a1, a2, a3) = (unit(axes[0]), unit(axes[1]), unit(axes[2]));
+        let view = (a3 + 0.3 * a2).normalize();
+        out.push(Case {
+            name,
+            obj: path,
+            scale,
+            weld,
+            init: if uv { Init::Uv } else { Init::World(a1) },
+            eye: c + 300.0 * view,
+            target: c,
+            light: (a3 + a2).normalize(),
+        });
+    }
+    Ok(out)
+}
+
+/// The scene of a case, without edits.
+pub fn scene(case: &Case) -> Result<LoadedScene, String> {
+    let arr = |v: &V3| [v.x, v.y, v.z];
+    let mut mesh =
+        serde_json::json!({ "path": case.obj.display().to_string(), "scale": case.scale });
+    if let Some(w) = case.weld {
+        mesh["weld"] = w.into();
+    }
+    let field = match case.init {
+        Init::Uv => serde_json::json!({ "init": "uv", "symmetry": "line" }),
+        Init::World(d) => {
+            serde_json::json!({ "init": "world", "world": arr(&d), "symmetry": "line" })
+        }
+    };
+    let json = serde_json::json!({
+        "mesh": mesh,
+        "units": "mm",
+        "lights": [{ "type": "directional", "key": true, "direction": arr(&case.light) }],
+        "view": { "eye": arr(&case.eye), "target": arr(&case.target) },
+        "field": field,
+    });
+    let path = scratch_dir().join(format!("{}.json", case.name));
+    let scene = Scene::from_str(&json.to_string(), &path).map_err(|e| e.to_string())?;
+    Ok(LoadedScene { base: scratch_dir(), path, scene })
+}
+
+/// The solver settings for an energy: `Ok(None)` when this build's scene loader does not know
+/// `solver.highlight_energy` and the energy is not today's ("tensor").
+pub fn solver_settings(energy: &str) -> Result<Option<(SolverSettings, bool)>, String> {
+    match serde_json::from_value::<SolverSettings>(
+        serde_json::json!({ "highlight_energy": energy }),
+    ) {
+        Ok(s) => Ok(Some((s, true))),
+        Err(e) if e.to_string().contains("unknown field") => {
+            Ok((energy == "tensor").then(|| (SolverSettings::default(), false)))
+        }
+        Err(e) => Err(format!("solver.highlight_energy = {energy:?}: {e}")),
+    }
+}
+
+fn bbox(p: &[V3]) -> (V3, V3) {
+    let mut lo = V3::repeat(f64::INFINITY);
+    let mut hi = V3::repeat(f64::NEG_INFINITY);
+    for q in p {
+        lo = lo.inf(q);
+        hi = hi.sup(q);
+    }
+    (lo, hi)
+}
+
+// ---------------------------------------------------------------------------------------------
+// The highlight C0 (stand-in for grainline::fidelity::highlight_segments)
+
+/// Zero set of g = hᵀu per triangle (linear interpolation of g at the corners; line fields:
+/// corners aligned to the first corner's direction first). World-space segments.
+pub fn highlight_segments(mesh: &Mesh, h: &[V3], u: &[V3], symmetry: Symmetry) -> Vec<[V3; 2]> {
+    face_segments(mesh, mesh.faces.iter(), h, u, symmetry)
+}
+
+fn face_segments<'a>(
+    mesh: &Mesh,
+    faces: impl Iterator<Item = &'a [u32; 3]>,
+    h: &[V3],
+    u: &[V3],
+    symmetry: Symmetry,
+) -> Vec<[V3; 2]> {
+    let mut out = Vec::new();
+    for f in faces {
+        let idx = f.map(|i| i as usize);
+        let mut dirs = idx.map(|i| u[i]);
+        if symmetry == Symmetry::Line {
+            for k in 1..3 {
+                if dirs[k].dot(&dirs[0]) < 0.0 {
+                    dirs[k] = -dirs[k];
+                }
+            }
+        }
+        let g: [f64; 3] = std::array::from_fn(|k| h[idx[k]].dot(&dirs[k]));
+        let mut pts = Vec::with_capacity(2);
+        for k in 0..3 {
+            let (a, b) = (k, (k + 1) % 3);
+            let (ga, gb) = (g[a], g[b]);
+            if (ga < 0.0) != (gb < 0.0) && ga != gb {
+                let t = ga / (ga - gb);
+                let (pa, pb) = (mesh.positions[idx[a]], mesh.positions[idx[b]]);
+                pts.push(pa + (pb - pa) * t);
+            }
+        }
+        if pts.len() == 2 && pts.iter().all(|p| p.iter().all(|c| c.is_finite())) {
+            out.push([pts[0], pts[1]]);
+        }
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Placement
+
+/// Where the corpus puts a case's edits.
+#[derive(Clone, Debug)]
+pub struct Placement {
+    /// Brush centre (on C0, on the surface).
+    pub point: V3,
+    /// Unit tangent of C0 there.
+    pub along: V3,
+    /// Unit tangent across C0 (normal × along): the warps' `direction`.
+    pub across: V3,
+    /// Unit surface normal there.
+    pub normal: V3,
+    /// The part's bounding-box diagonal.
+    pub diag: f64,
+    /// Distance from the centre to the nearest boundary / critical point / crease / singularity
+    /// (capped at half the curve's length).
+    pub clearance: f64,
+    /// Length of the chosen stretch of C0.
+    pub stretch: f64,
+    /// Segments of C0.
+    pub c0_segments: usize,
+    /// The curve edit's polyline (on the surface).
+    pub curve: Vec<V3>,
+}
+
+/// Points to stay away from: boundary vertices, critical points, crease vertices (dihedral
+/// angle above 45°) and the centroids of the initial field's singular triangles.
+fn obstacles(mesh: &Mesh, p: &Prepared) -> Vec<V3> {
+    let pos = &mesh.positions;
+    let fn_: Vec<V3> = mesh
+        .faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|i| pos[i as usize]);
+            (b - a).cross(&(c - a)).try_normalize(0.0).unwrap_or_else(V3::zeros)
+        })
+        .collect();
+    let mut edges: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (fi, f) in mesh.faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            edges.entry((a.min(b), a.max(b))).or_default().push(fi);
+        }
+    }
+    let mut bad = vec![false; pos.len()];
+    let cos45 = std::f64::consts::FRAC_1_SQRT_2;
+    for (&(a, b), fs) in &edges {
+        let sharp = fs.len() != 2 || fn_[fs[0]].dot(&fn_[fs[1]]) < cos45;
+        if sharp {
+            bad[a as usize] = true;
+            bad[b as usize] = true;
+        }
+    }
+    for (i, &c) in p.field.critical.iter().enumerate() {
+        bad[i] |= c;
+    }
+    let mut out: Vec<V3> = (0..pos.len()).filter(|&i| bad[i]).map(|i| pos[i]).collect();
+    let k = p.field_options.symmetry.k();
+    for s in grainline::solve::singularities(mesh, &p.field.geometry, &p.field.phi, k) {
+        out.push(V3::from(s.position));
+    }
+    out
+}
+
+/// Nearest-obstacle distances, capped (a uniform grid of cell `cap`).
+struct Clearance {
+    cell: f64,
+    grid: HashMap<[i64; 3], Vec<V3>>,
+}
+
+impl Clearance {
+    fn new(points: &[V3], cap: f64) -> Self {
+        let mut grid: HashMap<[i64; 3], Vec<V3>> = HashMap::new();
+        for p in points {
+            grid.entry(Self::key(p, cap)).or_default().push(*p);
+        }
+        Clearance { cell: cap, grid }
+    }
+
+    fn key(p: &V3, cell: f64) -> [i64; 3] {
+        [(p.x / cell).floor() as i64, (p.y / cell).floor() as i64, (p.z / cell).floor() as i64]
+    }
+
+    fn at(&self, p: &V3) -> f64 {
+        let k = Self::key(p, self.cell);
+        let mut best = self.cell;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = self.grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        for q in v {
+                            best = best.min((q - p).norm());
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Chains segments into polylines by their shared end points (within `eps`).
+fn chain(segments: &[[V3; 2]], eps: f64) -> Vec<Vec<V3>> {
+    let key = |p: &V3| {
+        [(p.x / eps).round() as i64, (p.y / eps).round() as i64, (p.z / eps).round() as i64]
+    };
+    let mut at: HashMap<[i64; 3], Vec<(usize, usize)>> = HashMap::new();
+    for (i, s) in segments.iter().enumerate() {
+        for (e, p) in s.iter().enumerate() {
+            at.entry(key(p)).or_default().push((i, e));
+        }
+    }
+    let neighbour = |i: usize, e: usize, used: &[bool]| -> Option<(usize, usize)> {
+        let k = key(&segments[i][e]);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = at.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        for &(j, f) in v {
+                            if j != i && !used[j] && (segments[j][f] - segments[i][e]).norm() <= eps
+                            {
+                                return Some((j, f));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        None
+    };
+    let mut used = vec![false; segments.len()];
+    let mut lines = Vec::new();
+    for start in 0..segments.len() {
+        if used[start] {
+            continue;
+        }
+        used[start] = true;
+        // Walk forward from end 1, then backward from end 0.
+        let mut fwd = vec![segments[start][0], segments[start][1]];
+        let (mut i, mut e) = (start, 1);
+        while let Some((j, f)) = neighbour(i, e, &used) {
+            used[j] = true;
+            fwd.push(segments[j][1 - f]);
+            (i, e) = (j, 1 - f);
+        }
+        let mut back = Vec::new();
+        let (mut i, mut e) = (start, 0);
+        while let Some((j, f)) = neighbour(i, e, &used) {
+            used[j] = true;
+            back.push(segments[j][1 - f]);
+            (i, e) = (j, 1 - f);
+        }
+        back.reverse();
+        back.extend(fwd);
+        lines.push(back);
+    }
+    lines
+}
+
+/// The surface near a point: closest point on the mesh, its interpolated normal.
+struct Surface<'a> {
+    mesh: &'a Mesh,
+    normals: Vec<V3>,
+    centres: Vec<V3>,
+    radii: Vec<f64>,
+}
+
+impl<'a> Surface<'a> {
+    fn new(mesh: &'a Mesh, geometry: &Geometry) -> Self {
+        let pos = &mesh.positions;
+        let mut centres = Vec::with_capacity(mesh.faces.len());
+        let mut radii = Vec::with_capacity(mesh.faces.len());
+        for f in &mesh.faces {
+            let [a, b, c] = f.map(|i| pos[i as usize]);
+            let m = (a + b + c) / 3.0;
+            radii.push((a - m).norm().max((b - m).norm()).max((c - m).norm()));
+            centres.push(m);
+        }
+        Surface { mesh, normals: geometry.frames.iter().map(|f| f.n).collect(), centres, radii }
+    }
+
+    /// Closest point, its normal, and whether it lies on a boundary-free interior of a face.
+    fn project(&self, p: &V3) -> (V3, V3) {
+        let pos = &self.mesh.positions;
+        let mut best = (f64::INFINITY, V3::zeros(), V3::z());
+        for (fi, f) in self.mesh.faces.iter().enumerate() {
+            if (self.centres[fi] - p).norm() - self.radii[fi] >= best.0 {
+                continue;
+            }
+            let [a, b, c] = f.map(|i| pos[i as usize]);
+            let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
+            let d = (q - p).norm();
+            if d < best.0 {
+                let n = f.iter().zip(w).map(|(&i, w)| self.normals[i as usize] * w).sum::<V3>();
+                best = (d, q, n.try_normalize(0.0).unwrap_or(V3::z()));
+            }
+        }
+        (best.1, best.2)
+    }
+}
+
+/// Places the edits of a case on its initial field (module documentation).
+pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
+    let geom = &p.field.geometry;
+    let (lo, hi) = bbox(&mesh.positions);
+    let diag = (hi - lo).norm();
+    let r_warp = WARP_RADIUS * diag;
+    let half_curve = 0.5 * CURVE_LENGTH * diag;
+    let u = geom.directions_of(&p.field.phi);
+    let segments = highlight_segments(mesh, &p.field.h, &u, p.field_options.symmetry);
+    if segments.is_empty() {
+        return Err("the initial field has no key highlight (hᵀu has no zero)".into());
+    }
+    let clear = Clearance::new(&obstacles(mesh, p), half_curve);
+    let surface = Surface::new(mesh, geom);
+    let lines = chain(&segments, 1e-7 * diag);
+    // The best stretch: (length, its points, clearances).
+    let mut best: Option<(f64, Vec<V3>, Vec<f64>)> = None;
+    for line in &lines {
+        let mut run: Vec<V3> = Vec::new();
+        let mut run_clear: Vec<f64> = Vec::new();
+        let mut flush = |run: &mut Vec<V3>, rc: &mut Vec<f64>| {
+            if run.len() >= 2 {
+                let len: f64 = run.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+                if best.as_ref().is_none_or(|b| len > b.0 + 1e-9 * diag) {
+                    best = Some((len, run.clone(), rc.clone()));
+                }
+            }
+            run.clear();
+            rc.clear();
+        };
+        for k in 0..line.len().saturating_sub(1) {
+            let (a, b) = (line[k], line[k + 1]);
+            let d = b - a;
+            if d.norm() <= 0.0 {
+                continue;
+            }
+            let mid = (a + b) * 0.5;
+            let c = clear.at(&mid);
+            let (_, n) = surface.project(&mid);
+            let facing = n.dot(&(eye - mid).normalize()) > 0.3;
+            let turn_ok = run.len() < 2 || {
+                let prev = run[run.len() - 1] - run[run.len() - 2];
+                prev.normalize().dot(&d.normalize()) > 30f64.to_radians().cos()
+            };
+            if c < r_warp || !facing || !turn_ok {
+                flush(&mut run, &mut run_clear);
+                if c < r_warp || !facing {
+                    continue;
+                }
+            }
+            if run.is_empty() {
+                run.push(a);
+            }
+            run.push(b);
+            run_clear.push(c);
+        }
+        flush(&mut run, &mut run_clear);
+    }
+    let Some((length, pts, cl)) = best else {
+        return Err(format!(
+            "no stretch of the key highlight ({} segments) facing the eye and {:.1} from \
+             boundaries, critical points, creases and singularities",
+            segments.len(),
+            r_warp
+        ));
+    };
+    // Arc positions of the segment midpoints; score = capped clearance, minus distance from
+    // the middle of the stretch.
+    let mut s = 0.0;
+    let mut pick = (f64::NEG_INFINITY, 0usize, 0.0);
+    for k in 0..pts.len() - 1 {
+        let l = (pts[k + 1] - pts[k]).norm();
+        let sm = s + 0.5 * l;
+        let score = cl[k].min(half_curve) / half_curve - 0.5 * (sm - 0.5 * length).abs() / length;
+        if score > pick.0 {
+            pick = (score, k, sm);
+        }
+        s += l;
+    }
+    let (_, k, s_mid) = pick;
+    let at_arc = |target: f64| -> V3 {
+        let mut s = 0.0;
+        for w in pts.windows(2) {
+            let l = (w[1] - w[0]).norm();
+            if s + l >= target && l > 0.0 {
+                return w[0] + (w[1] - w[0]) * ((target - s) / l).clamp(0.0, 1.0);
+            }
+            s += l;
+        }
+        if target <= 0.0 {
+            pts[0]
+        } else {
+            pts[pts.len() - 1]
+        }
+    };
+    let (point, normal) = surface.project(&((pts[k] + pts[k + 1]) * 0.5));
+    let delta = 0.25 * r_warp;
+    let chord = at_arc(s_mid + delta) - at_arc(s_mid - delta);
+    let along = (chord - normal * normal.dot(&chord))
+        .try_normalize(1e-12)
+        .ok_or("the key highlight has no tangent at the brush centre")?;
+    let across = normal.cross(&along);
+    let curve = s_curve(&surface, &point, &across, 2.0 * half_curve);
+    Ok(Placement {
+        point,
+        along,
+        across,
+        normal,
+        diag,
+        clearance: cl[k].min(half_curve),
+        stretch: length,
+        c0_segments: segments.len(),
+        curve,
+    })
+}
+
+/// An S-curve of length `len` through `p`: the plane curve (s, A·sin(2πs/len)), A = len/8,
+/// s ∈ [−len/2, len/2], with s along `base`, walked on the surface in steps of len/200 (each
+/// step re-projected onto the surface, the base direction carried along).
+fn s_curve(surface: &Surface, p: &V3, base: &V3, len: f64) -> Vec<V3> {
+    let amp = len / 8.0;
+    let steps = 100;
+    let ds = 0.5 * len / steps as f64;
+    let mut halves = Vec::new();
+    for sign in [1.0, -1.0] {
+        let mut pts = vec![*p];
+        let (mut q, mut n) = surface.project(p);
+        let mut b = *base * sign;
+        for i in 0..steps {
+            let s = (i as f64 + 0.5) * ds;
+            // Heading of the plane curve at arc parameter s (same slope on both halves: the
+            // S is point-symmetric about p).
+            let slope = std::f64::consts::TAU * amp / len * (std::f64::consts::TAU * s / len).cos();
+            let side = n.cross(&b);
+            let heading = (b + side * (slope * sign)).normalize();
+            let (nq, nn) = surface.project(&(q + heading * ds));
+            if (nq - (q + heading * ds)).norm() > 0.5 * ds && (nq - q).norm() < 0.5 * ds {
+                break; // walked off a boundary
+            }
+            q = nq;
+            n = nn;
+            b = (b - n * n.dot(&b)).try_normalize(1e-12).unwrap_or(b);
+            pts.push(q);
+        }
+        halves.push(pts);
+    }
+    let mut out: Vec<V3> = halves[1].iter().rev().copied().collect();
+    out.extend(halves[0].iter().skip(1));
+    out
+}
+
+/// The three edits of a placement: bend, expand, curve.
+pub fn edits(pl: &Placement) -> Vec<(&'static str, Edit)> {
+    let arr = |v: &V3| [v.x, v.y, v.z];
+    let warp = WarpEdit {
+        centre: Centre::Point(arr(&pl.point)),
+        radius: WARP_RADIUS * pl.diag,
+        metric: Metric::Geodesic,
+        strength: WARP_STRENGTH,
+        direction: Some(arr(&pl.across)),
+        weight: 1.0,
+    };
+    let curve = CurveEdit {
+        svg: None,
+        uv: None,
+        points: Some(vec![pl.curve.iter().map(arr).collect()]),
+        radius: CURVE_RADIUS * pl.diag,
+        weight: 1.0,
+        tolerance: 1e-3,
+    };
+    vec![
+        ("bend", Edit::Bend(warp.clone())),
+        ("expand", Edit::Expand(warp)),
+        ("curve", Edit::Curve(curve)),
+    ]
+}
+
+// ---------------------------------------------------------------------------------------------
+// The measure (stand-in for grainline::fidelity::edit_fidelity)
+
+/// What an edit asked for (stand-in for `grainline::fidelity::EditShape`).
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// Bend / expand: the brush plane and the warp.
+    Warp {
+        /// Which warp.
+        kind: WarpKind,
+        /// Its strength.
+        strength: f64,
+        /// Brush radius.
+        radius: f64,
+        /// Plane origin.
+        origin: V3,
+        /// Plane x axis.
+        ex: V3,
+        /// Plane y axis (the push direction).
+        ey: V3,
+        /// Support vertices.
+        support: Vec<u32>,
+    },
+    /// Curve: the drawn polylines and the support.
+    Curve {
+        /// Brush radius.
+        radius: f64,
+        /// The curves, on the surface.
+        polylines: Vec<Vec<V3>>,
+        /// Support vertices.
+        support: Vec<u32>,
+    },
+}
+
+/// The shape of a placed edit: the brush plane refitted as src/edit/support.rs does (weighted
+/// PCA over the vertices within the radius, straight-line distance), or the curve's support.
+pub fn shape_of(mesh: &Mesh, geom: &Geometry, pl: &Placement, tool: &str) -> Shape {
+    let pos = &mesh.positions;
+    if tool == "curve" {
+        let r = CURVE_RADIUS * pl.diag;
+        let support = (0..pos.len())
+            .filter(|&i| dist_to_polyline(&pos[i], &pl.curve) < r)
+            .map(|i| i as u32)
+            .collect();
+        return Shape::Curve { radius: r, polylines: vec![pl.curve.clone()], support };
+    }
+    let r = WARP_RADIUS * pl.diag;
+    let support: Vec<u32> =
+        (0..pos.len()).filter(|&i| (pos[i] - pl.point).norm() < r).map(|i| i as u32).collect();
+    let w: Vec<f64> = support
+        .iter()
+        .map(|&i| {
+            geom.areas[i as usize].max(0.0)
+                * (1.0 - ((pos[i as usize] - pl.point).norm() / r).powi(2))
+        })
+        .collect();
+    let total: f64 = w.iter().sum::<f64>().max(1e-300);
+    let centroid: V3 =
+        support.iter().zip(&w).map(|(&i, w)| pos[i as usize] * *w).sum::<V3>() / total;
+    let mean_n: V3 = support.iter().zip(&w).map(|(&i, w)| geom.frames[i as usize].n * *w).sum();
+    let mut cov = Matrix3::zeros();
+    for (&i, w) in support.iter().zip(&w) {
+        let d = pos[i as usize] - centroid;
+        cov += d * d.transpose() * (*w / total);
+    }
+    let eig = nalgebra::SymmetricEigen::new(cov);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let mut n: V3 = eig.eigenvectors.column(order[0]).into();
+    if !(eig.eigenvalues[order[0]] <= 0.5 * eig.eigenvalues[order[1]]) {
+        n = mean_n.try_normalize(0.0).unwrap_or(pl.normal);
+    }
+    if n.dot(&mean_n) < 0.0 {
+        n = -n;
+    }
+    let ey = (pl.across - n * n.dot(&pl.across)).normalize();
+    let ex = ey.cross(&n);
+    let kind = if tool == "bend" { WarpKind::Bend } else { WarpKind::Expand };
+    Shape::Warp { kind, strength: WARP_STRENGTH, radius: r, origin: pl.point, ex, ey, support }
+}
+
+fn dist_to_segment(p: &V3, a: &V3, b: &V3) -> f64 {
+    let d = b - a;
+    let l2 = d.norm_squared();
+    let t = if l2 > 0.0 { ((p - a).dot(&d) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (a + d * t - p).norm()
+}
+
+fn dist_to_polyline(p: &V3, line: &[V3]) -> f64 {
+    line.windows(2).map(|w| dist_to_segment(p, &w[0], &w[1])).fold(f64::INFINITY, f64::min)
+}
+
+fn dist2_to_segment(p: &Vector2<f64>, a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    let d = b - a;
+    let l2 = d.norm_squared();
+    let t = if l2 > 0.0 { ((p - a).dot(&d) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (a + d * t - p).norm()
+}
+
+/// The figures of one edit (stand-in for `grainline::fidelity::EditFidelity`).
+#[derive(Clone, Debug, Default)]
+pub struct Figures {
+    /// Target samples compared.
+    pub samples: usize,
+    /// Share within 0.05 r of C1.
+    pub within: f64,
+    /// 95th-percentile distance, units of r.
+    pub p95: f64,
+    /// Median distance, units of r.
+    pub median: f64,
+    /// Singular triangles inside the support before.
+    pub singular_before: usize,
+    /// … after.
+    pub singular_after: usize,
+    /// Why it could not be measured.
+    pub note: Option<String>,
+}
+
+/// Tolerance (× r), compare radius (× r), sample spacing (× r) of the issue's measure.
+pub const TOLERANCE: f64 = 0.05;
+const COMPARE: f64 = 0.85;
+const SPACING: f64 = 0.01;
+
+/// The issue's figures for one edit (stand-in; see the fidelity API).
+#[allow(clippy::too_many_arguments)]
+pub fn measure(
+    mesh: &Mesh,
+    geom: &Geometry,
+    h: &[V3],
+    symmetry: Symmetry,
+    phi_before: &[f64],
+    phi_after: &[f64],
+    shape: &Shape,
+) -> Figures {
+    let u0 = geom.directions_of(phi_before);
+    let u1 = geom.directions_of(phi_after);
+    let (support, radius) = match shape {
+        Shape::Warp { support, radius, .. } | Shape::Curve { support, radius, .. } => {
+            (support, *radius)
+        }
+    };
+    let mut inside = vec![false; mesh.num_vertices()];
+    for &i in support {
+        inside[i as usize] = true;
+    }
+    // Only the highlight near the support: segments of faces with a corner inside.
+    let local = |u: &[V3]| -> Vec<[V3; 2]> {
+        let faces = mesh.faces.iter().filter(|f| f.iter().any(|&i| inside[i as usize]));
+        face_segments(mesh, faces, h, u, symmetry)
+    };
+    let k = symmetry.k();
+    let count = |phi: &[f64]| {
+        grainline::solve::singularities(mesh, geom, phi, k)
+            .iter()
+            .filter(|s| mesh.faces[s.face as usize].iter().all(|&i| inside[i as usize]))
+            .count()
+    };
+    let mut fig = Figures {
+        singular_before: count(phi_before),
+        singular_after: count(phi_after),
+        ..Figures::default()
+    };
+    let c1 = local(&u1);
+    let mut dist: Vec<f64> = Vec::new();
+    match shape {
+        Shape::Warp { kind, strength, origin, ex, ey, .. } => {
+            let plane =
+                |p: &V3| Vector2::new(ex.dot(&(p - origin)), ey.dot(&(p - origin))) / radius;
+            let c1p: Vec<[Vector2<f64>; 2]> = c1
+                .iter()
+                .map(|s| [plane(&s[0]), plane(&s[1])])
+                .filter(|s| s[0].norm() <= 1.0 && s[1].norm() <= 1.0)
+                .collect();
+            for s in local(&u0) {
+                let (a, b) = (plane(&s[0]), plane(&s[1]));
+                let n = ((b - a).norm() / SPACING).ceil().max(1.0) as usize;
+                for j in 0..n {
+                    let q = a + (b - a) * ((j as f64 + 0.5) / n as f64);
+                    let w = grainline::edit::warp::warp(*kind, *strength, &q);
+                    if w.norm() > COMPARE {
+                        continue;
+                    }
+                    let d = c1p
+                        .iter()
+                        .map(|c| dist2_to_segment(&w, &c[0], &c[1]))
+                        .fold(f64::INFINITY, f64::min);
+                    dist.push(d);
+                }
+            }
+        }
+        Shape::Curve { polylines, .. } => {
+            for line in polylines {
+                let total: f64 = line.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+                let mut s = 0.0;
+                for w in line.windows(2) {
+                    let l = (w[1] - w[0]).norm();
+                    let n = (l / (SPACING * radius)).ceil().max(1.0) as usize;
+                    for j in 0..n {
+                        let t = (j as f64 + 0.5) / n as f64;
+                        let sj = s + t * l;
+                        if sj < radius || sj > total - radius {
+                            continue;
+                        }
+                        let p = w[0] + (w[1] - w[0]) * t;
+                        let d = c1
+                            .iter()
+                            .map(|c| dist_to_segment(&p, &c[0], &c[1]))
+                            .fold(f64::INFINITY, f64::min);
+                        dist.push(d / radius);
+                    }
+                    s += l;
+                }
+            }
+        }
+    }
+    fig.samples = dist.len();
+    if dist.is_empty() {
+        fig.note = Some("no target sample to compare".into());
+        return fig;
+    }
+    // A sample with no C1 near it is as far as the support is wide.
+    for d in &mut dist {
+        if !d.is_finite() {
+            *d = 2.0;
+        }
+    }
+    dist.sort_by(f64::total_cmp);
+    fig.within = dist.iter().filter(|&&d| d <= TOLERANCE).count() as f64 / dist.len() as f64;
+    let q = |p: f64| dist[((p * (dist.len() - 1) as f64).round() as usize).min(dist.len() - 1)];
+    fig.p95 = q(0.95);
+    fig.median = q(0.5);
+    fig
+}
+
+// ---------------------------------------------------------------------------------------------
+// Running a case
+
+/// One row of the table.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The case.
+    pub case: String,
+    /// bend / expand / curve.
+    pub edit: String,
+    /// The highlight energy asked for.
+    pub energy: String,
+    /// Whether the scene loader knew `solver.highlight_energy` (false: today's solver ran).
+    pub energy_key: bool,
+    /// Vertices of the part.
+    pub vertices: usize,
+    /// The figures.
+    pub figures: Figures,
+    /// Accepted iterations.
+    pub iterations: usize,
+    /// The iteration cap.
+    pub max_iterations: usize,
+    /// Why the solver stopped.
+    pub stop: String,
+    /// Wall seconds of the edits and the solve.
+    pub seconds: f64,
+    /// Total energy of the start and after each accepted iteration.
+    pub energies: Vec<f64>,
+    /// Continuation stage of each accepted iteration.
+    pub stages: Vec<usize>,
+    /// Why the edit did not run (its error), if it did not.
+    pub error: Option<String>,
+}
+
+impl Outcome {
+    /// The energy never rose (within a continuation stage; 1e-12 relative slack).
+    pub fn energy_monotone(&self) -> bool {
+        let mut prev = self.energies.first().copied().unwrap_or(0.0);
+        for (k, &e) in self.energies.iter().enumerate().skip(1) {
+            let same_stage = k < 2 || self.stages[k - 1] == self.stages[k - 2];
+            if same_stage && e > prev * (1.0 + 1e-12) + 1e-300 {
+                return false;
+            }
+            prev = e;
+        }
+        true
+    }
+}
+
+/// A case prepared once: the scene, the initial field and the placement.
+pub struct PreparedCase {
+    /// The scene without edits.
+    pub scene: LoadedScene,
+    /// The initial field.
+    pub prepared: Prepared,
+    /// Where the edits go.
+    pub placement: Result<Placement, String>,
+}
+
+/// Loads a case, computes its initial field and places its edits.
+pub fn prepare_case(case: &Case) -> Result<PreparedCase, String> {
+    let scene = scene(case)?;
+    let mut stages = Stages::new(&Silent);
+    let prepared = prepare(&scene, &mut stages).map_err(|e| format!("{}: {e}", case.name))?;
+    let placement = place(&prepared.mesh, &prepared, &case.eye);
+    Ok(PreparedCase { scene, prepared, placement })
+}
+
+/// Runs one edit of a prepared case with one energy; `None` when the energy is not available.
+pub fn run_edit(
+    case: &Case,
+    p: &PreparedCase,
+    tool: &str,
+    energy: &str,
+) -> Result<Option<Outcome>, String> {
+    let Some((settings, key)) = solver_settings(energy)? else { return Ok(None) };
+    let pl = p.placement.as_ref().map_err(|e| format!("{}: {e}", case.name))?;
+    let (_, edit) = edits(pl).into_iter().find(|(n, _)| *n == tool).ok_or("unknown tool")?;
+    let mut scene = p.scene.clone();
+    scene.scene.edits = vec![edit];
+    scene.scene.solver = settings;
+    let mesh = &p.prepared.mesh;
+    let mut out = Outcome {
+        case: case.name.clone(),
+        edit: tool.into(),
+        energy: energy.into(),
+        energy_key: key,
+        vertices: mesh.num_vertices(),
+        figures: Figures::default(),
+        iterations: 0,
+        max_iterations: scene.scene.solver.max_iterations,
+        stop: String::new(),
+        seconds: 0.0,
+        energies: Vec::new(),
+        stages: Vec::new(),
+        error: None,
+    };
+    let mut stages = Stages::new(&Silent);
+    let t = Instant::now();
+    let o = match optimize_stage(&scene, &p.prepared, &mut stages) {
+        Ok(o) => o,
+        Err(e) => {
+            out.error = Some(e.to_string());
+            return Ok(Some(out));
+        }
+    };
+    out.seconds = t.elapsed().as_secs_f64();
+    let r = &o.report.solver;
+    out.iterations = r.iterations.len();
+    out.stop = format!("{:?}", r.stop);
+    out.energies = std::iter::once(r.initial_energy.total())
+        .chain(r.iterations.iter().map(|i| i.energies.total()))
+        .collect();
+    out.stages = r.iterations.iter().map(|i| i.stage).collect();
+    let geom = &p.prepared.field.geometry;
+    let shape = shape_of(mesh, geom, pl, tool);
+    out.figures = measure(
+        mesh,
+        geom,
+        &o.h,
+        p.prepared.field_options.symmetry,
+        &p.prepared.field.phi,
+        &o.phi,
+        &shape,
+    );
+    Ok(Some(out))
+}
+
+/// The tools of the corpus, in table order.
+pub const TOOLS: [&str; 3] = ["bend", "expand", "curve"];
