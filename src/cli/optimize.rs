@@ -57,6 +57,7 @@ pub fn run(args: OptimizeArgs, quiet: bool) -> anyhow::Result<()> {
     drop(spinner);
     super::progress::warn_about(&optimized.report);
     if !quiet {
+        super::progress::warn_missed(&optimized.report);
         let s = &optimized.report.solver;
         eprintln!(
             "wrote {} ({} edited vertices; solver: {:?})",

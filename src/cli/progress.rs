@@ -79,3 +79,37 @@ pub fn warn_about(report: &grainline::pipeline::optimize::OptimizeStageReport) {
         );
     }
 }
+
+/// One warning per edit that did not land (issue 13's fidelity measure, src/fidelity.rs): the
+/// share of the target highlight within tolerance, the 95th-percentile distance and the singular
+/// triangles before and after, or why the edit could not be measured. Printed unless `--quiet`.
+pub fn warn_missed(report: &grainline::pipeline::optimize::OptimizeStageReport) {
+    for line in missed_lines(&report.fidelity) {
+        eprintln!("{line}");
+    }
+}
+
+/// The warning lines of [`warn_missed`].
+pub fn missed_lines(fidelity: &[grainline::fidelity::EditFidelity]) -> Vec<String> {
+    let tolerance = grainline::fidelity::FidelityOptions::default().tolerance;
+    fidelity
+        .iter()
+        .filter(|f| !f.landed)
+        .map(|f| {
+            let head = format!("grainline: warning: edit [{}] ({})", f.index, f.tool);
+            if f.samples == 0 {
+                let why = f.note.as_deref().unwrap_or("nothing to compare");
+                return format!("{head} could not be measured: {why}");
+            }
+            format!(
+                "{head} missed: {:.0} % of the target highlight within {tolerance} r (goal {:.0} \
+                 %), p95 {:.2} r, singular triangles {} → {}",
+                100.0 * f.within,
+                100.0 * grainline::fidelity::GOAL_WITHIN,
+                f.p95,
+                f.singular_before,
+                f.singular_after
+            )
+        })
+        .collect()
+}

@@ -37,6 +37,9 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     drop(spinner);
     if let Some(o) = &report.optimize {
         super::progress::warn_about(o);
+        if !quiet {
+            super::progress::warn_missed(o);
+        }
     }
     let report_path = args.report.clone().unwrap_or_else(|| {
         args.out_dir.clone().unwrap_or_else(|| scene.base.clone()).join("run-report.json")

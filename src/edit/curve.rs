@@ -353,14 +353,14 @@ pub(crate) fn apply(
         let mid = norms.len() / 2;
         *norms.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
     };
-    let found = if let Some(points) = &e.points {
+    let (found, polylines) = if let Some(points) = &e.points {
         let lines: Vec<Vec<Vector3<f64>>> = points
             .iter()
             .map(|l| l.iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect())
             .collect();
         report.polylines = Some(lines.len());
         report.segments = Some(lines.iter().map(|l| l.len() - 1).sum());
-        space_targets(ctx, &lines, e.radius)
+        (space_targets(ctx, &lines, e.radius), lines)
     } else {
         let lines: Vec<Vec<Vector2<f64>>> = match (&e.svg, &e.uv) {
             (Some(path), _) => read_svg_polylines(Path::new(path), e.tolerance)?,
@@ -372,10 +372,14 @@ pub(crate) fn apply(
         report.polylines = Some(lines.len());
         report.segments = Some(lines.iter().map(|l| l.len().saturating_sub(1)).sum());
         let key = if e.svg.is_some() { "svg" } else { "uv" };
-        uv_targets(ctx, &lines, e.radius).ok_or_else(|| {
+        let found = uv_targets(ctx, &lines, e.radius).ok_or_else(|| {
             Error::setting(key, "the mesh has no UV coordinates; give 3D `points` instead")
-        })?
+        })?;
+        (found, crate::fidelity::lift_uv_polylines(ctx.mesh, &lines))
     };
+    let support = (0..found.len()).filter(|&i| found[i].is_some()).map(|i| i as u32).collect();
+    report.shape =
+        Some(crate::fidelity::EditShape::Curve { radius: e.radius, polylines, support });
     let mut count = 0;
     let mut critical = 0;
     for (i, hit) in found.into_iter().enumerate() {

@@ -200,6 +200,9 @@ pub struct EditReport {
     /// Curve: segments after flattening.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub segments: Option<usize>,
+    /// What the edit asked for (bend, expand, curve), for [`crate::fidelity`].
+    #[serde(skip)]
+    pub shape: Option<crate::fidelity::EditShape>,
 }
 
 impl EditReport {

@@ -208,6 +208,7 @@ pub(crate) fn apply(
     report.vertices = targets.len();
     report.critical_vertices = critical;
     report.max_turn_deg = Some(max_turn);
+    report.shape = Some(crate::fidelity::warp_shape(kind, e.strength, &support));
     Ok(())
 }
 

@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use super::{Prepared, Stages};
 use crate::edit::{apply_edits, target_q, Edit, EditInput, EditOptions, EditReport};
+use crate::fidelity::{fidelity_of_edits, EditFidelity, FidelityOptions};
 use crate::field::FieldFile;
 use crate::highlight::critical::critical_points;
 use crate::highlight::tensor::default_epsilon;
@@ -46,6 +47,9 @@ pub struct OptimizeStageReport {
     pub edited_vertices: usize,
     /// The solver.
     pub solver: OptimizeReport,
+    /// Did each edit land? One entry per bend, expand and curve edit: the key highlight of the
+    /// solved field against the edit's target ([`crate::fidelity`]).
+    pub fidelity: Vec<EditFidelity>,
 }
 
 /// Applies the edits and solves for φ.
@@ -98,6 +102,17 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
     let solved = optimize(&p.mesh, &term, &er.phi, &er.support, settings)
         .map_err(|e| crate::scene::prefix("solver", e))?;
     let highlight = highlight_field(g, &solved.phi, symmetry, form, &h);
+    // The field before is the optimizer's input (after the stencils), under the key light.
+    let fidelity = fidelity_of_edits(
+        &p.mesh,
+        g,
+        &h,
+        symmetry,
+        &er.phi,
+        &solved.phi,
+        &er.reports,
+        &FidelityOptions::default(),
+    )?;
     let critical = critical_points(&h, normals.into_iter(), p.field_options.critical_threshold);
     let l = er.lighting.light;
     Ok(Optimized {
@@ -114,6 +129,7 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
             key_light: [l.x, l.y, l.z],
             edited_vertices: er.support.iter().filter(|&&s| s).count(),
             solver: solved.report,
+            fidelity,
         },
     })
 }

@@ -1,0 +1,944 @@
+//! Edit fidelity (issue 13; docs/math.md §9, "Edit fidelity"): did an edit put the key light's
+//! highlight where it asked?
+//!
+//! The key light's ideal highlight is the zero set {g = 0} of g = hᵀu (math.md §2: ℓ is tangent
+//! to the level sets of g, and on {g = 0} it is the highlight's tangent). Per triangle, g is
+//! interpolated linearly between its corners, so the zero set is one straight segment per
+//! triangle whose corners do not all have the same sign ([`highlight_segments`]). For line
+//! fields (k = 2) u has no sign: the corners of a triangle are first given the sign that
+//! agrees with the first corner (u_b ← −u_b where u_bᵀu_a < 0), which leaves the zero set
+//! unchanged by the sign of any vertex.
+//!
+//! For an edit of brush radius r, C0 is that highlight of the field before the edit (the
+//! optimizer's input) and C1 of the field after the solve, both restricted to the faces with a
+//! corner in the edit's support:
+//!
+//! - **bend / expand**: the target is W(C0): C0's segments projected to the brush plane
+//!   ((x, y) = [eₓ e_y]ᵀ(p − o)/r, src/edit/support.rs), every point mapped by the warp W, the
+//!   image resampled every `sample_spacing` of arc length; only samples within `compare_radius`
+//!   of the centre count. Distance: planar, to the nearest projected C1 segment that has an
+//!   endpoint in the unit disk; in units of r.
+//! - **curve**: the target is the drawn curve (3D polylines; UV curves lifted through the mesh's
+//!   UV map, [`lift_uv_polylines`]) resampled every `sample_spacing`·r of arc length, less one
+//!   radius at each end of each polyline. Distance: in space, to the nearest C1 segment, divided
+//!   by r.
+//!
+//! Faces whose corner normals face away from the brush plane (Σ nᵢ·n_plane ≤ 0: the far side of
+//! a thin part caught by a Euclidean brush) are left out of the warps' C0 and C1. Distances are
+//! capped at [`MAX_DISTANCE`] r (no C1 segment closer than that counts as that far), so every
+//! figure is finite. The figures: the share of samples within `tolerance`·r (`within`), the
+//! 95th percentile and the median of the distances (nearest rank), and the singular triangles
+//! ([`crate::solve::singularities`]) among the faces with all three corners in the support,
+//! before and after. An edit has *landed* when within ≥ [`GOAL_WITHIN`], p95 ≤ [`GOAL_P95`]
+//! and it added no singular triangle.
+
+use std::collections::HashMap;
+
+use nalgebra::{Vector2, Vector3};
+use serde::Serialize;
+
+use crate::edit::support::Support;
+use crate::edit::{EditReport, WarpKind};
+use crate::geometry::Geometry;
+use crate::highlight::Symmetry;
+use crate::mesh::Mesh;
+use crate::{Error, Result};
+
+/// The goal on [`EditFidelity::within`]: at least 90 % of the target within tolerance.
+pub const GOAL_WITHIN: f64 = 0.9;
+/// The goal on [`EditFidelity::p95`]: the 95th-percentile distance at most 0.10 r.
+pub const GOAL_P95: f64 = 0.10;
+/// Distances are capped at this many radii (a sample with no C1 segment closer counts as this
+/// far).
+pub const MAX_DISTANCE: f64 = 2.0;
+
+/// What an edit asked for, recorded by the edit tools (src/edit) in `EditReport::shape`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EditShape {
+    /// bend / expand: the brush plane of src/edit/support.rs (origin o, unit axes ex, ey;
+    /// planar coordinates (x, y) = [ex ey]ᵀ(p − o)/radius lie in the unit disk) and the warp.
+    Warp {
+        /// Bend or expand.
+        kind: WarpKind,
+        /// The warp strength s.
+        strength: f64,
+        /// The brush radius r, scene units.
+        radius: f64,
+        /// The plane's origin o (the centre projected onto the plane).
+        origin: Vector3<f64>,
+        /// The plane's unit x axis.
+        ex: Vector3<f64>,
+        /// The plane's unit y axis (the way the warp pushes).
+        ey: Vector3<f64>,
+        /// The support's vertices, ascending.
+        support: Vec<u32>,
+    },
+    /// curve: the drawn curves as 3D polylines on the surface (UV curves lifted through the
+    /// mesh's UV map), the brush radius, and the support (vertices that got a target).
+    Curve {
+        /// The brush radius r, scene units.
+        radius: f64,
+        /// The curves, scene units.
+        polylines: Vec<Vec<Vector3<f64>>>,
+        /// The vertices within r of a curve, ascending.
+        support: Vec<u32>,
+    },
+}
+
+impl EditShape {
+    /// The brush radius r.
+    pub fn radius(&self) -> f64 {
+        match self {
+            EditShape::Warp { radius, .. } | EditShape::Curve { radius, .. } => *radius,
+        }
+    }
+
+    /// The support's vertices.
+    pub fn support(&self) -> &[u32] {
+        match self {
+            EditShape::Warp { support, .. } | EditShape::Curve { support, .. } => support,
+        }
+    }
+}
+
+/// The shape of a bend or expand edit on `support`.
+pub fn warp_shape(kind: WarpKind, strength: f64, support: &Support) -> EditShape {
+    EditShape::Warp {
+        kind,
+        strength,
+        radius: support.radius,
+        origin: support.origin,
+        ex: support.ex,
+        ey: support.ey,
+        support: support.vertices.iter().map(|&v| v as u32).collect(),
+    }
+}
+
+/// Options of [`edit_fidelity`]; every length is in units of the brush radius r.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FidelityOptions {
+    /// A target sample is "within" when C1 is closer than this (default 0.05).
+    pub tolerance: f64,
+    /// Warps: only W(C0) samples closer than this to the centre count (default 0.85).
+    pub compare_radius: f64,
+    /// Arc length between target samples (default 0.01).
+    pub sample_spacing: f64,
+}
+
+impl Default for FidelityOptions {
+    fn default() -> Self {
+        FidelityOptions { tolerance: 0.05, compare_radius: 0.85, sample_spacing: 0.01 }
+    }
+}
+
+impl FidelityOptions {
+    /// Range-checks the options: tolerance in (0, 2], compare radius in (0, 1], spacing in
+    /// [10⁻⁴, 0.5].
+    pub fn validate(&self) -> Result<()> {
+        let check = |name: &str, x: f64, lo: f64, hi: f64, open_lo: bool| {
+            let ok = x.is_finite() && x <= hi && if open_lo { x > lo } else { x >= lo };
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::invalid_arg(
+                    format!("fidelity.{name}"),
+                    format!("must be within {}{lo}, {hi}], got {x}", if open_lo { "(" } else { "[" }),
+                ))
+            }
+        };
+        check("tolerance", self.tolerance, 0.0, MAX_DISTANCE, true)?;
+        check("compare_radius", self.compare_radius, 0.0, 1.0, true)?;
+        check("sample_spacing", self.sample_spacing, 1e-4, 0.5, false)
+    }
+}
+
+/// The figures of one edit; serialized into the optimize and run reports under `fidelity`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EditFidelity {
+    /// Position of the edit in the `edits` list.
+    pub index: usize,
+    /// The tool's name.
+    pub tool: String,
+    /// The brush radius r, scene units.
+    pub radius: f64,
+    /// Target samples compared.
+    pub samples: usize,
+    /// Share of the target samples within tolerance·r of C1 (0 to 1).
+    pub within: f64,
+    /// 95th-percentile distance from the target to C1, in units of r.
+    pub p95: f64,
+    /// Median distance, in units of r.
+    pub median: f64,
+    /// Singular triangles inside the support, field before the edit.
+    pub singular_before: usize,
+    /// Singular triangles inside the support after the solve.
+    pub singular_after: usize,
+    /// within ≥ 0.9, p95 ≤ 0.10 and singular_after ≤ singular_before.
+    pub landed: bool,
+    /// Why the edit could not be measured, or what missed.
+    pub note: Option<String>,
+}
+
+/// g = hᵀu at the three corners of a face; line fields: corners aligned to the first one.
+/// `None` if a corner is out of range or a value is not finite.
+fn corner_g(
+    face: &[u32; 3],
+    h: &[Vector3<f64>],
+    u: &[Vector3<f64>],
+    symmetry: Symmetry,
+) -> Option<[f64; 3]> {
+    let idx = face.map(|v| v as usize);
+    let ua = *u.get(idx[0])?;
+    let mut g = [0.0; 3];
+    for k in 0..3 {
+        let mut uk = *u.get(idx[k])?;
+        if symmetry == Symmetry::Line && k > 0 && uk.dot(&ua) < 0.0 {
+            uk = -uk;
+        }
+        g[k] = h.get(idx[k])?.dot(&uk);
+    }
+    g.iter().all(|x| x.is_finite()).then_some(g)
+}
+
+/// The zero segment of the linear interpolant of `g` over triangle `p` (g ≥ 0 counts as
+/// positive); `None` if every corner has the same sign or the segment has no length.
+fn zero_segment(p: &[Vector3<f64>; 3], g: &[f64; 3]) -> Option<[Vector3<f64>; 2]> {
+    let pos = g.map(|x| x >= 0.0);
+    let lone = (0..3).find(|&k| pos[k] != pos[(k + 1) % 3] && pos[k] != pos[(k + 2) % 3])?;
+    let at = |j: usize| {
+        let t = g[lone] / (g[lone] - g[j]);
+        p[lone] + (p[j] - p[lone]) * t
+    };
+    let (a, b) = (at((lone + 1) % 3), at((lone + 2) % 3));
+    let ok = (a - b).norm_squared() > 0.0 && a.iter().chain(b.iter()).all(|c| c.is_finite());
+    ok.then_some([a, b])
+}
+
+/// Zero set of g = hᵀu per triangle (linear interpolation of g at the corners; line fields:
+/// corners aligned to the first corner's direction first). World-space segments, in face
+/// order; faces with a non-finite value (or `h`, `u` too short) give none.
+pub fn highlight_segments(
+    mesh: &Mesh,
+    h: &[Vector3<f64>],
+    u: &[Vector3<f64>],
+    symmetry: Symmetry,
+) -> Vec<[Vector3<f64>; 2]> {
+    let faces: Vec<usize> = (0..mesh.num_faces()).collect();
+    segments_on(mesh, h, u, symmetry, &faces)
+}
+
+fn segments_on(
+    mesh: &Mesh,
+    h: &[Vector3<f64>],
+    u: &[Vector3<f64>],
+    symmetry: Symmetry,
+    faces: &[usize],
+) -> Vec<[Vector3<f64>; 2]> {
+    let n = mesh.num_vertices();
+    faces
+        .iter()
+        .filter_map(|&f| {
+            let face = mesh.faces.get(f)?;
+            if face.iter().any(|&v| v as usize >= n) {
+                return None;
+            }
+            let g = corner_g(face, h, u, symmetry)?;
+            zero_segment(&mesh.face_positions(f), &g)
+        })
+        .collect()
+}
+
+/// Nearest-segment queries: segments bucketed in a sparse uniform grid.
+struct SegmentGrid {
+    segs: Vec<[Vector3<f64>; 2]>,
+    cell: f64,
+    cells: HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl SegmentGrid {
+    /// `reach`: the largest distance queries care about (the cell is at least reach/8, so a
+    /// query visits at most 17³ cells).
+    fn new(segs: Vec<[Vector3<f64>; 2]>, reach: f64) -> Self {
+        let mean = if segs.is_empty() {
+            0.0
+        } else {
+            segs.iter().map(|s| (s[1] - s[0]).norm()).sum::<f64>() / segs.len() as f64
+        };
+        let cell = (2.0 * mean).max(reach / 8.0).max(1e-12);
+        let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for (k, s) in segs.iter().enumerate() {
+            let (lo, hi) = (key(&s[0].inf(&s[1]), cell), key(&s[0].sup(&s[1]), cell));
+            for i in lo[0]..=hi[0] {
+                for j in lo[1]..=hi[1] {
+                    for l in lo[2]..=hi[2] {
+                        cells.entry([i, j, l]).or_default().push(k as u32);
+                    }
+                }
+            }
+        }
+        SegmentGrid { segs, cell, cells }
+    }
+
+    /// The distance from `p` to the nearest segment, or `cap` if none is closer.
+    fn nearest(&self, p: &Vector3<f64>, cap: f64) -> f64 {
+        if self.segs.is_empty() {
+            return cap;
+        }
+        let c = key(p, self.cell);
+        let mut best = cap;
+        let rings = (cap / self.cell).ceil().max(1.0) as i64 + 1;
+        for ring in 0..=rings {
+            // Cells of Chebyshev distance `ring` from c.
+            for i in -ring..=ring {
+                for j in -ring..=ring {
+                    for l in -ring..=ring {
+                        if i.abs().max(j.abs()).max(l.abs()) != ring {
+                            continue;
+                        }
+                        let Some(list) = self.cells.get(&[c[0] + i, c[1] + j, c[2] + l]) else {
+                            continue;
+                        };
+                        for &k in list {
+                            let s = &self.segs[k as usize];
+                            best = best.min(point_segment_distance(p, &s[0], &s[1]));
+                        }
+                    }
+                }
+            }
+            // Every cell of a later ring is at least ring·cell away from p.
+            if best <= ring as f64 * self.cell {
+                break;
+            }
+        }
+        best
+    }
+}
+
+fn key(p: &Vector3<f64>, cell: f64) -> [i64; 3] {
+    p.map(|x| {
+        let c = (x / cell).floor();
+        if c.is_finite() {
+            c.clamp(-1e15, 1e15) as i64
+        } else {
+            0
+        }
+    })
+    .into()
+}
+
+fn point_segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let e = b - a;
+    let ee = e.norm_squared();
+    let t = if ee > 0.0 { ((p - a).dot(&e) / ee).clamp(0.0, 1.0) } else { 0.0 };
+    (a + e * t - p).norm()
+}
+
+/// Walks pieces of a chain and emits a sample every `spacing` of arc length (the first at
+/// spacing/2), carrying the phase from piece to piece.
+struct Resampler {
+    spacing: f64,
+    next: f64,
+    out: Vec<Vector3<f64>>,
+}
+
+impl Resampler {
+    fn new(spacing: f64) -> Self {
+        Resampler { spacing, next: 0.5 * spacing, out: Vec::new() }
+    }
+
+    fn piece(&mut self, p: &Vector3<f64>, q: &Vector3<f64>) {
+        let len = (q - p).norm();
+        if !(len > 0.0) {
+            return;
+        }
+        while self.next <= len {
+            self.out.push(p + (q - p) * (self.next / len));
+            self.next += self.spacing;
+        }
+        self.next -= len;
+    }
+}
+
+/// The faces with a corner in the support (`any`) and with all three (`all`), ascending.
+fn support_faces(mesh: &Mesh, support: &[u32]) -> (Vec<usize>, Vec<usize>) {
+    let mut inside = vec![false; mesh.num_vertices()];
+    for &v in support {
+        if let Some(x) = inside.get_mut(v as usize) {
+            *x = true;
+        }
+    }
+    let (mut any, mut all) = (Vec::new(), Vec::new());
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let c = face.map(|v| inside.get(v as usize).copied().unwrap_or(false));
+        if c.iter().any(|&x| x) {
+            any.push(f);
+        }
+        if c.iter().all(|&x| x) {
+            all.push(f);
+        }
+    }
+    (any, all)
+}
+
+/// W(C0) sampled every `spacing` (planar units), kept within `compare` of the centre.
+fn warp_samples(
+    c0: &[[Vector2<f64>; 2]],
+    kind: WarpKind,
+    strength: f64,
+    spacing: f64,
+    compare: f64,
+) -> Vec<Vector2<f64>> {
+    let w = |p: Vector2<f64>| crate::edit::warp::warp(kind, strength, &p);
+    let lift = |p: Vector2<f64>| Vector3::new(p.x, p.y, 0.0);
+    let mut rs = Resampler::new(spacing);
+    for s in c0 {
+        let (a, b) = (s[0], s[1]);
+        // A segment clear of the unit disk is not moved, and lies beyond the compare disk.
+        if point_segment_distance(&Vector3::zeros(), &lift(a), &lift(b)) > 1.0 {
+            continue;
+        }
+        let n = ((b - a).norm() / spacing).ceil().clamp(1.0, 1e6) as usize;
+        let at = |t: f64| a + (b - a) * t;
+        let mut prev = w(a);
+        for k in 1..=n {
+            let (t0, t1) = ((k - 1) as f64 / n as f64, k as f64 / n as f64);
+            let next = w(at(t1));
+            // Refine where the warp stretches a piece beyond the spacing.
+            let m = ((next - prev).norm() / spacing).ceil().clamp(1.0, 1e4) as usize;
+            let mut q = prev;
+            for j in 1..=m {
+                let r = if j == m { next } else { w(at(t0 + (t1 - t0) * j as f64 / m as f64)) };
+                rs.piece(&lift(q), &lift(r));
+                q = r;
+            }
+            prev = next;
+        }
+    }
+    rs.out
+        .into_iter()
+        .map(|p| Vector2::new(p.x, p.y))
+        .filter(|p| p.norm() < compare)
+        .collect()
+}
+
+/// Curve samples every `spacing` (scene units), more than `trim` of arc length from either end
+/// of each polyline: at arc lengths (k + ½)·spacing within [trim, length − trim].
+fn curve_samples(polylines: &[Vec<Vector3<f64>>], spacing: f64, trim: f64) -> Vec<Vector3<f64>> {
+    let mut out = Vec::new();
+    for line in polylines {
+        let total: f64 = line.windows(2).map(|s| (s[1] - s[0]).norm()).sum();
+        if !(total.is_finite() && total > 2.0 * trim) {
+            continue;
+        }
+        let (mut next, mut s0) = (0.5 * spacing, 0.0);
+        for seg in line.windows(2) {
+            let (a, b) = (seg[0], seg[1]);
+            let len = (b - a).norm();
+            if !(len > 0.0) {
+                continue;
+            }
+            while next <= s0 + len {
+                if next >= trim && next <= total - trim {
+                    out.push(a + (b - a) * ((next - s0) / len));
+                }
+                next += spacing;
+            }
+            s0 += len;
+        }
+    }
+    out
+}
+
+/// The nearest-rank percentile of sorted values (q in (0, 1]).
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let rank = (q * sorted.len() as f64).ceil() as usize;
+    sorted[rank.clamp(1, sorted.len()) - 1]
+}
+
+/// The figures of one edit: `u_before`/`u_after` are world-space unit grain vectors per vertex,
+/// `h` the key light's half vectors per vertex.
+///
+/// Errors: `h`, `u_before`, `u_after` or the geometry not of the mesh's vertex count, options out
+/// of range. A case that cannot be measured (no highlight before a warp, a curve shorter than two
+/// radii, no highlight after) is not an error: it gives `within = 0`, `landed = false` and a
+/// `note`.
+#[allow(clippy::too_many_arguments)]
+pub fn edit_fidelity(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    h: &[Vector3<f64>],
+    symmetry: Symmetry,
+    u_before: &[Vector3<f64>],
+    u_after: &[Vector3<f64>],
+    index: usize,
+    tool: &str,
+    shape: &EditShape,
+    options: &FidelityOptions,
+) -> Result<EditFidelity> {
+    options.validate()?;
+    let n = mesh.num_vertices();
+    if h.len() != n || u_before.len() != n || u_after.len() != n || geometry.num_vertices() != n {
+        return Err(Error::invalid_arg(
+            "fidelity",
+            format!(
+                "the mesh has {n} vertices, but h {}, u_before {}, u_after {}, geometry {}",
+                h.len(),
+                u_before.len(),
+                u_after.len(),
+                geometry.num_vertices()
+            ),
+        ));
+    }
+    let radius = shape.radius();
+    let mut fid = EditFidelity {
+        index,
+        tool: tool.to_string(),
+        radius,
+        samples: 0,
+        within: 0.0,
+        p95: 0.0,
+        median: 0.0,
+        singular_before: 0,
+        singular_after: 0,
+        landed: false,
+        note: None,
+    };
+    if !(radius.is_finite() && radius > 0.0) {
+        fid.note = Some(format!("the brush radius {radius} is not a positive number"));
+        return Ok(fid);
+    }
+    let (any, all) = support_faces(mesh, shape.support());
+    // Singular triangles inside the support.
+    let k = symmetry.k();
+    let count = |u: &[Vector3<f64>]| {
+        let phi = geometry.angles_of(u);
+        let sing = crate::solve::singularities(mesh, geometry, &phi, k);
+        sing.iter().filter(|s| all.binary_search(&(s.face as usize)).is_ok()).count()
+    };
+    fid.singular_before = count(u_before);
+    fid.singular_after = count(u_after);
+
+    // Distances of the target samples, in units of r.
+    let (distances, empty_target, empty_c1) = match shape {
+        EditShape::Warp { kind, strength, origin, ex, ey, .. } => {
+            let plane_n = ex.cross(ey);
+            let faces: Vec<usize> = any
+                .iter()
+                .copied()
+                .filter(|&f| {
+                    let s: Vector3<f64> =
+                        mesh.faces[f].iter().map(|&v| geometry.frames[v as usize].n).sum();
+                    s.dot(&plane_n) > 0.0
+                })
+                .collect();
+            let to_plane = |p: &Vector3<f64>| {
+                let w = p - origin;
+                Vector2::new(ex.dot(&w), ey.dot(&w)) / radius
+            };
+            let c0: Vec<[Vector2<f64>; 2]> = segments_on(mesh, h, u_before, symmetry, &faces)
+                .iter()
+                .map(|s| s.map(|p| to_plane(&p)))
+                .collect();
+            let samples = warp_samples(
+                &c0,
+                *kind,
+                *strength,
+                options.sample_spacing,
+                options.compare_radius,
+            );
+            let c1: Vec<[Vector3<f64>; 2]> = segments_on(mesh, h, u_after, symmetry, &faces)
+                .iter()
+                .map(|s| s.map(|p| to_plane(&p)))
+                .filter(|s| s[0].norm() <= 1.0 || s[1].norm() <= 1.0)
+                .map(|s| s.map(|p| Vector3::new(p.x, p.y, 0.0)))
+                .collect();
+            let empty_c1 = c1.is_empty();
+            let grid = SegmentGrid::new(c1, MAX_DISTANCE);
+            let d: Vec<f64> = samples
+                .iter()
+                .map(|p| grid.nearest(&Vector3::new(p.x, p.y, 0.0), MAX_DISTANCE))
+                .collect();
+            (d, samples.is_empty(), empty_c1)
+        }
+        EditShape::Curve { polylines, .. } => {
+            let samples = curve_samples(polylines, options.sample_spacing * radius, radius);
+            let c1 = segments_on(mesh, h, u_after, symmetry, &any);
+            let empty_c1 = c1.is_empty();
+            let cap = MAX_DISTANCE * radius;
+            let grid = SegmentGrid::new(c1, cap);
+            let d: Vec<f64> = samples.iter().map(|p| grid.nearest(p, cap) / radius).collect();
+            (d, samples.is_empty(), empty_c1)
+        }
+    };
+    if empty_target {
+        fid.note = Some(match shape {
+            EditShape::Warp { .. } => format!(
+                "nothing to compare: the field before the edit has no key highlight within \
+                 {} r of the brush centre",
+                options.compare_radius
+            ),
+            EditShape::Curve { .. } => "nothing to compare: no curve is longer than two radii \
+                                        (UV curves: on the mesh's UV layout)"
+                .to_string(),
+        });
+        return Ok(fid);
+    }
+    let mut sorted: Vec<f64> = distances.iter().map(|d| d.clamp(0.0, MAX_DISTANCE)).collect();
+    sorted.sort_unstable_by(f64::total_cmp);
+    fid.samples = sorted.len();
+    fid.within =
+        sorted.iter().filter(|&&d| d <= options.tolerance).count() as f64 / sorted.len() as f64;
+    fid.p95 = percentile(&sorted, 0.95);
+    fid.median = percentile(&sorted, 0.5);
+    let mut missed = Vec::new();
+    if empty_c1 {
+        missed.push("the solved field has no key highlight in the support".to_string());
+    }
+    if fid.within < GOAL_WITHIN {
+        missed.push(format!(
+            "{:.0} % of the target within {} r (goal {:.0} %)",
+            100.0 * fid.within,
+            options.tolerance,
+            100.0 * GOAL_WITHIN
+        ));
+    }
+    if fid.p95 > GOAL_P95 {
+        missed.push(format!("p95 {:.3} r (goal ≤ {GOAL_P95} r)", fid.p95));
+    }
+    if fid.singular_after > fid.singular_before {
+        missed.push(format!(
+            "singular triangles {} → {}",
+            fid.singular_before, fid.singular_after
+        ));
+    }
+    fid.landed = missed.is_empty();
+    if !fid.landed {
+        fid.note = Some(missed.join("; "));
+    }
+    Ok(fid)
+}
+
+/// The fidelity of every edit with a shape (`reports[k].shape`), for the fields `phi_before`
+/// (the optimizer's input) and `phi_after` (the solved field), angles in the geometry's frames.
+#[allow(clippy::too_many_arguments)]
+pub fn fidelity_of_edits(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    h: &[Vector3<f64>],
+    symmetry: Symmetry,
+    phi_before: &[f64],
+    phi_after: &[f64],
+    reports: &[EditReport],
+    options: &FidelityOptions,
+) -> Result<Vec<EditFidelity>> {
+    if !reports.iter().any(|r| r.shape.is_some()) {
+        return Ok(Vec::new());
+    }
+    let u_before = geometry.directions_of(phi_before);
+    let u_after = geometry.directions_of(phi_after);
+    reports
+        .iter()
+        .filter_map(|r| r.shape.as_ref().map(|s| (r, s)))
+        .map(|(r, s)| {
+            edit_fidelity(
+                mesh, geometry, h, symmetry, &u_before, &u_after, r.index, &r.tool, s, options,
+            )
+        })
+        .collect()
+}
+
+/// UV polylines lifted to 3D through the mesh's UV map: each polyline is subdivided (steps of a
+/// quarter of the median UV edge), every point located in a UV triangle (among overlapping
+/// triangles, the one whose lift is nearest the previous point, else the lowest face) and
+/// lifted by its barycentric coordinates. Points outside the UV layout are dropped and split
+/// the polyline, and so does a jump across a seam (a 3D step more than four times what the
+/// triangles' UV Jacobians allow); pieces of fewer than two points are dropped. Empty without
+/// UVs.
+pub fn lift_uv_polylines(mesh: &Mesh, lines: &[Vec<Vector2<f64>>]) -> Vec<Vec<Vector3<f64>>> {
+    let Some(uv) = mesh.uv.as_ref() else { return Vec::new() };
+    let finite = |p: &Vector2<f64>| p.x.is_finite() && p.y.is_finite();
+    let mut lo = Vector2::repeat(f64::INFINITY);
+    let mut hi = Vector2::repeat(f64::NEG_INFINITY);
+    for p in lines.iter().flatten().filter(|p| finite(p)) {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    if !(lo.x <= hi.x && lo.y <= hi.y) {
+        return Vec::new();
+    }
+    // UV triangles overlapping the curves' box, with their Jacobian scale |J|_F.
+    let n = mesh.num_vertices();
+    let mut tris: Vec<(usize, [Vector2<f64>; 3], f64)> = Vec::new();
+    let mut edges: Vec<f64> = Vec::new();
+    for f in 0..mesh.num_faces() {
+        if f >= uv.corners.len()
+            || uv.corners[f].iter().any(|&c| c as usize >= uv.values.len())
+            || mesh.faces[f].iter().any(|&v| v as usize >= n)
+        {
+            continue;
+        }
+        let t = uv.face(f);
+        if !t.iter().all(finite) {
+            continue;
+        }
+        let (a, b) = (t[0].inf(&t[1]).inf(&t[2]), t[0].sup(&t[1]).sup(&t[2]));
+        if b.x < lo.x || b.y < lo.y || a.x > hi.x || a.y > hi.y {
+            continue;
+        }
+        let [p0, p1, p2] = mesh.face_positions(f);
+        let (e1, e2, d1, d2) = (p1 - p0, p2 - p0, t[1] - t[0], t[2] - t[0]);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if !(det.abs() > 1e-14 * (d1.norm_squared() + d2.norm_squared())) {
+            continue;
+        }
+        let ju = (e1 * d2.y - e2 * d1.y) / det;
+        let jv = (e2 * d1.x - e1 * d2.x) / det;
+        let scale = (ju.norm_squared() + jv.norm_squared()).sqrt();
+        if !scale.is_finite() {
+            continue;
+        }
+        edges.push(d1.norm());
+        tris.push((f, t, scale));
+    }
+    if tris.is_empty() {
+        return Vec::new();
+    }
+    edges.sort_unstable_by(f64::total_cmp);
+    let median_edge = edges[edges.len() / 2];
+    let total: f64 = lines
+        .iter()
+        .flat_map(|l| l.windows(2))
+        .map(|s| (s[1] - s[0]).norm())
+        .filter(|d| d.is_finite())
+        .sum();
+    let step = (0.25 * median_edge).max(total / 200_000.0).max(1e-12);
+    // A uniform grid over the triangles' UV boxes.
+    let mut blo = Vector2::repeat(f64::INFINITY);
+    let mut bhi = Vector2::repeat(f64::NEG_INFINITY);
+    for (_, t, _) in &tris {
+        for p in t {
+            blo = blo.inf(p);
+            bhi = bhi.sup(p);
+        }
+    }
+    let dim = ((tris.len() as f64).sqrt().ceil() as usize).clamp(1, 1024);
+    let cell = ((bhi - blo).max() / dim as f64).max(1e-15);
+    let cell_of = |p: &Vector2<f64>| {
+        let f = |x: f64| {
+            let c = (x / cell).floor();
+            if c.is_finite() && c > 0.0 {
+                (c as usize).min(dim - 1)
+            } else {
+                0
+            }
+        };
+        (f(p.x - blo.x), f(p.y - blo.y))
+    };
+    let mut cells = vec![Vec::<u32>::new(); dim * dim];
+    for (k, (_, t, _)) in tris.iter().enumerate() {
+        let (a, b) = (cell_of(&t[0].inf(&t[1]).inf(&t[2])), cell_of(&t[0].sup(&t[1]).sup(&t[2])));
+        for j in a.1..=b.1 {
+            for i in a.0..=b.0 {
+                cells[j * dim + i].push(k as u32);
+            }
+        }
+    }
+    // Lift one UV point: (3D point, Jacobian scale), nearest `prev` among overlapping charts.
+    let lift = |q: &Vector2<f64>, prev: Option<&Vector3<f64>>| -> Option<(Vector3<f64>, f64)> {
+        if q.x < blo.x || q.y < blo.y || q.x > bhi.x || q.y > bhi.y {
+            return None;
+        }
+        let (i, j) = cell_of(q);
+        let mut best: Option<(f64, Vector3<f64>, f64)> = None;
+        for &k in &cells[j * dim + i] {
+            let (f, t, scale) = &tris[k as usize];
+            let (e1, e2, d) = (t[1] - t[0], t[2] - t[0], q - t[0]);
+            let det = e1.x * e2.y - e1.y * e2.x;
+            let v = (d.x * e2.y - d.y * e2.x) / det;
+            let w = (e1.x * d.y - e1.y * d.x) / det;
+            let b = [1.0 - v - w, v, w];
+            if !b.iter().all(|&x| x >= -1e-9) {
+                continue;
+            }
+            let [p0, p1, p2] = mesh.face_positions(*f);
+            let p = p0 * b[0] + p1 * b[1] + p2 * b[2];
+            let rank = prev.map_or(0.0, |x| (p - x).norm_squared());
+            if best.as_ref().is_none_or(|x| rank < x.0) {
+                best = Some((rank, p, *scale));
+            }
+        }
+        best.map(|(_, p, s)| (p, s))
+    };
+    let mut out = Vec::new();
+    let flush = |out: &mut Vec<Vec<Vector3<f64>>>, piece: &mut Vec<Vector3<f64>>| {
+        if piece.len() >= 2 {
+            out.push(std::mem::take(piece));
+        }
+        piece.clear();
+    };
+    for line in lines {
+        // The subdivided polyline; `None` marks a break (a non-finite point).
+        let mut points: Vec<Option<Vector2<f64>>> = Vec::new();
+        for (k, s) in line.windows(2).enumerate() {
+            let (a, b) = (s[0], s[1]);
+            if !(finite(&a) && finite(&b)) {
+                points.push(None);
+                continue;
+            }
+            let m = ((b - a).norm() / step).ceil().clamp(1.0, 1e6) as usize;
+            for j in usize::from(k > 0)..=m {
+                points.push(Some(a + (b - a) * (j as f64 / m as f64)));
+            }
+        }
+        let mut piece: Vec<Vector3<f64>> = Vec::new();
+        let mut last: Option<(Vector2<f64>, Vector3<f64>, f64)> = None;
+        for q in points {
+            let lifted =
+                q.and_then(|q| lift(&q, last.as_ref().map(|x| &x.1)).map(|(p, s)| (q, p, s)));
+            match lifted {
+                None => {
+                    flush(&mut out, &mut piece);
+                    last = None;
+                }
+                Some((q, p, scale)) => {
+                    if let Some((q0, p0, s0)) = last {
+                        let allowed = 4.0 * (q - q0).norm() * scale.max(s0);
+                        if (p - p0).norm() > allowed + 1e-12 * (1.0 + p.norm()) {
+                            flush(&mut out, &mut piece);
+                        }
+                    }
+                    piece.push(p);
+                    last = Some((q, p, scale));
+                }
+            }
+        }
+        flush(&mut out, &mut piece);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn zero_segment_of_a_hand_triangle() {
+        // g = x − 0.25 on the triangle (0,0), (1,0), (0,1): the zero set is x = 0.25 from
+        // (0.25, 0) to (0.25, 0.75).
+        let p = [Vector3::zeros(), Vector3::x(), Vector3::y()];
+        let g = [-0.25, 0.75, -0.25];
+        let [a, b] = zero_segment(&p, &g).unwrap();
+        let (lo, hi) = if a.y < b.y { (a, b) } else { (b, a) };
+        assert!((lo - Vector3::new(0.25, 0.0, 0.0)).norm() < 1e-15, "{lo:?}");
+        assert!((hi - Vector3::new(0.25, 0.75, 0.0)).norm() < 1e-15, "{hi:?}");
+        assert!(zero_segment(&p, &[1.0, 2.0, 0.5]).is_none());
+        assert!(zero_segment(&p, &[-1.0, -2.0, -0.5]).is_none());
+        assert!(zero_segment(&p, &[f64::NAN, -2.0, 0.5]).is_none());
+    }
+
+    #[test]
+    fn line_alignment_follows_the_first_corner() {
+        let face = [0u32, 1, 2];
+        let h = vec![Vector3::x(); 3];
+        let u = vec![Vector3::x(), -Vector3::x(), Vector3::new(-0.5, 0.8, 0.0)];
+        let g = corner_g(&face, &h, &u, Symmetry::Line).unwrap();
+        assert_eq!(g, [1.0, 1.0, 0.5]);
+        let g = corner_g(&face, &h, &u, Symmetry::Oriented).unwrap();
+        assert_eq!(g, [1.0, -1.0, -0.5]);
+    }
+
+    /// The grid's nearest distance against brute force over random segments and queries.
+    #[test]
+    fn segment_grid_agrees_with_brute_force() {
+        let mut s = 12345u64;
+        let mut rnd = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let segs: Vec<[Vector3<f64>; 2]> = (0..300)
+            .map(|_| {
+                let a = Vector3::new(rnd(), rnd(), rnd()) * 10.0;
+                let d = Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 0.6;
+                [a, a + d]
+            })
+            .collect();
+        let grid = SegmentGrid::new(segs.clone(), 4.0);
+        for _ in 0..500 {
+            let p = Vector3::new(rnd(), rnd(), rnd()) * 14.0 - Vector3::repeat(2.0);
+            let brute = segs
+                .iter()
+                .map(|s| point_segment_distance(&p, &s[0], &s[1]))
+                .fold(f64::INFINITY, f64::min)
+                .min(4.0);
+            assert_eq!(grid.nearest(&p, 4.0), brute, "{p:?}");
+        }
+        assert_eq!(SegmentGrid::new(Vec::new(), 1.0).nearest(&Vector3::zeros(), 1.0), 1.0);
+    }
+
+    #[test]
+    fn nearest_rank_percentiles() {
+        let v: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(percentile(&v, 0.95), 19.0);
+        assert_eq!(percentile(&v, 0.5), 10.0);
+        assert_eq!(percentile(&[3.0], 0.95), 3.0);
+        assert_eq!(percentile(&[], 0.5), 0.0);
+    }
+
+    /// A straight curve of length 10 sampled every 0.1 less 1 at each end: samples at arc
+    /// lengths 1.05, 1.15, …, 8.95 (80 of them), evenly spaced.
+    #[test]
+    fn curve_samples_drop_one_radius_at_each_end() {
+        let line = vec![
+            Vector3::zeros(),
+            Vector3::new(3.0, 0.0, 0.0),
+            Vector3::new(3.0, 0.0, 0.0),
+            Vector3::new(10.0, 0.0, 0.0),
+        ];
+        let s = curve_samples(&[line], 0.1, 1.0);
+        assert_eq!(s.len(), 80, "{}", s.len());
+        for (k, p) in s.iter().enumerate() {
+            assert!((p.x - (1.05 + 0.1 * k as f64)).abs() < 1e-9, "{k}: {p:?}");
+        }
+        assert!(curve_samples(&[vec![Vector3::zeros(), Vector3::x()]], 0.1, 0.6).is_empty());
+    }
+
+    /// W of a horizontal line through the bend: samples lie on y = c + s·d(x, c) at the
+    /// requested spacing.
+    #[test]
+    fn warp_samples_lie_on_the_warped_line() {
+        let c = 0.1;
+        let segs: Vec<[Vector2<f64>; 2]> = (0..40)
+            .map(|k| {
+                let x0 = -1.2 + 2.4 * k as f64 / 40.0;
+                [Vector2::new(x0, c), Vector2::new(x0 + 0.06, c)]
+            })
+            .collect();
+        let s = warp_samples(&segs, WarpKind::Bend, 0.8, 0.01, 0.85);
+        assert!(!s.is_empty());
+        for p in &s {
+            let d = crate::edit::warp::displacement(WarpKind::Bend, &Vector2::new(p.x, c)).0;
+            // On a chord of the warped curve (pieces ≤ 0.01: sagitta below 10⁻⁴).
+            assert!((p.y - (c + 0.8 * d)).abs() < 2e-4, "{p:?}");
+            assert!(p.norm() < 0.85);
+        }
+        // Arc length of the warped curve inside the 0.85 disk / spacing ≈ the sample count.
+        let mut len = 0.0;
+        let m = 20000;
+        let mut prev: Option<Vector2<f64>> = None;
+        for k in 0..=m {
+            let x = -1.0 + 2.0 * k as f64 / m as f64;
+            let q = crate::edit::warp::warp(WarpKind::Bend, 0.8, &Vector2::new(x, c));
+            if let Some(p) = prev {
+                if q.norm() < 0.85 && p.norm() < 0.85 {
+                    len += (q - p).norm();
+                }
+            }
+            prev = Some(q);
+        }
+        let expected = len / 0.01;
+        assert!((s.len() as f64 - expected).abs() <= 2.0, "{} vs {expected}", s.len());
+    }
+}
