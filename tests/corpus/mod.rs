@@ -11,15 +11,16 @@
 //!   from a₃ + a₂, with the initial field along its longest axis a₁ (or its UVs). Then the key
 //!   highlight C0 = {hᵀu = 0} runs across the part's front.
 //! - **Placement** ([`place`]): C0 is chained into polylines; a *stretch* is a run of C0 facing
-//!   the eye, turning by less than 30° per segment, and at least one warp radius away from
+//!   the eye, turning by less than 30° between the chords a quarter warp radius before and after
+//!   each point, and at least one warp radius away from
 //!   boundaries, critical points, creases (dihedral > 45°) and the initial field's singular
 //!   triangles. On the longest stretch the brush centre is the point with the largest clearance
 //!   (capped at half the curve's length), preferring the middle. Bend and expand: strength 0.8,
 //!   radius 6 % of the diagonal, centred there, pushing across C0. Curve: an S-curve 25 % of the
 //!   diagonal long through the centre, crossing C0 at about 50°, radius 2 % of the diagonal, traced
 //!   on the surface as a 3D polyline.
-//! - **Measure**: [`highlight_segments`] and [`measure`] are stand-ins with the signatures of
-//!   `grainline::fidelity` (docs: the fidelity API), used until that module lands.
+//! - **Measure**: `grainline::fidelity` — the figures the optimize stage reports per edit
+//!   (`OptimizeStageReport::fidelity`), from the shape the edit tool recorded.
 #![allow(dead_code)]
 
 use std::collections::HashMap;
@@ -27,16 +28,16 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use grainline::edit::support::closest_point_on_triangle;
-use grainline::edit::{Centre, CurveEdit, Edit, Metric, WarpEdit, WarpKind};
+use grainline::edit::{Centre, CurveEdit, Edit, Metric, WarpEdit};
+use grainline::fidelity::EditFidelity;
 use grainline::generate::{curved_panel, kettle_body, Ripple};
 use grainline::geometry::Geometry;
-use grainline::highlight::Symmetry;
 use grainline::mesh::Mesh;
 use grainline::pipeline::optimize::optimize_stage;
 use grainline::pipeline::{prepare, Prepared, Silent, Stages};
 use grainline::scene::{LoadedScene, Scene};
 use grainline::solve::SolverSettings;
-use nalgebra::{Matrix3, Vector2, Vector3};
+use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
 
@@ -78,6 +79,8 @@ pub struct Case {
     pub scale: f64,
     /// `mesh.weld`.
     pub weld: Option<f64>,
+    /// `mesh.allow_nonmanifold`.
+    pub nonmanifold: bool,
     /// The initial field.
     pub init: Init,
     /// The eye (scene units, after scaling).
@@ -121,6 +124,7 @@ pub fn generated_cases(size: Size, names: Option<&[String]>) -> Result<Vec<Case>
                 name,
                 scale: 1.0,
                 weld: None,
+                nonmanifold: false,
                 init: Init::Uv,
                 eye: V3::new(0.0, -420.0, 170.0),
                 target: V3::new(0.0, 0.0, 90.0),
@@ -143,6 +147,7 @@ pub fn generated_cases(size: Size, names: Option<&[String]>) -> Result<Vec<Case>
                     name,
                     scale: 1.0,
                     weld: None,
+                    nonmanifold: false,
                     init: Init::Uv,
                     eye,
                     target: V3::zeros(),
@@ -154,14 +159,16 @@ pub fn generated_cases(size: Size, names: Option<&[String]>) -> Result<Vec<Case>
     Ok(out)
 }
 
-/// The shared meshes of the corpus (file, whether it has UVs, weld distance in file units).
-pub const SHARED: [(&str, bool, Option<f64>); 6] = [
-    ("spot_triangulated.obj", true, None),
-    ("blub_quadrangulated.obj", true, None),
-    ("stanford-bunny.obj", false, None),
-    ("fandisk.obj", false, None),
-    ("rocker-arm.obj", false, None),
-    ("teapot.obj", false, Some(1e-6)),
+/// The shared meshes of the corpus (file, whether it has UVs, weld distance in file units,
+/// non-manifold vertices accepted). The teapot's patches are welded, which leaves one
+/// non-manifold vertex (its spout's tip).
+pub const SHARED: [(&str, bool, Option<f64>, bool); 6] = [
+    ("spot_triangulated.obj", true, None, false),
+    ("blub_quadrangulated.obj", true, None, false),
+    ("stanford-bunny.obj", false, None, false),
+    ("fandisk.obj", false, None, false),
+    ("rocker-arm.obj", false, None, false),
+    ("teapot.obj", false, Some(1e-6), true),
 ];
 
 /// `../shared/meshes` (or `$GRAINLINE_SHARED/meshes`), if present.
@@ -173,24 +180,33 @@ pub fn shared_dir() -> Option<PathBuf> {
     d.exists().then_some(d)
 }
 
-/// The shared meshes' cases (scaled to a 200 mm diagonal); a message when `../shared` is absent.
+/// The shared meshes' cases (scaled to a 200 mm diagonal); a message when `../shared` is absent,
+/// and one per mesh that does not load.
 pub fn shared_cases(names: Option<&[String]>) -> Result<Vec<Case>, String> {
     let Some(dir) = shared_dir() else {
         eprintln!("skipping the shared meshes: ../shared/meshes not found (set GRAINLINE_SHARED)");
         return Ok(Vec::new());
     };
     let mut out = Vec::new();
-    for (file, uv, weld) in SHARED {
+    for (file, uv, weld, nonmanifold) in SHARED {
         let name = file.split(['_', '.']).next().unwrap_or(file).to_string();
         let name = name.strip_prefix("stanford-").unwrap_or(&name).to_string();
         if !names.is_none_or(|l| l.iter().any(|x| *x == name)) {
             continue;
         }
         let path = dir.join(file);
-        let options = grainline::mesh::load::LoadOptions { weld, ..Default::default() };
-        let mesh = grainline::mesh::load::load_obj(&path, &options)
-            .map_err(|e| format!("{name}: {e}"))?
-            .mesh;
+        let options = grainline::mesh::load::LoadOptions {
+            weld,
+            allow_nonmanifold: nonmanifold,
+            ..Default::default()
+        };
+        let mesh = match grainline::mesh::load::load_obj(&path, &options) {
+            Ok(m) => m.mesh,
+            Err(e) => {
+                eprintln!("skipping {name}: {e}");
+                continue;
+            }
+        };
         let (lo, hi) = bbox(&mesh.positions);
         let scale = 200.0 / (hi - lo).norm();
         let (lo, hi) = (lo * scale, hi * scale);
@@ -209,6 +225,7 @@ pub fn shared_cases(names: Option<&[String]>) -> Result<Vec<Case>, String> {
             obj: path,
             scale,
             weld,
+            nonmanifold,
             init: if uv { Init::Uv } else { Init::World(a1) },
             eye: c + 300.0 * view,
             target: c,
@@ -225,6 +242,9 @@ pub fn scene(case: &Case) -> Result<LoadedScene, String> {
         serde_json::json!({ "path": case.obj.display().to_string(), "scale": case.scale });
     if let Some(w) = case.weld {
         mesh["weld"] = w.into();
+    }
+    if case.nonmanifold {
+        mesh["allow_nonmanifold"] = true.into();
     }
     let field = match case.init {
         Init::Uv => serde_json::json!({ "init": "uv", "symmetry": "line" }),
@@ -266,51 +286,6 @@ fn bbox(p: &[V3]) -> (V3, V3) {
         hi = hi.sup(q);
     }
     (lo, hi)
-}
-
-// ---------------------------------------------------------------------------------------------
-// The highlight C0 (stand-in for grainline::fidelity::highlight_segments)
-
-/// Zero set of g = hᵀu per triangle (linear interpolation of g at the corners; line fields:
-/// corners aligned to the first corner's direction first). World-space segments.
-pub fn highlight_segments(mesh: &Mesh, h: &[V3], u: &[V3], symmetry: Symmetry) -> Vec<[V3; 2]> {
-    face_segments(mesh, mesh.faces.iter(), h, u, symmetry)
-}
-
-fn face_segments<'a>(
-    mesh: &Mesh,
-    faces: impl Iterator<Item = &'a [u32; 3]>,
-    h: &[V3],
-    u: &[V3],
-    symmetry: Symmetry,
-) -> Vec<[V3; 2]> {
-    let mut out = Vec::new();
-    for f in faces {
-        let idx = f.map(|i| i as usize);
-        let mut dirs = idx.map(|i| u[i]);
-        if symmetry == Symmetry::Line {
-            for k in 1..3 {
-                if dirs[k].dot(&dirs[0]) < 0.0 {
-                    dirs[k] = -dirs[k];
-                }
-            }
-        }
-        let g: [f64; 3] = std::array::from_fn(|k| h[idx[k]].dot(&dirs[k]));
-        let mut pts = Vec::with_capacity(2);
-        for k in 0..3 {
-            let (a, b) = (k, (k + 1) % 3);
-            let (ga, gb) = (g[a], g[b]);
-            if (ga < 0.0) != (gb < 0.0) && ga != gb {
-                let t = ga / (ga - gb);
-                let (pa, pb) = (mesh.positions[idx[a]], mesh.positions[idx[b]]);
-                pts.push(pa + (pb - pa) * t);
-            }
-        }
-        if pts.len() == 2 && pts.iter().all(|p| p.iter().all(|c| c.is_finite())) {
-            out.push([pts[0], pts[1]]);
-        }
-    }
-    out
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -474,46 +449,123 @@ fn chain(segments: &[[V3; 2]], eps: f64) -> Vec<Vec<V3>> {
     lines
 }
 
-/// The surface near a point: closest point on the mesh, its interpolated normal.
+/// Closest points on the mesh: faces bucketed in a uniform grid (cell: four median face radii;
+/// a face in every cell its bounding box touches), searched ring by ring.
 struct Surface<'a> {
     mesh: &'a Mesh,
     normals: Vec<V3>,
-    centres: Vec<V3>,
-    radii: Vec<f64>,
+    cell: f64,
+    grid: HashMap<[i64; 3], Vec<u32>>,
+    rings: i64,
 }
 
 impl<'a> Surface<'a> {
     fn new(mesh: &'a Mesh, geometry: &Geometry) -> Self {
         let pos = &mesh.positions;
-        let mut centres = Vec::with_capacity(mesh.faces.len());
-        let mut radii = Vec::with_capacity(mesh.faces.len());
-        for f in &mesh.faces {
-            let [a, b, c] = f.map(|i| pos[i as usize]);
-            let m = (a + b + c) / 3.0;
-            radii.push((a - m).norm().max((b - m).norm()).max((c - m).norm()));
-            centres.push(m);
+        let mut radii: Vec<f64> = mesh
+            .faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|i| pos[i as usize]);
+                let m = (a + b + c) / 3.0;
+                (a - m).norm().max((b - m).norm()).max((c - m).norm())
+            })
+            .collect();
+        radii.sort_by(f64::total_cmp);
+        let (lo, hi) = bbox(pos);
+        let extent = (hi - lo).max().max(1e-300);
+        let median = radii.get(radii.len() / 2).copied().unwrap_or(extent);
+        let cell = (4.0 * median).max(extent / 512.0).max(1e-300);
+        let key = |p: &V3| Self::key_of(p, cell);
+        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for (fi, f) in mesh.faces.iter().enumerate() {
+            let (flo, fhi) = bbox(&f.map(|i| pos[i as usize]));
+            let (k0, k1) = (key(&flo), key(&fhi));
+            for x in k0[0]..=k1[0] {
+                for y in k0[1]..=k1[1] {
+                    for z in k0[2]..=k1[2] {
+                        grid.entry([x, y, z]).or_default().push(fi as u32);
+                    }
+                }
+            }
         }
-        Surface { mesh, normals: geometry.frames.iter().map(|f| f.n).collect(), centres, radii }
+        let rings = (extent / cell).ceil() as i64 + 2;
+        Surface { mesh, normals: geometry.frames.iter().map(|f| f.n).collect(), cell, grid, rings }
     }
 
-    /// Closest point, its normal, and whether it lies on a boundary-free interior of a face.
+    fn key_of(p: &V3, cell: f64) -> [i64; 3] {
+        [(p.x / cell).floor() as i64, (p.y / cell).floor() as i64, (p.z / cell).floor() as i64]
+    }
+
+    /// The closest point of the mesh to `p` and the interpolated vertex normal there.
     fn project(&self, p: &V3) -> (V3, V3) {
         let pos = &self.mesh.positions;
-        let mut best = (f64::INFINITY, V3::zeros(), V3::z());
-        for (fi, f) in self.mesh.faces.iter().enumerate() {
-            if (self.centres[fi] - p).norm() - self.radii[fi] >= best.0 {
-                continue;
-            }
+        let k = Self::key_of(p, self.cell);
+        let mut best = (f64::INFINITY, *p, V3::z());
+        let test = |fi: u32, best: &mut (f64, V3, V3)| {
+            let f = self.mesh.faces[fi as usize];
             let [a, b, c] = f.map(|i| pos[i as usize]);
             let (q, w) = closest_point_on_triangle(p, &a, &b, &c);
             let d = (q - p).norm();
             if d < best.0 {
                 let n = f.iter().zip(w).map(|(&i, w)| self.normals[i as usize] * w).sum::<V3>();
-                best = (d, q, n.try_normalize(0.0).unwrap_or(V3::z()));
+                *best = (d, q, n.try_normalize(0.0).unwrap_or(V3::z()));
+            }
+        };
+        for ring in 0..=self.rings {
+            for dx in -ring..=ring {
+                for dy in -ring..=ring {
+                    for dz in -ring..=ring {
+                        if dx.abs().max(dy.abs()).max(dz.abs()) != ring {
+                            continue;
+                        }
+                        if let Some(faces) = self.grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                            for &fi in faces {
+                                test(fi, &mut best);
+                            }
+                        }
+                    }
+                }
+            }
+            // Every face not yet seen lies in a cell at least `ring` cells away.
+            if best.0 <= ring as f64 * self.cell {
+                break;
             }
         }
         (best.1, best.2)
     }
+}
+
+/// For each point of a polyline: whether it turns by more than `max_deg` between the chords to
+/// the points `delta` of arc length before and after it (points nearer an end count as
+/// smooth).
+fn sharp_points(line: &[V3], delta: f64, max_deg: f64) -> Vec<bool> {
+    let n = line.len();
+    let mut s = vec![0.0; n];
+    for k in 1..n {
+        s[k] = s[k - 1] + (line[k] - line[k - 1]).norm();
+    }
+    let cos_max = max_deg.to_radians().cos();
+    let (mut back, mut fwd) = (0usize, 0usize);
+    (0..n)
+        .map(|k| {
+            while back + 1 < k && s[back + 1] <= s[k] - delta {
+                back += 1;
+            }
+            fwd = fwd.max(k);
+            while fwd < n && s[fwd] < s[k] + delta {
+                fwd += 1;
+            }
+            if s[back] > s[k] - delta || fwd >= n {
+                return false;
+            }
+            let (a, b) = (line[k] - line[back], line[fwd] - line[k]);
+            match (a.try_normalize(1e-300), b.try_normalize(1e-300)) {
+                (Some(a), Some(b)) => a.dot(&b) < cos_max,
+                _ => false,
+            }
+        })
+        .collect()
 }
 
 /// Places the edits of a case on its initial field (module documentation).
@@ -524,7 +576,8 @@ pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
     let r_warp = WARP_RADIUS * diag;
     let half_curve = 0.5 * CURVE_LENGTH * diag;
     let u = geom.directions_of(&p.field.phi);
-    let segments = highlight_segments(mesh, &p.field.h, &u, p.field_options.symmetry);
+    let segments =
+        grainline::fidelity::highlight_segments(mesh, &p.field.h, &u, p.field_options.symmetry);
     if segments.is_empty() {
         return Err("the initial field has no key highlight (hᵀu has no zero)".into());
     }
@@ -534,6 +587,7 @@ pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
     // The best stretch: (length, its points, clearances).
     let mut best: Option<(f64, Vec<V3>, Vec<f64>)> = None;
     for line in &lines {
+        let sharp = sharp_points(line, 0.25 * r_warp, 30.0);
         let mut run: Vec<V3> = Vec::new();
         let mut run_clear: Vec<f64> = Vec::new();
         let mut flush = |run: &mut Vec<V3>, rc: &mut Vec<f64>| {
@@ -556,10 +610,7 @@ pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
             let c = clear.at(&mid);
             let (_, n) = surface.project(&mid);
             let facing = n.dot(&(eye - mid).normalize()) > 0.3;
-            let turn_ok = run.len() < 2 || {
-                let prev = run[run.len() - 1] - run[run.len() - 2];
-                prev.normalize().dot(&d.normalize()) > 30f64.to_radians().cos()
-            };
+            let turn_ok = !sharp[k];
             if c < r_warp || !facing || !turn_ok {
                 flush(&mut run, &mut run_clear);
                 if c < r_warp || !facing {
@@ -694,240 +745,6 @@ pub fn edits(pl: &Placement) -> Vec<(&'static str, Edit)> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The measure (stand-in for grainline::fidelity::edit_fidelity)
-
-/// What an edit asked for (stand-in for `grainline::fidelity::EditShape`).
-#[derive(Clone, Debug)]
-pub enum Shape {
-    /// Bend / expand: the brush plane and the warp.
-    Warp {
-        /// Which warp.
-        kind: WarpKind,
-        /// Its strength.
-        strength: f64,
-        /// Brush radius.
-        radius: f64,
-        /// Plane origin.
-        origin: V3,
-        /// Plane x axis.
-        ex: V3,
-        /// Plane y axis (the push direction).
-        ey: V3,
-        /// Support vertices.
-        support: Vec<u32>,
-    },
-    /// Curve: the drawn polylines and the support.
-    Curve {
-        /// Brush radius.
-        radius: f64,
-        /// The curves, on the surface.
-        polylines: Vec<Vec<V3>>,
-        /// Support vertices.
-        support: Vec<u32>,
-    },
-}
-
-/// The shape of a placed edit: the brush plane refitted as src/edit/support.rs does (weighted
-/// PCA over the vertices within the radius, straight-line distance), or the curve's support.
-pub fn shape_of(mesh: &Mesh, geom: &Geometry, pl: &Placement, tool: &str) -> Shape {
-    let pos = &mesh.positions;
-    if tool == "curve" {
-        let r = CURVE_RADIUS * pl.diag;
-        let support = (0..pos.len())
-            .filter(|&i| dist_to_polyline(&pos[i], &pl.curve) < r)
-            .map(|i| i as u32)
-            .collect();
-        return Shape::Curve { radius: r, polylines: vec![pl.curve.clone()], support };
-    }
-    let r = WARP_RADIUS * pl.diag;
-    let support: Vec<u32> =
-        (0..pos.len()).filter(|&i| (pos[i] - pl.point).norm() < r).map(|i| i as u32).collect();
-    let w: Vec<f64> = support
-        .iter()
-        .map(|&i| {
-            geom.areas[i as usize].max(0.0)
-                * (1.0 - ((pos[i as usize] - pl.point).norm() / r).powi(2))
-        })
-        .collect();
-    let total: f64 = w.iter().sum::<f64>().max(1e-300);
-    let centroid: V3 =
-        support.iter().zip(&w).map(|(&i, w)| pos[i as usize] * *w).sum::<V3>() / total;
-    let mean_n: V3 = support.iter().zip(&w).map(|(&i, w)| geom.frames[i as usize].n * *w).sum();
-    let mut cov = Matrix3::zeros();
-    for (&i, w) in support.iter().zip(&w) {
-        let d = pos[i as usize] - centroid;
-        cov += d * d.transpose() * (*w / total);
-    }
-    let eig = nalgebra::SymmetricEigen::new(cov);
-    let mut order = [0usize, 1, 2];
-    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    let mut n: V3 = eig.eigenvectors.column(order[0]).into();
-    if !(eig.eigenvalues[order[0]] <= 0.5 * eig.eigenvalues[order[1]]) {
-        n = mean_n.try_normalize(0.0).unwrap_or(pl.normal);
-    }
-    if n.dot(&mean_n) < 0.0 {
-        n = -n;
-    }
-    let ey = (pl.across - n * n.dot(&pl.across)).normalize();
-    let ex = ey.cross(&n);
-    let kind = if tool == "bend" { WarpKind::Bend } else { WarpKind::Expand };
-    Shape::Warp { kind, strength: WARP_STRENGTH, radius: r, origin: pl.point, ex, ey, support }
-}
-
-fn dist_to_segment(p: &V3, a: &V3, b: &V3) -> f64 {
-    let d = b - a;
-    let l2 = d.norm_squared();
-    let t = if l2 > 0.0 { ((p - a).dot(&d) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    (a + d * t - p).norm()
-}
-
-fn dist_to_polyline(p: &V3, line: &[V3]) -> f64 {
-    line.windows(2).map(|w| dist_to_segment(p, &w[0], &w[1])).fold(f64::INFINITY, f64::min)
-}
-
-fn dist2_to_segment(p: &Vector2<f64>, a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
-    let d = b - a;
-    let l2 = d.norm_squared();
-    let t = if l2 > 0.0 { ((p - a).dot(&d) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    (a + d * t - p).norm()
-}
-
-/// The figures of one edit (stand-in for `grainline::fidelity::EditFidelity`).
-#[derive(Clone, Debug, Default)]
-pub struct Figures {
-    /// Target samples compared.
-    pub samples: usize,
-    /// Share within 0.05 r of C1.
-    pub within: f64,
-    /// 95th-percentile distance, units of r.
-    pub p95: f64,
-    /// Median distance, units of r.
-    pub median: f64,
-    /// Singular triangles inside the support before.
-    pub singular_before: usize,
-    /// … after.
-    pub singular_after: usize,
-    /// Why it could not be measured.
-    pub note: Option<String>,
-}
-
-/// Tolerance (× r), compare radius (× r), sample spacing (× r) of the measure.
-pub const TOLERANCE: f64 = 0.05;
-const COMPARE: f64 = 0.85;
-const SPACING: f64 = 0.01;
-
-/// The figures for one edit (stand-in; see the fidelity API).
-#[allow(clippy::too_many_arguments)]
-pub fn measure(
-    mesh: &Mesh,
-    geom: &Geometry,
-    h: &[V3],
-    symmetry: Symmetry,
-    phi_before: &[f64],
-    phi_after: &[f64],
-    shape: &Shape,
-) -> Figures {
-    let u0 = geom.directions_of(phi_before);
-    let u1 = geom.directions_of(phi_after);
-    let (support, radius) = match shape {
-        Shape::Warp { support, radius, .. } | Shape::Curve { support, radius, .. } => {
-            (support, *radius)
-        }
-    };
-    let mut inside = vec![false; mesh.num_vertices()];
-    for &i in support {
-        inside[i as usize] = true;
-    }
-    // Only the highlight near the support: segments of faces with a corner inside.
-    let local = |u: &[V3]| -> Vec<[V3; 2]> {
-        let faces = mesh.faces.iter().filter(|f| f.iter().any(|&i| inside[i as usize]));
-        face_segments(mesh, faces, h, u, symmetry)
-    };
-    let k = symmetry.k();
-    let count = |phi: &[f64]| {
-        grainline::solve::singularities(mesh, geom, phi, k)
-            .iter()
-            .filter(|s| mesh.faces[s.face as usize].iter().all(|&i| inside[i as usize]))
-            .count()
-    };
-    let mut fig = Figures {
-        singular_before: count(phi_before),
-        singular_after: count(phi_after),
-        ..Figures::default()
-    };
-    let c1 = local(&u1);
-    let mut dist: Vec<f64> = Vec::new();
-    match shape {
-        Shape::Warp { kind, strength, origin, ex, ey, .. } => {
-            let plane =
-                |p: &V3| Vector2::new(ex.dot(&(p - origin)), ey.dot(&(p - origin))) / radius;
-            let c1p: Vec<[Vector2<f64>; 2]> = c1
-                .iter()
-                .map(|s| [plane(&s[0]), plane(&s[1])])
-                .filter(|s| s[0].norm() <= 1.0 && s[1].norm() <= 1.0)
-                .collect();
-            for s in local(&u0) {
-                let (a, b) = (plane(&s[0]), plane(&s[1]));
-                let n = ((b - a).norm() / SPACING).ceil().max(1.0) as usize;
-                for j in 0..n {
-                    let q = a + (b - a) * ((j as f64 + 0.5) / n as f64);
-                    let w = grainline::edit::warp::warp(*kind, *strength, &q);
-                    if w.norm() > COMPARE {
-                        continue;
-                    }
-                    let d = c1p
-                        .iter()
-                        .map(|c| dist2_to_segment(&w, &c[0], &c[1]))
-                        .fold(f64::INFINITY, f64::min);
-                    dist.push(d);
-                }
-            }
-        }
-        Shape::Curve { polylines, .. } => {
-            for line in polylines {
-                let total: f64 = line.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-                let mut s = 0.0;
-                for w in line.windows(2) {
-                    let l = (w[1] - w[0]).norm();
-                    let n = (l / (SPACING * radius)).ceil().max(1.0) as usize;
-                    for j in 0..n {
-                        let t = (j as f64 + 0.5) / n as f64;
-                        let sj = s + t * l;
-                        if sj < radius || sj > total - radius {
-                            continue;
-                        }
-                        let p = w[0] + (w[1] - w[0]) * t;
-                        let d = c1
-                            .iter()
-                            .map(|c| dist_to_segment(&p, &c[0], &c[1]))
-                            .fold(f64::INFINITY, f64::min);
-                        dist.push(d / radius);
-                    }
-                    s += l;
-                }
-            }
-        }
-    }
-    fig.samples = dist.len();
-    if dist.is_empty() {
-        fig.note = Some("no target sample to compare".into());
-        return fig;
-    }
-    // A sample with no C1 near it is as far as the support is wide.
-    for d in &mut dist {
-        if !d.is_finite() {
-            *d = 2.0;
-        }
-    }
-    dist.sort_by(f64::total_cmp);
-    fig.within = dist.iter().filter(|&&d| d <= TOLERANCE).count() as f64 / dist.len() as f64;
-    let q = |p: f64| dist[((p * (dist.len() - 1) as f64).round() as usize).min(dist.len() - 1)];
-    fig.p95 = q(0.95);
-    fig.median = q(0.5);
-    fig
-}
-
-// ---------------------------------------------------------------------------------------------
 // Running a case
 
 /// One row of the table.
@@ -943,8 +760,8 @@ pub struct Outcome {
     pub energy_key: bool,
     /// Vertices of the part.
     pub vertices: usize,
-    /// The figures.
-    pub figures: Figures,
+    /// The figures (`None` when the edit did not run).
+    pub figures: Option<EditFidelity>,
     /// Accepted iterations.
     pub iterations: usize,
     /// The iteration cap.
@@ -1015,7 +832,7 @@ pub fn run_edit(
         energy: energy.into(),
         energy_key: key,
         vertices: mesh.num_vertices(),
-        figures: Figures::default(),
+        figures: None,
         iterations: 0,
         max_iterations: scene.scene.solver.max_iterations,
         stop: String::new(),
@@ -1041,17 +858,10 @@ pub fn run_edit(
         .chain(r.iterations.iter().map(|i| i.energies.total()))
         .collect();
     out.stages = r.iterations.iter().map(|i| i.stage).collect();
-    let geom = &p.prepared.field.geometry;
-    let shape = shape_of(mesh, geom, pl, tool);
-    out.figures = measure(
-        mesh,
-        geom,
-        &o.h,
-        p.prepared.field_options.symmetry,
-        &p.prepared.field.phi,
-        &o.phi,
-        &shape,
-    );
+    out.figures = o.report.fidelity.first().cloned();
+    if out.figures.is_none() {
+        out.error = Some("the optimize report has no fidelity for the edit".into());
+    }
     Ok(Some(out))
 }
 
