@@ -97,7 +97,8 @@ fn main() {
         match &p.placement {
             Ok(pl) => eprintln!(
                 "{}: {} vertices, field {:.2} s; C0 {} segments, stretch {:.1} mm, centre \
-                 [{:.1}, {:.1}, {:.1}] clearance {:.1} mm, curve {} points",
+                 [{:.1}, {:.1}, {:.1}] clearance {:.1} mm, curve {} points; obstacles: {} \
+                 boundary edges, {} creases, {} critical vertices, {} singular triangles",
                 case.name,
                 p.prepared.mesh.num_vertices(),
                 t.elapsed().as_secs_f64(),
@@ -107,7 +108,11 @@ fn main() {
                 pl.point.y,
                 pl.point.z,
                 pl.clearance,
-                pl.curve.len()
+                pl.curve.len(),
+                pl.obstacles[0],
+                pl.obstacles[1],
+                pl.obstacles[2],
+                pl.obstacles[3]
             ),
             Err(e) => {
                 eprintln!("{}: no placement: {e}", case.name);
@@ -168,7 +173,6 @@ fn row(o: &Outcome) -> String {
             o.case, o.vertices, o.edit, energy
         );
     };
-    let cap = if o.iterations >= o.max_iterations { " (cap)" } else { "" };
     let mono = if o.energy_monotone() { "" } else { ", energy rose" };
     let figs = if f.samples == 0 {
         format!("– | – | – ({})", f.note.as_deref().unwrap_or("nothing measured").replace('|', "/"))
@@ -176,7 +180,7 @@ fn row(o: &Outcome) -> String {
         format!("{:.1} % | {:.3} | {:.3}", 100.0 * f.within, f.p95, f.median)
     };
     format!(
-        "| {} | {} | {} | {} | {} | {} → {} | {}{cap} | {}{mono} | {:.2} |",
+        "| {} | {} | {} | {} | {} | {} → {} | {} | {}{mono} | {:.2} |",
         o.case,
         o.vertices,
         o.edit,

@@ -114,3 +114,43 @@ fn the_edits_land() {
     }
     assert!(missed.is_empty(), "edits that missed:\n{}", missed.join("\n"));
 }
+
+/// The generated parts are the sizes the corpus promises, against their formulas: the panel's
+/// corner height (100² / 600 + 75² / 400) / 2 = 15.365 mm, the 0.15 mm ripple (the 2 mm grid
+/// has x = 2 mm, where sin(2π·2/8) = 1), the body's end radii 38 + 40 sin(0.1π) and
+/// 38 + 20 sin(0.85π), and the vertex counts of both sizes.
+#[test]
+fn the_generated_parts_match_their_formulas() {
+    use grainline::generate::{curved_panel, kettle_body, Ripple};
+    let panel = curved_panel(200.0, 150.0, 600.0, 400.0, 100, 75, None);
+    let corner = panel.positions.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
+    assert!((corner - 0.5 * (100.0f64.powi(2) / 600.0 + 75.0f64.powi(2) / 400.0)).abs() < 1e-9);
+    let rippled = curved_panel(200.0, 150.0, 600.0, 400.0, 100, 75, Some(Ripple::CORPUS));
+    let dev = panel
+        .positions
+        .iter()
+        .zip(&rippled.positions)
+        .map(|(a, b)| (b.z - a.z).abs())
+        .fold(0.0, f64::max);
+    assert!((dev - 0.15).abs() < 1e-9, "ripple amplitude {dev}");
+    let sheet = curved_panel(200.0, 150.0, f64::INFINITY, f64::INFINITY, 100, 75, None);
+    assert!(sheet.positions.iter().all(|p| p.z == 0.0 && p.x.abs() <= 100.0 && p.y.abs() <= 75.0));
+    let body = kettle_body(80, 80, None);
+    let radius_at = |z: f64| {
+        let r: Vec<f64> = body
+            .positions
+            .iter()
+            .filter(|p| (p.z - z).abs() < 1e-9)
+            .map(|p| p.x.hypot(p.y))
+            .collect();
+        assert_eq!(r.len(), 80, "one ring at z = {z}");
+        r.iter().sum::<f64>() / r.len() as f64
+    };
+    let pi = std::f64::consts::PI;
+    assert!((radius_at(0.0) - (38.0 + 40.0 * (0.1 * pi).sin())).abs() < 1e-9);
+    assert!((radius_at(180.0) - (38.0 + 20.0 * (0.85 * pi).sin())).abs() < 1e-9);
+    assert_eq!(body.num_vertices(), 80 * 81);
+    assert_eq!(kettle_body(200, 200, None).num_vertices(), 40_200);
+    assert_eq!(curved_panel(200.0, 150.0, 600.0, 400.0, 240, 180, None).num_vertices(), 43_621);
+    assert_eq!(panel.num_vertices(), 101 * 76);
+}

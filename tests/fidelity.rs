@@ -10,8 +10,8 @@ use std::process::Command;
 use grainline::edit::{apply_edits, Centre, CurveEdit, Edit, EditInput, EditOptions, Metric};
 use grainline::edit::{WarpEdit, WarpKind};
 use grainline::fidelity::{
-    edit_fidelity, highlight_segments, lift_uv_polylines, EditFidelity, EditShape,
-    FidelityOptions, MAX_DISTANCE,
+    edit_fidelity, highlight_segments, lift_uv_polylines, EditFidelity, EditShape, FidelityOptions,
+    MAX_DISTANCE,
 };
 use grainline::generate::{self, Grid};
 use grainline::geometry::{Geometry, GeometryOptions, GradientForm};
@@ -31,8 +31,9 @@ impl Plane {
     fn new() -> Self {
         let mesh = generate::plane(1.5, Grid::new(120, 120));
         let geom = Geometry::compute(&mesh, &GeometryOptions::default());
-        let h = (Vector3::new(0.3, -0.5, 1.0).normalize() + Vector3::new(0.0, -0.2, 1.0).normalize())
-            .normalize();
+        let h = (Vector3::new(0.3, -0.5, 1.0).normalize()
+            + Vector3::new(0.0, -0.2, 1.0).normalize())
+        .normalize();
         Plane { mesh, geom, h }
     }
 
@@ -326,7 +327,16 @@ fn nothing_to_compare_gives_a_note_and_no_nan() {
     assert!(e.is_err());
     let bad = FidelityOptions { tolerance: f64::NAN, ..FidelityOptions::default() };
     let e = edit_fidelity(
-        &pl.mesh, &pl.geom, &pl.hs(), Symmetry::Line, &line, &line, 0, "bend", &shape, &bad,
+        &pl.mesh,
+        &pl.geom,
+        &pl.hs(),
+        Symmetry::Line,
+        &line,
+        &line,
+        0,
+        "bend",
+        &shape,
+        &bad,
     );
     assert!(e.is_err());
 }
@@ -481,7 +491,8 @@ fn reports_carry_the_figures_and_the_cli_warns_about_misses() {
         }
         let within = f["within"].as_f64().unwrap();
         let p95 = f["p95"].as_f64().unwrap();
-        let (sb, sa) = (f["singular_before"].as_u64().unwrap(), f["singular_after"].as_u64().unwrap());
+        let (sb, sa) =
+            (f["singular_before"].as_u64().unwrap(), f["singular_after"].as_u64().unwrap());
         let landed = f["samples"].as_u64().unwrap() > 0 && within >= 0.9 && p95 <= 0.10 && sa <= sb;
         assert_eq!(f["landed"].as_bool().unwrap(), landed, "{f}");
         let head = format!("edit [{}] ({})", f["index"], f["tool"].as_str().unwrap());

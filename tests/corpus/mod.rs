@@ -313,11 +313,13 @@ pub struct Placement {
     pub c0_segments: usize,
     /// The curve edit's polyline (on the surface).
     pub curve: Vec<V3>,
+    /// Obstacles: boundary edges, crease edges, critical vertices, singular triangles.
+    pub obstacles: [usize; 4],
 }
 
 /// Points to stay away from: boundary vertices, critical points, crease vertices (dihedral
 /// angle above 45°) and the centroids of the initial field's singular triangles.
-fn obstacles(mesh: &Mesh, p: &Prepared) -> Vec<V3> {
+fn obstacles(mesh: &Mesh, p: &Prepared) -> (Vec<V3>, [usize; 4]) {
     let pos = &mesh.positions;
     let fn_: Vec<V3> = mesh
         .faces
@@ -335,23 +337,27 @@ fn obstacles(mesh: &Mesh, p: &Prepared) -> Vec<V3> {
         }
     }
     let mut bad = vec![false; pos.len()];
+    let mut counts = [0usize; 4];
     let cos45 = std::f64::consts::FRAC_1_SQRT_2;
     for (&(a, b), fs) in &edges {
-        let sharp = fs.len() != 2 || fn_[fs[0]].dot(&fn_[fs[1]]) < cos45;
-        if sharp {
+        let boundary = fs.len() != 2;
+        if boundary || fn_[fs[0]].dot(&fn_[fs[1]]) < cos45 {
+            counts[if boundary { 0 } else { 1 }] += 1;
             bad[a as usize] = true;
             bad[b as usize] = true;
         }
     }
     for (i, &c) in p.field.critical.iter().enumerate() {
         bad[i] |= c;
+        counts[2] += c as usize;
     }
     let mut out: Vec<V3> = (0..pos.len()).filter(|&i| bad[i]).map(|i| pos[i]).collect();
     let k = p.field_options.symmetry.k();
     for s in grainline::solve::singularities(mesh, &p.field.geometry, &p.field.phi, k) {
         out.push(V3::from(s.position));
+        counts[3] += 1;
     }
-    out
+    (out, counts)
 }
 
 /// Nearest-obstacle distances, capped (a uniform grid of cell `cap`).
@@ -581,7 +587,8 @@ pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
     if segments.is_empty() {
         return Err("the initial field has no key highlight (hᵀu has no zero)".into());
     }
-    let clear = Clearance::new(&obstacles(mesh, p), half_curve);
+    let (obstacle_points, obstacles) = obstacles(mesh, p);
+    let clear = Clearance::new(&obstacle_points, half_curve);
     let surface = Surface::new(mesh, geom);
     let lines = chain(&segments, 1e-7 * diag);
     // The best stretch: (length, its points, clearances).
@@ -680,6 +687,7 @@ pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
         stretch: length,
         c0_segments: segments.len(),
         curve,
+        obstacles,
     })
 }
 
