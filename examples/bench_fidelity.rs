@@ -14,7 +14,8 @@
 //! build's scene loader does not know is skipped, and "tensor" then runs today's solver). Prints
 //! a markdown table: the share of the target highlight within 0.05 r of the solved one, its
 //! 95th-percentile distance (× r), the singular triangles inside the support before → after,
-//! the iterations, the stop reason and the wall time of the edits and the solve.
+//! the iterations, the stop reason and the wall time of the optimize stage (the edits, the solve
+//! and the fidelity measure).
 //!
 //! Cases: body, body-ripple, panel, panel-ripple, sheet, sheet-ripple, spot, blub, bunny,
 //! fandisk, rocker-arm, teapot. `--small` uses the test's coarse generated parts.
@@ -135,7 +136,7 @@ fn main() {
     }
     println!(
         "| case | V | edit | energy | within 0.05 r | p95 (× r) | median (× r) | singular before → \
-         after | iterations | stop | edits + solve (s) |"
+         after | iterations | stop | optimize stage (s) |"
     );
     println!("|---|---:|---|---|---:|---:|---:|---:|---:|---|---:|");
     for o in &rows {

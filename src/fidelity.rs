@@ -142,7 +142,10 @@ impl FidelityOptions {
             } else {
                 Err(Error::invalid_arg(
                     format!("fidelity.{name}"),
-                    format!("must be within {}{lo}, {hi}], got {x}", if open_lo { "(" } else { "[" }),
+                    format!(
+                        "must be within {}{lo}, {hi}], got {x}",
+                        if open_lo { "(" } else { "[" }
+                    ),
                 ))
             }
         };
@@ -414,11 +417,7 @@ fn warp_samples(
             prev = next;
         }
     }
-    rs.out
-        .into_iter()
-        .map(|p| Vector2::new(p.x, p.y))
-        .filter(|p| p.norm() < compare)
-        .collect()
+    rs.out.into_iter().map(|p| Vector2::new(p.x, p.y)).filter(|p| p.norm() < compare).collect()
 }
 
 /// Curve samples every `spacing` (scene units), more than `trim` of arc length from either end
@@ -542,13 +541,8 @@ pub fn edit_fidelity(
                 .iter()
                 .map(|s| s.map(|p| to_plane(&p)))
                 .collect();
-            let samples = warp_samples(
-                &c0,
-                *kind,
-                *strength,
-                options.sample_spacing,
-                options.compare_radius,
-            );
+            let samples =
+                warp_samples(&c0, *kind, *strength, options.sample_spacing, options.compare_radius);
             let c1: Vec<[Vector3<f64>; 2]> = segments_on(mesh, h, u_after, symmetry, &faces)
                 .iter()
                 .map(|s| s.map(|p| to_plane(&p)))
@@ -609,10 +603,7 @@ pub fn edit_fidelity(
         missed.push(format!("p95 {:.3} r (goal ≤ {GOAL_P95} r)", fid.p95));
     }
     if fid.singular_after > fid.singular_before {
-        missed.push(format!(
-            "singular triangles {} → {}",
-            fid.singular_before, fid.singular_after
-        ));
+        missed.push(format!("singular triangles {} → {}", fid.singular_before, fid.singular_after));
     }
     fid.landed = missed.is_empty();
     if !fid.landed {

@@ -378,8 +378,7 @@ pub(crate) fn apply(
         (found, crate::fidelity::lift_uv_polylines(ctx.mesh, &lines))
     };
     let support = (0..found.len()).filter(|&i| found[i].is_some()).map(|i| i as u32).collect();
-    report.shape =
-        Some(crate::fidelity::EditShape::Curve { radius: e.radius, polylines, support });
+    report.shape = Some(crate::fidelity::EditShape::Curve { radius: e.radius, polylines, support });
     let mut count = 0;
     let mut critical = 0;
     for (i, hit) in found.into_iter().enumerate() {
