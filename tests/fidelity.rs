@@ -155,9 +155,13 @@ fn segments_lie_on_the_known_circle_and_cover_it() {
 fn a_field_on_the_warped_line_lands() {
     let pl = Plane::new();
     let before = pl.field(|_, y| y - C);
-    for (kind, target) in
-        [(WarpKind::Bend, bent_line as fn(f64) -> f64), (WarpKind::Expand, expanded_line)]
-    {
+    // The largest displacement of the line: S(1 − C²)²/2 times 1 (bend) or g(C) (expand).
+    let g = C.sin() / (C.sin().powi(2) + 0.02f64.powi(2)).powf(0.25);
+    let most = S * (1.0 - C * C).powi(2) / 2.0;
+    for (kind, target, most) in [
+        (WarpKind::Bend, bent_line as fn(f64) -> f64, most),
+        (WarpKind::Expand, expanded_line, most * g),
+    ] {
         let after = pl.field(|x, y| y - target(x));
         let shape = warp(kind, S, pl.within(1.0, Vector2::zeros()));
         let f = pl.fidelity(Symmetry::Oriented, &before, &after, &shape);
@@ -168,9 +172,11 @@ fn a_field_on_the_warped_line_lands() {
         assert!(f.p95 < 0.005, "{kind:?}: {f:?}");
         assert_eq!((f.singular_before, f.singular_after), (0, 0));
         assert!(f.landed && f.note.is_none(), "{kind:?}: {f:?}");
-        // The unwarped line is not the target: the bend moves it by up to S/2 = 0.4.
+        // The unwarped line is not the target: the warp moves it by up to `most` (0.39 for
+        // the bend, 0.12 for the expand).
         let f = pl.fidelity(Symmetry::Oriented, &before, &before, &shape);
-        assert!(!f.landed && f.within < 0.5 && f.p95 > 0.2, "{kind:?}: {f:?}");
+        assert!(!f.landed && f.within < 0.5, "{kind:?}: {f:?}");
+        assert!(f.p95 > 0.7 * most && f.p95 < most + 0.005, "{kind:?} {most}: {f:?}");
         assert!(f.note.as_deref().unwrap().contains("within"), "{f:?}");
     }
 }
@@ -233,7 +239,7 @@ fn line_field_sign_flips_do_not_change_the_figures() {
         u.iter()
             .map(|v| {
                 state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                if (state >> 33) % 3 == 0 {
+                if (state >> 33).is_multiple_of(3) {
                     -v
                 } else {
                     *v
@@ -278,9 +284,15 @@ fn an_index_one_singularity_inside_the_support_is_counted() {
     for symmetry in [Symmetry::Oriented, Symmetry::Line] {
         let inside = radial(Vector2::new(0.0131, 0.0072));
         let f = pl.fidelity(symmetry, &before, &inside, &shape);
-        assert_eq!((f.singular_before, f.singular_after), (0, 1), "{symmetry:?}: {f:?}");
+        // Oriented: one face of index 1. A line field wraps differences to (−90°, 90°], and
+        // the face around p₀ spans more than 90° between two corners: the +1 then shows as two
+        // adjacent +½ faces.
+        let expected = if symmetry == Symmetry::Oriented { 1..=1 } else { 1..=2 };
+        assert_eq!(f.singular_before, 0, "{symmetry:?}: {f:?}");
+        assert!(expected.contains(&f.singular_after), "{symmetry:?}: {f:?}");
         assert!(!f.landed);
-        assert!(f.note.as_deref().unwrap().contains("singular triangles 0 → 1"), "{f:?}");
+        let note = format!("singular triangles 0 → {}", f.singular_after);
+        assert!(f.note.as_deref().unwrap().contains(&note), "{f:?}");
         let outside = radial(Vector2::new(0.9131, 0.0072));
         let f = pl.fidelity(symmetry, &before, &outside, &shape);
         assert_eq!((f.singular_before, f.singular_after), (0, 0), "{symmetry:?}: {f:?}");
