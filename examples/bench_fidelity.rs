@@ -140,7 +140,7 @@ fn main() {
     );
     println!("|---|---:|---|---|---:|---:|---:|---:|---:|---|---:|");
     for o in &rows {
-        println!("{}", row(&o));
+        println!("{}", row(o));
     }
     let landed = rows
         .iter()

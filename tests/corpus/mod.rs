@@ -191,7 +191,7 @@ pub fn shared_cases(names: Option<&[String]>) -> Result<Vec<Case>, String> {
     for (file, uv, weld, nonmanifold) in SHARED {
         let name = file.split(['_', '.']).next().unwrap_or(file).to_string();
         let name = name.strip_prefix("stanford-").unwrap_or(&name).to_string();
-        if !names.is_none_or(|l| l.iter().any(|x| *x == name)) {
+        if !names.is_none_or(|l| l.contains(&name)) {
             continue;
         }
         let path = dir.join(file);
