@@ -28,7 +28,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use grainline::edit::support::closest_point_on_triangle;
-use grainline::edit::{Centre, CurveEdit, Edit, Metric, WarpEdit};
+use grainline::edit::Edit;
 use grainline::fidelity::EditFidelity;
 use grainline::generate::{curved_panel, kettle_body, Ripple};
 use grainline::geometry::Geometry;
@@ -91,16 +91,27 @@ pub struct Case {
     pub light: V3,
 }
 
-/// A directory for the generated OBJ files (one per process).
+/// The directory of the generated OBJ files and scenes (one for every run, so nothing piles up
+/// in the temporary directory).
 pub fn scratch_dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("grainline-corpus-{}", std::process::id()));
+    let d = std::env::temp_dir().join("grainline-corpus");
     let _ = std::fs::create_dir_all(&d);
     d
 }
 
+/// Writes a generated part (to a temporary name first, then renamed: tests running at the same
+/// time never read a half-written file).
 fn write_obj(mesh: &Mesh, name: &str) -> Result<PathBuf, String> {
-    let p = scratch_dir().join(format!("{name}.obj"));
-    std::fs::write(&p, grainline::mesh::write::obj_string(mesh, name))
+    let dir = scratch_dir();
+    let p = dir.join(format!("{name}-{}v.obj", mesh.num_vertices()));
+    let tmp = dir.join(format!(
+        "{name}-{}v.{}.{:?}.tmp",
+        mesh.num_vertices(),
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::write(&tmp, grainline::mesh::write::obj_string(mesh, name))
+        .and_then(|_| std::fs::rename(&tmp, &p))
         .map_err(|e| format!("{}: {e}", p.display()))?;
     Ok(p)
 }
@@ -728,28 +739,26 @@ fn s_curve(surface: &Surface, p: &V3, base: &V3, len: f64) -> Vec<V3> {
 
 /// The three edits of a placement: bend, expand, curve.
 pub fn edits(pl: &Placement) -> Vec<(&'static str, Edit)> {
+    // Built from scene JSON, so keys added later (with their defaults) need no change here.
     let arr = |v: &V3| [v.x, v.y, v.z];
-    let warp = WarpEdit {
-        centre: Centre::Point(arr(&pl.point)),
-        radius: WARP_RADIUS * pl.diag,
-        metric: Metric::Geodesic,
-        strength: WARP_STRENGTH,
-        direction: Some(arr(&pl.across)),
-        weight: 1.0,
+    let warp = |tool: &str| {
+        serde_json::json!({
+            "tool": tool,
+            "centre": { "point": arr(&pl.point) },
+            "radius": WARP_RADIUS * pl.diag,
+            "strength": WARP_STRENGTH,
+            "direction": arr(&pl.across),
+        })
     };
-    let curve = CurveEdit {
-        svg: None,
-        uv: None,
-        points: Some(vec![pl.curve.iter().map(arr).collect()]),
-        radius: CURVE_RADIUS * pl.diag,
-        weight: 1.0,
-        tolerance: 1e-3,
-    };
-    vec![
-        ("bend", Edit::Bend(warp.clone())),
-        ("expand", Edit::Expand(warp)),
-        ("curve", Edit::Curve(curve)),
-    ]
+    let curve = serde_json::json!({
+        "tool": "curve",
+        "points": [pl.curve.iter().map(arr).collect::<Vec<_>>()],
+        "radius": CURVE_RADIUS * pl.diag,
+    });
+    [("bend", warp("bend")), ("expand", warp("expand")), ("curve", curve)]
+        .into_iter()
+        .map(|(name, json)| (name, serde_json::from_value(json).expect("a valid edit")))
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------------
