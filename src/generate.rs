@@ -224,6 +224,64 @@ pub fn revolve(profile: impl Fn(f64) -> (f64, f64), n_around: usize, n_profile: 
     })
 }
 
+/// A ripple of the acceptance corpus (issue 13): `amplitude · sin(2π·x / wavelength)` along the
+/// surface normal, x the coordinate the ripple runs across (millimetres on the corpus parts).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ripple {
+    /// Amplitude, scene units (the corpus uses 0.15 mm).
+    pub amplitude: f64,
+    /// Wavelength, scene units (the corpus uses 8 mm).
+    pub wavelength: f64,
+}
+
+impl Ripple {
+    /// The corpus ripple: 0.15 mm amplitude, 8 mm wavelength.
+    pub const CORPUS: Ripple = Ripple { amplitude: 0.15, wavelength: 8.0 };
+
+    /// The offset at coordinate `x`.
+    pub fn offset(&self, x: f64) -> f64 {
+        self.amplitude * (std::f64::consts::TAU * x / self.wavelength).sin()
+    }
+}
+
+/// A kettle-like body of revolution about the z axis, in millimetres: 180 mm tall, open at the
+/// bottom (radius 50 mm) and at the neck (radius 47 mm), widest (about 68 mm) a little below
+/// mid-height: r(z) = 38 + 40·sin(π·(0.1 + 0.75·s))·(1 − 0.5·s), s = z/180, smooth with
+/// |∂r/∂z| < 0.6 everywhere. UVs are (angle / 2π, t) as in [`revolve`]; normals point outwards.
+/// With `ripple`, the radius gains `ripple.offset(z)` (rings around the body).
+pub fn kettle_body(n_around: usize, n_profile: usize, ripple: Option<Ripple>) -> Mesh {
+    let height = 180.0;
+    revolve(
+        |t| {
+            let z = height * t;
+            let r = 38.0 + 40.0 * (std::f64::consts::PI * (0.1 + 0.75 * t)).sin() * (1.0 - 0.5 * t);
+            (r + ripple.map_or(0.0, |w| w.offset(z)), z)
+        },
+        n_around,
+        n_profile,
+    )
+}
+
+/// A gently doubly curved panel `z = (x²/rx + y²/ry)/2` over the rectangle
+/// [−width/2, width/2] × [−depth/2, depth/2] (scene units; normals +z at the centre), on an
+/// `nx × ny`-cell grid whose (s, t) parameters are the UVs. With `ripple`, z gains
+/// `ripple.offset(x)` (ridges along y). rx = ry = ∞ (`f64::INFINITY`) is a flat sheet.
+pub fn curved_panel(
+    width: f64,
+    depth: f64,
+    rx: f64,
+    ry: f64,
+    nx: usize,
+    ny: usize,
+    ripple: Option<Ripple>,
+) -> Mesh {
+    Grid::new(nx, ny).build(|s, t| {
+        let (x, y) = ((s - 0.5) * width, (t - 0.5) * depth);
+        let curved = 0.5 * (x * x / rx + y * y / ry);
+        Vector3::new(x, y, curved + ripple.map_or(0.0, |w| w.offset(x)))
+    })
+}
+
 /// SplitMix64: a tiny deterministic generator for jitter (not for anything cryptographic).
 struct SplitMix(u64);
 

@@ -1,0 +1,156 @@
+//! Issue 13's acceptance test ("Edits that land") on a small, fast subset of the corpus
+//! (tests/corpus/mod.rs): the coarse generated body of revolution, curved panel and flat sheet
+//! (5k–10k vertices), each with a bend, an expand and a curve placed on its key highlight by
+//! code. The full corpus is `examples/bench_fidelity.rs`.
+//!
+//! The issue's goals (within ≥ 0.9, p95 ≤ 0.10 r, no new singular triangle, converged in at
+//! most 15 iterations, energy never rising) are `#[ignore]`d until the position energy lands;
+//! the sanity checks (everything runs, no NaN, figures in range) always run.
+
+mod corpus;
+
+use corpus::{Outcome, Size};
+
+/// The subset: the energy the issue asks for ("position"), or today's solver when this build's
+/// scene loader has no `solver.highlight_energy`.
+fn outcomes() -> Vec<Outcome> {
+    let energy = match corpus::solver_settings("position").expect("settings") {
+        Some(_) => "position",
+        None => "tensor",
+    };
+    let names: Vec<String> = ["body", "panel", "sheet"].iter().map(|s| s.to_string()).collect();
+    let cases = corpus::generated_cases(Size::Small, Some(&names)).expect("generated parts");
+    assert_eq!(cases.len(), 3);
+    let mut out = Vec::new();
+    for case in &cases {
+        let p = corpus::prepare_case(case).expect("field");
+        let pl = p.placement.as_ref().unwrap_or_else(|e| panic!("{}: placement: {e}", case.name));
+        assert!(pl.curve.len() > 10, "{}: curve of {} points", case.name, pl.curve.len());
+        for tool in corpus::TOOLS {
+            let o = corpus::run_edit(case, &p, tool, energy).expect("run").expect("energy");
+            out.push(o);
+        }
+    }
+    out
+}
+
+/// Placement from outside the code: on the flat sheet with the UV field u = x̂, a light with no
+/// x component and a point eye at x = 21, hᵀu = 0 exactly where the eye direction has no x
+/// component, i.e. on the line x = 21 (up to the linear interpolation of g between grid lines
+/// 2 mm apart: the half vector's length changes by a few 1e-3 over a cell). The brush centre must lie on it, the highlight's tangent
+/// along ŷ and the push direction along x̂.
+#[test]
+fn the_sheet_highlight_is_the_line_below_the_eye() {
+    let names = vec!["sheet".to_string()];
+    let cases = corpus::generated_cases(Size::Small, Some(&names)).expect("sheet");
+    let p = corpus::prepare_case(&cases[0]).expect("field");
+    let pl = p.placement.expect("placement");
+    assert!((pl.point.x - 21.0).abs() < 0.02, "centre {:?}", pl.point);
+    assert!(pl.point.z.abs() < 1e-9 && pl.point.y.abs() <= 75.0, "centre {:?}", pl.point);
+    assert!(pl.along.y.abs() > 1.0 - 1e-4, "along {:?}", pl.along);
+    assert!(pl.across.x.abs() > 1.0 - 1e-4, "across {:?}", pl.across);
+    // 200 × 150 mm: diagonal 250 mm. The highlight crosses the sheet (150 mm); the stretch is
+    // the part at least one warp radius (15 mm) from the boundary, measured at segment
+    // midpoints: 150 − 2·15 mm, less a cell at each end.
+    assert!((pl.diag - 250.0).abs() < 1e-9, "diag {}", pl.diag);
+    assert!(pl.stretch >= 150.0 - 2.0 * (15.0 + 2.0), "stretch {}", pl.stretch);
+    // The S-curve: 62.5 mm long on the sheet (it stays on the plane, far from the boundary).
+    let len: f64 = pl.curve.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    assert!(len > 0.24 * 250.0 && len < 0.26 * 250.0 * 1.1, "curve length {len}");
+    assert!(pl.curve.iter().all(|q| q.z.abs() < 1e-9), "curve leaves the sheet");
+}
+
+/// Sanity: every edit of the subset runs, and every figure is finite and in range.
+#[test]
+fn the_subset_runs_and_its_figures_are_in_range() {
+    for o in outcomes() {
+        let what = format!("{} {} ({})", o.case, o.edit, o.energy);
+        assert!(o.error.is_none(), "{what}: {:?}", o.error);
+        let f = o.figures.as_ref().expect("figures");
+        assert!(f.samples > 0, "{what}: nothing measured: {:?}", f.note);
+        assert!((0.0..=1.0).contains(&f.within), "{what}: within {}", f.within);
+        assert!(f.p95.is_finite() && f.p95 >= 0.0, "{what}: p95 {}", f.p95);
+        assert!(f.median.is_finite() && f.median >= 0.0 && f.median <= f.p95, "{what}");
+        assert!(o.iterations <= o.max_iterations, "{what}");
+        assert!(o.energies.iter().all(|e| e.is_finite() && *e >= 0.0), "{what}: {:?}", o.energies);
+        assert!(o.seconds.is_finite(), "{what}");
+    }
+}
+
+/// Issue 13's goals on every edit of the subset.
+#[test]
+#[ignore = "issue 13: passes once solver.highlight_energy = position lands"]
+fn the_edits_land() {
+    let mut missed = Vec::new();
+    for o in outcomes() {
+        let Some(f) = o.figures.clone() else {
+            missed.push(format!("{} {}: {:?}", o.case, o.edit, o.error));
+            continue;
+        };
+        let what = format!(
+            "{} {} ({}): within {:.1} %, p95 {:.3} r, singular {} → {}, {} iterations ({}){}",
+            o.case,
+            o.edit,
+            o.energy,
+            100.0 * f.within,
+            f.p95,
+            f.singular_before,
+            f.singular_after,
+            o.iterations,
+            o.stop,
+            if o.energy_monotone() { "" } else { ", energy rose" }
+        );
+        let ok = o.error.is_none()
+            && f.samples > 0
+            && f.within >= 0.9
+            && f.p95 <= 0.10
+            && f.singular_after <= f.singular_before
+            && o.iterations <= 15
+            && o.stop != "IterationCap"
+            && o.energy_monotone();
+        if !ok {
+            missed.push(what);
+        }
+    }
+    assert!(missed.is_empty(), "edits that missed:\n{}", missed.join("\n"));
+}
+
+/// The generated parts are the sizes the corpus promises, against their formulas: the panel's
+/// corner height (100² / 600 + 75² / 400) / 2 = 15.365 mm, the 0.15 mm ripple (the 2 mm grid
+/// has x = 2 mm, where sin(2π·2/8) = 1), the body's end radii 38 + 40 sin(0.1π) and
+/// 38 + 20 sin(0.85π), and the vertex counts of both sizes.
+#[test]
+fn the_generated_parts_match_their_formulas() {
+    use grainline::generate::{curved_panel, kettle_body, Ripple};
+    let panel = curved_panel(200.0, 150.0, 600.0, 400.0, 100, 75, None);
+    let corner = panel.positions.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
+    assert!((corner - 0.5 * (100.0f64.powi(2) / 600.0 + 75.0f64.powi(2) / 400.0)).abs() < 1e-9);
+    let rippled = curved_panel(200.0, 150.0, 600.0, 400.0, 100, 75, Some(Ripple::CORPUS));
+    let dev = panel
+        .positions
+        .iter()
+        .zip(&rippled.positions)
+        .map(|(a, b)| (b.z - a.z).abs())
+        .fold(0.0, f64::max);
+    assert!((dev - 0.15).abs() < 1e-9, "ripple amplitude {dev}");
+    let sheet = curved_panel(200.0, 150.0, f64::INFINITY, f64::INFINITY, 100, 75, None);
+    assert!(sheet.positions.iter().all(|p| p.z == 0.0 && p.x.abs() <= 100.0 && p.y.abs() <= 75.0));
+    let body = kettle_body(80, 80, None);
+    let radius_at = |z: f64| {
+        let r: Vec<f64> = body
+            .positions
+            .iter()
+            .filter(|p| (p.z - z).abs() < 1e-9)
+            .map(|p| p.x.hypot(p.y))
+            .collect();
+        assert_eq!(r.len(), 80, "one ring at z = {z}");
+        r.iter().sum::<f64>() / r.len() as f64
+    };
+    let pi = std::f64::consts::PI;
+    assert!((radius_at(0.0) - (38.0 + 40.0 * (0.1 * pi).sin())).abs() < 1e-9);
+    assert!((radius_at(180.0) - (38.0 + 20.0 * (0.85 * pi).sin())).abs() < 1e-9);
+    assert_eq!(body.num_vertices(), 80 * 81);
+    assert_eq!(kettle_body(200, 200, None).num_vertices(), 40_200);
+    assert_eq!(curved_panel(200.0, 150.0, 600.0, 400.0, 240, 180, None).num_vertices(), 43_621);
+    assert_eq!(panel.num_vertices(), 101 * 76);
+}
