@@ -40,7 +40,8 @@ impl HighlightTerm<'_> {
     pub fn g_hat(&self, phi: &[f64], i: usize) -> f64 {
         let hb = self.h_bar(i);
         let len = hb.norm();
-        if !(len > 0.0) {
+        // `len > 0` is false for 0 and NaN alike.
+        if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return 0.0;
         }
         let (sn, cs) = phi[i].sin_cos();
