@@ -8,7 +8,7 @@
 use grainline::edit::{apply_edits, target_q, Edit, EditInput, EditOptions};
 use grainline::field::{compute_field, FieldOptions};
 use grainline::highlight::tensor::default_epsilon;
-use grainline::highlight::{highlight_field, InitialField, Lighting, Symmetry, View};
+use grainline::highlight::{highlight_field_near, InitialField, Lighting, Symmetry, View};
 use grainline::mesh::load::{load_obj, LoadOptions};
 use grainline::solve::{optimize, HighlightTerm, SolverSettings};
 use grainline::uvfield::{run_toolpaths, ToolpathSection};
@@ -54,9 +54,18 @@ fn main() -> grainline::Result<()> {
         epsilon,
         target_q: target_q(g, &edited.target_ell, epsilon),
         weight: edited.weight.clone(),
+        // The eye is a point: ℓ has the near term (∇h)ᵀu (docs/math.md §2.1).
+        h_gradient: edited.h_gradient.as_deref(),
     };
     let solved = optimize(&mesh, &term, &edited.phi, &edited.support, &SolverSettings::default())?;
-    let after = highlight_field(g, &solved.phi, options.symmetry, options.gradient_form, &edited.h);
+    let after = highlight_field_near(
+        g,
+        &solved.phi,
+        options.symmetry,
+        options.gradient_form,
+        &edited.h,
+        edited.h_gradient.as_deref(),
+    );
     println!(
         "{} vertices edited, {} unknowns, {} iterations ({:?}); |ℓ| median {:.3e}",
         solved.report.edited,
