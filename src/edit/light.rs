@@ -30,7 +30,8 @@
 //!
 //! The move_light tool instead switches the key light and keeps the current ℓ (under the old
 //! light) as the target of every vertex, so the optimizer re-orients the grain to keep the
-//! highlights where they were.
+//! highlights where they were. A point key light stays a point light: it moves to the new
+//! direction as seen from the centre of the part's bounding box, at the same distance from it.
 
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -312,8 +313,15 @@ pub(crate) fn apply_move(
     let old_ell = st.ell.clone();
     let old = st.lighting.light;
     let new = Vector3::new(e.light[0], e.light[1], e.light[2]);
-    st.lighting = crate::highlight::Lighting::new(new, st.lighting.view)
-        .map_err(|err| Error::setting("light", err.to_string()))?;
+    let moved = match st.lighting.light_position {
+        None => crate::highlight::Lighting::new(new, st.lighting.view),
+        // A point light moves to the new direction from the part's centre, at its distance.
+        Some(_) => {
+            let c = crate::highlight::lighting::centre_of(&ctx.mesh.positions);
+            st.lighting.moved(&c, new)
+        }
+    };
+    st.lighting = moved.map_err(|err| Error::setting("light", err.to_string()))?;
     st.pinned = true;
     st.refresh(ctx, true);
     let mut changes: Vec<f64> = (0..old_ell.len())
@@ -330,6 +338,7 @@ pub(crate) fn apply_move(
     report.vertices = st.critical.iter().filter(|c| !**c).count();
     report.critical_vertices = st.critical.len() - report.vertices;
     report.light = Some([st.lighting.light.x, st.lighting.light.y, st.lighting.light.z]);
+    report.light_position = st.lighting.light_position.map(|l| [l.x, l.y, l.z]);
     report.light_turn_deg = Some(old.angle(&st.lighting.light).to_degrees());
     report.median_ell_change_deg = Some(median);
     Ok(())
