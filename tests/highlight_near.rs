@@ -247,11 +247,11 @@ fn g_is_the_tangential_derivative_of_h_against_central_differences() {
             let g = h_gradient(&lighting, &p, &frame);
             let e = 1e-6;
             let axes = [frame.t, frame.b];
-            for a in 0..2 {
-                let dh = (exact_h(light, &(p + axes[a] * e)) - exact_h(light, &(p - axes[a] * e)))
-                    / (2.0 * e);
-                for b in 0..2 {
-                    let fd = dh.dot(&axes[b]);
+            for (a, ea) in axes.iter().enumerate() {
+                let dh =
+                    (exact_h(light, &(p + ea * e)) - exact_h(light, &(p - ea * e))) / (2.0 * e);
+                for (b, eb) in axes.iter().enumerate() {
+                    let fd = dh.dot(eb);
                     assert!(
                         (g[(a, b)] - fd).abs() < 1e-8,
                         "{}: G[{a}][{b}] = {} vs central difference {fd}",
