@@ -346,10 +346,9 @@ fn the_term_is_absent_and_eq7_bit_identical_for_a_distant_light_and_view() {
     options.init = InitialField::Smooth;
     let field = grainline::field::compute_field(&d.mesh, &options).unwrap();
     assert!(field.h_gradient.is_none());
-    let grad = &field.highlight.gradient;
-    for i in 0..d.mesh.num_vertices() {
+    for (i, grad) in field.highlight.gradient.iter().enumerate() {
         let (f, w) = (&field.geometry.frames[i], &field.geometry.weingarten[i]);
-        let m = m_vector(f, w, &grad[i], field.phi[i], &field.h[i]);
+        let m = m_vector(f, w, grad, field.phi[i], &field.h[i]);
         assert_eq!(m, field.highlight.m[i], "vertex {i}");
     }
     // The highlight energy with an explicit `None` is the one without the field.
@@ -461,7 +460,7 @@ fn near_term_figures(
 ) -> ([f64; 3], [f64; 3], usize) {
     let (mut ratio, mut angle) = (Vec::new(), Vec::new());
     for i in 0..phi.len() {
-        if critical[i] || !(m[i].norm() > 0.0) {
+        if critical[i] || m[i].norm() <= 0.0 {
             continue;
         }
         let gu = g[i] * Vector2::new(phi[i].cos(), phi[i].sin());
@@ -531,4 +530,50 @@ fn near_term_size_on_the_bundled_examples() {
             );
         }
     }
+}
+
+#[test]
+fn a_scene_with_a_point_key_light_gets_the_near_term_and_reports_the_light() {
+    // A flat sheet, a constant world-x grain, a near eye and a point key light listed after a
+    // directional light: the key light is the point light, h at every vertex is the exact half
+    // vector of the two positions, and ℓ is the exact level-set tangent of hᵀu.
+    use grainline::pipeline::{prepare, Silent, Stages};
+    let dir = std::env::temp_dir().join(format!("grainline-near-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = grainline::generate::plane(0.5, Grid::new(16, 16));
+    std::fs::write(dir.join("sheet.obj"), grainline::mesh::write::obj_string(&mesh, "s")).unwrap();
+    let (l, e) = (v(-0.6, 0.5, 1.3), v(0.3, -0.8, 1.6));
+    let scene = serde_json::json!({
+        "mesh": "sheet.obj",
+        "lights": [
+            {"type": "directional", "direction": [0.3, -0.5, 1.0]},
+            {"type": "point", "key": true, "position": [l.x, l.y, l.z], "intensity": 2.0}
+        ],
+        "view": {"eye": [e.x, e.y, e.z]},
+        "field": {"init": "world", "world": [1.0, 0.0, 0.0]}
+    });
+    let path = dir.join("scene.json");
+    std::fs::write(&path, scene.to_string()).unwrap();
+    let s = grainline::scene::LoadedScene::read(&path).unwrap();
+    let p = prepare(&s, &mut Stages::new(&Silent)).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let lighting = p.field_options.lighting;
+    assert_eq!(lighting.light_position, Some(l));
+    let light = Light { name: "scene", light: Source::Point(l), eye: Source::Point(e) };
+    let plane = &SURFACES[0];
+    let f = &p.field;
+    assert!(f.h_gradient.is_some());
+    for (i, q) in p.mesh.positions.iter().enumerate() {
+        assert!((f.h[i] - exact_h(&light, q)).norm() < 1e-12, "h of vertex {i}");
+        let truth = exact_ell(plane, &light, q.x, q.y);
+        let err = (f.highlight.ell[i] - truth).norm() / truth.norm();
+        assert!(err < 1e-8, "ℓ of vertex {i}: {:?} vs {truth:?}", f.highlight.ell[i]);
+    }
+    let file =
+        grainline::field::FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, f).unwrap();
+    assert_eq!(file.meta.light_position, Some([l.x, l.y, l.z]));
+    // The nominal direction: from the centre of the sheet's bounding box (the origin).
+    let nominal = l.normalize();
+    assert!((Vector3::from(file.meta.light) - nominal).norm() < 1e-12);
+    assert_eq!(file.meta.eye, Some([e.x, e.y, e.z]));
 }

@@ -217,7 +217,7 @@ pub fn h_gradient_of(
 ) -> Matrix2<f64> {
     let s = w_in + w_out;
     let len = s.norm();
-    if !(len > 1e-9) {
+    if len.is_nan() || len <= 1e-9 {
         return Matrix2::zeros();
     }
     let h = s / len;
