@@ -8,7 +8,7 @@
 use grainline::edit::{apply_edits, Edit, EditInput, EditOptions};
 use grainline::field::{compute_field, FieldOptions};
 use grainline::highlight::tensor::default_epsilon;
-use grainline::highlight::{highlight_field, InitialField, Lighting, Symmetry, View};
+use grainline::highlight::{highlight_field_near, InitialField, Lighting, Symmetry, View};
 use grainline::mesh::load::{load_obj, LoadOptions};
 use grainline::solve::{optimize, SolverSettings};
 use grainline::uvfield::{run_toolpaths, ToolpathSection};
@@ -55,7 +55,14 @@ fn main() -> grainline::Result<()> {
         epsilon,
     );
     let solved = optimize(&mesh, &term, &edited.phi, &edited.support, &settings)?;
-    let after = highlight_field(g, &solved.phi, options.symmetry, options.gradient_form, &edited.h);
+    let after = highlight_field_near(
+        g,
+        &solved.phi,
+        options.symmetry,
+        options.gradient_form,
+        &edited.h,
+        edited.h_gradient.as_deref(),
+    );
     println!(
         "{} vertices edited, {} unknowns, {} iterations ({:?}); |ℓ| median {:.3e}",
         solved.report.edited,

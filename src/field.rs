@@ -3,15 +3,15 @@
 
 use std::path::Path;
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Geometry, GeometryDiagnostics, GeometryOptions, GradientForm};
 use crate::highlight::critical::{critical_points, DEFAULT_CRITICAL_THRESHOLD};
 use crate::highlight::{
-    half_vectors, highlight_field, initial_field, HighlightField, InitialField, Lighting, Symmetry,
-    View,
+    h_gradients, half_vectors, highlight_field_near, initial_field, HighlightField, InitialField,
+    Lighting, Symmetry, View,
 };
 use crate::mesh::Mesh;
 use crate::{Error, Result};
@@ -56,7 +56,10 @@ pub struct FieldResult {
     pub phi: Vec<f64>,
     /// Half vectors.
     pub h: Vec<Vector3<f64>>,
-    /// ∇φ, m and ℓ.
+    /// The near term's G per vertex (a point eye or light; `None` when both are distant):
+    /// [`crate::highlight::h_gradients`].
+    pub h_gradient: Option<Vec<Matrix2<f64>>>,
+    /// ∇φ, m and ℓ (Eq. 7 with the near term).
     pub highlight: HighlightField,
     /// Critical points.
     pub critical: Vec<bool>,
@@ -73,13 +76,21 @@ pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult>
     let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
     let normals: Vec<Vector3<f64>> = geometry.frames.par_iter().map(|f| f.n).collect();
     let h = half_vectors(&options.lighting, &mesh.positions, &normals);
-    let highlight =
-        highlight_field(&geometry, &init.phi, options.symmetry, options.gradient_form, &h);
+    let h_gradient = h_gradients(&options.lighting, &mesh.positions, &geometry.frames);
+    let highlight = highlight_field_near(
+        &geometry,
+        &init.phi,
+        options.symmetry,
+        options.gradient_form,
+        &h,
+        h_gradient.as_deref(),
+    );
     let critical = critical_points(&h, normals.into_iter(), options.critical_threshold);
     Ok(FieldResult {
         geometry,
         phi: init.phi,
         h,
+        h_gradient,
         highlight,
         critical,
         fallback_vertices: init.fallback_vertices,
@@ -94,8 +105,12 @@ pub struct FieldMeta {
     pub mesh: String,
     /// Length unit of every position, area (unit²) and curvature (1/unit).
     pub units: String,
-    /// Direction towards the light (unit).
+    /// Direction towards the light (unit). For a point light: the direction from the part's
+    /// bounding-box centre towards `light_position`.
     pub light: [f64; 3],
+    /// The position of a point key light; absent for a distant light.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light_position: Option<[f64; 3]>,
     /// Direction towards a distant viewer (unit), or null with an eye.
     pub view: Option<[f64; 3]>,
     /// Eye position, or null for a distant view.
@@ -132,7 +147,7 @@ pub struct FieldFile {
     pub normal: Vec<[f64; 3]>,
     /// Unit grain directions.
     pub u: Vec<[f64; 3]>,
-    /// The Eq. 7 highlight tangent (not normalized).
+    /// The Eq. 7 highlight tangent (not normalized; with the near term for a point eye or light).
     pub ell: Vec<[f64; 3]>,
     /// Maximum principal curvature (positive on a sphere with outward normals).
     pub k1: Vec<f64>,
@@ -168,6 +183,24 @@ pub fn init_name(init: &InitialField) -> String {
     }
 }
 
+/// `meta.light`: the distant light's direction, or for a point light the direction from the
+/// centre of the part's bounding box towards it (the lighting's own nominal direction where
+/// the light sits at that centre).
+fn nominal_light(lighting: &Lighting, mesh: &Mesh) -> Vector3<f64> {
+    match lighting.light_position {
+        None => lighting.light,
+        Some(l) => {
+            let d = l - crate::highlight::lighting::centre_of(&mesh.positions);
+            let n = d.norm();
+            if n > 0.0 && n.is_finite() {
+                d / n
+            } else {
+                lighting.light
+            }
+        }
+    }
+}
+
 fn arr(v: &Vector3<f64>) -> [f64; 3] {
     [v.x, v.y, v.z]
 }
@@ -192,7 +225,8 @@ impl FieldFile {
             meta: FieldMeta {
                 mesh: mesh_name.into(),
                 units: mesh.units.as_str().into(),
-                light: arr(&options.lighting.light),
+                light: arr(&nominal_light(&options.lighting, mesh)),
+                light_position: options.lighting.light_position.as_ref().map(arr),
                 view,
                 eye,
                 symmetric: options.symmetry == Symmetry::Line,

@@ -410,6 +410,7 @@ fn the_tools_record_their_shape() {
             radius: 0.11,
             weight: 1.0,
             tolerance: 1e-3,
+            width: None,
         }),
     ];
     let r = apply_edits(&input, &edits, &EditOptions::default()).unwrap();

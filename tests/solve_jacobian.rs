@@ -32,6 +32,7 @@ fn check(form: GradientForm, symmetry: Symmetry) {
         target_q,
         weight: vec![1.0; n],
         target_g: vec![None; n],
+        h_gradient: None,
     };
     let mut worst: f64 = 0.0;
     for i in 0..n {
@@ -101,6 +102,7 @@ fn residual_energy_is_the_tensor_distance() {
         target_q: targets.iter().map(|t| Some(q(t, 0.0))).collect(),
         weight: vec![1.0; n],
         target_g: vec![None; n],
+        h_gradient: None,
     };
     let (mut e_res, mut e_tensor) = (0.0, 0.0);
     for (i, t) in targets.iter().enumerate() {

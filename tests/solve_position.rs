@@ -117,6 +117,7 @@ fn position_rows_match_central_differences() {
         target_q: vec![None; n],
         weight: vec![1.3; n],
         target_g: targets,
+        h_gradient: None,
     };
     let mut phi: Vec<f64> = (0..n).map(|i| field.phi[i] + 0.37 * (i as f64).sin()).collect();
     let step = 1e-6;

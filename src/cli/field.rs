@@ -16,9 +16,17 @@ use super::MeshArgs;
 pub struct FieldArgs {
     #[command(flatten)]
     mesh: MeshArgs,
-    /// Direction towards the (distant) light, X,Y,Z.
+    /// Direction towards the (distant) light, X,Y,Z (required unless --light-position is given).
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true,
+        required_unless_present = "light_position"
+    )]
+    light: Option<String>,
+    /// Position of a point light, X,Y,Z (per-vertex light directions; overrides --light).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    light: String,
+    light_position: Option<String>,
     /// Direction towards a distant viewer, X,Y,Z (required unless --eye is given).
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, required_unless_present = "eye")]
     view: Option<String>,
@@ -57,13 +65,20 @@ fn parse_normals(s: &str) -> Result<NormalSource, String> {
 /// Runs `grainline field`.
 pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
     let stages = Stages::new(quiet);
-    let light = grainline::parse_vec3("light", &args.light)?;
     let view = match (&args.eye, &args.view) {
         (Some(e), _) => View::Eye(grainline::parse_vec3("eye", e)?),
         (None, Some(v)) => View::Direction(grainline::parse_vec3("view", v)?),
         (None, None) => anyhow::bail!("give --view X,Y,Z or --eye X,Y,Z"),
     };
-    let lighting = Lighting::new(light, view)?;
+    let light_position = match &args.light_position {
+        Some(p) => Some(grainline::parse_vec3("light-position", p)?),
+        None => None,
+    };
+    let light = match (&light_position, &args.light) {
+        (Some(_), _) => None,
+        (None, Some(l)) => Some(Lighting::new(grainline::parse_vec3("light", l)?, view)?),
+        (None, None) => anyhow::bail!("give --light X,Y,Z or --light-position X,Y,Z"),
+    };
     let mut plan = grainline::output::OutputPlan::new();
     plan.output("--out", &args.out).input("the mesh", &args.mesh.mesh);
     if let Some(d) = &args.directions {
@@ -73,6 +88,14 @@ pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
     stages.stage("loading mesh");
     let loaded = grainline::mesh::load::load_obj(&args.mesh.mesh, &args.mesh.load_options())?;
     let mesh = loaded.mesh;
+    let lighting = match (light, light_position) {
+        (Some(l), _) => l,
+        (None, Some(p)) => {
+            let centre = grainline::highlight::lighting::centre_of(&mesh.positions);
+            Lighting::point(p, centre, view)?
+        }
+        (None, None) => anyhow::bail!("give --light X,Y,Z or --light-position X,Y,Z"),
+    };
     let init = match &args.directions {
         Some(path) => InitialField::Directions(read_directions(path, mesh.num_vertices())?),
         None => args.init.parse::<InitialField>()?,

@@ -15,14 +15,23 @@
 //! m(θ) = sin θ ∇φᵢ + cos θ Wᵢūᵢ,       ℓ(θ) = R m(θ).
 //! ```
 //!
+//! With a point eye or a point light, ℓ also has the near term (docs/math.md §2.1), which
+//! depends on θ through h(θ) and ω_in(θ): m(θ) = sin θ ∇φᵢ + cos θ Wᵢūᵢ + G(θ)ūᵢ, with G(θ) from
+//! ω_in(θ), ω_out and the distances to the eye and to the light (a point light keeps its
+//! distance from the vertex when it moves). The search evaluates this exact m(θ), so the light
+//! it returns gives vertex i exactly the ℓ it reports.
+//!
 //! The search minimizes the angle (mod π) between ℓ(θ) and the wanted ℓ*: 2000 samples of θ
 //! (global), golden-section refinement around the best admissible sample, and the closed-form
 //! roots θ = atan2(−⟨Rb, ℓ*⟩×, ⟨Ra, ℓ*⟩×) (a = ∇φ, b = Wū, × the 2D cross product) when they are
-//! admissible; the best of these wins.
+//! admissible; the best of these wins. The closed form is exact only without the near term
+//! (G = 0); with it, its roots are merely candidates, judged like the others by the exact
+//! m(θ).
 //!
 //! The move_light tool instead switches the key light and keeps the current ℓ (under the old
 //! light) as the target of every vertex, so the optimizer re-orients the grain to keep the
-//! highlights where they were.
+//! highlights where they were. A point key light stays a point light: it moves to the new
+//! direction as seen from the centre of the part's bounding box, at the same distance from it.
 
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
@@ -30,7 +39,9 @@ use serde::{Deserialize, Serialize};
 use super::support::{resolve_centre, Centre};
 use super::{check_direction, line_angle_deg, Context, EditReport, State};
 use crate::geometry::{Geometry, GradientForm};
-use crate::highlight::{Lighting, Symmetry};
+use crate::highlight::ell::m_vector_near;
+use crate::highlight::lighting::h_gradient_of;
+use crate::highlight::Symmetry;
 use crate::{Error, Result};
 
 /// A light edit: `{"tool": "light", "centre": {"vertex": 12}, "ell": [1, 0, 0]}`.
@@ -117,6 +128,10 @@ pub struct LightQuery<'a> {
     pub wanted: Vector3<f64>,
     /// The minimum nᵀω_in.
     pub min_cos: f64,
+    /// The distance from the vertex to the eye (`None`: a distant view).
+    pub eye_distance: Option<f64>,
+    /// The distance from the vertex to the light, kept when it moves (`None`: a distant light).
+    pub light_distance: Option<f64>,
 }
 
 const SAMPLES: usize = 2000;
@@ -146,11 +161,30 @@ pub fn find_light(q: &LightQuery) -> Result<LightSearch> {
     let v = n.cross(&u);
     let grad = q.geometry.stencil.gradient_at(q.phi, q.symmetry.k(), q.form, i);
     let (sn, cs) = q.phi[i].sin_cos();
-    let wu = q.geometry.weingarten[i] * Vector2::new(cs, sn);
+    let w = &q.geometry.weingarten[i];
+    let wu = w * Vector2::new(cs, sn);
     let rot = |m: Vector2<f64>| Vector2::new(-m.y, m.x);
     let (ra, rb) = (rot(grad), rot(wu));
+    let near = q.eye_distance.is_some() || q.light_distance.is_some();
+    let light_of = |theta: f64| {
+        let h = n * theta.cos() + v * theta.sin();
+        h * (2.0 * h.dot(&q.omega_out)) - q.omega_out
+    };
+    // ℓ(θ) in frame coordinates: the distant closed form, or Eq. 7 with the near term for the
+    // half vector of the light the family gives at θ (module documentation).
+    let ell_of = |theta: f64| {
+        if !near {
+            return ra * theta.sin() + rb * theta.cos();
+        }
+        let w_in = light_of(theta);
+        let w_in = w_in / w_in.norm().max(f64::MIN_POSITIVE);
+        let s = w_in + q.omega_out;
+        let h = s / s.norm().max(f64::MIN_POSITIVE);
+        let g = h_gradient_of(&w_in, &q.omega_out, q.light_distance, q.eye_distance, f);
+        rot(m_vector_near(f, w, &grad, q.phi[i], &h, Some(&g)))
+    };
     let error = |theta: f64| {
-        let l = ra * theta.sin() + rb * theta.cos();
+        let l = ell_of(theta);
         let cross = (l.x * target.y - l.y * target.x).abs();
         let dot = l.dot(&target).abs();
         if cross == 0.0 && dot == 0.0 {
@@ -158,10 +192,6 @@ pub fn find_light(q: &LightQuery) -> Result<LightSearch> {
         } else {
             cross.atan2(dot)
         }
-    };
-    let light_of = |theta: f64| {
-        let h = n * theta.cos() + v * theta.sin();
-        h * (2.0 * h.dot(&q.omega_out)) - q.omega_out
     };
     let admissible = |theta: f64| n.dot(&light_of(theta)) >= q.min_cos;
     let half_pi = std::f64::consts::FRAC_PI_2;
@@ -248,22 +278,26 @@ pub(crate) fn apply(
             format!("the current ℓ vanishes at vertex {i}; give the wanted direction"),
         ));
     }
+    let p = &ctx.mesh.positions[i];
     let found = find_light(&LightQuery {
         geometry: ctx.geom,
         phi: &st.phi,
         symmetry: ctx.symmetry,
         form: ctx.form,
         vertex: i,
-        omega_out: st.lighting.omega_out(&ctx.mesh.positions[i]),
+        omega_out: st.lighting.omega_out(p),
         wanted,
         min_cos: e.min_elevation_deg.to_radians().sin(),
+        eye_distance: st.lighting.eye_distance(p),
+        light_distance: st.lighting.light_distance(p),
     })?;
     let old = st.lighting.light;
-    st.lighting = Lighting::new(found.light, st.lighting.view)?;
+    st.lighting = st.lighting.moved(p, found.light)?;
     st.refresh(ctx, true);
     report.vertices = 1;
     report.vertex = Some(i);
     report.light = Some([found.light.x, found.light.y, found.light.z]);
+    report.light_position = st.lighting.light_position.map(|l| [l.x, l.y, l.z]);
     report.angle_error_deg = Some(found.angle_error_deg);
     report.light_turn_deg = Some(old.angle(&found.light).to_degrees());
     Ok(())
@@ -279,8 +313,15 @@ pub(crate) fn apply_move(
     let old_ell = st.ell.clone();
     let old = st.lighting.light;
     let new = Vector3::new(e.light[0], e.light[1], e.light[2]);
-    st.lighting = Lighting::new(new, st.lighting.view)
-        .map_err(|err| Error::setting("light", err.to_string()))?;
+    let moved = match st.lighting.light_position {
+        None => crate::highlight::Lighting::new(new, st.lighting.view),
+        // A point light moves to the new direction from the part's centre, at its distance.
+        Some(_) => {
+            let c = crate::highlight::lighting::centre_of(&ctx.mesh.positions);
+            st.lighting.moved(&c, new)
+        }
+    };
+    st.lighting = moved.map_err(|err| Error::setting("light", err.to_string()))?;
     st.pinned = true;
     st.refresh(ctx, true);
     let mut changes: Vec<f64> = (0..old_ell.len())
@@ -297,6 +338,7 @@ pub(crate) fn apply_move(
     report.vertices = st.critical.iter().filter(|c| !**c).count();
     report.critical_vertices = st.critical.len() - report.vertices;
     report.light = Some([st.lighting.light.x, st.lighting.light.y, st.lighting.light.z]);
+    report.light_position = st.lighting.light_position.map(|l| [l.x, l.y, l.z]);
     report.light_turn_deg = Some(old.angle(&st.lighting.light).to_degrees());
     report.median_ell_change_deg = Some(median);
     Ok(())

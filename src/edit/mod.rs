@@ -28,12 +28,12 @@ pub mod stencil;
 pub mod support;
 pub mod warp;
 
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Geometry, GradientForm};
 use crate::highlight::critical::{critical_points, DEFAULT_CRITICAL_THRESHOLD};
-use crate::highlight::{half_vectors, highlight_field, Lighting, Symmetry};
+use crate::highlight::{h_gradients, half_vectors, highlight_field_near, Lighting, Symmetry};
 use crate::mesh::{Mesh, VertexFaces};
 use crate::{Error, Result};
 
@@ -145,6 +145,9 @@ pub struct EditResult {
     pub lighting: Lighting,
     /// The half vectors of `lighting`.
     pub h: Vec<Vector3<f64>>,
+    /// The near term's G per vertex for `lighting` (`None` when the light and view are both
+    /// distant): [`crate::highlight::h_gradients`].
+    pub h_gradient: Option<Vec<Matrix2<f64>>>,
     /// World-space target tangent ℓ*ᵢ (in the tangent plane of vertex i, not normalized);
     /// `None` where the vertex has no target (weight 0, or a critical point, where ℓ does not
     /// depend on the field).
@@ -186,9 +189,14 @@ pub struct EditReport {
     /// Light tools: the vertex of the search (light) or none (move_light).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub vertex: Option<usize>,
-    /// Light tools: the new light direction (unit, towards the light).
+    /// Light tools: the new light direction (unit, towards the light; for a point light, from
+    /// the searched vertex).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub light: Option<[f64; 3]>,
+    /// Light tool with a point key light: the new light's position (it keeps its distance from
+    /// the searched vertex).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_position: Option<[f64; 3]>,
     /// Light tool: the angle (mod π) between the wanted ℓ and the ℓ the new light produces,
     /// degrees.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -282,6 +290,8 @@ impl EditResult {
             target_q: vec![None; n],
             weight: vec![0.0; n],
             target_g: vec![None; n],
+            // A point eye or light: ℓ has the near term (∇h)ᵀu (docs/math.md §2.1).
+            h_gradient: self.h_gradient.as_deref(),
         };
         match energy {
             crate::solve::HighlightEnergy::Tensor => crate::solve::HighlightTerm {
@@ -335,9 +345,15 @@ impl<'a> Context<'a> {
         }
     }
 
-    /// ℓ of the field `phi` under half vectors `h` (Eq. 7).
-    pub fn ell_of(&self, phi: &[f64], h: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
-        highlight_field(self.geom, phi, self.symmetry, self.form, h).ell
+    /// ℓ of the field `phi` under half vectors `h` and near-term matrices `g` (Eq. 7 and
+    /// docs/math.md §2.1).
+    pub fn ell_of(
+        &self,
+        phi: &[f64],
+        h: &[Vector3<f64>],
+        g: Option<&[Matrix2<f64>]>,
+    ) -> Vec<Vector3<f64>> {
+        highlight_field_near(self.geom, phi, self.symmetry, self.form, h, g).ell
     }
 
     /// ĝ = h̄ᵀū/|h̄| of the field `phi` under `h` (docs/math.md §9; 0 where h̄ = 0).
@@ -356,6 +372,8 @@ pub(crate) struct State {
     pub phi: Vec<f64>,
     pub lighting: Lighting,
     pub h: Vec<Vector3<f64>>,
+    /// The near term's G of `lighting` (`None`: distant light and view).
+    pub h_gradient: Option<Vec<Matrix2<f64>>>,
     /// ℓ of `phi` under `lighting` (the "current" ℓ).
     pub ell: Vec<Vector3<f64>>,
     /// hᵀn above the critical threshold.
@@ -378,7 +396,8 @@ pub(crate) struct State {
 
 impl State {
     fn new(ctx: &Context, input: &EditInput) -> Self {
-        let ell = ctx.ell_of(input.phi, input.h);
+        let h_gradient = h_gradients(input.lighting, &ctx.mesh.positions, &ctx.geom.frames);
+        let ell = ctx.ell_of(input.phi, input.h, h_gradient.as_deref());
         let g = ctx.g_of(input.phi, input.h);
         let n = ell.len();
         State {
@@ -387,6 +406,7 @@ impl State {
             phi: input.phi.to_vec(),
             lighting: *input.lighting,
             h: input.h.to_vec(),
+            h_gradient,
             critical: critical_points(
                 input.h,
                 ctx.normals.iter().copied(),
@@ -406,10 +426,11 @@ impl State {
     pub fn refresh(&mut self, ctx: &Context, lighting_changed: bool) {
         if lighting_changed {
             self.h = half_vectors(&self.lighting, &ctx.mesh.positions, &ctx.normals);
+            self.h_gradient = h_gradients(&self.lighting, &ctx.mesh.positions, &ctx.geom.frames);
             self.critical =
                 critical_points(&self.h, ctx.normals.iter().copied(), DEFAULT_CRITICAL_THRESHOLD);
         }
-        self.ell = ctx.ell_of(&self.phi, &self.h);
+        self.ell = ctx.ell_of(&self.phi, &self.h, self.h_gradient.as_deref());
         self.g = ctx.g_of(&self.phi, &self.h);
         if !self.pinned {
             for i in 0..self.ell.len() {
@@ -483,6 +504,7 @@ impl State {
             phi: self.phi,
             lighting: self.lighting,
             h: self.h,
+            h_gradient: self.h_gradient,
             target_ell,
             weight,
             target_g,

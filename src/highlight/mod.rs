@@ -8,9 +8,9 @@ pub mod lighting;
 pub mod smoothest;
 pub mod tensor;
 
-pub use ell::{highlight_field, HighlightField};
+pub use ell::{highlight_field, highlight_field_near, HighlightField};
 pub use init::{initial_field, InitialField, InitialFieldResult};
-pub use lighting::{half_vectors, Lighting, View};
+pub use lighting::{h_gradients, half_vectors, Lighting, View};
 
 /// The rotational symmetry of a grain field.
 ///

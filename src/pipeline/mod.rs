@@ -88,23 +88,56 @@ pub struct Prepared {
     pub field: FieldResult,
 }
 
-/// The highlight model's light: the first directional light marked `"key": true`, else the
-/// first directional light.
-pub fn key_light(scene: &crate::scene::Scene) -> Result<Vector3<f64>> {
-    let i = crate::render::key_light_index(&scene.lights)
-        .ok_or_else(|| Error::setting("lights", "needs a directional light"))?;
+/// The highlight model's key light as the scene gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KeyLight {
+    /// A distant light: the direction towards it.
+    Directional(Vector3<f64>),
+    /// A point light at this position.
+    Point(Vector3<f64>),
+}
+
+impl KeyLight {
+    /// The [`Lighting`] of this key light and `view` for the mesh `mesh` (a point light's
+    /// nominal direction is taken from the centre of the mesh's bounding box).
+    pub fn lighting(&self, view: crate::highlight::View, mesh: &Mesh) -> Result<Lighting> {
+        match *self {
+            KeyLight::Directional(d) => Lighting::new(d, view),
+            KeyLight::Point(p) => {
+                Lighting::point(p, crate::highlight::lighting::centre_of(&mesh.positions), view)
+            }
+        }
+    }
+}
+
+/// The highlight model's light: the first directional or point light marked `"key": true`,
+/// else the first directional light, else the first point light
+/// ([`crate::render::key_light_index`]).
+pub fn key_light(scene: &crate::scene::Scene) -> Result<KeyLight> {
+    let none = || Error::setting("lights", "needs a directional or point light");
+    let i = crate::render::key_light_index(&scene.lights).ok_or_else(none)?;
     match &scene.lights[i] {
-        crate::render::LightSpec::Directional { direction, .. } => Ok(Vector3::from(*direction)),
-        _ => Err(Error::setting("lights", "needs a directional light")),
+        crate::render::LightSpec::Directional { direction, .. } => {
+            Ok(KeyLight::Directional(Vector3::from(*direction)))
+        }
+        crate::render::LightSpec::Point { position, .. } => {
+            Ok(KeyLight::Point(Vector3::from(*position)))
+        }
+        _ => Err(none()),
     }
 }
 
 /// Loads the part and computes the geometry, the initial field and its highlights.
 pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
-    let lighting = Lighting::new(key_light(scene).map_err(|e| s.wrap(e))?, scene.view.view())?;
+    let key = key_light(scene).map_err(|e| s.wrap(e))?;
+    if let KeyLight::Directional(d) = key {
+        // A bad direction is reported before the part is loaded, as it always was.
+        Lighting::new(d, scene.view.view())?;
+    }
     stages.start("load");
     let (mesh, mesh_name) = load_part(s)?;
+    let lighting = key.lighting(scene.view.view(), &mesh)?;
     stages.start("field");
     let directions = match (&scene.field.init, &scene.field.directions) {
         (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),

@@ -1,6 +1,6 @@
 //! The edit and solve stages: targets from the scene's edits, then the sparse LM.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix2, Vector3};
 use serde::Serialize;
 
 use super::{Prepared, Stages};
@@ -9,7 +9,7 @@ use crate::fidelity::{fidelity_of_edits, EditFidelity, FidelityOptions};
 use crate::field::FieldFile;
 use crate::highlight::critical::critical_points;
 use crate::highlight::tensor::default_epsilon;
-use crate::highlight::{highlight_field, HighlightField, Lighting};
+use crate::highlight::{highlight_field_near, HighlightField, Lighting};
 use crate::scene::LoadedScene;
 use crate::solve::{optimize, OptimizeReport};
 use crate::Result;
@@ -24,6 +24,8 @@ pub struct Optimized {
     pub lighting: Lighting,
     /// Half vectors of that lighting.
     pub h: Vec<Vector3<f64>>,
+    /// The near term's G per vertex of that lighting (`None`: distant light and view).
+    pub h_gradient: Option<Vec<Matrix2<f64>>>,
     /// ∇φ, m and ℓ of the solved field.
     pub highlight: HighlightField,
     /// Critical points under that lighting.
@@ -41,8 +43,12 @@ pub struct Optimized {
 pub struct OptimizeStageReport {
     /// One entry per edit.
     pub edits: Vec<EditReport>,
-    /// The key light after the edits (it differs from the scene's when a light tool ran).
+    /// The key light after the edits (it differs from the scene's when a light tool ran); for
+    /// a point light its nominal direction (`key_light_position` is the light).
     pub key_light: [f64; 3],
+    /// The position of a point key light after the edits (absent for a distant light).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub key_light_position: Option<[f64; 3]>,
     /// Vertices inside an edit's support.
     pub edited_vertices: usize,
     /// The solver.
@@ -86,14 +92,15 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
         .map_err(|e| crate::scene::prefix("edits", e))?;
     let normals: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
     let h = er.h.clone();
+    let hg = er.h_gradient.clone();
     stages.start("solve");
-    let before = highlight_field(g, &er.phi, symmetry, form, &h);
+    let before = highlight_field_near(g, &er.phi, symmetry, form, &h, hg.as_deref());
     let m_norms: Vec<f64> = before.m.iter().map(|m| m.norm()).collect();
     let epsilon = default_epsilon(&m_norms);
     let term = er.highlight_term(g, symmetry, form, settings.highlight_energy, epsilon);
     let solved = optimize(&p.mesh, &term, &er.phi, &er.support, settings)
         .map_err(|e| crate::scene::prefix("solver", e))?;
-    let highlight = highlight_field(g, &solved.phi, symmetry, form, &h);
+    let highlight = highlight_field_near(g, &solved.phi, symmetry, form, &h, hg.as_deref());
     // The field before is the optimizer's input (after the stencils), under the key light.
     let fidelity = fidelity_of_edits(
         &p.mesh,
@@ -106,12 +113,18 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
         &FidelityOptions::default(),
     )?;
     let critical = critical_points(&h, normals.into_iter(), p.field_options.critical_threshold);
-    let l = er.lighting.light;
+    let l = match er.lighting.light_position {
+        None => er.lighting.light,
+        Some(lp) => (lp - crate::highlight::lighting::centre_of(&p.mesh.positions))
+            .try_normalize(0.0)
+            .unwrap_or(er.lighting.light),
+    };
     Ok(Optimized {
         phi: solved.phi,
         phi_edited: er.phi,
         lighting: er.lighting,
         h,
+        h_gradient: hg.clone(),
         highlight,
         critical,
         target_ell: er.target_ell,
@@ -119,6 +132,7 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
         report: OptimizeStageReport {
             edits: er.reports,
             key_light: [l.x, l.y, l.z],
+            key_light_position: er.lighting.light_position.map(|p| [p.x, p.y, p.z]),
             edited_vertices: er.support.iter().filter(|&&s| s).count(),
             solver: solved.report,
             fidelity,
@@ -135,6 +149,7 @@ pub fn optimized_field_file(p: &Prepared, o: &Optimized) -> Result<FieldFile> {
         geometry: p.field.geometry.clone(),
         phi: o.phi.clone(),
         h: o.h.clone(),
+        h_gradient: o.h_gradient.clone(),
         highlight: o.highlight.clone(),
         critical: o.critical.clone(),
         fallback_vertices: p.field.fallback_vertices.clone(),

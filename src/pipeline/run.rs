@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::optimize::{optimize_stage, optimized_field_file, OptimizeStageReport};
 use super::{output_path, prepare, Observer, StageTime, Stages};
-use crate::highlight::highlight_field;
+use crate::highlight::highlight_field_near;
 use crate::output::{json_compact, json_pretty, OutputPlan, Staged};
 use crate::render::{render, Camera, EditOverlay, RenderInput, RenderReport};
 use crate::scene::LoadedScene;
@@ -276,14 +276,15 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         }
         None => None,
     };
-    let (phi, h, ell, critical, light) = match &optimized {
-        Some(o) => (&o.phi, &o.h, &o.highlight.ell, &o.critical, o.lighting.light),
+    let (phi, h, h_gradient, ell, critical, lighting) = match &optimized {
+        Some(o) => (&o.phi, &o.h, &o.h_gradient, &o.highlight.ell, &o.critical, o.lighting),
         None => (
             given_phi.as_ref().unwrap_or(&prepared.field.phi),
             &prepared.field.h,
+            &prepared.field.h_gradient,
             &prepared.field.highlight.ell,
             &prepared.field.critical,
-            prepared.field_options.lighting.light,
+            prepared.field_options.lighting,
         ),
     };
     if let Some(p) = &scene.field.output {
@@ -387,7 +388,8 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             brushed.as_ref().map(|b| b.u.iter().map(|v| Vector3::from(*v)).collect());
         let brushed_ell = brushed_u.as_ref().map(|bu| {
             let bphi = g.angles_of(bu);
-            highlight_field(g, &bphi, symmetry, prepared.field_options.gradient_form, h).ell
+            let form = prepared.field_options.gradient_form;
+            highlight_field_near(g, &bphi, symmetry, form, h, h_gradient.as_deref()).ell
         });
         input.brushed_u = brushed_u.as_deref();
         input.brushed_ell = brushed_ell.as_deref();
@@ -431,8 +433,18 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
                     if Some(i) == crate::render::key_light_index(&scene.lights) =>
                 {
                     crate::render::LightSpec::Directional {
-                        direction: [light.x, light.y, light.z],
+                        direction: [lighting.light.x, lighting.light.y, lighting.light.z],
                         irradiance: *irradiance,
+                        colour: *colour,
+                        key: *key,
+                    }
+                }
+                crate::render::LightSpec::Point { position, intensity, colour, key }
+                    if Some(i) == crate::render::key_light_index(&scene.lights) =>
+                {
+                    crate::render::LightSpec::Point {
+                        position: lighting.light_position.map_or(*position, |p| [p.x, p.y, p.z]),
+                        intensity: *intensity,
                         colour: *colour,
                         key: *key,
                     }

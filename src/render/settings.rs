@@ -241,6 +241,10 @@ pub enum LightSpec {
         /// Linear RGB colour (default white).
         #[serde(default = "white")]
         colour: [f64; 3],
+        /// Marks the light of the highlight model (default false): the half vector then uses
+        /// ω_in = normalize(position − p) per vertex.
+        #[serde(default)]
+        key: bool,
     },
     /// Light from an equirectangular image (Radiance .hdr or PNG) around the scene, z up.
     Environment {
@@ -271,7 +275,7 @@ impl LightSpec {
                 check_range("irradiance", *irradiance, 0.0, 1e9)?;
                 check_colour("colour", colour, 1e9)
             }
-            LightSpec::Point { position, intensity, colour } => {
+            LightSpec::Point { position, intensity, colour, .. } => {
                 check_vec("position", position, false)?;
                 check_range("intensity", *intensity, 0.0, 1e12)?;
                 check_colour("colour", colour, 1e9)
@@ -299,11 +303,19 @@ pub fn validate_lights(lights: &[LightSpec]) -> Result<()> {
     Ok(())
 }
 
-/// The light of the highlight model: the first directional light with `key: true`, else the
-/// first directional light.
+/// The light of the highlight model: the first directional or point light with `key: true`,
+/// else the first directional light, else the first point light.
 pub fn key_light_index(lights: &[LightSpec]) -> Option<usize> {
-    let dir = |l: &LightSpec, need_key: bool| matches!(l, LightSpec::Directional { key, .. } if *key || !need_key);
-    lights.iter().position(|l| dir(l, true)).or_else(|| lights.iter().position(|l| dir(l, false)))
+    let keyed = |l: &LightSpec| {
+        matches!(l, LightSpec::Directional { key: true, .. } | LightSpec::Point { key: true, .. })
+    };
+    let dir = |l: &LightSpec| matches!(l, LightSpec::Directional { .. });
+    let point = |l: &LightSpec| matches!(l, LightSpec::Point { .. });
+    lights
+        .iter()
+        .position(keyed)
+        .or_else(|| lights.iter().position(dir))
+        .or_else(|| lights.iter().position(point))
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -29,7 +29,7 @@ impl Light {
                         e: colour.map(|c| c * irradiance),
                     })
                 }
-                LightSpec::Point { position, intensity, colour } => Some(Light::Point {
+                LightSpec::Point { position, intensity, colour, .. } => Some(Light::Point {
                     pos: Vector3::from(*position),
                     i: colour.map(|c| c * intensity),
                 }),

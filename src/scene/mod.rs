@@ -128,8 +128,8 @@ impl Scene {
         if crate::render::key_light_index(&self.lights).is_none() {
             return Err(Error::setting(
                 "lights",
-                "needs a directional light: the highlight model's key light (`\"key\": true` \
-                 picks one when there are several)",
+                "needs a directional or point light: the highlight model's key light \
+                 (`\"key\": true` picks one when there are several)",
             ));
         }
         crate::edit::validate_edits(&self.edits).map_err(|e| prefix("edits", e))?;

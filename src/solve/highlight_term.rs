@@ -14,6 +14,7 @@
 //! ∂∇φᵢ/∂φⱼ = Pᵢ⁺[:, j] cᵢⱼ,           ∂∇φᵢ/∂φᵢ = −Σⱼ Pᵢ⁺[:, j] cᵢⱼ
 //! ∂mᵢ/∂φᵢ = −(ūᵢᵀh̄ᵢ)∇φᵢ + (v̄ᵢᵀh̄ᵢ) ∂∇φᵢ/∂φᵢ + (nᵢᵀh) Wᵢ v̄ᵢ
 //! ∂mᵢ/∂φⱼ = (v̄ᵢᵀh̄ᵢ) ∂∇φᵢ/∂φⱼ
+//! with a point eye or light (`h_gradient`, docs/math.md §2.1): mᵢ += Gᵢūᵢ, ∂mᵢ/∂φᵢ += Gᵢv̄ᵢ
 //! ∂rᵢ/∂φ  = √(wᵢAᵢ/2) (∂q/∂ℓ) R (∂mᵢ/∂φ),  D = |ℓ|² + ε²,
 //! ∂q₁/∂ℓ = 2[(ℓ₁, −ℓ₂) − q₁ℓ]/D,          ∂q₂/∂ℓ = 2[(ℓ₂, ℓ₁) − q₂ℓ]/D
 //! ```
@@ -24,7 +25,7 @@
 use nalgebra::{Matrix2, Vector2, Vector3};
 
 use crate::geometry::{Geometry, GradientForm};
-use crate::highlight::ell::m_vector;
+use crate::highlight::ell::m_vector_near;
 use crate::highlight::tensor::{default_epsilon, q};
 use crate::highlight::Symmetry;
 
@@ -49,6 +50,9 @@ pub struct HighlightTerm<'a> {
     /// [`super::position_term`]). A vertex may have a tensor target, a position target, both or
     /// neither; the pipeline gives each vertex the one `solver.highlight_energy` selects.
     pub target_g: Vec<Option<f64>>,
+    /// The near term's Gᵢ per vertex (a point eye or a point light: (∇h)ᵀu = Gᵢūᵢ, from
+    /// [`crate::highlight::h_gradients`]); `None` for a distant light and view (Eq. 7 exactly).
+    pub h_gradient: Option<&'a [Matrix2<f64>]>,
 }
 
 /// The residual of one vertex and its Jacobian entries.
@@ -73,6 +77,18 @@ impl<'a> HighlightTerm<'a> {
         form: GradientForm,
         phi: &[f64],
     ) -> Self {
+        Self::own_targets_near(geometry, h, None, symmetry, form, phi)
+    }
+
+    /// [`HighlightTerm::own_targets`] with the near term's G per vertex (`None`: distant).
+    pub fn own_targets_near(
+        geometry: &'a Geometry,
+        h: &'a [Vector3<f64>],
+        h_gradient: Option<&'a [Matrix2<f64>]>,
+        symmetry: Symmetry,
+        form: GradientForm,
+        phi: &[f64],
+    ) -> Self {
         let n = phi.len();
         let mut term = HighlightTerm {
             geometry,
@@ -83,6 +99,7 @@ impl<'a> HighlightTerm<'a> {
             target_q: vec![None; n],
             weight: vec![1.0; n],
             target_g: vec![None; n],
+            h_gradient,
         };
         let ell: Vec<Vector2<f64>> = (0..n).map(|i| term.ell_bar(phi, i)).collect();
         let norms: Vec<f64> = ell.iter().map(|l| l.norm()).collect();
@@ -97,7 +114,8 @@ impl HighlightTerm<'_> {
     pub fn ell_bar(&self, phi: &[f64], i: usize) -> Vector2<f64> {
         let g = self.geometry;
         let grad = g.stencil.gradient_at(phi, self.symmetry.k(), self.form, i);
-        QUARTER_TURN * m_vector(&g.frames[i], &g.weingarten[i], &grad, phi[i], &self.h[i])
+        let gi = self.h_gradient.map(|gs| &gs[i]);
+        QUARTER_TURN * m_vector_near(&g.frames[i], &g.weingarten[i], &grad, phi[i], &self.h[i], gi)
     }
 
     /// The residual of vertex `i` alone.
@@ -133,7 +151,11 @@ impl HighlightTerm<'_> {
         let (u, v) = (Vector2::new(cs, sn), Vector2::new(-sn, cs));
         let hb = frame.to_local(&self.h[i]);
         let (uh, vh, nh) = (u.dot(&hb), v.dot(&hb), frame.n.dot(&self.h[i]));
-        let m = grad * vh + w * u * nh;
+        let mut m = grad * vh + w * u * nh;
+        let near = self.h_gradient.map(|gs| &gs[i]);
+        if let Some(gm) = near {
+            m += gm * u;
+        }
         let ell = QUARTER_TURN * m;
         let dsq = ell.norm_squared() + self.epsilon * self.epsilon;
         let qv = q(&ell, self.epsilon);
@@ -165,7 +187,10 @@ impl HighlightTerm<'_> {
             let dr = dq * (col * vh);
             entries.push((j, [dr.x, dr.y]));
         }
-        let dm_self = -grad * uh + dgrad_self * vh + w * v * nh;
+        let mut dm_self = -grad * uh + dgrad_self * vh + w * v * nh;
+        if let Some(gm) = near {
+            dm_self += gm * v;
+        }
         let dr = dq * dm_self;
         entries[0].1 = [dr.x, dr.y];
         [residual.x, residual.y]
