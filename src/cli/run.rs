@@ -43,6 +43,11 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     });
     grainline::output::write_json_atomic(&report_path, &report)
         .with_context(|| format!("writing {}", report_path.display()))?;
+    // Warnings (an empty G-code program written with `allow_empty`) are printed even with
+    // --quiet; the run report carries them too.
+    for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
+        eprintln!("warning: {w}");
+    }
     if !quiet {
         for o in &report.outputs {
             eprintln!("wrote {o}");

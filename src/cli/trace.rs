@@ -62,6 +62,11 @@ pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
         grainline::output::write_json_atomic(r, &report)
             .with_context(|| format!("writing {}", r.display()))?;
     }
+    // Warnings (an empty G-code program written with `allow_empty`) are printed even with
+    // --quiet; the run report carries them too.
+    for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
+        eprintln!("warning: {w}");
+    }
     if !quiet {
         for o in &report.outputs {
             eprintln!("wrote {o}");

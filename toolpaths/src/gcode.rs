@@ -435,7 +435,7 @@ fn blend_tolerance(tolerance: f64, o: &GcodeOptions) -> Result<(f64, usize)> {
         d += 1;
     }
     let p = rounded(t, d);
-    if !(p > 0.0) {
+    if p.is_nan() || p <= 0.0 {
         return Err(ToolpathError::Gcode {
             key: "plan.tolerance",
             message: format!(
