@@ -5,12 +5,12 @@
 //! cargo run --release --example api
 //! ```
 
-use grainline::edit::{apply_edits, target_q, Edit, EditInput, EditOptions};
+use grainline::edit::{apply_edits, Edit, EditInput, EditOptions};
 use grainline::field::{compute_field, FieldOptions};
 use grainline::highlight::tensor::default_epsilon;
 use grainline::highlight::{highlight_field, InitialField, Lighting, Symmetry, View};
 use grainline::mesh::load::{load_obj, LoadOptions};
-use grainline::solve::{optimize, HighlightTerm, SolverSettings};
+use grainline::solve::{optimize, SolverSettings};
 use grainline::uvfield::{run_toolpaths, ToolpathSection};
 use nalgebra::Vector3;
 
@@ -46,16 +46,15 @@ fn main() -> grainline::Result<()> {
     // The highlight energy (Eq. 8) with the edit's targets, solved by sparse LM.
     let m: Vec<f64> = field.highlight.m.iter().map(|m| m.norm()).collect();
     let epsilon = default_epsilon(&m);
-    let term = HighlightTerm {
-        geometry: g,
-        h: &edited.h,
-        symmetry: options.symmetry,
-        form: options.gradient_form,
+    let settings = SolverSettings::default();
+    let term = edited.highlight_term(
+        g,
+        options.symmetry,
+        options.gradient_form,
+        settings.highlight_energy,
         epsilon,
-        target_q: target_q(g, &edited.target_ell, epsilon),
-        weight: edited.weight.clone(),
-    };
-    let solved = optimize(&mesh, &term, &edited.phi, &edited.support, &SolverSettings::default())?;
+    );
+    let solved = optimize(&mesh, &term, &edited.phi, &edited.support, &settings)?;
     let after = highlight_field(g, &solved.phi, options.symmetry, options.gradient_form, &edited.h);
     println!(
         "{} vertices edited, {} unknowns, {} iterations ({:?}); |ℓ| median {:.3e}",

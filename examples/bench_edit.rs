@@ -86,6 +86,7 @@ fn main() {
                 radius: 0.05,
                 weight: 1.0,
                 tolerance: 1e-3,
+                width: None,
             }),
         ),
     ];

@@ -29,5 +29,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         kettle.num_vertices(),
         kettle.num_faces()
     );
+    // A gently doubly curved panel (160 × 120 mm, principal radii 400 and 600 mm, convex
+    // towards +z); UVs = (s, t) over the grid, i.e. x and y scaled to [0, 1].
+    let dome = generate::Grid::new(96, 72).build(|s, t| {
+        let (x, y) = (160.0 * s - 80.0, 120.0 * t - 60.0);
+        nalgebra::Vector3::new(x, y, -(x * x / 800.0 + y * y / 1200.0))
+    });
+    let text = obj_string(
+        &dome,
+        "grainline example: a doubly curved panel, radii 400 and 600 mm (examples/generate_meshes.rs)",
+    );
+    grainline::output::write_atomic(&dir.join("dome.obj"), text.as_bytes())?;
+    println!(
+        "wrote examples/data/dome.obj ({} vertices, {} faces)",
+        dome.num_vertices(),
+        dome.num_faces()
+    );
     Ok(())
 }

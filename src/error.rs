@@ -148,3 +148,99 @@ impl Error {
         Error::Setting { key: key.into(), message: message.into() }
     }
 }
+
+/// A number as messages print it: the shortest text that reads back as the same `f64`, in
+/// exponent form when it is very small or very large (`1e-300`, not 300 digits), without a
+/// trailing `.0` (`5`, `0.25`, `1.5e20`).
+///
+/// ```
+/// use grainline::error::fmt_num;
+/// assert_eq!(fmt_num(5.0), "5");
+/// assert_eq!(fmt_num(179.9999), "179.9999");
+/// assert_eq!(fmt_num(1e-300), "1e-300");
+/// assert_eq!(fmt_num(-2.5e20), "-2.5e20");
+/// assert_eq!(fmt_num(f64::NAN), "NaN");
+/// ```
+pub fn fmt_num(x: f64) -> String {
+    let s = format!("{x:?}");
+    match s.strip_suffix(".0") {
+        Some(t) => t.to_string(),
+        None => s,
+    }
+}
+
+/// Three numbers as messages print them: `(x, y, z)` with [`fmt_num`].
+pub fn fmt_vec3(v: &[f64; 3]) -> String {
+    format!("({}, {}, {})", fmt_num(v[0]), fmt_num(v[1]), fmt_num(v[2]))
+}
+
+/// A sparse Cholesky failure in words (faer's own text is its `Debug` form).
+pub(crate) fn describe_llt(e: &faer::sparse::linalg::LltError) -> String {
+    use faer::sparse::linalg::LltError;
+    match e {
+        LltError::Numeric(n) => describe_pivot(n),
+        LltError::Generic(g) => describe_faer(g),
+    }
+}
+
+/// A numeric Cholesky failure in words.
+pub(crate) fn describe_pivot(e: &faer::linalg::cholesky::llt::factor::LltError) -> String {
+    match e {
+        faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => format!(
+            "the system is not positive definite (pivot {index} of the factorization is not > 0)"
+        ),
+    }
+}
+
+/// A faer allocation or indexing failure in words.
+pub(crate) fn describe_faer(e: &faer::sparse::FaerError) -> String {
+    match e {
+        faer::sparse::FaerError::IndexOverflow => "the system is too large to index".into(),
+        faer::sparse::FaerError::OutOfMemory => "out of memory".into(),
+        _ => "the sparse solver failed".into(),
+    }
+}
+
+/// A faer sparse-matrix assembly failure in words.
+pub(crate) fn describe_creation(e: &faer::sparse::CreationError) -> String {
+    match e {
+        faer::sparse::CreationError::Generic(g) => describe_faer(g),
+        faer::sparse::CreationError::OutOfBounds { row, col } => {
+            format!("entry ({row}, {col}) lies outside the matrix")
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn item15_solver_failures_are_described_in_words() {
+        use faer::linalg::cholesky::llt::factor::LltError as Numeric;
+        use faer::sparse::linalg::LltError;
+        let e = describe_llt(&LltError::Numeric(Numeric::NonPositivePivot { index: 1 }));
+        assert_eq!(
+            e,
+            "the system is not positive definite (pivot 1 of the factorization is not > 0)"
+        );
+        let e = describe_llt(&LltError::Generic(faer::sparse::FaerError::OutOfMemory));
+        assert_eq!(e, "out of memory");
+        let e = describe_creation(&faer::sparse::CreationError::OutOfBounds { row: 3, col: 9 });
+        assert_eq!(e, "entry (3, 9) lies outside the matrix");
+    }
+
+    #[test]
+    fn item15_numbers_are_short_and_exact() {
+        assert_eq!(fmt_num(1e-300), "1e-300");
+        assert_eq!(fmt_num(1e300), "1e300");
+        assert_eq!(fmt_num(0.5), "0.5");
+        assert_eq!(fmt_num(-3.0), "-3");
+        assert_eq!(fmt_num(f64::INFINITY), "inf");
+        // Exact: the text reads back as the same number.
+        for x in [0.1 + 0.2, 179.9999, 1.0 / 3.0, 6.02e23] {
+            assert_eq!(fmt_num(x).parse::<f64>().unwrap(), x);
+        }
+        assert_eq!(fmt_vec3(&[1e-200, 0.0, -2.5]), "(1e-200, 0, -2.5)");
+    }
+}

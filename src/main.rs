@@ -14,6 +14,7 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> ExitCode {
     grainline::allocator::keep_freed_memory();
+    remove_temporaries_on_signal();
     let args = cli::Cli::parse();
     // Sparse factorizations run sequentially: their rounding must not depend on the thread
     // count (outputs are byte-identical at any --threads).
@@ -29,6 +30,31 @@ fn main() -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// On SIGINT, SIGTERM or SIGHUP: delete the temporary files of outputs not yet persisted
+/// (grainline::output) and exit with 128 + the signal's number. A signal ends the process
+/// without running destructors, so `tempfile`'s own cleanup would not run.
+fn remove_temporaries_on_signal() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            let removed = grainline::output::remove_temporaries();
+            let name = match sig {
+                SIGINT => "SIGINT",
+                SIGTERM => "SIGTERM",
+                _ => "SIGHUP",
+            };
+            eprintln!(
+                "grainline: interrupted by {name}: {removed} temporary file(s) removed; outputs \
+                 not yet written were left as they were"
+            );
+            std::process::exit(128 + sig);
+        }
+    });
 }
 
 /// The error and its causes on one line, leaving out a cause whose text the message already

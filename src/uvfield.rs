@@ -68,7 +68,10 @@ impl UvFieldOptions {
         if !(self.degenerate_ratio.is_finite() && (0.0..=1e-3).contains(&self.degenerate_ratio)) {
             return Err(Error::setting(
                 "degenerate_ratio",
-                format!("must be in [0, 1e-3], got {}", self.degenerate_ratio),
+                format!(
+                    "must be in [0, 1e-3], got {}",
+                    crate::error::fmt_num(self.degenerate_ratio)
+                ),
             ));
         }
         Ok(())
@@ -619,9 +622,10 @@ fn section_key(name: &str) -> String {
 /// `toolpaths.`).
 pub fn toolpath_error(e: ToolpathError) -> Error {
     match e {
-        ToolpathError::InvalidOption { name, value, reason } => {
-            Error::setting(section_key(name), format!("{reason}, got {value}"))
-        }
+        ToolpathError::InvalidOption { name, value, reason } => Error::setting(
+            section_key(name),
+            format!("{reason}, got {}", crate::error::fmt_num(value)),
+        ),
         ToolpathError::Gcode { key, message } => Error::setting(section_key(key), message),
         e @ ToolpathError::OutsideEnvelope { .. } => {
             Error::setting("gcode_options.envelope", e.to_string())

@@ -325,8 +325,15 @@ fn curve_tool_on_a_plane_follows_a_straight_uv_line() {
     assert!((lines[0][1] - Vector2::new(0.8, 0.6)).norm() < 1e-6);
     let radius = 0.15;
     let uv = lines.iter().map(|l| l.iter().map(|p| [p.x, p.y]).collect()).collect();
-    let curve =
-        CurveEdit { svg: None, uv: Some(uv), points: None, radius, weight: 1.0, tolerance: 1e-3 };
+    let curve = CurveEdit {
+        svg: None,
+        uv: Some(uv),
+        points: None,
+        radius,
+        weight: 1.0,
+        tolerance: 1e-3,
+        width: None,
+    };
     let r = s.apply(&[Edit::Curve(curve)]);
     let dir = (b - a).normalize();
     let mut count = 0;
@@ -362,6 +369,7 @@ fn curve_tool_on_a_plane_follows_a_straight_uv_line() {
         radius,
         weight: 1.0,
         tolerance: 1e-3,
+        width: None,
     };
     let r = s.apply(&[Edit::Curve(curve)]);
     let hits = (0..s.mesh.num_vertices()).filter(|&i| r.support[i]).count();
@@ -461,6 +469,7 @@ fn edits_over_critical_points_leave_no_nan() {
             radius: 0.2,
             weight: 1.0,
             tolerance: 1e-3,
+            width: None,
         }),
     ];
     let r = s.apply(&edits);
@@ -564,6 +573,7 @@ fn curve_and_stencil_on_a_cylinder() {
         radius,
         weight: 1.0,
         tolerance: 1e-3,
+        width: None,
     };
     let r = s.apply(&[Edit::Curve(curve)]);
     let mut count = 0;

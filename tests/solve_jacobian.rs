@@ -31,6 +31,7 @@ fn check(form: GradientForm, symmetry: Symmetry) {
         epsilon: 0.05,
         target_q,
         weight: vec![1.0; n],
+        target_g: vec![None; n],
     };
     let mut worst: f64 = 0.0;
     for i in 0..n {
@@ -99,6 +100,7 @@ fn residual_energy_is_the_tensor_distance() {
         epsilon: 0.0,
         target_q: targets.iter().map(|t| Some(q(t, 0.0))).collect(),
         weight: vec![1.0; n],
+        target_g: vec![None; n],
     };
     let (mut e_res, mut e_tensor) = (0.0, 0.0);
     for (i, t) in targets.iter().enumerate() {

@@ -64,6 +64,12 @@ pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
         (None, None) => anyhow::bail!("give --view X,Y,Z or --eye X,Y,Z"),
     };
     let lighting = Lighting::new(light, view)?;
+    let mut plan = grainline::output::OutputPlan::new();
+    plan.output("--out", &args.out).input("the mesh", &args.mesh.mesh);
+    if let Some(d) = &args.directions {
+        plan.input("--directions", d);
+    }
+    plan.check()?;
     stages.stage("loading mesh");
     let loaded = grainline::mesh::load::load_obj(&args.mesh.mesh, &args.mesh.load_options())?;
     let mesh = loaded.mesh;

@@ -26,13 +26,23 @@ pub struct OptimizeArgs {
 /// Runs `grainline optimize`.
 pub fn run(args: OptimizeArgs, quiet: bool) -> anyhow::Result<()> {
     let scene = LoadedScene::read(&args.scene)?;
+    let mut plan = grainline::output::OutputPlan::new();
+    plan.output("--out", &args.out);
+    if let Some(r) = &args.report {
+        plan.output("--report", r);
+    }
+    grainline::pipeline::run::scene_inputs(&scene, &mut plan);
+    plan.check()?;
     let spinner = Spinner::new(quiet);
     let mut stages = Stages::new(&spinner);
     let prepared = prepare(&scene, &mut stages).map_err(|e| scene.wrap(e))?;
     let optimized = optimize_stage(&scene, &prepared, &mut stages).map_err(|e| scene.wrap(e))?;
     stages.start("write");
     let file = optimized_field_file(&prepared, &optimized)?;
-    grainline::output::write_json_compact_atomic(&args.out, &file)
+    // FIELD.json and the report are put in place together, the report last.
+    let mut staged = grainline::output::Staged::new();
+    staged
+        .add(&args.out, &grainline::output::json_compact(&file)?)
         .with_context(|| format!("writing {}", args.out.display()))?;
     if let Some(r) = &args.report {
         #[derive(serde::Serialize)]
@@ -51,15 +61,17 @@ pub fn run(args: OptimizeArgs, quiet: bool) -> anyhow::Result<()> {
             stages: std::mem::replace(&mut stages, Stages::new(&spinner)).into_times(),
             optimize: &optimized.report,
         };
-        grainline::output::write_json_atomic(r, &report)
+        staged
+            .add(r, &grainline::output::json_pretty(&report)?)
             .with_context(|| format!("writing {}", r.display()))?;
     }
+    staged.commit()?;
     drop(spinner);
     super::progress::warn_about(&optimized.report);
     if !quiet {
         let s = &optimized.report.solver;
         eprintln!(
-            "wrote {} ({} edited vertices; solver: {:?})",
+            "wrote {} ({} edited vertices; solver: {})",
             args.out.display(),
             optimized.report.edited_vertices,
             s.stop

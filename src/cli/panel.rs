@@ -26,6 +26,10 @@ pub struct PanelArgs {
 
 /// Runs `grainline panel`.
 pub fn run(args: PanelArgs, quiet: bool) -> anyhow::Result<()> {
+    grainline::output::OutputPlan::new()
+        .output("--out", &args.out)
+        .input("the outline", &args.outline)
+        .check()?;
     let opts = PanelOptions {
         max_edge: args.max_edge,
         min_angle_deg: args.min_angle,
@@ -45,9 +49,9 @@ pub fn run(args: PanelArgs, quiet: bool) -> anyhow::Result<()> {
         e => e,
     })?;
     let comment = format!(
-        "grainline panel from {}\nmax edge {:?} mm, min angle {} deg, tolerance {} mm",
+        "grainline panel from {}\nmax edge {}, min angle {} deg, tolerance {} mm",
         args.outline.display(),
-        args.max_edge,
+        args.max_edge.map_or_else(|| "unlimited".to_string(), |e| format!("{e} mm")),
         args.min_angle,
         args.tolerance
     );

@@ -72,7 +72,7 @@ pub fn warn_about(report: &grainline::pipeline::optimize::OptimizeStageReport) {
         && s.initial_energy.highlight > 1e-12
     {
         eprintln!(
-            "grainline: warning: the solver made no step ({:?}): where the grain is constant \
+            "grainline: warning: the solver made no step ({}): where the grain is constant \
              on a flat region ℓ = 0 and the highlight energy has no gradient; start from a \
              varying field (e.g. a stencil) there",
             s.stop

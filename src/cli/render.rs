@@ -2,7 +2,6 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 use grainline::pipeline::run::{run as run_scene, RunOptions};
 use grainline::scene::LoadedScene;
@@ -33,6 +32,18 @@ pub struct RenderArgs {
 
 /// Runs `grainline render`.
 pub fn run(args: RenderArgs, quiet: bool) -> anyhow::Result<()> {
+    // The flags among themselves first, so a clash is named by its flags.
+    let mut plan = grainline::output::OutputPlan::new();
+    for (flag, p) in [("--out", &args.out), ("--linear", &args.linear), ("--report", &args.report)]
+    {
+        if let Some(p) = p {
+            plan.output(flag, p);
+        }
+    }
+    if let Some(f) = &args.field {
+        plan.input("--field", f);
+    }
+    plan.check()?;
     let mut scene = LoadedScene::read(&args.scene)?;
     let settings = scene.scene.render.get_or_insert_with(Default::default);
     if let Some(p) = &args.out {
@@ -49,13 +60,10 @@ pub fn run(args: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         t.strokes_json = None;
     }
     let spinner = Spinner::new(quiet);
-    let options = RunOptions { out_dir: None, field: args.field.clone() };
+    let options =
+        RunOptions { out_dir: None, field: args.field.clone(), report: args.report.clone() };
     let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
-    if let Some(r) = &args.report {
-        grainline::output::write_json_atomic(r, &report)
-            .with_context(|| format!("writing {}", r.display()))?;
-    }
     if !quiet {
         for o in &report.outputs {
             eprintln!("wrote {o}");

@@ -30,19 +30,21 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     if let Some(d) = &args.out_dir {
         std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
     }
+    let report_path = args.report.clone().unwrap_or_else(|| {
+        args.out_dir.clone().unwrap_or_else(|| scene.base.clone()).join("run-report.json")
+    });
     let spinner = Spinner::new(quiet);
-    let report =
-        run_scene(&scene, &RunOptions { out_dir: args.out_dir.clone(), field: None }, &spinner)
-            .map_err(|e| scene.wrap(e))?;
+    let options = RunOptions {
+        out_dir: args.out_dir.clone(),
+        field: None,
+        report: Some(report_path.clone()),
+    };
+    // Every output, then the report, is written only once all of them are computed.
+    let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
     if let Some(o) = &report.optimize {
         super::progress::warn_about(o);
     }
-    let report_path = args.report.clone().unwrap_or_else(|| {
-        args.out_dir.clone().unwrap_or_else(|| scene.base.clone()).join("run-report.json")
-    });
-    grainline::output::write_json_atomic(&report_path, &report)
-        .with_context(|| format!("writing {}", report_path.display()))?;
     // Warnings (an empty G-code program written with `allow_empty`) are printed even with
     // --quiet; the run report carries them too.
     for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {

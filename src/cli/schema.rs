@@ -17,7 +17,10 @@ pub struct SchemaArgs {
 pub fn run(args: SchemaArgs) -> anyhow::Result<()> {
     let text = grainline::scene::json_schema_text();
     match args.out {
-        Some(p) => grainline::output::write_atomic(&p, text.as_bytes())
+        Some(p) => grainline::output::OutputPlan::new()
+            .output("--out", &p)
+            .check()
+            .and_then(|_| grainline::output::write_atomic(&p, text.as_bytes()))
             .with_context(|| format!("writing {}", p.display()))?,
         None => print!("{text}"),
     }

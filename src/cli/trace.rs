@@ -2,7 +2,6 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 use grainline::pipeline::run::{run as run_scene, RunOptions};
 use grainline::scene::LoadedScene;
@@ -35,6 +34,22 @@ pub struct TraceArgs {
 
 /// Runs `grainline trace`.
 pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
+    // The flags among themselves first, so a clash is named by its flags.
+    let mut plan = grainline::output::OutputPlan::new();
+    for (flag, p) in [
+        ("--svg", &args.svg),
+        ("--gcode", &args.gcode),
+        ("--strokes", &args.strokes),
+        ("--report", &args.report),
+    ] {
+        if let Some(p) = p {
+            plan.output(flag, p);
+        }
+    }
+    if let Some(f) = &args.field {
+        plan.input("--field", f);
+    }
+    plan.check()?;
     let mut scene = LoadedScene::read(&args.scene)?;
     scene.scene.render = None;
     let section = scene.scene.toolpaths.get_or_insert_with(Default::default);
@@ -55,13 +70,10 @@ pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
         );
     }
     let spinner = Spinner::new(quiet);
-    let options = RunOptions { out_dir: None, field: args.field.clone() };
+    let options =
+        RunOptions { out_dir: None, field: args.field.clone(), report: args.report.clone() };
     let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
-    if let Some(r) = &args.report {
-        grainline::output::write_json_atomic(r, &report)
-            .with_context(|| format!("writing {}", r.display()))?;
-    }
     // Warnings (an empty G-code program written with `allow_empty`) are printed even with
     // --quiet; the run report carries them too.
     for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {

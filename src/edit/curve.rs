@@ -20,6 +20,16 @@
 //!
 //! **Magnitude.** ℓ* has the length max(|ℓᵢ|, median |ℓ|): a curve asks for a clear highlight
 //! direction even where the current ℓ is nearly zero.
+//!
+//! **Position** (docs/math.md §9). The tangent targets only make the highlights *parallel* to
+//! the curve; the position target puts the key light's highlight *on* it. With d the signed
+//! distance of vertex i from the closest curve (positive to the left of the curve's direction,
+//! seen from the normal; behind an end the offset along the tangent does not count, so d → 0
+//! continuously), ĝ*ᵢ = (1 − β) ĝᵢ + β σ oᵢ tanh(d/width): β = 1 up to half the radius and
+//! falls smoothly to 0 at the radius (so the zero of ĝ* is on the curve exactly and the target
+//! joins the current field at the tube's edge); σ = ±1, one per polyline, is the side that
+//! agrees best with the current ĝ (the smaller change); oᵢ = ±1 orients a line field
+//! consistently over the tube (1 for k = 1).
 
 use std::path::Path;
 
@@ -53,6 +63,13 @@ pub struct CurveEdit {
     /// Flattening tolerance of SVG Bézier curves, UV units (default 0.001).
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// The sharpness of the highlight put on the curve, scene units (default: the radius): the
+    /// position target is ĝ* = tanh(d/width) at signed distance d from the curve, so the grain
+    /// turns from across h (on the curve) by 50° at d = width. A rendered highlight is about
+    /// α·width/|h̄| wide for a BRDF of roughness α along the grain: smaller is sharper (and
+    /// turns the grain faster; mind a turning-radius constraint).
+    #[serde(default)]
+    pub width: Option<f64>,
 }
 
 fn default_tolerance() -> f64 {
@@ -71,8 +88,11 @@ impl CurveEdit {
         if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance <= 0.1) {
             return Err(Error::setting(
                 "tolerance",
-                format!("must be within (0, 0.1], got {}", self.tolerance),
+                format!("must be within (0, 0.1], got {}", crate::error::fmt_num(self.tolerance)),
             ));
+        }
+        if let Some(w) = self.width {
+            check_radius("width", w)?;
         }
         if let Some(lines) = &self.uv {
             check_polylines("uv", lines)?;
@@ -378,17 +398,22 @@ pub(crate) fn apply(
     };
     let mut count = 0;
     let mut critical = 0;
-    for (i, hit) in found.into_iter().enumerate() {
-        let Some((d, tangent)) = hit else { continue };
+    let width = e.width.unwrap_or(e.radius);
+    let profile = position_profile(ctx, st, &found, e.radius, width);
+    for (i, hit) in found.iter().enumerate() {
+        let Some(hit) = hit else { continue };
         st.support[i] = true;
         if st.critical[i] {
             critical += 1;
             continue;
         }
+        // The position rows keep the full weight over the tube: their target itself blends
+        // into the current field at the tube's edge.
+        st.set_target_g(i, profile[i], e.weight);
         let n = ctx.normals[i];
-        let t = tangent - n * n.dot(&tangent);
-        let w = e.weight * (1.0 - (d / e.radius).powi(2)).powi(2);
-        if !(t.norm() > 1e-9 * tangent.norm()) || !(w > 0.0) {
+        let t = hit.tangent - n * n.dot(&hit.tangent);
+        let w = e.weight * (1.0 - (hit.distance / e.radius).powi(2)).powi(2);
+        if !(t.norm() > 1e-9 * hit.tangent.norm()) || !(w > 0.0) {
             continue;
         }
         let len = st.ell[i].norm().max(median);
@@ -398,6 +423,13 @@ pub(crate) fn apply(
     }
     report.vertices = count;
     report.critical_vertices = critical;
+    if critical > 0 {
+        report.notes.push(format!(
+            "the curve passes within its radius of {critical} critical points (h ∥ n): every \
+             highlight goes through them whatever the grain, so the highlight cannot follow the \
+             curve there"
+        ));
+    }
     if count == 0 && critical == 0 {
         return Err(Error::setting(
             "radius",
@@ -411,12 +443,98 @@ pub(crate) fn apply(
     Ok(())
 }
 
-/// Per vertex, the (distance, 3D tangent) of the closest 3D polyline within `radius`.
-fn space_targets(
+/// The closest curve of a vertex within the radius.
+#[derive(Clone, Copy, Debug)]
+struct Hit {
+    /// Distance to the curve (scene units).
+    distance: f64,
+    /// The curve's 3D tangent at the closest point (not normalized).
+    tangent: Vector3<f64>,
+    /// The vertex minus the closest point (3D, scene units, to first order for UV curves).
+    offset: Vector3<f64>,
+    /// Which polyline.
+    line: usize,
+}
+
+/// β of the position profile: 1 up to half the radius, then a smoothstep down to 0 at it.
+fn blend(d: f64, radius: f64) -> f64 {
+    let x = ((d / radius - 0.5) / 0.5).clamp(0.0, 1.0);
+    1.0 - x * x * (3.0 - 2.0 * x)
+}
+
+/// The position target ĝ* of every vertex with a hit (module docs, "Position"); other entries
+/// are the current targets.
+fn position_profile(
     ctx: &Context,
-    lines: &[Vec<Vector3<f64>>],
+    st: &State,
+    found: &[Option<Hit>],
     radius: f64,
-) -> Vec<Option<(f64, Vector3<f64>)>> {
+    width: f64,
+) -> Vec<f64> {
+    let n = found.len();
+    // oᵢ: a consistent orientation of a line field over the tube, by breadth-first search from
+    // the lowest vertex of each connected piece (k = 1: all +1).
+    let mut orient = vec![0.0f64; n];
+    let line_field = ctx.symmetry == crate::highlight::Symmetry::Line;
+    for seed in 0..n {
+        if found[seed].is_none() || orient[seed] != 0.0 {
+            continue;
+        }
+        orient[seed] = 1.0;
+        let mut queue = std::collections::VecDeque::from([seed]);
+        while let Some(i) = queue.pop_front() {
+            let ui = ctx.grain(&st.phi, i) * orient[i];
+            for &j in ctx.geom.adjacency.neighbors(i) {
+                let j = j as usize;
+                if found[j].is_none() || orient[j] != 0.0 {
+                    continue;
+                }
+                let same = !line_field || ctx.grain(&st.phi, j).dot(&ui) >= 0.0;
+                orient[j] = if same { 1.0 } else { -1.0 };
+                queue.push_back(j);
+            }
+        }
+    }
+    // The signed distance: the offset's component across the tangent, seen from the normal.
+    let signed: Vec<f64> = found
+        .iter()
+        .enumerate()
+        .map(|(i, h)| {
+            h.map_or(0.0, |h| {
+                let t = h.tangent.normalize();
+                ctx.normals[i].dot(&t.cross(&h.offset))
+            })
+        })
+        .collect();
+    // σ per polyline: the side whose profile agrees best with the current ĝ.
+    let lines = found.iter().flatten().map(|h| h.line + 1).max().unwrap_or(0);
+    let mut agree = vec![0.0f64; lines];
+    for (i, h) in found.iter().enumerate() {
+        if let Some(h) = h {
+            let b = blend(h.distance, radius) * ctx.geom.areas[i].max(0.0);
+            agree[h.line] += b * orient[i] * st.target_g[i] * (signed[i] / width).tanh();
+        }
+    }
+    let sigma: Vec<f64> = agree.iter().map(|&a| if a < 0.0 { -1.0 } else { 1.0 }).collect();
+    (0..n)
+        .map(|i| match &found[i] {
+            Some(h) => {
+                let b = blend(h.distance, radius);
+                let wanted = sigma[h.line] * orient[i] * (signed[i] / width).tanh();
+                let g = (1.0 - b) * st.target_g[i] + b * wanted;
+                if g.is_finite() {
+                    g
+                } else {
+                    st.target_g[i]
+                }
+            }
+            None => st.target_g[i],
+        })
+        .collect()
+}
+
+/// Per vertex, the closest 3D polyline within `radius`.
+fn space_targets(ctx: &Context, lines: &[Vec<Vector3<f64>>], radius: f64) -> Vec<Option<Hit>> {
     let mut lo = Vector3::repeat(f64::INFINITY);
     let mut hi = Vector3::repeat(f64::NEG_INFINITY);
     for p in lines.iter().flatten() {
@@ -431,8 +549,8 @@ fn space_targets(
             if (0..3).any(|k| p[k] < lo[k] || p[k] > hi[k]) {
                 return None;
             }
-            let mut best: Option<(f64, Vector3<f64>)> = None;
-            for l in lines {
+            let mut best: Option<Hit> = None;
+            for (line, l) in lines.iter().enumerate() {
                 for s in l.windows(2) {
                     let e = s[1] - s[0];
                     let ee = e.norm_squared();
@@ -440,9 +558,10 @@ fn space_targets(
                         continue;
                     }
                     let t = ((p - s[0]).dot(&e) / ee).clamp(0.0, 1.0);
-                    let d = (s[0] + e * t - p).norm();
-                    if d < radius && best.is_none_or(|b| d < b.0) {
-                        best = Some((d, e));
+                    let offset = p - (s[0] + e * t);
+                    let d = offset.norm();
+                    if d < radius && best.is_none_or(|b| d < b.distance) {
+                        best = Some(Hit { distance: d, tangent: e, offset, line });
                     }
                 }
             }
@@ -451,14 +570,9 @@ fn space_targets(
         .collect()
 }
 
-/// Per vertex, the (distance, 3D tangent) of the closest UV polyline within `radius`, measured
-/// through the UV Jacobian of each of the vertex's charts. `None` if the mesh has no UVs.
-#[allow(clippy::type_complexity)]
-fn uv_targets(
-    ctx: &Context,
-    lines: &[Vec<Vector2<f64>>],
-    radius: f64,
-) -> Option<Vec<Option<(f64, Vector3<f64>)>>> {
+/// Per vertex, the closest UV polyline within `radius`, measured through the UV Jacobian of
+/// each of the vertex's charts. `None` if the mesh has no UVs.
+fn uv_targets(ctx: &Context, lines: &[Vec<Vector2<f64>>], radius: f64) -> Option<Vec<Option<Hit>>> {
     let mesh = ctx.mesh;
     let uv = mesh.uv.as_ref()?;
     let face_jacobian: Vec<Option<[Vector3<f64>; 2]>> = (0..mesh.num_faces())
@@ -509,7 +623,7 @@ fn uv_targets(
                     charts[k].2[0] += j[0] * angle;
                     charts[k].2[1] += j[1] * angle;
                 }
-                let mut best: Option<(f64, Vector3<f64>)> = None;
+                let mut best: Option<Hit> = None;
                 for (key, total, js) in charts {
                     if !(total > 0.0) {
                         continue;
@@ -531,12 +645,18 @@ fn uv_targets(
                     {
                         continue;
                     }
-                    for l in lines {
+                    for (line, l) in lines.iter().enumerate() {
                         for s in l.windows(2) {
-                            let (_, d2) = closest_on_segment(&p, &s[0], &s[1], &g);
-                            if d2 < r2 && best.is_none_or(|b| d2 < b.0 * b.0) {
+                            let (t, d2) = closest_on_segment(&p, &s[0], &s[1], &g);
+                            if d2 < r2 && best.is_none_or(|b| d2 < b.distance * b.distance) {
                                 let e = s[1] - s[0];
-                                best = Some((d2.sqrt(), ju * e.x + jv * e.y));
+                                let o = p - (s[0] + e * t);
+                                best = Some(Hit {
+                                    distance: d2.sqrt(),
+                                    tangent: ju * e.x + jv * e.y,
+                                    offset: ju * o.x + jv * o.y,
+                                    line,
+                                });
                             }
                         }
                     }

@@ -65,7 +65,7 @@ impl LightEdit {
         if !(e.is_finite() && (0.0..90.0).contains(&e)) {
             return Err(Error::setting(
                 "min_elevation_deg",
-                format!("must be within [0, 90), got {e}"),
+                format!("must be within [0, 90), got {}", crate::error::fmt_num(e)),
             ));
         }
         Ok(())

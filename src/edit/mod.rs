@@ -151,6 +151,12 @@ pub struct EditResult {
     pub target_ell: Vec<Option<Vector3<f64>>>,
     /// Weight of each target (0 where `target_ell` is `None`).
     pub weight: Vec<f64>,
+    /// The position target ĝ*ᵢ (docs/math.md §9): the cosine between the grain and the tangent
+    /// part of h that vertex i should have, in the orientation of `phi[i]`; `None` exactly where
+    /// `None` at critical points and where the position weight is 0.
+    pub target_g: Vec<Option<f64>>,
+    /// Weight of each position target (0 where `target_g` is `None`).
+    pub weight_g: Vec<f64>,
     /// Inside the support of some edit (the vertices the optimizer should free).
     pub support: Vec<bool>,
     /// One report per edit.
@@ -200,6 +206,10 @@ pub struct EditReport {
     /// Curve: segments after flattening.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub segments: Option<usize>,
+    /// What may keep the edit from doing what it asks (the CLI prints them as warnings):
+    /// critical points in the support, a warp reaching beyond the part's boundary.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 impl EditReport {
@@ -247,6 +257,44 @@ pub fn apply_edits(input: &EditInput, edits: &[Edit], options: &EditOptions) -> 
     st.finish(options, reports)
 }
 
+impl EditResult {
+    /// The optimizer's data term for these targets: the position energy (ĝ*, `weight_g`) or the
+    /// paper's tensor energy (q(ℓ̄*) with regularization `epsilon`, `weight`), under the half
+    /// vectors after the light tools.
+    pub fn highlight_term<'a>(
+        &'a self,
+        geometry: &'a Geometry,
+        symmetry: Symmetry,
+        form: GradientForm,
+        energy: crate::solve::HighlightEnergy,
+        epsilon: f64,
+    ) -> crate::solve::HighlightTerm<'a> {
+        let n = self.weight.len();
+        let base = crate::solve::HighlightTerm {
+            geometry,
+            h: &self.h,
+            symmetry,
+            form,
+            epsilon,
+            target_q: vec![None; n],
+            weight: vec![0.0; n],
+            target_g: vec![None; n],
+        };
+        match energy {
+            crate::solve::HighlightEnergy::Tensor => crate::solve::HighlightTerm {
+                target_q: target_q(geometry, &self.target_ell, epsilon),
+                weight: self.weight.clone(),
+                ..base
+            },
+            crate::solve::HighlightEnergy::Position => crate::solve::HighlightTerm {
+                weight: self.weight_g.clone(),
+                target_g: self.target_g.clone(),
+                ..base
+            },
+        }
+    }
+}
+
 /// The targets q(ℓ̄*ᵢ) of [`crate::solve::HighlightTerm::target_q`]: ℓ* in the frame of vertex
 /// i (ℓ̄* = [tᵢ bᵢ]ᵀℓ*) through the regularized tensor of [`crate::highlight::tensor::q`].
 pub fn target_q(
@@ -288,6 +336,16 @@ impl<'a> Context<'a> {
     pub fn ell_of(&self, phi: &[f64], h: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
         highlight_field(self.geom, phi, self.symmetry, self.form, h).ell
     }
+
+    /// ĝ = h̄ᵀū/|h̄| of the field `phi` under `h` (docs/math.md §9; 0 where h̄ = 0).
+    pub fn g_of(&self, phi: &[f64], h: &[Vector3<f64>]) -> Vec<f64> {
+        self.geom.frames.iter().zip(phi).zip(h).map(|((f, &p), h)| g_hat(f, p, h)).collect()
+    }
+
+    /// The grain direction of vertex `i` for the field `phi`.
+    pub fn grain(&self, phi: &[f64], i: usize) -> Vector3<f64> {
+        self.geom.frames[i].direction(phi[i])
+    }
 }
 
 /// The state the edits transform, in order.
@@ -301,8 +359,14 @@ pub(crate) struct State {
     pub critical: Vec<bool>,
     /// The target field so far.
     pub target: Vec<Vector3<f64>>,
+    /// ĝ = h̄ᵀū/|h̄| of `phi` under `h` (the "current" position value; 0 at h̄ = 0).
+    pub g: Vec<f64>,
+    /// The position target so far (docs/math.md §9), in the orientation of `phi`.
+    pub target_g: Vec<f64>,
     /// Weight of an edit's target; `None` where no edit has set one yet.
     pub edit_weight: Vec<Option<f64>>,
+    /// Weight of an edit's position target; `None` where no edit has set one yet.
+    pub edit_weight_g: Vec<Option<f64>>,
     /// Inside some edit's support.
     pub support: Vec<bool>,
     /// Set by move_light: the untargeted vertices keep the old light's ℓ from then on.
@@ -312,8 +376,11 @@ pub(crate) struct State {
 impl State {
     fn new(ctx: &Context, input: &EditInput) -> Self {
         let ell = ctx.ell_of(input.phi, input.h);
+        let g = ctx.g_of(input.phi, input.h);
         let n = ell.len();
         State {
+            target_g: g.clone(),
+            g,
             phi: input.phi.to_vec(),
             lighting: *input.lighting,
             h: input.h.to_vec(),
@@ -325,6 +392,7 @@ impl State {
             target: ell.clone(),
             ell,
             edit_weight: vec![None; n],
+            edit_weight_g: vec![None; n],
             support: vec![false; n],
             pinned: false,
         }
@@ -339,13 +407,24 @@ impl State {
                 critical_points(&self.h, ctx.normals.iter().copied(), DEFAULT_CRITICAL_THRESHOLD);
         }
         self.ell = ctx.ell_of(&self.phi, &self.h);
+        self.g = ctx.g_of(&self.phi, &self.h);
         if !self.pinned {
             for i in 0..self.ell.len() {
                 if self.edit_weight[i].is_none() {
                     self.target[i] = self.ell[i];
                 }
+                if self.edit_weight_g[i].is_none() {
+                    self.target_g[i] = self.g[i];
+                }
             }
         }
+    }
+
+    /// Sets the position target of vertex `i` from an edit of weight `w`.
+    pub fn set_target_g(&mut self, i: usize, g: f64, w: f64) {
+        self.target_g[i] = g;
+        self.edit_weight_g[i] = Some(w);
+        self.support[i] = true;
     }
 
     /// Sets the target of vertex `i` from an edit of weight `w`.
@@ -358,10 +437,27 @@ impl State {
     fn finish(self, options: &EditOptions, reports: Vec<EditReport>) -> Result<EditResult> {
         let n = self.target.len();
         let mut target_ell = vec![None; n];
+        let mut target_g = vec![None; n];
         let mut weight = vec![0.0; n];
+        let mut weight_g = vec![0.0; n];
         for i in 0..n {
+            if self.critical[i] {
+                continue;
+            }
+            let wg = self.edit_weight_g[i].unwrap_or(options.outside_weight);
+            if wg > 0.0 {
+                let g = self.target_g[i];
+                if !g.is_finite() {
+                    return Err(Error::Numerical {
+                        stage: "edits",
+                        message: format!("the position target of vertex {i} is not finite"),
+                    });
+                }
+                target_g[i] = Some(g);
+                weight_g[i] = wg;
+            }
             let w = self.edit_weight[i].unwrap_or(options.outside_weight);
-            if self.critical[i] || w <= 0.0 {
+            if w <= 0.0 {
                 continue;
             }
             let t = self.target[i];
@@ -386,10 +482,24 @@ impl State {
             h: self.h,
             target_ell,
             weight,
+            target_g,
+            weight_g,
             support: self.support,
             reports,
         })
     }
+}
+
+/// ĝ = h̄ᵀū/|h̄| at one vertex: the cosine between the grain of angle `phi` and the tangent part
+/// of `h` (0 where that part vanishes).
+pub fn g_hat(frame: &crate::geometry::Frame, phi: f64, h: &Vector3<f64>) -> f64 {
+    let hb = frame.to_local(h);
+    let len = hb.norm();
+    if !(len > 0.0) {
+        return 0.0;
+    }
+    let (sn, cs) = phi.sin_cos();
+    ((cs * hb.x + sn * hb.y) / len).clamp(-1.0, 1.0)
 }
 
 /// Prefixes the key of a setting error with the edit's index; names the edit in other errors.
@@ -406,7 +516,10 @@ fn at_edit(k: usize, tool: &str, err: Error) -> Error {
 /// A weight must be finite and ≥ 0.
 pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
     if !(w.is_finite() && w >= 0.0) {
-        return Err(Error::setting(key, format!("must be a finite number ≥ 0, got {w}")));
+        return Err(Error::setting(
+            key,
+            format!("must be a finite number ≥ 0, got {}", crate::error::fmt_num(w)),
+        ));
     }
     Ok(())
 }
@@ -414,7 +527,10 @@ pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
 /// A radius must be finite and > 0.
 pub(crate) fn check_radius(key: &str, r: f64) -> Result<()> {
     if !(r.is_finite() && r > 0.0) {
-        return Err(Error::setting(key, format!("must be a finite number > 0, got {r}")));
+        return Err(Error::setting(
+            key,
+            format!("must be a finite number > 0, got {}", crate::error::fmt_num(r)),
+        ));
     }
     Ok(())
 }

@@ -63,7 +63,10 @@ impl StencilEdit {
         if !(self.blend.is_finite() && (0.0..=10.0).contains(&self.blend)) {
             return Err(Error::setting(
                 "blend",
-                format!("must be within [0, 10] (a fraction of the radius), got {}", self.blend),
+                format!(
+                    "must be within [0, 10] (a fraction of the radius), got {}",
+                    crate::error::fmt_num(self.blend)
+                ),
             ));
         }
         check_weight("weight", self.weight)
@@ -120,8 +123,9 @@ pub(crate) fn apply(
     }
     for &i in inside.iter().chain(&band) {
         if !st.critical[i] {
-            let ell = st.ell[i];
+            let (ell, g) = (st.ell[i], st.g[i]);
             st.set_target(i, ell, e.weight);
+            st.set_target_g(i, g, e.weight);
         }
         st.support[i] = true;
     }
@@ -178,11 +182,14 @@ fn blend_band(ctx: &Context, phi: &mut [f64], band: &[usize], k: f64) -> Result<
     }
     let m = band.len();
     let a = SparseColMat::<usize, c64>::try_new_from_triplets(m, m, &triplets).map_err(|e| {
-        Error::Numerical { stage: "stencil blend", message: format!("matrix assembly: {e:?}") }
+        Error::Numerical {
+            stage: "stencil blend",
+            message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
+        }
     })?;
     let llt = a.sp_cholesky(Side::Lower).map_err(|e| Error::Numerical {
         stage: "stencil blend",
-        message: format!("Cholesky: {e:?}"),
+        message: format!("Cholesky: {}", crate::error::describe_llt(&e)),
     })?;
     llt.solve_in_place(rhs.as_mut());
     for (r, &i) in band.iter().enumerate() {

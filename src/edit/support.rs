@@ -346,9 +346,13 @@ impl Support {
             return Err(Error::setting(
                 "radius",
                 format!(
-                    "the support holds no vertex: no vertex is within {radius} of the centre \
-                     ({:?} distance); increase the radius or move the centre",
-                    metric
+                    "the support holds no vertex: no vertex is within {} of the centre \
+                     ({} distance); increase the radius or move the centre",
+                    crate::error::fmt_num(radius),
+                    match metric {
+                        Metric::Geodesic => "geodesic",
+                        Metric::Euclidean => "euclidean",
+                    }
                 ),
             ));
         }
@@ -532,6 +536,17 @@ impl PlaneLocator {
         q: &Vector2<f64>,
         near: &Vector3<f64>,
     ) -> (usize, [f64; 3]) {
+        self.locate_or_nearest(ctx, q, near).0
+    }
+
+    /// [`PlaneLocator::locate`], and whether `q` lies in a triangle (false: beyond a boundary,
+    /// the closest point of the closest triangle was used).
+    pub fn locate_or_nearest(
+        &self,
+        ctx: &Context,
+        q: &Vector2<f64>,
+        near: &Vector3<f64>,
+    ) -> ((usize, [f64; 3]), bool) {
         let (ci, cj) = cell_of(q, &self.lo, self.cell, self.dim);
         let mut best: Option<(f64, usize, [f64; 3])> = None;
         for j in cj.saturating_sub(1)..=(cj + 1).min(self.dim - 1) {
@@ -550,7 +565,7 @@ impl PlaneLocator {
             }
         }
         if let Some((_, f, b)) = best {
-            return (f, b);
+            return ((f, b), true);
         }
         // Outside every triangle (beyond a boundary): the closest point of the closest one.
         let q3 = Vector3::new(q.x, q.y, 0.0);
@@ -563,7 +578,7 @@ impl PlaneLocator {
                 best = Some((d, *f, bary));
             }
         }
-        best.map_or((0, [1.0, 0.0, 0.0]), |(_, f, b)| (f, b))
+        (best.map_or((0, [1.0, 0.0, 0.0]), |(_, f, b)| (f, b)), false)
     }
 
     /// Interpolates the vertex vectors `values` at `q`. For line fields (`align`), the corner
@@ -589,6 +604,26 @@ impl PlaneLocator {
             out += c * b[k];
         }
         out
+    }
+}
+
+impl PlaneLocator {
+    /// Interpolates the vertex scalars `values` at `q` (barycentric in the located triangle);
+    /// each corner value is multiplied by `sign(corner)` first (±1: line fields state ĝ in one
+    /// orientation of the grain). The flag is false where `q` lies beyond the part's boundary.
+    pub fn interpolate_scalar(
+        &self,
+        ctx: &Context,
+        q: &Vector2<f64>,
+        near: &Vector3<f64>,
+        values: &[f64],
+        sign: impl Fn(usize) -> f64,
+    ) -> (f64, bool) {
+        let ((f, b), inside) = self.locate_or_nearest(ctx, q, near);
+        let corners = ctx.mesh.faces[f];
+        let v =
+            (0..3).map(|k| values[corners[k] as usize] * sign(corners[k] as usize) * b[k]).sum();
+        (v, inside)
     }
 }
 

@@ -180,6 +180,7 @@ pub(crate) fn apply(
     let mut targets = Vec::with_capacity(support.vertices.len());
     let mut max_turn: f64 = 0.0;
     let mut critical = 0;
+    let mut outside = 0usize;
     for (&v, p) in support.vertices.iter().zip(&support.xy) {
         if st.critical[v] {
             critical += 1;
@@ -197,10 +198,25 @@ pub(crate) fn apply(
         let planar = jacobian(kind, e.strength, &q) * support.vector_to_plane(&ell_q);
         let new = support.vector_from_plane(&ctx.geom.frames[v], &planar);
         max_turn = max_turn.max(line_angle_deg(&new, &st.target[v]));
-        targets.push((v, new));
+        // The position target (math.md §9): g*(p) = g(W⁻¹(p)), the corners' ĝ stated in the
+        // orientation of vertex v's grain for line fields.
+        let u_v = ctx.grain(&st.phi, v);
+        let sign = |c: usize| {
+            if align && ctx.grain(&st.phi, c).dot(&u_v) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            }
+        };
+        let (g_new, inside) = locator.interpolate_scalar(ctx, &q, &pos, &st.target_g, sign);
+        if !inside {
+            outside += 1;
+        }
+        targets.push((v, new, g_new));
     }
-    for (v, t) in &targets {
-        st.set_target(*v, *t, e.weight);
+    for &(v, t, g) in &targets {
+        st.set_target(v, t, e.weight);
+        st.set_target_g(v, g, e.weight);
     }
     for &v in &support.vertices {
         st.support[v] = true;
@@ -208,6 +224,20 @@ pub(crate) fn apply(
     report.vertices = targets.len();
     report.critical_vertices = critical;
     report.max_turn_deg = Some(max_turn);
+    if outside > 0 {
+        report.notes.push(format!(
+            "the warp pulls the highlight of {outside} of {} brush vertices from beyond the \
+             part's boundary (the nearest boundary values were used); move the brush away \
+             from the edge or lower the strength",
+            targets.len()
+        ));
+    }
+    if critical > 0 {
+        report.notes.push(format!(
+            "{critical} brush vertices are critical points (h ∥ n), where no grain moves the \
+             highlight"
+        ));
+    }
     Ok(())
 }
 

@@ -61,7 +61,10 @@ fn unit(name: &str, v: Vector3<f64>) -> Result<Vector3<f64>> {
     if !(n.is_finite() && n > 0.0) {
         return Err(Error::invalid_arg(
             name,
-            format!("direction ({}, {}, {}) must be finite and non-zero", v.x, v.y, v.z),
+            format!(
+                "direction {} must be finite and non-zero",
+                crate::error::fmt_vec3(&[v.x, v.y, v.z])
+            ),
         ));
     }
     Ok(v / n)

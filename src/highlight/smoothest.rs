@@ -87,11 +87,14 @@ pub fn smoothest_field(
         triplets.push(Triplet::new(i, i, c64::new(diag, 0.0)));
     }
     let a = SparseColMat::<usize, c64>::try_new_from_triplets(n, n, &triplets).map_err(|e| {
-        Error::Numerical { stage: "smoothest field", message: format!("matrix assembly: {e:?}") }
+        Error::Numerical {
+            stage: "smoothest field",
+            message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
+        }
     })?;
     let llt = a.sp_cholesky(Side::Lower).map_err(|e| Error::Numerical {
         stage: "smoothest field",
-        message: format!("Cholesky: {e:?}"),
+        message: format!("Cholesky: {}", crate::error::describe_llt(&e)),
     })?;
 
     // Deterministic start: golden-angle phases.

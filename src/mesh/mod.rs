@@ -15,7 +15,7 @@ mod scan_parallel;
 pub mod topology;
 mod union_find;
 pub mod uv_charts;
-mod validate;
+pub(crate) mod validate;
 pub mod vertex_faces;
 pub mod weld;
 pub mod write;

@@ -43,6 +43,21 @@ impl FileNames<'_> {
     }
 }
 
+/// The hint the loader's non-manifold errors end with; a scene names its own key instead
+/// (`pipeline::load_part`).
+pub(crate) const NONMANIFOLD_HINT: &str = "--allow-nonmanifold accepts them";
+
+/// At most `FACES_LISTED` faces, then "… and N more".
+const FACES_LISTED: usize = 4;
+
+fn few(shown: &[String], total: usize) -> String {
+    if total <= shown.len() {
+        shown.join(", ")
+    } else {
+        format!("{} … and {} more", shown.join(", "), total - shown.len())
+    }
+}
+
 /// Finds every structural problem.
 pub(crate) fn find_problems(he: &HalfEdges) -> Problems {
     let flags: Vec<u8> =
@@ -66,16 +81,17 @@ pub(crate) fn check(
     if !allow_nonmanifold {
         if let Some(&h) = p.nonmanifold_edges.first() {
             let faces = he.edge_faces(h);
-            let lines: Vec<String> = faces.iter().map(|f| names.face(f.0)).collect();
+            let lines: Vec<String> =
+                faces.iter().take(FACES_LISTED).map(|f| names.face(f.0)).collect();
             return Err(Error::NonManifold {
                 path: path.to_owned(),
                 message: format!(
                     "non-manifold edge between vertices {} and {} shared by {} faces ({}); {} \
-                     such edge(s) in all (--allow-nonmanifold accepts them)",
+                     such edge(s) in all ({NONMANIFOLD_HINT})",
                     names.vertex(he.origin(h)),
                     names.vertex(he.dest(h)),
                     faces.len(),
-                    lines.join(", "),
+                    few(&lines, faces.len()),
                     p.nonmanifold_edges.len()
                 ),
             });
@@ -104,7 +120,7 @@ pub(crate) fn check(
                 path: path.to_owned(),
                 message: format!(
                     "non-manifold vertex {}: its faces form separate fans that touch only at \
-                     it; {} such vertex(es) in all (--allow-nonmanifold accepts them)",
+                     it; {} such vertex(es) in all ({NONMANIFOLD_HINT})",
                     names.vertex(v.0),
                     p.nonmanifold_vertices.len()
                 ),

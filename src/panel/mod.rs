@@ -75,20 +75,26 @@ impl PanelOptions {
     pub fn validate(&self) -> Result<()> {
         if let Some(m) = self.max_edge {
             if !(m.is_finite() && m > 0.0) {
-                return Err(Error::setting("max_edge", format!("must be > 0, got {m}")));
+                return Err(Error::setting(
+                    "max_edge",
+                    format!("must be > 0, got {}", crate::error::fmt_num(m)),
+                ));
             }
         }
         let a = self.min_angle_deg;
         if !(a.is_finite() && (0.0..=34.0).contains(&a)) {
             return Err(Error::setting(
                 "min_angle_deg",
-                format!("must be in [0, 34] degrees (refinement may not terminate above), got {a}"),
+                format!(
+                    "must be in [0, 34] degrees (refinement may not terminate above), got {}",
+                    crate::error::fmt_num(a)
+                ),
             ));
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
             return Err(Error::setting(
                 "tolerance",
-                format!("must be > 0, got {}", self.tolerance),
+                format!("must be > 0, got {}", crate::error::fmt_num(self.tolerance)),
             ));
         }
         if self.max_added_vertices == 0 {
@@ -282,8 +288,10 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
             for j in 0..k {
                 let t = j as f64 / k as f64;
                 let p = Point2::new(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]));
-                handles
-                    .push(cdt.insert(p).map_err(|e| numerical(format!("{}: {e:?}", l.element)))?);
+                handles.push(
+                    cdt.insert(p)
+                        .map_err(|e| numerical(format!("{}: {}", l.element, insertion(&e))))?,
+                );
             }
         }
         let m = handles.len();
@@ -329,7 +337,7 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
             break;
         }
         for p in mids {
-            cdt.insert(p).map_err(|e| numerical(format!("{e:?}")))?;
+            cdt.insert(p).map_err(|e| numerical(insertion(&e)))?;
         }
         result = cdt.refine(params());
         complete &= result.refinement_complete;
@@ -394,4 +402,38 @@ pub fn panel_from_svg(path: &Path, opts: &PanelOptions) -> Result<PanelResult> {
         .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
     let loops = read_svg_loops(&text, path, opts.tolerance)?;
     mesh_loops(&loops, path, opts)
+}
+
+/// The triangulator's refusal of a point in words (spade's text is its `Debug` form).
+fn insertion(e: &spade::InsertionError) -> String {
+    match e {
+        spade::InsertionError::TooLarge => format!(
+            "a coordinate is beyond the triangulator's range (|x| ≤ {})",
+            crate::error::fmt_num(spade::MAX_ALLOWED_VALUE)
+        ),
+        spade::InsertionError::TooSmall => format!(
+            "a coordinate is too close to zero for the triangulator (|x| ≥ {} or 0)",
+            crate::error::fmt_num(spade::MIN_ALLOWED_VALUE)
+        ),
+        spade::InsertionError::NAN => "a coordinate is not a number".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn item15_triangulator_refusals_are_in_words() {
+        for e in [
+            spade::InsertionError::TooLarge,
+            spade::InsertionError::TooSmall,
+            spade::InsertionError::NAN,
+        ] {
+            let m = super::insertion(&e);
+            assert!(
+                !m.contains("TooLarge") && !m.contains("TooSmall") && !m.contains("NAN"),
+                "{m}"
+            );
+            assert!(m.contains("coordinate"), "{m}");
+        }
+    }
 }

@@ -131,7 +131,19 @@ pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
     let scene = &s.scene;
     if let Some(m) = &scene.mesh {
         let path = s.input(&m.0.path);
-        let loaded = crate::mesh::load::load_obj(&path, &m.load_options(scene.units))?;
+        let loaded = crate::mesh::load::load_obj(&path, &m.load_options(scene.units)).map_err(
+            |e| match e {
+                // Inside a scene the switch is a key, not the command-line flag.
+                Error::NonManifold { path, message } => Error::NonManifold {
+                    path,
+                    message: message.replace(
+                        crate::mesh::validate::NONMANIFOLD_HINT,
+                        "`mesh.allow_nonmanifold: true` in the scene accepts them",
+                    ),
+                },
+                e => e,
+            },
+        )?;
         return Ok((loaded.mesh, m.0.path.clone()));
     }
     let o = scene.outline.as_ref().ok_or_else(|| Error::Scene {

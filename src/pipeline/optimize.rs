@@ -4,13 +4,13 @@ use nalgebra::Vector3;
 use serde::Serialize;
 
 use super::{Prepared, Stages};
-use crate::edit::{apply_edits, target_q, Edit, EditInput, EditOptions, EditReport};
+use crate::edit::{apply_edits, Edit, EditInput, EditOptions, EditReport};
 use crate::field::FieldFile;
 use crate::highlight::critical::critical_points;
 use crate::highlight::tensor::default_epsilon;
 use crate::highlight::{highlight_field, HighlightField, Lighting};
 use crate::scene::LoadedScene;
-use crate::solve::{optimize, HighlightTerm, OptimizeReport};
+use crate::solve::{optimize, OptimizeReport};
 use crate::Result;
 
 /// The field after the edits and the solve.
@@ -86,15 +86,7 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
     let before = highlight_field(g, &er.phi, symmetry, form, &h);
     let m_norms: Vec<f64> = before.m.iter().map(|m| m.norm()).collect();
     let epsilon = default_epsilon(&m_norms);
-    let term = HighlightTerm {
-        geometry: g,
-        h: &h,
-        symmetry,
-        form,
-        epsilon,
-        target_q: target_q(g, &er.target_ell, epsilon),
-        weight: er.weight.clone(),
-    };
+    let term = er.highlight_term(g, symmetry, form, settings.highlight_energy, epsilon);
     let solved = optimize(&p.mesh, &term, &er.phi, &er.support, settings)
         .map_err(|e| crate::scene::prefix("solver", e))?;
     let highlight = highlight_field(g, &solved.phi, symmetry, form, &h);

@@ -9,7 +9,7 @@ use serde::Serialize;
 use super::optimize::{optimize_stage, optimized_field_file, OptimizeStageReport};
 use super::{output_path, prepare, Observer, StageTime, Stages};
 use crate::highlight::highlight_field;
-use crate::output::{write_atomic, write_json_compact_atomic};
+use crate::output::{json_compact, json_pretty, OutputPlan, Staged};
 use crate::render::{render, Camera, EditOverlay, RenderInput, RenderReport};
 use crate::scene::LoadedScene;
 use crate::uvfield::{as_brushed, field_mesh, toolpath_error, UvFieldReport};
@@ -24,6 +24,8 @@ pub struct RunOptions {
     /// Take the grain from this FIELD.json (the output of `grainline optimize` or `grainline
     /// field` on the same mesh) instead of computing it: no edits, no solve.
     pub field: Option<PathBuf>,
+    /// Also write the run report (pretty JSON) here, after every other output.
+    pub report: Option<PathBuf>,
 }
 
 /// Which stages a scene needs.
@@ -126,17 +128,81 @@ pub struct RunReport {
     pub outputs: Vec<String>,
 }
 
-fn write_out(outs: &mut Vec<String>, path: &Path, bytes: &[u8]) -> Result<()> {
-    if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(d)
-            .map_err(|source| crate::Error::Io { path: d.to_path_buf(), source })?;
-    }
-    write_atomic(path, bytes)?;
-    outs.push(path.display().to_string());
-    Ok(())
+fn write_out(staged: &mut Staged, path: &Path, bytes: &[u8]) -> Result<()> {
+    staged.add(path, bytes)
 }
 
-/// Runs the scene: the stages its outputs need, each timed; writes every output atomically.
+/// The files a run of `s` writes (with their scene keys) and the files it reads, for
+/// [`OutputPlan::check`]: no output may be a directory, a device, a FIFO or a link, two
+/// outputs may not share a file, and no output may overwrite an input.
+pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> OutputPlan {
+    let scene = &s.scene;
+    let out = |p: &str| output_path(s, options.out_dir.as_deref(), p);
+    let mut plan = OutputPlan::new();
+    if let Some(p) = &scene.field.output {
+        plan.output("field.output", out(p));
+    }
+    let needs = StagePlan::of(scene);
+    if let Some(t) = scene.toolpaths.as_ref().filter(|_| needs.trace) {
+        for (key, p) in [
+            ("toolpaths.svg", &t.svg),
+            ("toolpaths.gcode", &t.gcode),
+            ("toolpaths.strokes_json", &t.strokes_json),
+        ] {
+            if let Some(p) = p {
+                plan.output(key, out(p));
+            }
+        }
+    }
+    if let Some(r) = &scene.render {
+        plan.output("render.output", out(&r.output));
+        if let Some(p) = &r.linear {
+            plan.output("render.linear", out(p));
+        }
+    }
+    if let Some(p) = &options.report {
+        plan.output("the run report", p.clone());
+    }
+    scene_inputs(s, &mut plan);
+    if let Some(p) = &options.field {
+        plan.input("--field", p.clone());
+    }
+    plan
+}
+
+/// Adds the files a scene reads to `plan`: the scene file, the mesh or outline, the
+/// directions file, curve edits' SVGs and environment images.
+pub fn scene_inputs(s: &LoadedScene, plan: &mut OutputPlan) {
+    let scene = &s.scene;
+    plan.input("the scene file", s.path.clone());
+    if let Some(m) = &scene.mesh {
+        plan.input("mesh", s.input(&m.0.path));
+    }
+    if let Some(o) = &scene.outline {
+        plan.input("outline", s.input(&o.path));
+    }
+    if let Some(p) = &scene.field.directions {
+        plan.input("field.directions", s.input(p));
+    }
+    for (i, e) in scene.edits.iter().enumerate() {
+        if let crate::edit::Edit::Curve(c) = e {
+            if let Some(p) = &c.svg {
+                plan.input(format!("edits[{i}].svg"), s.input(p));
+            }
+        }
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        if let crate::render::LightSpec::Environment { file, .. } = l {
+            plan.input(format!("lights[{i}].file"), s.input(file));
+        }
+    }
+}
+
+/// Runs the scene: the stages its outputs need, each timed. Before any work the output paths
+/// are checked ([`output_plan`]); every output is written into a temporary beside its target
+/// as it is computed, and all of them are renamed into place only once the last one is ready,
+/// the report (when [`RunOptions::report`] is set) last of all. A run that fails part-way
+/// leaves every earlier output as it was.
 ///
 /// ```
 /// use grainline::pipeline::{run::{run, RunOptions}, Silent};
@@ -171,11 +237,22 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         plan.solve = false;
     }
     let out = |p: &str| output_path(s, options.out_dir.as_deref(), p);
+    output_plan(s, options).check()?;
     let mut stages = Stages::new(observer);
-    let mut outputs = Vec::new();
+    let mut staged = Staged::new();
     let prepared = prepare(s, &mut stages)?;
     let g = &prepared.field.geometry;
     let symmetry = prepared.field_options.symmetry;
+    if plan.trace && prepared.mesh.uv.is_none() {
+        // Checked before the solve, not after it.
+        return Err(crate::Error::setting(
+            "toolpaths",
+            format!(
+                "{} has no UV coordinates (OBJ `vt`); toolpaths need a UV layout",
+                prepared.mesh_name
+            ),
+        ));
+    }
     // The field after edits and the solve, or the initial one.
     let optimized =
         if plan.solve { Some(optimize_stage(s, &prepared, &mut stages)?) } else { None };
@@ -220,13 +297,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
                 &prepared.field,
             )?,
         };
-        let path = out(p);
-        if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(d)
-                .map_err(|source| crate::Error::Io { path: d.to_path_buf(), source })?;
-        }
-        write_json_compact_atomic(&path, &file)?;
-        outputs.push(path.display().to_string());
+        write_out(&mut staged, &out(p), &json_compact(&file)?)?;
     }
     let mut toolpaths = None;
     let mut brushed = None;
@@ -243,11 +314,13 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         }
         let units = prepared.mesh.units;
         section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
+        // Errors found while tracing name their key from the scene's top (`toolpaths.…`).
+        let in_section = |e| crate::scene::prefix("toolpaths", e);
         let (fm, uvr): (_, UvFieldReport) =
             field_mesh(&prepared.mesh, g, phi, symmetry, &section.uv_field)?;
         let fm_copy = if plan.as_brushed || want_gap { Some(fm.clone()) } else { None };
         let job = grainline_toolpaths::generate(fm, &section.job_options(units))
-            .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
+            .map_err(|e| in_section(toolpath_error(e)))?;
         strokes_3d =
             job.strokes_3d.iter().map(|s| s.iter().map(|p| Vector3::from(*p)).collect()).collect();
         stages.start("write toolpaths");
@@ -257,7 +330,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             (&section.strokes_json, &job.strokes_json),
         ] {
             if let (Some(p), Some(t)) = (name, text) {
-                write_out(&mut outputs, &out(p), t.as_bytes())?;
+                write_out(&mut staged, &out(p), t.as_bytes())?;
             }
         }
         if let (true, Some(fm), Some(map)) =
@@ -371,9 +444,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         let r =
             render(&input, &scene.material, &lights, &camera, settings).map_err(|e| s.wrap(e))?;
         stages.start("write render");
-        write_out(&mut outputs, &out(&settings.output), &r.png)?;
+        write_out(&mut staged, &out(&settings.output), &r.png)?;
         if let (Some(p), Some(bytes)) = (&settings.linear, &r.linear) {
-            write_out(&mut outputs, &out(p), bytes)?;
+            write_out(&mut staged, &out(p), bytes)?;
         }
         render_report = Some(r.report);
     }
@@ -383,8 +456,10 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         p95_deg: b.p95_deg,
         max_deg: b.max_deg,
     });
+    // Every output is computed and staged: put them in place, then the report.
+    let outputs: Vec<String> = staged.commit()?.iter().map(|p| p.display().to_string()).collect();
     let times = stages.into_times();
-    Ok(RunReport {
+    let report = RunReport {
         format: "grainline-run-report",
         version: 1,
         scene: s.path.display().to_string(),
@@ -400,5 +475,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         as_brushed: as_brushed_figures,
         render: render_report,
         outputs,
-    })
+    };
+    if let Some(p) = &options.report {
+        crate::output::write_atomic(p, &json_pretty(&report)?)?;
+    }
+    Ok(report)
 }

@@ -34,7 +34,7 @@ impl Camera {
         if !(self.fov_deg.is_finite() && self.fov_deg > 0.0 && self.fov_deg <= 179.0) {
             return Err(Error::setting(
                 "view.fov_deg",
-                format!("must be in (0, 179], got {}", self.fov_deg),
+                format!("must be in (0, 179], got {}", crate::error::fmt_num(self.fov_deg)),
             ));
         }
         Ok(())

@@ -228,32 +228,7 @@ pub(crate) fn render_with(
     camera.validate()?;
     input.validate()?;
     let fx = &settings.effects;
-    let chosen = |list: &[usize], key: &str| -> Result<Vec<Light>> {
-        let prepared = Light::prepare(lights);
-        let idx: Vec<usize> = if list.is_empty() {
-            key_light_index(lights).into_iter().collect()
-        } else {
-            list.to_vec()
-        };
-        idx.iter()
-            .map(|&i| {
-                prepared.get(i).copied().flatten().ok_or_else(|| {
-                    Error::setting(
-                        format!("render.effects.{key}.lights"),
-                        format!("{i} is not the index of a directional or point light"),
-                    )
-                })
-            })
-            .collect()
-    };
-    let curve_lights = match &fx.highlight_curves {
-        Some(h) => chosen(&h.lights, "highlight_curves")?,
-        None => Vec::new(),
-    };
-    let critical_lights = match &fx.critical_points {
-        Some(c) => chosen(&c.lights, "critical_points")?,
-        None => Vec::new(),
-    };
+    let (curve_lights, critical_lights) = effect_lights(fx, lights)?;
     if fx.lic.is_some() && input.ell.is_none() {
         return Err(Error::setting("render.effects.lic", "needs ℓ per vertex (RenderInput::ell)"));
     }
@@ -552,6 +527,54 @@ pub(crate) fn render_with(
     report.warnings = warnings;
     report.total_ms = start.elapsed().as_secs_f64() * 1e3;
     Ok(RenderOutput { png, linear, report })
+}
+
+/// The lights chosen by `effects.highlight_curves.lights` and `effects.critical_points.lights`
+/// (an empty list: the key light). Each index must be a directional or point light of
+/// `lights`; the error's key is `render.effects.<effect>.lights[k]`.
+fn effect_lights(fx: &Effects, lights: &[LightSpec]) -> Result<(Vec<Light>, Vec<Light>)> {
+    let prepared = Light::prepare(lights);
+    let chosen = |list: &[usize], key: &str| -> Result<Vec<Light>> {
+        if list.is_empty() {
+            return Ok(key_light_index(lights).and_then(|i| prepared[i]).into_iter().collect());
+        }
+        list.iter()
+            .enumerate()
+            .map(|(k, &i)| {
+                let bad = |message: String| {
+                    Error::setting(format!("render.effects.{key}.lights[{k}]"), message)
+                };
+                match (lights.get(i), prepared.get(i).copied().flatten()) {
+                    (_, Some(l)) => Ok(l),
+                    (None, _) => Err(bad(format!(
+                        "{i} is not the index of a light: the scene has {} light(s), \
+                         lights[0] to lights[{}]",
+                        lights.len(),
+                        lights.len().saturating_sub(1)
+                    ))),
+                    (Some(_), None) => Err(bad(format!(
+                        "lights[{i}] is an environment light; give a directional or point light"
+                    ))),
+                }
+            })
+            .collect()
+    };
+    let curves = match &fx.highlight_curves {
+        Some(h) => chosen(&h.lights, "highlight_curves")?,
+        None => Vec::new(),
+    };
+    let critical = match &fx.critical_points {
+        Some(c) => chosen(&c.lights, "critical_points")?,
+        None => Vec::new(),
+    };
+    Ok((curves, critical))
+}
+
+/// The checks of [`render`] that involve the scene's lights and not only the `render`
+/// section: the effects' light indices. Keys start with `render.`. The scene check calls
+/// this, so a bad index is refused before any work.
+pub fn validate_with_lights(settings: &RenderSettings, lights: &[LightSpec]) -> Result<()> {
+    effect_lights(&settings.effects, lights).map(|_| ())
 }
 
 /// Puts a section name in front of a setting's key.

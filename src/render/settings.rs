@@ -24,7 +24,10 @@ pub(crate) fn check_range(key: &str, x: f64, lo: f64, hi: f64) -> Result<()> {
     if x.is_finite() && x >= lo && x <= hi {
         Ok(())
     } else {
-        Err(Error::setting(key, format!("must be a number in [{lo}, {hi}], got {x}")))
+        Err(Error::setting(
+            key,
+            format!("must be a number in [{lo}, {hi}], got {}", crate::error::fmt_num(x)),
+        ))
     }
 }
 
@@ -33,7 +36,10 @@ pub(crate) fn check_open(key: &str, x: f64, lo: f64, hi: f64) -> Result<()> {
     if x.is_finite() && x > lo && x <= hi {
         Ok(())
     } else {
-        Err(Error::setting(key, format!("must be a number in ({lo}, {hi}], got {x}")))
+        Err(Error::setting(
+            key,
+            format!("must be a number in ({lo}, {hi}], got {}", crate::error::fmt_num(x)),
+        ))
     }
 }
 
@@ -46,10 +52,25 @@ fn check_colour(key: &str, c: &[f64; 3], hi: f64) -> Result<()> {
 
 fn check_vec(key: &str, v: &[f64; 3], nonzero: bool) -> Result<()> {
     if v.iter().any(|x| !x.is_finite()) {
-        return Err(Error::setting(key, format!("components must be finite, got {v:?}")));
+        return Err(Error::setting(
+            key,
+            format!("components must be finite, got {}", crate::error::fmt_vec3(v)),
+        ));
     }
     if nonzero && v.iter().all(|x| *x == 0.0) {
         return Err(Error::setting(key, "must not be the zero vector"));
+    }
+    let norm = nalgebra::Vector3::from(*v).norm();
+    if nonzero && !(norm.is_finite() && norm > f64::MIN_POSITIVE) {
+        // Its length under- or overflows: it cannot be made a unit vector.
+        return Err(Error::setting(
+            key,
+            format!(
+                "{} cannot be normalized (its length {} in f64); scale it towards 1",
+                crate::error::fmt_vec3(v),
+                if norm.is_finite() { "underflows" } else { "overflows" }
+            ),
+        ));
     }
     Ok(())
 }

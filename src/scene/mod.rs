@@ -138,6 +138,7 @@ impl Scene {
         }
         if let Some(r) = &self.render {
             r.validate().map_err(|e| prefix("render", e))?;
+            crate::render::validate_with_lights(r, &self.lights)?;
         }
         self.solver.validate().map_err(|e| prefix("solver", e))?;
         Ok(())

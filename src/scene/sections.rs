@@ -94,14 +94,14 @@ impl MeshSection {
             if !(w.is_finite() && w >= 0.0) {
                 return Err(Error::setting(
                     "weld",
-                    format!("must be a finite number ≥ 0, got {w}"),
+                    format!("must be a finite number ≥ 0, got {}", crate::error::fmt_num(w)),
                 ));
             }
         }
         if !(m.scale.is_finite() && m.scale > 0.0) {
             return Err(Error::setting(
                 "scale",
-                format!("must be a finite number > 0, got {}", m.scale),
+                format!("must be a finite number > 0, got {}", crate::error::fmt_num(m.scale)),
             ));
         }
         Ok(())
@@ -152,13 +152,19 @@ impl OutlineSection {
         }
         if let Some(e) = self.max_edge {
             if !(e.is_finite() && e > 0.0) {
-                return Err(Error::setting("max_edge", format!("must be > 0, got {e}")));
+                return Err(Error::setting(
+                    "max_edge",
+                    format!("must be > 0, got {}", crate::error::fmt_num(e)),
+                ));
             }
         }
         if !(self.min_angle.is_finite() && (0.0..=30.0).contains(&self.min_angle)) {
             return Err(Error::setting(
                 "min_angle",
-                format!("must be in [0, 30] degrees, got {}", self.min_angle),
+                format!(
+                    "must be in [0, 30] degrees, got {}",
+                    crate::error::fmt_num(self.min_angle)
+                ),
             ));
         }
         Ok(())
@@ -191,7 +197,7 @@ pub struct ViewSection {
     /// The camera's up direction (default +Z).
     #[serde(default = "default_up")]
     pub up: [f64; 3],
-    /// Vertical field of view of the preview camera, degrees (default 35).
+    /// Vertical field of view of the preview camera, degrees, in (0, 179] (default 35).
     #[serde(default = "default_fov")]
     pub fov_deg: f64,
     /// `point` (default) or `distant`.
@@ -211,7 +217,10 @@ fn finite3(key: &str, v: &[f64; 3]) -> Result<Vector3<f64>> {
     if v.iter().all(|c| c.is_finite()) {
         Ok(Vector3::new(v[0], v[1], v[2]))
     } else {
-        Err(Error::setting(key, format!("must be three finite numbers, got {v:?}")))
+        Err(Error::setting(
+            key,
+            format!("must be three finite numbers, got {}", crate::error::fmt_vec3(v)),
+        ))
     }
 }
 
@@ -221,18 +230,21 @@ impl ViewSection {
         let eye = finite3("eye", &self.eye)?;
         let target = finite3("target", &self.target)?;
         let up = finite3("up", &self.up)?;
+        // The preview camera's own check, so what the scene accepts the renderer accepts
+        // (e.g. its field of view is at most 179°, the limit of its projection).
+        let camera = crate::render::Camera { eye, target, up, fov_deg: self.fov_deg };
+        camera.validate().map_err(|e| match e {
+            Error::Setting { key, message } => {
+                Error::setting(key.strip_prefix("view.").unwrap_or(&key).to_string(), message)
+            }
+            e => e,
+        })?;
         let d = target - eye;
         if d.norm() <= 0.0 {
             return Err(Error::setting("target", "must differ from `eye`"));
         }
         if up.norm() <= 0.0 || d.cross(&up).norm() <= 1e-9 * d.norm() * up.norm() {
             return Err(Error::setting("up", "must be non-zero and not parallel to the view"));
-        }
-        if !(self.fov_deg.is_finite() && self.fov_deg > 0.0 && self.fov_deg < 180.0) {
-            return Err(Error::setting(
-                "fov_deg",
-                format!("must be in (0, 180) degrees, got {}", self.fov_deg),
-            ));
         }
         Ok(())
     }
@@ -363,7 +375,7 @@ impl FieldSection {
         if !(t.is_finite() && t > 0.0 && t <= 1.0) {
             return Err(Error::setting(
                 "critical_threshold",
-                format!("must be in (0, 1], got {t}"),
+                format!("must be in (0, 1], got {}", crate::error::fmt_num(t)),
             ));
         }
         Ok(())

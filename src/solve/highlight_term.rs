@@ -45,6 +45,10 @@ pub struct HighlightTerm<'a> {
     pub target_q: Vec<Option<Vector2<f64>>>,
     /// Weight wᵢ per vertex (multiplies the area).
     pub weight: Vec<f64>,
+    /// Target ĝ*ᵢ of the position energy per vertex (`None`: no position row;
+    /// [`super::position_term`]). A vertex may have a tensor target, a position target, both or
+    /// neither; the pipeline gives each vertex the one `solver.highlight_energy` selects.
+    pub target_g: Vec<Option<f64>>,
 }
 
 /// The residual of one vertex and its Jacobian entries.
@@ -78,6 +82,7 @@ impl<'a> HighlightTerm<'a> {
             epsilon: 0.0,
             target_q: vec![None; n],
             weight: vec![1.0; n],
+            target_g: vec![None; n],
         };
         let ell: Vec<Vector2<f64>> = (0..n).map(|i| term.ell_bar(phi, i)).collect();
         let norms: Vec<f64> = ell.iter().map(|l| l.norm()).collect();

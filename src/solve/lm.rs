@@ -122,11 +122,27 @@ pub enum StopReason {
     NothingToSolve,
 }
 
+impl std::fmt::Display for StopReason {
+    /// The name the reports use (`relative-decrease`, `gradient`, `iteration-cap`,
+    /// `no-progress`, `nothing-to-solve`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            StopReason::RelativeDecrease => "relative-decrease",
+            StopReason::Gradient => "gradient",
+            StopReason::IterationCap => "iteration-cap",
+            StopReason::NoProgress => "no-progress",
+            StopReason::NothingToSolve => "nothing-to-solve",
+        })
+    }
+}
+
 /// The energy of each stacked term.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Energies {
     /// E_ℓ, the highlight energy (Eq. 8 repaired).
     pub highlight: f64,
+    /// E_g, the position energy (the highlight where the edits ask; `solve::position_term`).
+    pub position: f64,
     /// E_s, the smoothness energy.
     pub smoothness: f64,
     /// The turning-radius hinge.
@@ -140,12 +156,13 @@ pub struct Energies {
 impl Energies {
     /// The sum of all terms.
     pub fn total(&self) -> f64 {
-        self.highlight + self.smoothness + self.turning + self.splay + self.locks
+        self.highlight + self.position + self.smoothness + self.turning + self.splay + self.locks
     }
 
     fn add(&mut self, term: Term, e: f64) {
         match term {
             Term::Highlight => self.highlight += e,
+            Term::Position => self.position += e,
             Term::Smoothness => self.smoothness += e,
             Term::Turning => self.turning += e,
             Term::Splay => self.splay += e,
@@ -195,6 +212,7 @@ pub struct LmResult {
 #[derive(Clone, Copy, Debug)]
 enum Term {
     Highlight,
+    Position,
     Smoothness,
     Turning,
     Splay,
@@ -390,6 +408,29 @@ impl Block for HighlightBlock<'_> {
     }
 }
 
+struct PositionBlock<'a> {
+    term: &'a HighlightTerm<'a>,
+    rows: Vec<u32>,
+}
+
+impl Block for PositionBlock<'_> {
+    fn term(&self) -> Term {
+        Term::Position
+    }
+    fn energy(&self, phi: &[f64]) -> f64 {
+        chunked_sum(&self.rows, |&i| {
+            let r = self.term.position_row(phi, i as usize).0;
+            r * r
+        })
+    }
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
+        acc.rows(&self.rows, |&i, local, col_of| {
+            let (r, d) = self.term.position_row(phi, i as usize);
+            local.push(col_of, std::iter::once((i, [d, 0.0])), [r, 0.0]);
+        })
+    }
+}
+
 struct SmoothnessBlock {
     edges: Vec<(u32, u32, f64, f64)>, // (i, j, ρ_ij, λ_s w_ij), i < j, at least one free
     k: u32,
@@ -549,7 +590,11 @@ pub fn solve_cached(
 ) -> Result<LmResult> {
     let g = term.geometry;
     let nv = g.num_vertices();
-    if phi.len() != nv || term.target_q.len() != nv || term.weight.len() != nv {
+    if phi.len() != nv
+        || term.target_q.len() != nv
+        || term.weight.len() != nv
+        || term.target_g.len() != nv
+    {
         return Err(Error::invalid_arg(
             "phi",
             format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
@@ -579,6 +624,13 @@ pub fn solve_cached(
     let mut blocks: Vec<Box<dyn Block>> = Vec::new();
     let rows = touched.iter().copied().filter(|&i| term.target_q[i as usize].is_some()).collect();
     blocks.push(Box::new(HighlightBlock { term, rows }));
+    // A position row depends on its own angle only: the free vertices with a target.
+    let rows: Vec<u32> = (0..nv as u32)
+        .filter(|&i| col_of[i as usize].is_some() && term.target_g[i as usize].is_some())
+        .collect();
+    if !rows.is_empty() {
+        blocks.push(Box::new(PositionBlock { term, rows }));
+    }
     if options.smoothness > 0.0 {
         let mut edges = Vec::new();
         for i in 0..nv {

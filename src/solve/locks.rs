@@ -91,7 +91,7 @@ impl LockSpec {
             if !(r.radius.is_finite() && r.radius > 0.0) {
                 return Err(Error::setting(
                     format!("{key}.region.radius"),
-                    format!("must be a finite number > 0, got {}", r.radius),
+                    format!("must be a finite number > 0, got {}", crate::error::fmt_num(r.radius)),
                 ));
             }
         }
@@ -120,7 +120,7 @@ impl LockSpec {
             if !(w.is_finite() && w > 0.0) {
                 return Err(Error::setting(
                     format!("{key}.weight"),
-                    format!("must be a finite number > 0, got {w}"),
+                    format!("must be a finite number > 0, got {}", crate::error::fmt_num(w)),
                 ));
             }
         }

@@ -10,6 +10,7 @@ pub mod lm;
 pub mod locks;
 pub mod optimize;
 mod pattern;
+pub mod position_term;
 pub mod settings;
 pub mod singularities;
 pub mod smoothness;
@@ -22,5 +23,5 @@ pub use lm::{
 };
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
 pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};
-pub use settings::{Constraints, SolverSettings, Splay, TurningRadius};
+pub use settings::{Constraints, HighlightEnergy, SolverSettings, Splay, TurningRadius};
 pub use singularities::{singularities, Singularity};

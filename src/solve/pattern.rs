@@ -114,9 +114,9 @@ impl DirectSystem {
         } else {
             let a = SymbolicSparseColMatRef::new_checked(n, n, &lp, None, &li);
             let mut mem = MemBuffer::try_new(amd::order_scratch::<usize>(n, li.len()))
-                .map_err(|e| format!("{e:?}"))?;
+                .map_err(|_| "out of memory for the factorization workspace".to_string())?;
             amd::order(&mut fwd, &mut new_of, a, amd::Control::default(), MemStack::new(&mut mem))
-                .map_err(|e| format!("{e:?}"))?;
+                .map_err(|e| crate::error::describe_faer(&e))?;
         }
         // The same lower triangle in the new numbering.
         let mut col_ptr = vec![0usize; n + 1];
@@ -215,14 +215,14 @@ impl DirectSystem {
                 ..Default::default()
             },
         )
-        .map_err(|e| format!("{e:?}"))?;
+        .map_err(|e| crate::error::describe_faer(&e))?;
         let l_values = vec![0.0; symbolic.len_val()];
         let workspace = MemBuffer::try_new(
             symbolic
                 .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
                 .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)),
         )
-        .map_err(|e| format!("{e:?}"))?;
+        .map_err(|_| "out of memory for the factorization workspace".to_string())?;
         let nnz = row_idx.len();
         Ok(DirectSystem {
             n,
@@ -308,7 +308,7 @@ impl DirectSystem {
                 MemStack::new(&mut self.workspace),
                 Default::default(),
             )
-            .map_err(|e| format!("{e:?}"))?;
+            .map_err(|e| crate::error::describe_pivot(&e))?;
         let x = MatMut::from_column_major_slice_mut(&mut self.rhs, self.n, 1);
         llt.solve_in_place_with_conj(Conj::No, x, Par::Seq, MemStack::new(&mut self.workspace));
         for (c, &k) in self.new_of.iter().enumerate() {

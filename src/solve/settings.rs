@@ -100,8 +100,26 @@ pub struct SolverSettings {
     /// Weight of the "keep the current ℓ" targets of vertices outside every edit (≥ 0, default
     /// 1.0; used by the edit module when it builds the targets).
     pub outside_weight: f64,
+    /// Which highlight energy the edits' targets drive (default `position`).
+    pub highlight_energy: HighlightEnergy,
     /// Fabrication constraints.
     pub constraints: Constraints,
+}
+
+/// The data term of the solve: what an edit's target says about the highlight.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum HighlightEnergy {
+    /// Target the scalar g = hᵀu itself (docs/math.md §9): its zero set is the key light's
+    /// highlight and its level sets are the potential highlights, so a warp's target
+    /// g*(p) = g(W⁻¹(p)) puts the highlight *where* the edit asks, and a curve's target makes
+    /// the highlight lie *on* the curve. One row per vertex, smooth in φ, no |ℓ| → 0
+    /// singularity, no curvature in the residual.
+    #[default]
+    Position,
+    /// The paper's Eq. 5/8 (repaired, docs/math.md §4): the direction of the highlight tangent ℓ
+    /// (Eq. 7) only, through the tensor L = ℓℓᵀ/|ℓ|².
+    Tensor,
 }
 
 impl Default for SolverSettings {
@@ -118,6 +136,7 @@ impl Default for SolverSettings {
             harmonic_start: true,
             margin_rings: 2,
             outside_weight: 1.0,
+            highlight_energy: HighlightEnergy::Position,
             constraints: Constraints::default(),
         }
     }
