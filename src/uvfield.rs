@@ -33,15 +33,15 @@
 use std::collections::{BTreeMap, HashMap};
 
 use grainline_toolpaths::{
-    CoverageOptions, Directions, FieldMesh, GcodeOptions, JobOptions, JobOutput, Metric, Placement,
-    PlacementOptions, PlanOptions, SeamPair, SvgOptions, ToolpathError,
+    CoverageOptions, Directions, FieldMesh, GcodeOptions, JobOptions, JobOutput, LengthUnit,
+    Metric, Placement, PlacementOptions, PlanOptions, SeamPair, SvgOptions, ToolpathError,
 };
 use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Units};
 use crate::{Error, Result};
 
 /// Options of [`field_mesh`].
@@ -605,27 +605,41 @@ pub struct ToolpathSection {
     pub gcode_options: GcodeOptions,
 }
 
-/// A toolpaths error as a grainline error: option errors keep their key path.
+/// The section's key path of a toolpaths crate key: the crate names `svg.*`/`gcode.*` after
+/// `JobOptions`; this section calls them `svg_options`/`gcode_options`.
+fn section_key(name: &str) -> String {
+    if let Some(rest) = name.strip_prefix("svg.") {
+        format!("svg_options.{rest}")
+    } else if let Some(rest) = name.strip_prefix("gcode.") {
+        format!("gcode_options.{rest}")
+    } else {
+        name.to_string()
+    }
+}
+
+/// A toolpaths error as a grainline error: option errors keep their key path, relative to
+/// the `toolpaths` section (`gcode_options.safe_z`; [`crate::scene::prefix`] adds
+/// `toolpaths.`).
 pub fn toolpath_error(e: ToolpathError) -> Error {
     match e {
-        ToolpathError::InvalidOption { name, value, reason } => {
-            // The toolpaths crate names `svg.*`/`gcode.*` after JobOptions; this section
-            // calls them `svg_options`/`gcode_options`.
-            let key = if let Some(rest) = name.strip_prefix("svg.") {
-                format!("svg_options.{rest}")
-            } else if let Some(rest) = name.strip_prefix("gcode.") {
-                format!("gcode_options.{rest}")
-            } else {
-                name.to_string()
-            };
-            Error::setting(key, format!("{reason}, got {}", crate::error::fmt_num(value)))
-        }
+        ToolpathError::InvalidOption { name, value, reason } => Error::setting(
+            section_key(name),
+            format!("{reason}, got {}", crate::error::fmt_num(value)),
+        ),
+        ToolpathError::Gcode { key, message } => Error::setting(section_key(key), message),
         e @ ToolpathError::OutsideEnvelope { .. } => {
             Error::setting("gcode_options.envelope", e.to_string())
         }
         e @ ToolpathError::BelowFloor { .. } => {
             Error::setting("gcode_options.z_floor", e.to_string())
         }
+        e @ ToolpathError::EmptyProgram { .. } => Error::setting(
+            "gcode",
+            e.to_string().replace(
+                "`allow_empty: true` in the G-code options",
+                "`gcode_options.allow_empty: true`",
+            ),
+        ),
         e @ ToolpathError::TiltExceeded { .. } => {
             Error::setting("plan.z_mode.max_tilt_deg", e.to_string())
         }
@@ -633,22 +647,41 @@ pub fn toolpath_error(e: ToolpathError) -> Error {
     }
 }
 
+/// The toolpaths crate's length unit for a scene unit.
+pub fn length_unit(units: Units) -> LengthUnit {
+    match units {
+        Units::Mm => LengthUnit::Mm,
+        Units::Cm => LengthUnit::Cm,
+        Units::M => LengthUnit::M,
+        Units::In => LengthUnit::In,
+    }
+}
+
 impl ToolpathSection {
-    /// The toolpaths crate's job options for this section.
-    pub fn job_options(&self) -> JobOptions {
+    /// The toolpaths crate's job options for this section, in a scene of `units` (every
+    /// length of the section is in the scene's units; the G-code is printed in mm).
+    pub fn job_options(&self, units: Units) -> JobOptions {
+        let mut gcode = self.gcode_options.clone();
+        gcode.units = length_unit(units);
         JobOptions {
             placement: self.placement.clone(),
             plan: self.plan.clone(),
             coverage: self.coverage.clone(),
             svg: self.svg.as_ref().map(|_| self.svg_options.clone()),
-            gcode: self.gcode.as_ref().map(|_| self.gcode_options.clone()),
+            gcode: self.gcode.as_ref().map(|_| gcode),
             strokes_json: self.strokes_json.is_some(),
         }
     }
 
-    /// Range-checks every setting; keys are relative to the section
-    /// (`placement.width`, `gcode_options.feed`, `svg`, …).
+    /// Range-checks every setting for a scene in millimetres; see [`Self::validate_in`].
     pub fn validate(&self) -> Result<()> {
+        self.validate_in(Units::Mm)
+    }
+
+    /// Range-checks every setting for a scene in `units` (whether a feed prints as zero
+    /// depends on them); keys are relative to the section (`placement.width`,
+    /// `gcode_options.feed`, `svg`, …).
+    pub fn validate_in(&self, units: Units) -> Result<()> {
         for (key, v) in
             [("svg", &self.svg), ("gcode", &self.gcode), ("strokes_json", &self.strokes_json)]
         {
@@ -660,9 +693,11 @@ impl ToolpathSection {
             Error::Setting { key, message } => Error::setting(format!("uv_field.{key}"), message),
             e => e,
         })?;
-        let mut all = self.job_options();
+        let mut all = self.job_options(units);
         all.svg = Some(self.svg_options.clone());
-        all.gcode = Some(self.gcode_options.clone());
+        let mut gcode = self.gcode_options.clone();
+        gcode.units = length_unit(units);
+        all.gcode = Some(gcode);
         all.validate().map_err(toolpath_error)
     }
 }
@@ -675,8 +710,9 @@ pub fn run_toolpaths(
     symmetry: Symmetry,
     section: &ToolpathSection,
 ) -> Result<(JobOutput, UvFieldReport)> {
-    section.validate()?;
+    section.validate_in(mesh.units)?;
     let (fm, report) = field_mesh(mesh, geometry, phi, symmetry, &section.uv_field)?;
-    let out = grainline_toolpaths::generate(fm, &section.job_options()).map_err(toolpath_error)?;
+    let out = grainline_toolpaths::generate(fm, &section.job_options(mesh.units))
+        .map_err(toolpath_error)?;
     Ok((out, report))
 }

@@ -155,6 +155,85 @@ fn bad_sections_are_named_and_nothing_is_written() {
     }
 }
 
+/// G-code refusals raised while running name the scene key path (`toolpaths.…`), and
+/// nothing is written; an empty program is refused unless `allow_empty`, which the run
+/// report then warns about.
+#[test]
+fn gcode_errors_name_the_scene_key_path() {
+    let d = dir("gcode-keys");
+    write_part(&d);
+    let tp = |gcode: &str, plan: &str| {
+        format!(
+            r#", "toolpaths": {{"svg": "o/x.svg", "gcode": "o/x.ngc", "placement": {{"width": 4}},
+                "plan": {{{plan}}}, "gcode_options": {{{gcode}}}}}"#
+        )
+    };
+    let tilt = r#""z_mode": {"mode": "surface_following", "max_tilt_deg": 5, "on_tilt": "skip"}"#;
+    for (toolpaths, needle) in [
+        (tp(r#""safe_z": 0.5"#, ""), "toolpaths.gcode_options.safe_z: 0.5 mm prints as Z0.500"),
+        (tp(r#""z_floor": 1"#, ""), "toolpaths.gcode_options.z_floor: Z = 0 mm (as printed)"),
+        (
+            tp(r#""spindle": {"snippet": {"on": "M3", "off": "M5\nM2"}}"#, ""),
+            "toolpaths.gcode_options.spindle.snippet.off: line 2 `M2`",
+        ),
+        (tp(r#""feed": 0.01"#, ""), "toolpaths.gcode_options.feed: 0.01 mm/min prints as F0.0"),
+        (tp(r#""safe_z": 100"#, tilt), "toolpaths.gcode: the G-code program would have no passes"),
+        (
+            tp(r#""safe_z": 100"#, &tilt.replace("skip", "error")),
+            "toolpaths.plan.z_mode.max_tilt_deg: stroke",
+        ),
+    ] {
+        let sc = scene(&d, "[]", &toolpaths, "");
+        let o = run(&["--quiet", "run", sc.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{toolpaths}: {err}");
+        assert!(err.contains(needle), "{toolpaths}: {err}");
+        assert!(!d.join("o").exists(), "nothing written after a failure");
+    }
+    let sc = scene(&d, "[]", &tp(r#""safe_z": 100, "allow_empty": true"#, tilt), "");
+    let o = run(&["--quiet", "run", sc.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r = report(&d.join("run-report.json"));
+    let w = r["toolpaths"]["job"]["warnings"][0].as_str().unwrap();
+    assert!(w.contains("no passes") && w.contains("allow_empty"), "{w}");
+    let g = std::fs::read_to_string(d.join("o/x.ngc")).unwrap();
+    assert!(!g.lines().any(|l| l.starts_with("G1 ")), "{g}");
+}
+
+/// A scene in inches: the G-code is in mm (G21) with every length converted, and the
+/// `gcode_options` lengths are read in inches.
+#[test]
+fn gcode_units_in_scene_prints_millimetres() {
+    let d = dir("gcode-in");
+    write_part(&d);
+    let sc = scene(
+        &d,
+        "[]",
+        r#", "toolpaths": {"gcode": "o/x.ngc", "placement": {"width": 4},
+              "gcode_options": {"safe_z": 0.2, "clearance": 0.1, "feed": 40, "plunge_feed": 10,
+                                "envelope": {"min": [-1000, -1000, -1], "max": [1000, 1000, 1]}}}"#,
+        "",
+    );
+    let text =
+        std::fs::read_to_string(&sc).unwrap().replacen("{\n", "{\n  \"units\": \"in\",\n", 1);
+    std::fs::write(&sc, text).unwrap();
+    let o = run(&["--quiet", "run", sc.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let g = std::fs::read_to_string(d.join("o/x.ngc")).unwrap();
+    assert!(g.contains("units: mm, G21; lengths converted from in x25.4"), "{g}");
+    assert!(g.contains("G0 Z5.080\n") && g.contains(" F1016.0\n") && g.contains(" F254.0\n"));
+    assert!(!g.contains("G20"));
+    // An envelope ending at X = 1 in is far too small for the ≈ 200 in wide layout.
+    let text = std::fs::read_to_string(&sc).unwrap().replace("[1000, 1000, 1]", "[1, 1000, 1]");
+    std::fs::write(&sc, text).unwrap();
+    let o = run(&["--quiet", "run", sc.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("toolpaths.gcode_options.envelope: X = ") && err.contains(" in by "),
+        "{err}"
+    );
+}
+
 #[test]
 fn trace_writes_the_strokes_of_a_given_field_and_flags_override_the_scene() {
     let d = dir("trace");

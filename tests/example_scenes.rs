@@ -1,5 +1,8 @@
 //! The bundled example scenes run end to end and write their SVG, G-code and PNG
-//! (the spot scene needs ../shared and is skipped with a message without it).
+//! (the spot scene needs ../shared and is skipped with a message without it). Each G-code
+//! program is read by LinuxCNC's rs274 (`../shared/tools/check-gcode --canon`, which installs
+//! rs274 on first use): accepted, no rapid below the travel height, travel above every
+//! cutting point, every feed > 0.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -23,7 +26,59 @@ fn run_example(name: &str, outputs: &[&str]) {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("run-report.json")).unwrap()).unwrap();
     assert!(report["toolpaths"]["job"]["stroke_count"].as_u64().unwrap() > 0, "{name}: no strokes");
+    for f in outputs.iter().filter(|f| f.ends_with(".ngc")) {
+        check_gcode(name, &out.join(f), &out.join("canon"));
+    }
     std::fs::remove_dir_all(&out).ok();
+}
+
+/// `../shared/tools/check-gcode` (or under `$GRAINLINE_SHARED`), or None with a message.
+fn check_gcode_tool() -> Option<PathBuf> {
+    let shared = std::env::var_os("GRAINLINE_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let p = shared.join("tools/check-gcode");
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("skipping the rs274 check: {} not found (../shared is absent)", p.display());
+        None
+    }
+}
+
+/// rs274 accepts the program; its canonical moves never rapid below the travel height, the
+/// travel height is above every cutting point, and every feed is > 0.
+fn check_gcode(name: &str, ngc: &std::path::Path, canon: &std::path::Path) {
+    let Some(tool) = check_gcode_tool() else { return };
+    let o = Command::new("bash").arg(&tool).arg("--canon").arg(canon).arg(ngc).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{name}: check-gcode rejected {}:\n{text}", ngc.display());
+    let file = canon.join(format!("{}.canon", ngc.file_name().unwrap().to_string_lossy()));
+    let c = std::fs::read_to_string(file).unwrap();
+    let args = |l: &str| -> Vec<f64> {
+        let a = &l[l.find('(').unwrap() + 1..l.rfind(')').unwrap()];
+        a.split(',').filter_map(|x| x.trim().parse().ok()).collect()
+    };
+    let (mut rapid_z, mut cut_z, mut feed, mut feeds) = (Vec::new(), Vec::new(), 0.0, 0);
+    for l in c.lines() {
+        if l.contains("USE_LENGTH_UNITS(") {
+            assert!(l.contains("CANON_UNITS_MM"), "{name}: {l}");
+        } else if l.contains("SET_FEED_RATE(") {
+            feed = args(l)[0];
+        } else if l.contains("STRAIGHT_TRAVERSE(") {
+            rapid_z.push(args(l)[2]);
+        } else if l.contains("STRAIGHT_FEED(") || l.contains("ARC_FEED(") {
+            let a = args(l);
+            cut_z.push(if l.contains("ARC_FEED(") { a[5] } else { a[2] });
+            assert!(feed > 0.0, "{name}: a cutting move at feed {feed}: {l}");
+            feeds += 1;
+        }
+    }
+    assert!(feeds > 10, "{name}: only {feeds} cutting moves");
+    let travel = rapid_z[0];
+    let top = cut_z.iter().cloned().fold(f64::MIN, f64::max);
+    assert!(rapid_z.iter().all(|&z| (z - travel).abs() < 1e-4), "{name}: a rapid below travel");
+    assert!(travel > top, "{name}: travel {travel} not above the highest cut {top}");
 }
 
 #[test]

@@ -48,6 +48,11 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
             super::progress::warn_missed(o);
         }
     }
+    // Warnings (an empty G-code program written with `allow_empty`) are printed even with
+    // --quiet; the run report carries them too.
+    for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
+        eprintln!("warning: {w}");
+    }
     if !quiet {
         for o in &report.outputs {
             eprintln!("wrote {o}");

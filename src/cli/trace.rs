@@ -74,6 +74,11 @@ pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
         RunOptions { out_dir: None, field: args.field.clone(), report: args.report.clone() };
     let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
+    // Warnings (an empty G-code program written with `allow_empty`) are printed even with
+    // --quiet; the run report carries them too.
+    for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
+        eprintln!("warning: {w}");
+    }
     if !quiet {
         for o in &report.outputs {
             eprintln!("wrote {o}");

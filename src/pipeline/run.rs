@@ -313,13 +313,14 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             c.keep_map = true;
             section.coverage = Some(c);
         }
-        section.validate().map_err(|e| crate::scene::prefix("toolpaths", e))?;
+        let units = prepared.mesh.units;
+        section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
         // Errors found while tracing name their key from the scene's top (`toolpaths.…`).
         let in_section = |e| crate::scene::prefix("toolpaths", e);
         let (fm, uvr): (_, UvFieldReport) =
             field_mesh(&prepared.mesh, g, phi, symmetry, &section.uv_field)?;
         let fm_copy = if plan.as_brushed || want_gap { Some(fm.clone()) } else { None };
-        let job = grainline_toolpaths::generate(fm, &section.job_options())
+        let job = grainline_toolpaths::generate(fm, &section.job_options(units))
             .map_err(|e| in_section(toolpath_error(e)))?;
         strokes_3d =
             job.strokes_3d.iter().map(|s| s.iter().map(|p| Vector3::from(*p)).collect()).collect();

@@ -134,7 +134,7 @@ impl Scene {
         }
         crate::edit::validate_edits(&self.edits).map_err(|e| prefix("edits", e))?;
         if let Some(t) = &self.toolpaths {
-            t.validate().map_err(|e| prefix("toolpaths", e))?;
+            t.validate_in(self.units).map_err(|e| prefix("toolpaths", e))?;
         }
         if let Some(r) = &self.render {
             r.validate().map_err(|e| prefix("render", e))?;

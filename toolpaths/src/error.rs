@@ -40,10 +40,12 @@ pub enum ToolpathError {
         /// Element index.
         index: usize,
     },
-    /// The program would move outside the configured machine envelope.
+    /// The program would move outside the configured machine envelope. Values are the
+    /// coordinates as printed (after rounding to `decimals`), in the option's length unit.
     #[error(
-        "{axis} = {value:.3} mm leaves the machine envelope [{min:.3}, {max:.3}] mm by {by:.3} mm \
-         ({})", move_of(*.stroke)
+        "{axis} = {} {unit} (as printed) leaves the machine envelope [{}, {}] {unit} by {} \
+         {unit} ({})",
+        short(*.value), short(*.min), short(*.max), short(*.by), at_stroke(*.stroke)
     )]
     OutsideEnvelope {
         /// Axis name (`X`, `Y` or `Z`).
@@ -54,24 +56,51 @@ pub enum ToolpathError {
         min: f64,
         /// Envelope maximum on that axis.
         max: f64,
-        /// Distance outside the envelope, mm.
+        /// Distance outside the envelope.
         by: f64,
-        /// Stroke index in the plan, if the move belongs to a stroke.
+        /// Length unit of the numbers (`mm`, `in`, …).
+        unit: &'static str,
+        /// Stroke index (in [`crate::Placement::strokes`]) of the pass the move belongs to;
+        /// none for travel.
         stroke: Option<usize>,
     },
-    /// The program would drive the tool below the Z floor.
+    /// The program would drive the tool below the Z floor (values as printed).
     #[error(
-        "Z = {z:.3} mm goes below the Z floor {floor:.3} mm by {by:.3} mm ({})", move_of(*.stroke)
+        "Z = {} {unit} (as printed) goes below the Z floor {} {unit} by {} {unit} ({})",
+        short(*.z), short(*.floor), short(*.by), at_stroke(*.stroke)
     )]
     BelowFloor {
         /// Offending Z.
         z: f64,
         /// Configured floor.
         floor: f64,
-        /// How far below, mm.
+        /// How far below.
         by: f64,
-        /// Stroke index in the plan, if the move belongs to a stroke.
+        /// Length unit of the numbers (`mm`, `in`, …).
+        unit: &'static str,
+        /// Stroke index of the pass the move belongs to; none for travel.
         stroke: Option<usize>,
+    },
+    /// A G-code option gives a program that would be unsafe or would not print as asked
+    /// (safe Z too close to the part as printed, a feed that prints as zero, a snippet with
+    /// a forbidden word, …). `key` is the option's key path (`gcode.safe_z`, …).
+    #[error("{key}: {message}")]
+    Gcode {
+        /// The option's key path from [`crate::JobOptions`].
+        key: &'static str,
+        /// What is wrong, with the values involved.
+        message: String,
+    },
+    /// Every stroke was left out (e.g. skipped for tilt): the G-code program would have no
+    /// passes. Refused unless `gcode.allow_empty` is set.
+    #[error(
+        "the G-code program would have no passes (no stroke was placed, or every stroke was \
+         left out: {skipped_tilt} skipped for tilt); refusing to write an empty program (set \
+         `allow_empty: true` in the G-code options to write it anyway)"
+    )]
+    EmptyProgram {
+        /// Strokes skipped for tilt.
+        skipped_tilt: usize,
     },
     /// In surface-following mode the surface normal tilts too far from the tool axis.
     #[error(
@@ -99,11 +128,21 @@ pub enum ToolpathError {
     Internal(String),
 }
 
-/// Where a move belongs, for messages: `stroke 3`, or a travel move.
-fn move_of(stroke: Option<usize>) -> String {
+/// A length for messages: at most 6 decimals, trailing zeros removed (`10`, `0.25`).
+pub(crate) fn short(x: f64) -> String {
+    let s = format!("{x:.6}");
+    let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+fn at_stroke(stroke: Option<usize>) -> String {
     match stroke {
-        Some(i) => format!("stroke {i}"),
-        None => "a travel move".into(),
+        Some(s) => format!("stroke {s}"),
+        None => "travel at safe Z".into(),
     }
 }
 

@@ -1,21 +1,37 @@
 //! G-code export for `grbl`, `linuxcnc` and `plain` (plotter) dialects, with a safety check.
 //!
-//! Program shape: a comment header naming the job; `G21 G90 G17 G94` (mm, absolute, XY
-//! plane, feed per minute); `G0 Z<safe>`; spindle/tool on (`M3 S…` or a configured
-//! snippet); per pass `G0 X Y` at safe Z, `G1 Z… F<plunge>`, then `G1`/`G2`/`G3` cutting
-//! moves at `F<feed>`, then `G0 Z<safe>`; finally tool off (`M5`), and `M2` (`M30` for grbl).
+//! Program shape: a comment header naming the job and the units; `G21 G90 G17 G94` (mm,
+//! absolute, XY plane, feed per minute); `G64 P<plan.tolerance>` (linuxcnc); `G0 Z<safe>`;
+//! spindle/tool on (`M3 S…` or a configured snippet); per pass `G0 X Y` at safe Z,
+//! `G1 Z… F<plunge>`, then `G1`/`G2`/`G3` cutting moves at `F<feed>`, then `G0 Z<safe>`;
+//! finally tool off (`M5`), and `M2` (`M30` for grbl).
+//!
+//! **Units.** The program is always in millimetres (`G21`). The plan and every length option
+//! (`safe_z`, `clearance`, `envelope`, `z_floor`, feeds per minute, the blending tolerance)
+//! are in [`GcodeOptions::units`] and are multiplied by its size in mm when printed; the
+//! header says so (`units: mm, G21; lengths converted from in x25.4`).
+//!
 //! Every number is printed with a fixed number of decimals (`-0` normalized to `0`), so
 //! output is byte-stable and free of float noise such as `9.999999999998`.
 //!
-//! Before anything is written, every position the program visits — including arc extremes
-//! and the safe-Z travel — is checked against the machine envelope and the Z floor; a
-//! violation is an error that says by how much (nothing is clipped).
+//! **Safety is checked on the program as printed.** The program is first built as the
+//! numbers the controller will read (coordinates rounded to `decimals`, arc centres from
+//! the printed I/J), then, before anything is written:
+//! * travel (`safe_z`, as printed) must clear the highest printed cutting point by at least
+//!   `clearance` (> 0), else `gcode.safe_z` is refused with the highest point;
+//! * every position the program visits — plunge points, all move ends, arc extremes, the
+//!   safe-Z travel and home — must lie in the envelope and above the Z floor (nothing is
+//!   clipped; the error says by how much);
+//! * every printed feed and spindle speed must be > 0;
+//! * `G64 P` must not print as zero;
+//! * snippets may hold only spindle, coolant and dwell words (see [`Spindle::Snippet`]);
+//! * a program without passes is refused unless `allow_empty` is set.
 
 use std::fmt::Write;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{finite, positive, Result, ToolpathError};
+use crate::error::{finite, positive, short, Result, ToolpathError};
 use crate::geom::{Vec2, Vec3};
 use crate::plan::Plan;
 use crate::simplify::Segment;
@@ -44,7 +60,12 @@ pub enum Spindle {
     None,
     /// `M3 S<rpm>` / `M5`.
     Speed(f64),
-    /// Configured lines (e.g. a brush motor relay).
+    /// Configured lines (e.g. a brush motor relay). Each line may hold only the words
+    /// `M3`, `M4`, `M5` (spindle), `M7`, `M8`, `M9` (coolant), `S<number>`, `G4 P<number>`
+    /// (dwell, seconds) and comments (`( … )` or `; …`, not LinuxCNC's active comments such
+    /// as `(MSG, …)` or `(LOGOPEN, …)`); at most one spindle and one coolant word, one `S`
+    /// and one dwell per line. Anything else (motion, `M2`, `M30`, offsets, `N` numbers,
+    /// parameters) is refused, naming the line and the word.
     Snippet {
         /// Lines emitted to turn the tool on.
         on: String,
@@ -53,7 +74,7 @@ pub enum Spindle {
     },
 }
 
-/// Axis-aligned machine envelope (mm).
+/// Axis-aligned machine envelope (in [`GcodeOptions::units`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 #[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
@@ -64,7 +85,44 @@ pub struct Envelope {
     pub max: Vec3,
 }
 
-/// G-code options.
+/// Length unit of the plan and of the length options of [`GcodeOptions`]. The program is
+/// always printed in millimetres (`G21`): lengths are multiplied by [`LengthUnit::in_mm`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LengthUnit {
+    /// Millimetres (the default).
+    #[default]
+    Mm,
+    /// Centimetres.
+    Cm,
+    /// Metres.
+    M,
+    /// Inches.
+    In,
+}
+
+impl LengthUnit {
+    /// Length of one unit in millimetres.
+    pub fn in_mm(self) -> f64 {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::Cm => 10.0,
+            LengthUnit::M => 1000.0,
+            LengthUnit::In => 25.4,
+        }
+    }
+
+    /// Short name (`mm`, `cm`, `m`, `in`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LengthUnit::Mm => "mm",
+            LengthUnit::Cm => "cm",
+            LengthUnit::M => "m",
+            LengthUnit::In => "in",
+        }
+    }
+}
+
+/// G-code options. Lengths are in [`GcodeOptions::units`] (the plan's unit).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 #[serde(deny_unknown_fields)]
@@ -74,20 +132,32 @@ pub struct GcodeOptions {
     pub dialect: Dialect,
     /// Job name for the header comment. Default "grainline".
     pub job: String,
-    /// Cutting feed, mm/min (> 0). Default 1000.
+    /// Cutting feed, length units per minute (> 0, and > 0 once printed in mm/min with one
+    /// decimal). Default 1000.
     pub feed: f64,
-    /// Plunge feed, mm/min (> 0). Default 300.
+    /// Plunge feed, length units per minute (same rules). Default 300.
     pub plunge_feed: f64,
-    /// Safe Z for travel, mm. Default 5.
+    /// Safe Z for travel. As printed, it must clear the highest printed cutting point by at
+    /// least `clearance`. Default 5.
     pub safe_z: f64,
+    /// Smallest gap between the travel height and the highest cutting point, both as
+    /// printed (> 0). Default 1.
+    pub clearance: f64,
     /// Tool on/off. Default `M3 S1000`.
     pub spindle: Spindle,
     /// Machine envelope to enforce. Default none.
     pub envelope: Option<Envelope>,
     /// Lowest Z the tool may reach. Default none.
     pub z_floor: Option<f64>,
-    /// Decimals for coordinates (1..=6). Default 3.
+    /// Decimals of the printed coordinates in mm (1..=6). Default 3.
     pub decimals: usize,
+    /// Write a program without passes (every stroke skipped) instead of refusing it; the
+    /// job report then carries a warning. Default false.
+    pub allow_empty: bool,
+    /// Length unit of the plan and of the options above; not a key of the options file
+    /// (grainline sets it from the scene's `units`). Default mm.
+    #[serde(skip)]
+    pub units: LengthUnit,
 }
 
 impl Default for GcodeOptions {
@@ -98,22 +168,63 @@ impl Default for GcodeOptions {
             feed: 1000.0,
             plunge_feed: 300.0,
             safe_z: 5.0,
+            clearance: 1.0,
             spindle: Spindle::Speed(1000.0),
             envelope: None,
             z_floor: None,
             decimals: 3,
+            allow_empty: false,
+            units: LengthUnit::Mm,
         }
     }
 }
 
+/// Decimals of printed feeds (mm/min).
+const FEED_DECIMALS: usize = 1;
+
+/// Most decimals `G64 P` is printed with.
+const MAX_BLEND_DECIMALS: usize = 6;
+
 impl GcodeOptions {
-    /// Reject zero, negative or NaN feeds and other bad values.
+    /// Reject zero, negative or NaN feeds, feeds and speeds that print as zero, forbidden
+    /// snippet words and other bad values.
     pub fn validate(&self) -> Result<()> {
-        positive("gcode.feed", self.feed)?;
-        positive("gcode.plunge_feed", self.plunge_feed)?;
+        let (k, u) = (self.units.in_mm(), self.units.as_str());
+        for (key, v) in [("gcode.feed", self.feed), ("gcode.plunge_feed", self.plunge_feed)] {
+            positive(key, v)?;
+            if rounded(v * k, FEED_DECIMALS) <= 0.0 {
+                return Err(ToolpathError::Gcode {
+                    key,
+                    message: format!(
+                        "{} {u}/min prints as F{} (feeds are printed in mm/min with {FEED_DECIMALS} \
+                         decimal); the smallest printable feed is F0.1 = {} {u}/min",
+                        short(v),
+                        num(v * k, FEED_DECIMALS),
+                        short(0.1 / k)
+                    ),
+                });
+            }
+        }
         finite("gcode.safe_z", self.safe_z)?;
-        if let Spindle::Speed(s) = self.spindle {
-            positive("gcode.spindle.speed", s)?;
+        positive("gcode.clearance", self.clearance)?;
+        match &self.spindle {
+            Spindle::None => {}
+            Spindle::Speed(s) => {
+                positive("gcode.spindle.speed", *s)?;
+                if rounded(*s, 0) <= 0.0 {
+                    return Err(ToolpathError::Gcode {
+                        key: "gcode.spindle.speed",
+                        message: format!(
+                            "{} prints as S0 (speeds are printed in whole rpm); use at least 1",
+                            short(*s)
+                        ),
+                    });
+                }
+            }
+            Spindle::Snippet { on, off } => {
+                check_snippet("gcode.spindle.snippet.on", on)?;
+                check_snippet("gcode.spindle.snippet.off", off)?;
+            }
         }
         if !(1..=6).contains(&self.decimals) {
             return Err(ToolpathError::InvalidOption {
@@ -157,32 +268,143 @@ fn rounded(x: f64, decimals: usize) -> f64 {
     num(x, decimals).parse().unwrap_or(x)
 }
 
-fn check_point(o: &GcodeOptions, p: Vec3, stroke: Option<usize>) -> Result<()> {
-    if !p.iter().all(|x| x.is_finite()) {
-        return Err(ToolpathError::Internal(format!("non-finite coordinate in stroke {stroke:?}")));
+/// LinuxCNC comments that do something (print, log to a file, probe to a file).
+const ACTIVE_COMMENTS: [&str; 10] = [
+    "MSG",
+    "DEBUG",
+    "PRINT",
+    "LOG",
+    "LOGOPEN",
+    "LOGAPPEND",
+    "LOGCLOSE",
+    "PROBEOPEN",
+    "PROBECLOSE",
+    "ABORT",
+];
+
+/// A G-code number as rs274 reads it: optional sign, digits with an optional point.
+fn gnum(s: &str) -> Option<f64> {
+    let t = s.strip_prefix(['+', '-']).unwrap_or(s);
+    let ok = !t.is_empty()
+        && t != "."
+        && t.chars().all(|c| c.is_ascii_digit() || c == '.')
+        && t.matches('.').count() <= 1;
+    if ok {
+        s.parse().ok().filter(|v: &f64| v.is_finite())
+    } else {
+        None
     }
-    if let Some(floor) = o.z_floor {
-        if p[2] < floor - 1e-9 {
-            return Err(ToolpathError::BelowFloor { z: p[2], floor, by: floor - p[2], stroke });
-        }
-    }
-    if let Some(e) = o.envelope {
-        for (k, axis) in ['X', 'Y', 'Z'].into_iter().enumerate() {
-            let (lo, hi, v) = (e.min[k], e.max[k], p[k]);
-            if v < lo - 1e-9 || v > hi + 1e-9 {
-                let by = if v < lo { lo - v } else { v - hi };
-                return Err(ToolpathError::OutsideEnvelope {
-                    axis,
-                    value: v,
-                    min: lo,
-                    max: hi,
-                    by,
-                    stroke,
-                });
+}
+
+/// Check a snippet word by word (see [`Spindle::Snippet`]).
+fn check_snippet(key: &'static str, text: &str) -> Result<()> {
+    let allowed = "only M3, M4, M5, M7, M8, M9, S<number>, G4 P<number> and comments are \
+                   allowed in a snippet";
+    for (li, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        let bad = |word: &str, why: &str| ToolpathError::Gcode {
+            key,
+            message: format!("line {} `{}`: {why} `{word}`; {allowed}", li + 1, short_line(line)),
+        };
+        // Split into words and comments.
+        let mut words: Vec<String> = Vec::new();
+        let mut rest = line;
+        while !rest.is_empty() {
+            let c = rest.chars().next().unwrap_or(' ');
+            if c.is_whitespace() {
+                rest = rest.trim_start();
+            } else if c == ';' {
+                break;
+            } else if c == '(' {
+                let Some(end) = rest.find(')') else {
+                    return Err(bad(rest, "unclosed comment"));
+                };
+                let body = &rest[1..end];
+                if body.contains('(') {
+                    return Err(bad(&rest[..=end], "nested comment"));
+                }
+                let first: String = body
+                    .trim_start()
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphabetic())
+                    .collect::<String>()
+                    .to_ascii_uppercase();
+                if ACTIVE_COMMENTS.contains(&first.as_str()) {
+                    return Err(bad(&rest[..=end], "active comment"));
+                }
+                rest = &rest[end + 1..];
+            } else if c.is_ascii_alphabetic() {
+                let end = rest[1..]
+                    .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '+' || c == '-'))
+                    .map_or(rest.len(), |e| e + 1);
+                words.push(rest[..end].to_string());
+                rest = &rest[end..];
+            } else {
+                let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+                return Err(bad(&rest[..end], "the word"));
             }
+        }
+        let (mut spindle, mut coolant, mut s, mut dwell, mut p) = (0, 0, 0, 0, 0);
+        for w in &words {
+            let letter = w.chars().next().unwrap_or(' ').to_ascii_uppercase();
+            let Some(v) = gnum(&w[1..]) else {
+                return Err(bad(w, "the word"));
+            };
+            match letter {
+                'M' if [3.0, 4.0, 5.0].contains(&v) => spindle += 1,
+                'M' if [7.0, 8.0, 9.0].contains(&v) => coolant += 1,
+                'S' if v >= 0.0 => s += 1,
+                'G' if v == 4.0 => dwell += 1,
+                'P' if v >= 0.0 => p += 1,
+                _ => return Err(bad(w, "the word")),
+            }
+            let twice = match letter {
+                'M' if spindle > 1 => Some("a second spindle word"),
+                'M' if coolant > 1 => Some("a second coolant word"),
+                'S' if s > 1 => Some("a second S word"),
+                'G' if dwell > 1 => Some("a second dwell"),
+                'P' if p > 1 => Some("a second P word"),
+                _ => None,
+            };
+            if let Some(why) = twice {
+                return Err(bad(w, &format!("{why} on the line:")));
+            }
+        }
+        if dwell != p {
+            let w = if dwell > 0 { "G4" } else { "P" };
+            return Err(bad(w, "a dwell needs `G4 P<seconds>` on one line, got"));
         }
     }
     Ok(())
+}
+
+fn short_line(l: &str) -> String {
+    let mut s: String = l.chars().take(80).collect();
+    if l.chars().count() > 80 {
+        s.push('…');
+    }
+    s
+}
+
+/// One machine move as printed (mm, rounded to `decimals`).
+#[derive(Clone, Copy, Debug)]
+enum Move {
+    /// `G0` to a point.
+    Rapid(Vec3),
+    /// `G1` to a point at a feed (mm/min, as printed); `first` prints the feed word.
+    Line { to: Vec3, feed: f64, first: bool },
+    /// `G2`/`G3` to a point around `center` (printed start + printed I/J).
+    Arc { to: Vec3, center: Vec2, ij: Vec2, ccw: bool, feed: f64, first: bool },
+}
+
+/// The program as the controller reads it.
+struct Program {
+    /// `G64 P` value (mm, printed) and its decimals; none for grbl and plain.
+    blend: Option<(f64, usize)>,
+    /// Travel height (printed).
+    safe_z: f64,
+    /// Per pass: the stroke index and its moves (rapid to XY, plunge, cuts, retract).
+    passes: Vec<(usize, Vec<Move>)>,
 }
 
 /// Points an XY arc reaches at its extremes (axis crossings within the sweep), plus its end.
@@ -204,104 +426,270 @@ fn arc_extremes(from: Vec3, to: Vec3, c: Vec2, ccw: bool) -> Vec<Vec3> {
     out
 }
 
-/// Check the whole program against the envelope and floor.
-pub fn check_safety(plan: &Plan, o: &GcodeOptions) -> Result<()> {
-    o.validate()?;
-    let mut top = f64::NEG_INFINITY;
-    for (i, pass) in plan.passes.iter().enumerate() {
-        let s = Some(i);
-        check_point(o, [pass.start[0], pass.start[1], o.safe_z], s)?;
-        check_point(o, pass.start, s)?;
-        top = top.max(pass.start[2]);
-        let mut cur = pass.start;
-        for (_, m) in &pass.moves {
-            match *m {
-                Segment::Line { to } => check_point(o, to, s)?,
-                Segment::Arc { to, center, ccw } => {
-                    for p in arc_extremes(cur, to, center, ccw) {
-                        check_point(o, p, s)?;
-                    }
-                }
-            }
-            top = top.max(m.end()[2]);
-            cur = m.end();
-        }
+/// The `G64 P` value: `plan.tolerance` in mm, printed with the coordinate decimals or more
+/// (up to 6) until it is within 5 % of the tolerance; refused if it prints as zero.
+fn blend_tolerance(tolerance: f64, o: &GcodeOptions) -> Result<(f64, usize)> {
+    let t = tolerance * o.units.in_mm();
+    let mut d = o.decimals;
+    while d < MAX_BLEND_DECIMALS && (rounded(t, d) - t).abs() > 0.05 * t {
+        d += 1;
     }
-    if top > o.safe_z {
-        return Err(ToolpathError::InvalidOption {
-            name: "gcode.safe_z",
-            value: o.safe_z,
-            reason: "is below the highest point of a pass; travel would collide",
+    let p = rounded(t, d);
+    if p.is_nan() || p <= 0.0 {
+        return Err(ToolpathError::Gcode {
+            key: "plan.tolerance",
+            message: format!(
+                "{} {} prints as G64 P0 even with {MAX_BLEND_DECIMALS} decimals (P is in mm); the \
+                 smallest printable blending tolerance is 0.000001 mm",
+                short(tolerance),
+                o.units.as_str()
+            ),
         });
     }
-    check_point(o, [plan.home[0], plan.home[1], o.safe_z], None)
+    Ok((p, d))
+}
+
+/// Build the program as printed.
+fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
+    let (k, dp) = (o.units.in_mm(), o.decimals);
+    let p = |x: f64| rounded(x * k, dp);
+    let p3 = |v: Vec3| [p(v[0]), p(v[1]), p(v[2])];
+    let feed = rounded(o.feed * k, FEED_DECIMALS);
+    let plunge = rounded(o.plunge_feed * k, FEED_DECIMALS);
+    let safe_z = p(o.safe_z);
+    let blend = if o.dialect == Dialect::LinuxCnc {
+        Some(blend_tolerance(plan.tolerance, o)?)
+    } else {
+        None
+    };
+    let mut passes = Vec::with_capacity(plan.passes.len());
+    for pass in &plan.passes {
+        let start = p3(pass.start);
+        if !start.iter().all(|x| x.is_finite()) {
+            return Err(ToolpathError::Internal(format!(
+                "non-finite coordinate in stroke {}",
+                pass.stroke
+            )));
+        }
+        let mut moves = vec![
+            Move::Rapid([start[0], start[1], safe_z]),
+            Move::Line { to: start, feed: plunge, first: true },
+        ];
+        let mut cur = start;
+        let mut first = true;
+        for (_, m) in &pass.moves {
+            let to = p3(m.end());
+            if !to.iter().all(|x| x.is_finite()) {
+                return Err(ToolpathError::Internal(format!(
+                    "non-finite coordinate in stroke {}",
+                    pass.stroke
+                )));
+            }
+            let mv = match *m {
+                Segment::Arc { center, ccw, .. } if (to[0], to[1]) != (cur[0], cur[1]) => {
+                    // The centre on the bisector of the printed chord (so both printed ends
+                    // are on one circle), nearest to the fitted centre; I/J get one decimal
+                    // more than the coordinates.
+                    let c = [center[0] * k, center[1] * k];
+                    let mid = [(cur[0] + to[0]) / 2.0, (cur[1] + to[1]) / 2.0];
+                    let (dx, dy) = (to[0] - cur[0], to[1] - cur[1]);
+                    let len = (dx * dx + dy * dy).sqrt();
+                    let n = [-dy / len, dx / len];
+                    let t = (c[0] - mid[0]) * n[0] + (c[1] - mid[1]) * n[1];
+                    let c = [mid[0] + t * n[0], mid[1] + t * n[1]];
+                    let ij = [rounded(c[0] - cur[0], dp + 1), rounded(c[1] - cur[1], dp + 1)];
+                    let center = [cur[0] + ij[0], cur[1] + ij[1]];
+                    Move::Arc { to, center, ij, ccw, feed, first }
+                }
+                // A line, or an arc whose printed ends coincide in XY (a controller would
+                // read that as a full circle): a straight move.
+                _ => Move::Line { to, feed, first },
+            };
+            moves.push(mv);
+            first = false;
+            cur = to;
+        }
+        moves.push(Move::Rapid([cur[0], cur[1], safe_z]));
+        passes.push((pass.stroke, moves));
+    }
+    Ok(Program { blend, safe_z, passes })
+}
+
+/// Check the printed program against the envelope, the floor and the clearance.
+fn check_program(plan: &Plan, o: &GcodeOptions, prog: &Program) -> Result<()> {
+    let k = o.units.in_mm();
+    let unit = o.units.as_str();
+    // Limits are compared with the printed numbers in mm; a relative 1e-9 absorbs the unit
+    // conversion of the limits themselves.
+    let eps = |x: f64| 1e-9 * x.abs().max(1.0);
+    let check = |q: Vec3, stroke: Option<usize>| -> Result<()> {
+        if let Some(floor) = o.z_floor {
+            let f = floor * k;
+            if q[2] < f - eps(f) {
+                return Err(ToolpathError::BelowFloor {
+                    z: q[2] / k,
+                    floor,
+                    by: (f - q[2]) / k,
+                    unit,
+                    stroke,
+                });
+            }
+        }
+        if let Some(e) = o.envelope {
+            for (a, axis) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+                let (lo, hi, v) = (e.min[a] * k, e.max[a] * k, q[a]);
+                if v < lo - eps(lo) || v > hi + eps(hi) {
+                    let by = if v < lo { lo - v } else { v - hi };
+                    return Err(ToolpathError::OutsideEnvelope {
+                        axis,
+                        value: v / k,
+                        min: e.min[a],
+                        max: e.max[a],
+                        by: by / k,
+                        unit,
+                        stroke,
+                    });
+                }
+            }
+        }
+        Ok(())
+    };
+    let mut top = f64::NEG_INFINITY;
+    for (stroke, moves) in &prog.passes {
+        let s = Some(*stroke);
+        let mut cur = [f64::NAN; 3];
+        for m in moves {
+            match *m {
+                Move::Rapid(q) => check(q, None)?,
+                Move::Line { to, .. } => {
+                    check(to, s)?;
+                    top = top.max(to[2]);
+                }
+                Move::Arc { to, center, ccw, .. } => {
+                    for q in arc_extremes(cur, to, center, ccw) {
+                        check(q, s)?;
+                    }
+                    top = top.max(to[2]).max(cur[2]);
+                }
+            }
+            cur = match *m {
+                Move::Rapid(q) => q,
+                Move::Line { to, .. } | Move::Arc { to, .. } => to,
+            };
+        }
+    }
+    let c = o.clearance * k;
+    if top.is_finite() && prog.safe_z - top < c - eps(c) {
+        return Err(ToolpathError::Gcode {
+            key: "gcode.safe_z",
+            message: format!(
+                "{} {unit} prints as Z{} mm, {} mm above the highest cutting point Z{} mm (as \
+                 printed; {} {unit}); travel must clear it by the clearance {} {unit}: set \
+                 safe_z to at least {} {unit}",
+                short(o.safe_z),
+                num(prog.safe_z, o.decimals),
+                short(prog.safe_z - top),
+                num(top, o.decimals),
+                short(top / k),
+                short(o.clearance),
+                short((top + c) / k)
+            ),
+        });
+    }
+    let home =
+        [rounded(plan.home[0] * k, o.decimals), rounded(plan.home[1] * k, o.decimals), prog.safe_z];
+    check(home, None)
+}
+
+/// Check the whole program (as printed) against the envelope, the floor, the clearance of
+/// the travel height and the printable-number rules; see the module docs.
+pub fn check_safety(plan: &Plan, o: &GcodeOptions) -> Result<()> {
+    o.validate()?;
+    let prog = build(plan, o)?;
+    check_program(plan, o, &prog)
 }
 
 fn sanitize(s: &str) -> String {
     s.chars().map(|c| if c == '(' || c == ')' || c.is_control() { ' ' } else { c }).collect()
 }
 
-/// Write the plan as G-code. Refuses (with an error) programs that break the envelope or
-/// the floor; see the module docs for the program shape.
+/// Write the plan as G-code. Refuses (with an error) programs that break the envelope, the
+/// floor or the clearance, snippets with forbidden words, numbers that print as zero, and
+/// empty programs (unless `allow_empty`); see the module docs for the program shape.
 pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
-    check_safety(plan, o)?;
+    o.validate()?;
+    if plan.passes.is_empty() && !o.allow_empty {
+        return Err(ToolpathError::EmptyProgram { skipped_tilt: plan.skipped_tilt.len() });
+    }
+    let prog = build(plan, o)?;
+    check_program(plan, o, &prog)?;
     let dp = o.decimals;
     let n = |x: f64| num(x, dp);
-    let f = |x: f64| num(x, 1);
+    let f = |x: f64| num(x, FEED_DECIMALS);
     let mut g = String::new();
     let dialect = match o.dialect {
         Dialect::Grbl => "grbl",
         Dialect::LinuxCnc => "linuxcnc",
         Dialect::Plain => "plain",
     };
+    let units = match o.units {
+        LengthUnit::Mm => "units: mm, G21".to_string(),
+        u => format!("units: mm, G21; lengths converted from {} x{}", u.as_str(), u.in_mm()),
+    };
     let w = &mut g;
     let _ = writeln!(w, "(grainline-toolpaths job: {})", sanitize(&o.job));
-    let _ = writeln!(w, "(dialect: {dialect}; passes: {}; units: mm)", plan.passes.len());
+    let _ = writeln!(w, "(dialect: {dialect}; passes: {}; {units})", plan.passes.len());
     let _ = writeln!(w, "G21 G90 G17 G94");
-    if o.dialect == Dialect::LinuxCnc {
-        let _ = writeln!(w, "G64 P{}", n(10f64.powi(-(dp as i32)) * 10.0));
+    if let Some((p, d)) = prog.blend {
+        let _ = writeln!(w, "G64 P{}", num(p, d));
     }
-    let _ = writeln!(w, "G0 Z{}", n(o.safe_z));
+    let _ = writeln!(w, "G0 Z{}", n(prog.safe_z));
+    let snippet = |w: &mut String, text: &str| {
+        for l in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+            let _ = writeln!(w, "{l}");
+        }
+    };
     if o.dialect != Dialect::Plain {
         match &o.spindle {
             Spindle::None => {}
             Spindle::Speed(s) => {
                 let _ = writeln!(w, "M3 S{}", num(*s, 0));
             }
-            Spindle::Snippet { on, .. } => {
-                let _ = writeln!(w, "{}", on.trim_end());
-            }
+            Spindle::Snippet { on, .. } => snippet(w, on),
         }
     }
-    for (i, pass) in plan.passes.iter().enumerate() {
-        let _ = writeln!(w, "(pass {i}: stroke {})", pass.stroke);
-        let _ = writeln!(w, "G0 X{} Y{}", n(pass.start[0]), n(pass.start[1]));
-        let _ = writeln!(w, "G1 Z{} F{}", n(pass.start[2]), f(o.plunge_feed));
-        let mut cur = pass.start;
-        let mut first = true;
-        for (_, m) in &pass.moves {
-            let feed = if first { format!(" F{}", f(o.feed)) } else { String::new() };
+    for (i, (stroke, moves)) in prog.passes.iter().enumerate() {
+        let _ = writeln!(w, "(pass {i}: stroke {stroke})");
+        for (j, m) in moves.iter().enumerate() {
             match *m {
-                Segment::Line { to } => {
-                    let _ = writeln!(w, "G1 X{} Y{} Z{}{feed}", n(to[0]), n(to[1]), n(to[2]));
+                Move::Rapid(q) if j == 0 => {
+                    let _ = writeln!(w, "G0 X{} Y{}", n(q[0]), n(q[1]));
                 }
-                Segment::Arc { to, center, ccw } => {
+                Move::Rapid(q) => {
+                    let _ = writeln!(w, "G0 Z{}", n(q[2]));
+                }
+                Move::Line { to, feed, .. } if j == 1 => {
+                    let _ = writeln!(w, "G1 Z{} F{}", n(to[2]), f(feed));
+                }
+                Move::Line { to, feed, first } => {
+                    let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
+                    let _ = writeln!(w, "G1 X{} Y{} Z{}{fw}", n(to[0]), n(to[1]), n(to[2]));
+                }
+                Move::Arc { to, ij, ccw, feed, first, .. } => {
+                    let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
                     let _ = writeln!(
                         w,
-                        "{} X{} Y{} Z{} I{} J{}{feed}",
+                        "{} X{} Y{} Z{} I{} J{}{fw}",
                         if ccw { "G3" } else { "G2" },
                         n(to[0]),
                         n(to[1]),
                         n(to[2]),
-                        num(center[0] - rounded(cur[0], dp), dp + 1),
-                        num(center[1] - rounded(cur[1], dp), dp + 1)
+                        num(ij[0], dp + 1),
+                        num(ij[1], dp + 1)
                     );
                 }
             }
-            first = false;
-            cur = m.end();
         }
-        let _ = writeln!(w, "G0 Z{}", n(o.safe_z));
     }
     if o.dialect != Dialect::Plain {
         match &o.spindle {
@@ -309,9 +697,7 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
             Spindle::Speed(_) => {
                 let _ = writeln!(w, "M5");
             }
-            Spindle::Snippet { off, .. } => {
-                let _ = writeln!(w, "{}", off.trim_end());
-            }
+            Spindle::Snippet { off, .. } => snippet(w, off),
         }
     }
     let _ = writeln!(w, "{}", if o.dialect == Dialect::Grbl { "M30" } else { "M2" });

@@ -106,7 +106,15 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
     } else {
         None
     };
-    let report = Report::new(&placement, &plan, cov.as_ref(), t);
+    let mut report = Report::new(&placement, &plan, cov.as_ref(), t);
+    if gcode.is_some() && plan.passes.is_empty() {
+        report.warnings.push(format!(
+            "the G-code program has no passes ({} strokes placed, {} skipped for tilt); written \
+             because gcode.allow_empty is set",
+            placement.strokes.len(),
+            plan.skipped_tilt.len()
+        ));
+    }
     let strokes_3d = if dom.has_lift() {
         placement
             .strokes

@@ -57,7 +57,7 @@ pub use bound::{travel_bound, BoundOptions, TravelBound};
 pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};
 pub use error::{Result, ToolpathError};
 pub use field::{singularities, Singularity};
-pub use gcode::{check_safety, write_gcode, Dialect, Envelope, GcodeOptions, Spindle};
+pub use gcode::{check_safety, write_gcode, Dialect, Envelope, GcodeOptions, LengthUnit, Spindle};
 pub use geom::{Metric, Vec2, Vec3};
 pub use job::{generate, JobOptions, JobOutput};
 pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};

@@ -197,6 +197,9 @@ pub struct Plan {
     pub width: f64,
     /// Tool home (machine XY).
     pub home: Vec2,
+    /// The simplification tolerance the passes were made with (`PlanOptions::tolerance`);
+    /// LinuxCNC's `G64 P` path blending uses it.
+    pub tolerance: f64,
 }
 
 /// Most entry candidates offered to the orderer per closed loop.
@@ -350,6 +353,7 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
         travel_greedy: ordering.travel_greedy,
         width: placement.width,
         home: opts.order.home,
+        tolerance: opts.tolerance,
     })
 }
 

@@ -54,6 +54,10 @@ pub struct Report {
     pub field_evaluations: u64,
     /// Time per phase.
     pub timings: Vec<PhaseTime>,
+    /// Things the job did that a user should know about although they are not errors (an
+    /// empty G-code program written because `gcode.allow_empty` is set).
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 fn seg_len(from: [f64; 3], s: &Segment) -> f64 {
@@ -112,6 +116,7 @@ impl Report {
             skipped_tilt: plan.skipped_tilt.clone(),
             field_evaluations: placement.field_evaluations,
             timings,
+            warnings: Vec::new(),
         }
     }
 }

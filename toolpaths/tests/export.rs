@@ -154,9 +154,8 @@ fn dialects_and_number_format() {
     assert!(!grbl.contains("G64"));
     let plain = run(Dialect::Plain, Spindle::Speed(12000.0));
     assert!(!plain.contains("M3") && !plain.contains("M5") && plain.ends_with("M2\n"));
-    let lcnc =
-        run(Dialect::LinuxCnc, Spindle::Snippet { on: "M64 P0".into(), off: "M65 P0".into() });
-    assert!(lcnc.contains("G64 P") && lcnc.contains("M64 P0\n") && lcnc.contains("M65 P0\n"));
+    let lcnc = run(Dialect::LinuxCnc, Spindle::Snippet { on: "M7".into(), off: "M9".into() });
+    assert!(lcnc.contains("G64 P") && lcnc.contains("M7\n") && lcnc.contains("M9\n"));
     assert!(
         lcnc.starts_with("(grainline-toolpaths job: grainline)\nG21 G90 G17 G94")
             || lcnc.contains("G21 G90 G17 G94\n")

@@ -93,7 +93,7 @@ fn envelope_and_floor_violations_are_refused_with_the_amount() {
     // Cutting at Z = −0.5 with the floor at −0.2: refused by 0.3 mm.
     match program(GcodeOptions { z_floor: Some(-0.2), ..Default::default() }) {
         Err(e @ ToolpathError::BelowFloor { .. }) => {
-            assert!(e.to_string().contains("by 0.300 mm"), "{e}");
+            assert!(e.to_string().contains("by 0.3 mm"), "{e}");
         }
         other => panic!("expected a floor error, got {:?}", other.map(|o| o.report)),
     }

@@ -64,7 +64,11 @@ pub fn field_mesh(
 
 /// `<workspace>/../shared/tools/NAME`, or `None` (with a skip message) when absent.
 pub fn shared_tool(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/tools").join(name);
+    // GRAINLINE_SHARED overrides the location (a worktree placed elsewhere).
+    let shared = std::env::var_os("GRAINLINE_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared"));
+    let p = shared.join("tools").join(name);
     if p.exists() {
         Some(p)
     } else {
@@ -127,4 +131,120 @@ pub fn parse_canon(text: &str) -> Vec<Canon> {
         }
     }
     out
+}
+
+/// A canonical move with its arc geometry, read back from rs274's output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CanonMove {
+    /// G0 to (x, y, z).
+    Traverse([f64; 3]),
+    /// G1 to (x, y, z) at a feed.
+    Line([f64; 3], f64),
+    /// G2/G3 in the XY plane to (x, y, z) about (cx, cy); `ccw` for G3.
+    Arc { end: [f64; 3], center: [f64; 2], ccw: bool, feed: f64 },
+}
+
+/// Parse an rs274 `.canon` file into moves with arc centres and the length unit it
+/// reports (`true` when `USE_LENGTH_UNITS(CANON_UNITS_MM)` was the last unit set).
+pub fn parse_canon_moves(text: &str) -> (Vec<CanonMove>, bool) {
+    let mut feed = 0.0;
+    let mut mm = true;
+    let mut out = Vec::new();
+    let args = |l: &str| -> Vec<f64> {
+        let a = &l[l.find('(').unwrap() + 1..l.rfind(')').unwrap()];
+        a.split(',').filter_map(|x| x.trim().parse().ok()).collect()
+    };
+    for line in text.lines() {
+        if line.contains("USE_LENGTH_UNITS(") {
+            mm = line.contains("CANON_UNITS_MM");
+        } else if line.contains("SET_FEED_RATE(") {
+            feed = args(line)[0];
+        } else if line.contains("STRAIGHT_TRAVERSE(") {
+            let a = args(line);
+            out.push(CanonMove::Traverse([a[0], a[1], a[2]]));
+        } else if line.contains("STRAIGHT_FEED(") {
+            let a = args(line);
+            out.push(CanonMove::Line([a[0], a[1], a[2]], feed));
+        } else if line.contains("ARC_FEED(") {
+            // ARC_FEED(end1, end2, c1, c2, turn, end3, ...) in the XY plane.
+            let a = args(line);
+            out.push(CanonMove::Arc {
+                end: [a[0], a[1], a[5]],
+                center: [a[2], a[3]],
+                ccw: a[4] > 0.0,
+                feed,
+            });
+        }
+    }
+    (out, mm)
+}
+
+/// Points along every move of a canon program (arcs sampled every ≤ 1°), each with whether
+/// it is a rapid, starting from `start`.
+pub fn canon_points(moves: &[CanonMove], start: [f64; 3]) -> Vec<([f64; 3], bool)> {
+    let mut cur = start;
+    let mut pts = Vec::new();
+    for m in moves {
+        match *m {
+            CanonMove::Traverse(p) => {
+                pts.push((p, true));
+                cur = p;
+            }
+            CanonMove::Line(p, _) => {
+                pts.push((p, false));
+                cur = p;
+            }
+            CanonMove::Arc { end, center, ccw, .. } => {
+                let a0 = (cur[1] - center[1]).atan2(cur[0] - center[0]);
+                let a1 = (end[1] - center[1]).atan2(end[0] - center[0]);
+                let r = ((cur[0] - center[0]).powi(2) + (cur[1] - center[1]).powi(2)).sqrt();
+                let tau = std::f64::consts::TAU;
+                let mut sweep =
+                    if ccw { (a1 - a0).rem_euclid(tau) } else { (a0 - a1).rem_euclid(tau) };
+                if sweep == 0.0 {
+                    sweep = tau;
+                }
+                let n = (sweep.to_degrees().ceil() as usize).max(1);
+                for i in 1..=n {
+                    let t = i as f64 / n as f64;
+                    let a = if ccw { a0 + sweep * t } else { a0 - sweep * t };
+                    let z = cur[2] + (end[2] - cur[2]) * t;
+                    pts.push(([center[0] + r * a.cos(), center[1] + r * a.sin(), z], false));
+                }
+                cur = end;
+            }
+        }
+    }
+    pts
+}
+
+/// Length of every feed move (arcs by their sweep) and of every rapid of a canon program.
+pub fn canon_lengths(moves: &[CanonMove], start: [f64; 3]) -> (f64, f64) {
+    let mut cur = start;
+    let (mut feed, mut rapid) = (0.0, 0.0);
+    let d = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    for m in moves {
+        match *m {
+            CanonMove::Traverse(p) => {
+                rapid += d(cur, p);
+                cur = p;
+            }
+            CanonMove::Line(p, _) => {
+                feed += d(cur, p);
+                cur = p;
+            }
+            CanonMove::Arc { end, center, ccw, .. } => {
+                let a0 = (cur[1] - center[1]).atan2(cur[0] - center[0]);
+                let a1 = (end[1] - center[1]).atan2(end[0] - center[0]);
+                let r = ((cur[0] - center[0]).powi(2) + (cur[1] - center[1]).powi(2)).sqrt();
+                let tau = std::f64::consts::TAU;
+                let sweep = if ccw { (a1 - a0).rem_euclid(tau) } else { (a0 - a1).rem_euclid(tau) };
+                feed += ((r * sweep).powi(2) + (end[2] - cur[2]).powi(2)).sqrt();
+                cur = end;
+            }
+        }
+    }
+    (feed, rapid)
 }
