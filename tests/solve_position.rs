@@ -175,11 +175,12 @@ fn a_bend_on_a_flat_sheet_seen_by_a_near_eye_lands_on_the_warped_highlight() {
             "row {row}: highlight at x = {got:.3}, W(C₀) at {target:.3} (C₀ at {c0:.3})"
         );
     }
-    // The paper's energy has no gradient here: ℓ of Eq. 7 vanishes for a constant grain on a
-    // plane, so its solve leaves the highlight where it was.
+    // Eq. 7 alone vanishes for a constant grain on a plane; with the near eye's term (∇h)ᵀu
+    // (docs/math.md §2.1) the tensor energy has a gradient too, and its solve moves the
+    // highlight towards W(C₀) (by more than a tenth of the radius).
     let (phi_t, _) = solve(&mesh, &options, &field, &field.phi, &[bend], HighlightEnergy::Tensor);
     let got = crossing(&mesh, &field, &phi_t, 0.0, x0);
-    assert!((got - x0).abs() < 0.05 * r, "tensor: {got} vs C₀ {x0}");
+    assert!((got - x0).abs() > 0.1 * r, "tensor: {got} vs C₀ {x0}");
 }
 
 #[test]

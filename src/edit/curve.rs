@@ -373,6 +373,18 @@ pub(crate) fn apply(
         let mid = norms.len() / 2;
         *norms.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
     };
+    // The position targets need the triangles the curve crosses to have their corners inside
+    // the tube (β = 1 up to half of it): on a mesh coarser than the radius, they reach two
+    // median edge lengths from the curve.
+    let edge = median_edge_length(ctx.mesh);
+    let reach = e.radius.max(2.0 * edge);
+    if reach > e.radius {
+        report.notes.push(format!(
+            "the radius {} is less than two median edge lengths ({:.3}): the position targets \
+             reach {reach:.3} from the curve so that the mesh can carry the highlight",
+            e.radius, edge
+        ));
+    }
     let (found, polylines) = if let Some(points) = &e.points {
         let lines: Vec<Vec<Vector3<f64>>> = points
             .iter()
@@ -380,7 +392,7 @@ pub(crate) fn apply(
             .collect();
         report.polylines = Some(lines.len());
         report.segments = Some(lines.iter().map(|l| l.len() - 1).sum());
-        (space_targets(ctx, &lines, e.radius), lines)
+        (space_targets(ctx, &lines, reach), lines)
     } else {
         let lines: Vec<Vec<Vector2<f64>>> = match (&e.svg, &e.uv) {
             (Some(path), _) => read_svg_polylines(Path::new(path), e.tolerance)?,
@@ -392,17 +404,20 @@ pub(crate) fn apply(
         report.polylines = Some(lines.len());
         report.segments = Some(lines.iter().map(|l| l.len().saturating_sub(1)).sum());
         let key = if e.svg.is_some() { "svg" } else { "uv" };
-        let found = uv_targets(ctx, &lines, e.radius).ok_or_else(|| {
+        let found = uv_targets(ctx, &lines, reach).ok_or_else(|| {
             Error::setting(key, "the mesh has no UV coordinates; give 3D `points` instead")
         })?;
         (found, crate::fidelity::lift_uv_polylines(ctx.mesh, &lines))
     };
-    let support = (0..found.len()).filter(|&i| found[i].is_some()).map(|i| i as u32).collect();
+    let support = (0..found.len())
+        .filter(|&i| found[i].is_some_and(|h| h.distance < e.radius))
+        .map(|i| i as u32)
+        .collect();
     report.shape = Some(crate::fidelity::EditShape::Curve { radius: e.radius, polylines, support });
     let mut count = 0;
     let mut critical = 0;
     let width = e.width.unwrap_or(e.radius);
-    let profile = position_profile(ctx, st, &found, e.radius, width);
+    let profile = position_profile(ctx, st, &found, reach, width);
     for (i, hit) in found.iter().enumerate() {
         let Some(hit) = hit else { continue };
         st.support[i] = true;
@@ -413,6 +428,9 @@ pub(crate) fn apply(
         // The position rows keep the full weight over the tube: their target itself blends
         // into the current field at the tube's edge.
         st.set_target_g(i, profile[i], e.weight);
+        if hit.distance >= e.radius {
+            continue;
+        }
         let n = ctx.normals[i];
         let t = hit.tangent - n * n.dot(&hit.tangent);
         let w = e.weight * (1.0 - (hit.distance / e.radius).powi(2)).powi(2);
@@ -457,6 +475,22 @@ struct Hit {
     offset: Vector3<f64>,
     /// Which polyline.
     line: usize,
+}
+
+/// The median length of the mesh's edges (each interior edge counted twice; 0 without faces).
+fn median_edge_length(mesh: &crate::mesh::Mesh) -> f64 {
+    let mut lengths: Vec<f64> = (0..mesh.num_faces())
+        .flat_map(|f| {
+            let [a, b, c] = mesh.face_positions(f);
+            [(b - a).norm(), (c - b).norm(), (a - c).norm()]
+        })
+        .filter(|l| l.is_finite())
+        .collect();
+    if lengths.is_empty() {
+        return 0.0;
+    }
+    let mid = lengths.len() / 2;
+    *lengths.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1
 }
 
 /// β of the position profile: 1 up to half the radius, then a smoothstep down to 0 at it.
