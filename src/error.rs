@@ -35,7 +35,8 @@ pub enum Error {
         /// What is wrong, naming the element (vertex, face, edge) and, where known, the line.
         message: String,
     },
-    /// A coordinate (`v`, `vt`, `vn`) that is NaN or infinite, with its 1-based line.
+    /// A coordinate (`v`, `vt`, `vn`) that is NaN or infinite, or a position coordinate too
+    /// large for areas to stay finite (`limits::MAX_COORDINATE`), with its 1-based line.
     #[error("{path}:{line}: {message}")]
     NonFinite {
         /// The file.

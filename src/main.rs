@@ -21,7 +21,15 @@ fn main() -> ExitCode {
     faer::set_global_parallelism(faer::Par::Seq);
     if let Some(n) = args.threads {
         // Results never depend on the thread count; this only bounds the CPU used.
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global();
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        let (n, capped) = grainline::limits::worker_threads(n, cores);
+        if capped {
+            eprintln!(
+                "grainline: note: --threads capped at {n} ({}× the {cores} available core(s))",
+                grainline::limits::THREADS_PER_CORE
+            );
+        }
+        let _ = rayon::ThreadPoolBuilder::new().num_threads(n).build_global();
     }
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,

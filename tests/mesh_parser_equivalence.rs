@@ -351,3 +351,82 @@ fn large_file_auto_matches_tobj() {
     assert_eq!(a, outcome(&path, &o, ObjParser::Auto));
     std::fs::remove_file(&path).ok();
 }
+
+/// `text` as an exporter might write it (issue 15 item 17) and the plain text it must load as:
+/// 0 a UTF-8 byte-order mark, 1 CR-only line ends, 2 a trailing `# comment` on every `v`/`f`
+/// line, 3 every face continued with `\` before its last corner (the plain text then has a
+/// blank line after each face, so that both have the same lines).
+fn exporter_form(text: &str, form: u8) -> (String, String) {
+    match form {
+        0 => (text.to_string(), format!("\u{feff}{text}")),
+        1 => (text.to_string(), text.replace("\r\n", "\r").replace('\n', "\r")),
+        _ => {
+            let (mut plain, mut out) = (String::new(), String::new());
+            for line in text.split_inclusive('\n') {
+                let (body, end) = line.split_at(line.trim_end_matches(['\r', '\n']).len());
+                let end = if end.is_empty() { "\n" } else { end };
+                let is = |k: &str| body.starts_with(k) && body[k.len()..].starts_with([' ', '\t']);
+                if form == 2 && (is("v") || is("f")) {
+                    plain += &format!("{body}{end}");
+                    out += &format!("{body} # exported{end}");
+                } else if form == 3 && is("f") {
+                    let cut = body.trim_end().rfind([' ', '\t']).unwrap();
+                    plain += &format!("{body}{end}{end}");
+                    out += &format!("{} \\{end}{}{end}", &body[..cut], &body[cut..]);
+                } else {
+                    plain += &format!("{body}{end}");
+                    out += &format!("{body}{end}");
+                }
+            }
+            (plain, out)
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 120, ..ProptestConfig::default() })]
+
+    /// Each exporter form loads exactly as the plain file does — same mesh, report, face lines
+    /// or error — with both readers.
+    #[test]
+    fn item17_exporter_forms_load_as_the_plain_file(s in spec(), form in 0u8..4) {
+        let (plain, exported) = exporter_form(&generate(&s), form);
+        let want = assert_same(&plain, "form.obj");
+        let got = assert_same(&exported, "form.obj");
+        prop_assert_eq!(got, want);
+    }
+}
+
+#[test]
+fn item17_bom_is_accepted() {
+    let plain = assert_same("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "a.obj");
+    assert!(!plain.starts_with("error"), "{plain}");
+    assert_eq!(assert_same("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "b.obj"), plain);
+}
+
+#[test]
+fn item17_cr_only_line_endings_are_accepted() {
+    let out = assert_same("v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\r", "cr.obj");
+    assert!(out.contains("[1.0, 0.0, 0.0]") && out.contains("[0.0, 1.0, 0.0]"), "{out}");
+    // Errors keep the editor's line numbers: the bad index is on line 4.
+    let err = assert_same("v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 9\r", "cr.obj");
+    assert!(err.starts_with("error") && err.contains("cr.obj:4:"), "{err}");
+}
+
+#[test]
+fn item17_backslash_continuation_lines_are_accepted() {
+    let out = assert_same(
+        "v 0 0 \\\n 0\nv 1 0 0\nv 0 1 0\nf 1 \\\n2 \\\n  3\nv 5 5 5\nf 2 1 4\n",
+        "bs.obj",
+    );
+    assert!(!out.starts_with("error"), "{out}");
+    // Two faces, on the lines where their statements start (5, and 9 after the continued one).
+    assert!(out.ends_with("[5, 9]"), "{out}");
+}
+
+#[test]
+fn item17_trailing_comments_are_accepted() {
+    let text = "o part#2 # the name keeps its '#'\nv 0 0 0 # origin\nv 1 0 0\t# x\nv 0 1 0\nf 1 2 3 # one face\n";
+    let out = assert_same(text, "c.obj");
+    assert!(out.contains("\"part#2\"") && out.contains("[0.0, 1.0, 0.0]"), "{out}");
+}

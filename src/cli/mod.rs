@@ -22,7 +22,7 @@ pub struct Cli {
     /// No progress bars or status lines.
     #[arg(long, short, global = true)]
     pub quiet: bool,
-    /// Worker threads (results are identical whatever the count).
+    /// Worker threads (results are identical whatever the count); at most 4 per available core.
     #[arg(long, global = true, value_name = "N")]
     pub threads: Option<usize>,
     #[command(subcommand)]

@@ -169,6 +169,8 @@ pub enum ObjParser {
     Parallel,
 }
 
+pub use crate::limits::MAX_COORDINATE;
+
 /// Files of at least this many bytes are read by the parallel parser under [`ObjParser::Auto`].
 pub const PARALLEL_MIN_BYTES: usize = 4 << 20;
 
@@ -182,6 +184,8 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
 pub fn load_obj_with(path: &Path, options: &LoadOptions, parser: ObjParser) -> Result<LoadedMesh> {
     check_options(options)?;
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
+    // BOM, CR-only line ends, `\` continuations and trailing comments, for both readers.
+    let bytes = scan::normalize(bytes);
     let parallel = match parser {
         ObjParser::Auto => bytes.len() >= PARALLEL_MIN_BYTES,
         ObjParser::Tobj => false,
@@ -462,6 +466,10 @@ impl Builder<'_> {
                     let i = self.scan.corner_v[m.start + k] as usize;
                     return Err(self.non_finite(Kind::V, i, "vertex"));
                 }
+                if let Some(&x) = v.iter().find(|x| x.abs() * self.options.scale > MAX_COORDINATE) {
+                    let i = self.scan.corner_v[m.start + k] as usize;
+                    return Err(self.too_large(i, x));
+                }
                 pos[self.scan.corner_v[m.start + k] as usize] = v;
             }
         }
@@ -473,6 +481,20 @@ impl Builder<'_> {
             path: self.path.to_owned(),
             line: scan::line_of(self.bytes, kind, index),
             message: format!("{what} {} has a non-finite (NaN or infinite) value", index + 1),
+        }
+    }
+
+    fn too_large(&self, index: usize, x: f64) -> Error {
+        let scale = self.options.scale;
+        let scaled = if scale == 1.0 { String::new() } else { format!(" (×{scale} scale)") };
+        Error::NonFinite {
+            path: self.path.to_owned(),
+            line: scan::line_of(self.bytes, Kind::V, index),
+            message: format!(
+                "vertex {} has a coordinate {x:e}{scaled} beyond ±{MAX_COORDINATE:e}: areas and \
+                 normals of its faces would overflow to infinity",
+                index + 1
+            ),
         }
     }
 

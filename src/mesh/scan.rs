@@ -455,3 +455,84 @@ mod tests {
         assert!(matches!(e, Error::Parse { line: 2, .. }), "{e}");
     }
 }
+
+/// Rewrites the forms exporters write into the plain OBJ text both readers parse, keeping
+/// every statement on its physical line (so line numbers in errors stay the editor's):
+///
+/// * a UTF-8 byte-order mark at the start is removed;
+/// * a CR not followed by LF (classic Mac line endings) ends the line, as LF;
+/// * a trailing comment — `#` at the start of a line or after a space or tab, to the end of
+///   the line — is removed (a `#` inside a word, as in `o part#2`, stays);
+/// * a line ending in `\` (after the comment is removed, trailing spaces allowed) continues on
+///   the next: the two are joined with a space on the first line and the second is left empty.
+///
+/// Returns the input unchanged (no copy) when it has none of these forms.
+pub(crate) fn normalize(bytes: Vec<u8>) -> Vec<u8> {
+    let bom = bytes.starts_with(b"\xEF\xBB\xBF");
+    let lone_cr =
+        bytes.iter().enumerate().any(|(i, &b)| b == b'\r' && bytes.get(i + 1) != Some(&b'\n'));
+    let backslash = bytes.contains(&b'\\');
+    let comment = bytes.windows(2).any(|w| matches!(w[0], b' ' | b'\t') && w[1] == b'#');
+    if !(bom || lone_cr || backslash || comment) {
+        return bytes;
+    }
+    let body = if bom { &bytes[3..] } else { &bytes[..] };
+    let mut out = Vec::with_capacity(body.len());
+    // Newlines owed by continued lines, written when the logical line ends.
+    let mut owed = 0usize;
+    let mut i = 0;
+    while i < body.len() {
+        // One physical line: [i, end), terminated by LF, CRLF, CR or the end of the text.
+        let end =
+            body[i..].iter().position(|&b| b == b'\n' || b == b'\r').map_or(body.len(), |p| i + p);
+        let next = match body.get(end) {
+            Some(b'\r') if body.get(end + 1) == Some(&b'\n') => end + 2,
+            Some(_) => end + 1,
+            None => end,
+        };
+        let mut line = &body[i..end];
+        if let Some(p) = (0..line.len())
+            .find(|&k| line[k] == b'#' && (k == 0 || matches!(line[k - 1], b' ' | b'\t')))
+        {
+            line = &line[..p];
+        }
+        let trimmed =
+            line.len() - line.iter().rev().take_while(|&&b| b == b' ' || b == b'\t').count();
+        if trimmed > 0 && line[trimmed - 1] == b'\\' && next > end {
+            out.extend_from_slice(&line[..trimmed - 1]);
+            out.push(b' ');
+            owed += 1;
+        } else {
+            out.extend_from_slice(line);
+            if next > end {
+                out.push(b'\n');
+            }
+            out.extend(std::iter::repeat_n(b'\n', owed));
+            owed = 0;
+        }
+        i = next;
+    }
+    out.extend(std::iter::repeat_n(b'\n', owed));
+    out
+}
+
+#[cfg(test)]
+mod normalize_tests {
+    use super::normalize;
+
+    fn n(s: &str) -> String {
+        String::from_utf8(normalize(s.as_bytes().to_vec())).unwrap()
+    }
+
+    #[test]
+    fn exporter_forms_become_plain_lines_on_their_own_line_numbers() {
+        assert_eq!(n("\u{feff}v 0 0 0\n"), "v 0 0 0\n");
+        assert_eq!(n("v 0 0 0\rv 1 0 0\r\nf 1 2 3\r"), "v 0 0 0\nv 1 0 0\nf 1 2 3\n");
+        assert_eq!(n("f 1 2 \\\n 3\nv 1 2 3\n"), "f 1 2   3\n\nv 1 2 3\n");
+        assert_eq!(n("f 1 \\  \n2 \\\n3"), "f 1  2  3\n\n");
+        assert_eq!(n("v 0 0 0 # origin\n# all\no part#2\n"), "v 0 0 0 \n\no part#2\n");
+        assert_eq!(n("f 1 2 3 # not continued \\\nv 0 0 0\n"), "f 1 2 3 \nv 0 0 0\n");
+        let plain = "v 0 0 0\r\nf 1 2 3\n";
+        assert_eq!(n(plain), plain);
+    }
+}
