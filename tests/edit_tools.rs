@@ -576,6 +576,18 @@ fn curve_and_stencil_on_a_cylinder() {
         width: None,
     };
     let r = s.apply(&[Edit::Curve(curve)]);
+    // The position targets (and so the support) reach max(r, 2 × the median edge length).
+    let mut edges: Vec<f64> = s
+        .mesh
+        .faces
+        .iter()
+        .flat_map(|f| {
+            let q = f.map(|v| s.mesh.positions[v as usize]);
+            [(q[1] - q[0]).norm(), (q[2] - q[1]).norm(), (q[0] - q[2]).norm()]
+        })
+        .collect();
+    edges.sort_by(f64::total_cmp);
+    let reach = radius.max(2.0 * edges[edges.len() / 2]);
     let mut count = 0;
     for (i, p) in s.mesh.positions.iter().enumerate() {
         let alpha = p.y.atan2(p.x);
@@ -588,8 +600,12 @@ fn curve_and_stencil_on_a_cylinder() {
             let w = (1.0 - (p.z / radius).powi(2)).powi(2);
             assert!((r.weight[i] - w).abs() < 1e-6, "vertex {i}: {} vs {w}", r.weight[i]);
         }
-        if p.z.abs() > radius + 1e-9 {
+        if p.z.abs() > reach + 1e-9 {
             assert!(!r.support[i]);
+        }
+        if p.z.abs() > radius + 1e-9 {
+            // No tangent target beyond the radius: the "keep the current ℓ" weight.
+            assert_eq!(r.weight[i], 1.0, "vertex {i}");
         }
     }
     assert!(count > 50, "{count}");

@@ -149,8 +149,14 @@ fn a_bend_on_a_flat_sheet_seen_by_a_near_eye_lands_on_the_warped_highlight() {
         "direction": [1.0, 0.0, 0.0], "metric": "euclidean"
     }))
     .unwrap();
-    let (phi, report) =
-        solve(&mesh, &options, &field, &field.phi, &[bend.clone()], HighlightEnergy::Position);
+    let (phi, report) = solve(
+        &mesh,
+        &options,
+        &field,
+        &field.phi,
+        std::slice::from_ref(&bend),
+        HighlightEnergy::Position,
+    );
     assert_ne!(report.stop, grainline::solve::StopReason::IterationCap);
     assert!(report.iterations.len() <= 15, "{} iterations", report.iterations.len());
     for w in report.iterations.windows(2) {
@@ -201,8 +207,14 @@ fn a_drawn_line_gets_the_highlight_on_it_whatever_the_line_field_signs() {
         .map(|(i, &p)| if (i * 2654435761) % 3 == 0 { p + std::f64::consts::PI } else { p })
         .collect();
     for start in [&field.phi, &flipped] {
-        let (phi, report) =
-            solve(&mesh, &options, &field, start, &[curve.clone()], HighlightEnergy::Position);
+        let (phi, report) = solve(
+            &mesh,
+            &options,
+            &field,
+            start,
+            std::slice::from_ref(&curve),
+            HighlightEnergy::Position,
+        );
         assert_ne!(report.stop, grainline::solve::StopReason::IterationCap);
         for row in [-30.0, -15.0, 0.0, 15.0, 30.0] {
             let got = crossing(&mesh, &field, &phi, row, x_line);
