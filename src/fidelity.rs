@@ -1,4 +1,4 @@
-//! Edit fidelity (issue 13; docs/math.md §9, "Edit fidelity"): did an edit put the key light's
+//! Edit fidelity (issue 13; docs/math.md §10, "Edit fidelity"): did an edit put the key light's
 //! highlight where it asked?
 //!
 //! The key light's ideal highlight is the zero set {g = 0} of g = hᵀu (math.md §2: ℓ is tangent
