@@ -36,18 +36,6 @@ impl HighlightTerm<'_> {
         self.geometry.frames[i].to_local(&self.h[i])
     }
 
-    /// ĝᵢ = h̄ᵢᵀūᵢ/|h̄ᵢ| of the field φ (0 where h̄ vanishes: a critical point).
-    pub fn g_hat(&self, phi: &[f64], i: usize) -> f64 {
-        let hb = self.h_bar(i);
-        let len = hb.norm();
-        // `len > 0` is false for 0 and NaN alike.
-        if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return 0.0;
-        }
-        let (sn, cs) = phi[i].sin_cos();
-        (cs * hb.x + sn * hb.y) / len
-    }
-
     /// The position residual of vertex `i` and its derivative with respect to φᵢ (0 and 0
     /// without a target).
     #[inline]
