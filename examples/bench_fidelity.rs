@@ -2,8 +2,14 @@
 //!
 //! ```text
 //! cargo run --release --example bench_fidelity -- [--energy position|tensor|both]
-//!     [--cases NAME,...] [--edits bend,expand,curve] [--small]
+//!     [--cases NAME,...] [--edits bend,expand,curve] [--small] [--dump DIR]
+//!     [--solver JSON]
 //! ```
+//!
+//! `--solver '{"smoothness": 1e-6}'` merges further `solver` keys into every case's settings.
+//! `--dump DIR` also writes each case's edited scene as `DIR/CASE-EDIT-ENERGY.json` (mesh path
+//! absolute, a 768² preview with the key highlight curves and the edit's support drawn), so that
+//! `grainline run DIR/CASE-EDIT-ENERGY.json --out-dir DIR` shows by eye what the figures say.
 //!
 //! For every part of the corpus (tests/corpus/mod.rs: generated bodies of revolution, curved
 //! panels and flat sheets, with and without a 0.15 mm ripple, and the smooth meshes of
@@ -37,6 +43,7 @@ fn main() {
     let mut cases: Option<Vec<String>> = None;
     let mut tools: Vec<String> = corpus::TOOLS.iter().map(|s| s.to_string()).collect();
     let mut size = Size::Full;
+    let mut dump: Option<std::path::PathBuf> = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -48,6 +55,11 @@ fn main() {
             "--cases" => cases = Some(list(&args.next().unwrap_or_default())),
             "--edits" => tools = list(&args.next().unwrap_or_default()),
             "--small" => size = Size::Small,
+            "--dump" => dump = args.next().map(Into::into),
+            // SAFETY: single-threaded here, before any thread starts.
+            "--solver" => unsafe {
+                std::env::set_var("GRAINLINE_CORPUS_SOLVER", args.next().unwrap_or_default())
+            },
             "-h" | "--help" => usage(""),
             other => usage(&format!("unknown argument {other:?}")),
         }
@@ -123,6 +135,9 @@ fn main() {
         }
         for tool in &tools {
             for energy in &energies {
+                if let (Some(dir), Ok(pl)) = (&dump, &p.placement) {
+                    dump_scene(dir, case, pl, tool, energy);
+                }
                 match corpus::run_edit(case, &p, tool, energy) {
                     Ok(Some(o)) => {
                         eprintln!("  {}", row(&o));
@@ -153,6 +168,32 @@ fn main() {
     );
     for n in notes {
         println!("- {n}");
+    }
+}
+
+/// Writes the edited scene of one row (see `--dump`).
+fn dump_scene(
+    dir: &std::path::Path,
+    case: &corpus::Case,
+    pl: &corpus::Placement,
+    tool: &str,
+    energy: &str,
+) {
+    let Some((_, edit)) = corpus::edits_json(pl).into_iter().find(|(n, _)| *n == tool) else {
+        return;
+    };
+    let name = format!("{}-{tool}-{energy}", case.name);
+    let mut json = corpus::scene_json(case);
+    json["edits"] = serde_json::json!([edit]);
+    json["solver"] = serde_json::json!({ "highlight_energy": energy });
+    json["render"] = serde_json::json!({
+        "width": 768, "height": 768, "output": format!("{name}.png"),
+        "effects": { "shading": true, "highlight_curves": {}, "edits": {} }
+    });
+    let _ = std::fs::create_dir_all(dir);
+    let text = serde_json::to_string_pretty(&json).unwrap_or_default();
+    if let Err(e) = std::fs::write(dir.join(format!("{name}.json")), text) {
+        eprintln!("note: --dump: {e}");
     }
 }
 

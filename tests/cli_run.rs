@@ -97,7 +97,15 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
         let wall = r["wall_seconds"].as_f64().unwrap();
         assert!((wall - sum).abs() <= 0.05 * wall + 1e-3, "stages {sum} s, wall {wall} s");
         assert!(r["toolpaths"]["job"]["stroke_count"].as_u64().unwrap() > 5);
-        assert!(!r["optimize"]["solver"]["iterations"].as_array().unwrap().is_empty());
+        // The solve ran: iterations, or the position energy's branch-coherent start, which
+        // satisfies the targets as it is.
+        let solver = &r["optimize"]["solver"];
+        assert!(
+            !solver["iterations"].as_array().unwrap().is_empty()
+                || solver["start"] == "coherent-branch",
+            "{solver}"
+        );
+        assert!(solver["given_energy"].as_f64().unwrap() > 0.0);
         bytes.push(files);
     }
     assert!(bytes[0] == bytes[1], "outputs differ between --threads 1 and 2");

@@ -26,7 +26,8 @@ use crate::geometry::Geometry;
 
 /// The harmonic fill of `phi` on the `free` vertices (sorted, unique). Returns `None` when the
 /// system cannot be factorized. Vertices where the fill vanishes (|zᵢ| below 1e-9 of the
-/// boundary's: a singularity of the filled field) keep their angle from `phi`.
+/// boundary's: a singularity of the filled field) keep their angle from `phi`. Each filled angle
+/// is the representative (mod 2π/k) nearest the vertex's angle in `phi`.
 pub fn harmonic_fill(
     geometry: &Geometry,
     weights: &[f64],
@@ -85,7 +86,14 @@ pub fn harmonic_fill(
     for (c, &v) in free.iter().enumerate() {
         let z = rhs[(c, 0)];
         if z.re.is_finite() && z.im.is_finite() && z.norm() > 1e-9 * scale {
-            out[v as usize] = z.im.atan2(z.re) / kf;
+            // arg(z)/k is one of the k representatives of the filled direction; keep the one
+            // nearest the given angle, so that a line field's orientation at each vertex (in
+            // which the position targets state ĝ*, math.md §9) survives the fill.
+            let a = z.im.atan2(z.re) / kf;
+            let period = std::f64::consts::TAU / kf;
+            let old = phi[v as usize];
+            let m = ((old - a) / period).round();
+            out[v as usize] = if m.is_finite() { a + m * period } else { a };
         }
     }
     Some(out)

@@ -2,6 +2,7 @@
 //! optimizer (the paper's §4.3, math.md §3–4), the sparse Levenberg–Marquardt driver, the
 //! fabrication constraints, and the entry point [`optimize()`].
 
+pub mod branch;
 mod cg;
 pub mod fabrication;
 pub mod fill;

@@ -14,6 +14,7 @@
 
 use serde::Serialize;
 
+use super::branch::coherent_start;
 use super::fabrication::{GradientHinge, HingeKind};
 use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
@@ -80,6 +81,8 @@ pub enum StartChoice {
     /// The connection-harmonic fill of the free region ([`super::fill::harmonic_fill`]), whose
     /// energy was lower.
     HarmonicFill,
+    /// The position energy's branch-coherent start ([`super::branch::coherent_start`]).
+    CoherentBranch,
 }
 
 /// What [`optimize`] did.
@@ -105,8 +108,12 @@ pub struct OptimizeReport {
     pub interleaved_smoothing: bool,
     /// Which start the kept solve began from.
     pub start: StartChoice,
-    /// How many starts were solved from (1 or 2; the second only when the first did not reach
-    /// a negligible energy).
+    /// The total energy of the given field (after the hard locks), whichever start was kept:
+    /// the solve lowered the energy from it to the last iteration's (or `initial_energy`'s,
+    /// when the kept start needed no iteration).
+    pub given_energy: f64,
+    /// How many starts were solved from (1 to 3; a later one only when the earlier did not
+    /// reach a negligible energy).
     pub starts_tried: usize,
     /// Constraint violations of the result.
     pub violations: ConstraintViolations,
@@ -261,6 +268,16 @@ pub fn optimize(
             }
         }
     }
+    // The position energy's branch-coherent start (`super::branch`) goes first: it satisfies
+    // every position row, and the other starts can reach the same (zero) energy on mixed
+    // branches, which misplace the highlight. It is kept when its solve ends at a negligible
+    // energy relative to the given start's.
+    let probe = LmOptions { max_iterations: 0, ..options.clone() };
+    let given = candidates.iter().find(|(c, _)| *c == StartChoice::Given).expect("given");
+    let given_energy = solve(mesh, term, &given.1, &free_list, &probe)?.initial_energy.total();
+    if let Some(coherent) = coherent_start(term, &given.1, &free_list) {
+        candidates.insert(0, (StartChoice::CoherentBranch, coherent));
+    }
     let mut best: Option<(StartChoice, Run)> = None;
     let mut starts_tried = 0;
     for (choice, start) in candidates {
@@ -268,10 +285,12 @@ pub fn optimize(
         starts_tried += 1;
         let e0 = run.initial.map_or(0.0, |e| e.total());
         let e1 = run.final_energy();
+        let coherent = choice == StartChoice::CoherentBranch;
         if best.as_ref().is_none_or(|(_, b)| e1 < b.final_energy()) {
             best = Some((choice, run));
         }
-        if e1 <= NEGLIGIBLE_ENERGY * e0 {
+        let scale = if coherent { given_energy.max(e0) } else { e0 };
+        if e1 <= NEGLIGIBLE_ENERGY * scale {
             break;
         }
     }
@@ -331,6 +350,7 @@ pub fn optimize(
         smoothness_weight: options.smoothness,
         interleaved_smoothing: options.interleaved_smoothing,
         start: start_choice,
+        given_energy,
         starts_tried,
         violations,
         conflicting_locks: locks.conflicts,

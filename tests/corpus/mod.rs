@@ -248,6 +248,14 @@ pub fn shared_cases(names: Option<&[String]>) -> Result<Vec<Case>, String> {
 
 /// The scene of a case, without edits.
 pub fn scene(case: &Case) -> Result<LoadedScene, String> {
+    let json = scene_json(case);
+    let path = scratch_dir().join(format!("{}.json", case.name));
+    let scene = Scene::from_str(&json.to_string(), &path).map_err(|e| e.to_string())?;
+    Ok(LoadedScene { base: scratch_dir(), path, scene })
+}
+
+/// The scene file of a case, without edits, as JSON (the mesh path absolute).
+pub fn scene_json(case: &Case) -> serde_json::Value {
     let arr = |v: &V3| [v.x, v.y, v.z];
     let mut mesh =
         serde_json::json!({ "path": case.obj.display().to_string(), "scale": case.scale });
@@ -263,24 +271,30 @@ pub fn scene(case: &Case) -> Result<LoadedScene, String> {
             serde_json::json!({ "init": "world", "world": arr(&d), "symmetry": "line" })
         }
     };
-    let json = serde_json::json!({
+    serde_json::json!({
         "mesh": mesh,
         "units": "mm",
         "lights": [{ "type": "directional", "key": true, "direction": arr(&case.light) }],
         "view": { "eye": arr(&case.eye), "target": arr(&case.target) },
         "field": field,
-    });
-    let path = scratch_dir().join(format!("{}.json", case.name));
-    let scene = Scene::from_str(&json.to_string(), &path).map_err(|e| e.to_string())?;
-    Ok(LoadedScene { base: scratch_dir(), path, scene })
+    })
 }
 
 /// The solver settings for an energy: `Ok(None)` when this build's scene loader does not know
 /// `solver.highlight_energy` and the energy is not today's ("tensor").
+///
+/// `GRAINLINE_CORPUS_SOLVER` (a JSON object of further `solver` keys, the bench's `--solver`)
+/// is merged in, for experiments.
 pub fn solver_settings(energy: &str) -> Result<Option<(SolverSettings, bool)>, String> {
-    match serde_json::from_value::<SolverSettings>(
-        serde_json::json!({ "highlight_energy": energy }),
-    ) {
+    let mut json = serde_json::json!({ "highlight_energy": energy });
+    if let Ok(extra) = std::env::var("GRAINLINE_CORPUS_SOLVER") {
+        let extra: serde_json::Value =
+            serde_json::from_str(&extra).map_err(|e| format!("GRAINLINE_CORPUS_SOLVER: {e}"))?;
+        for (k, v) in extra.as_object().into_iter().flatten() {
+            json[k] = v.clone();
+        }
+    }
+    match serde_json::from_value::<SolverSettings>(json) {
         Ok(s) => Ok(Some((s, true))),
         Err(e) if e.to_string().contains("unknown field") => {
             Ok((energy == "tensor").then(|| (SolverSettings::default(), false)))
@@ -739,7 +753,15 @@ fn s_curve(surface: &Surface, p: &V3, base: &V3, len: f64) -> Vec<V3> {
 
 /// The three edits of a placement: bend, expand, curve.
 pub fn edits(pl: &Placement) -> Vec<(&'static str, Edit)> {
-    // Built from scene JSON, so keys added later (with their defaults) need no change here.
+    edits_json(pl)
+        .into_iter()
+        .map(|(name, json)| (name, serde_json::from_value(json).expect("a valid edit")))
+        .collect()
+}
+
+/// The edits of a placement as scene-file JSON, by tool name.
+// Built from scene JSON, so keys added later (with their defaults) need no change here.
+pub fn edits_json(pl: &Placement) -> Vec<(&'static str, serde_json::Value)> {
     let arr = |v: &V3| [v.x, v.y, v.z];
     let warp = |tool: &str| {
         serde_json::json!({
@@ -755,10 +777,7 @@ pub fn edits(pl: &Placement) -> Vec<(&'static str, Edit)> {
         "points": [pl.curve.iter().map(arr).collect::<Vec<_>>()],
         "radius": CURVE_RADIUS * pl.diag,
     });
-    [("bend", warp("bend")), ("expand", warp("expand")), ("curve", curve)]
-        .into_iter()
-        .map(|(name, json)| (name, serde_json::from_value(json).expect("a valid edit")))
-        .collect()
+    vec![("bend", warp("bend")), ("expand", warp("expand")), ("curve", curve)]
 }
 
 // ---------------------------------------------------------------------------------------------
