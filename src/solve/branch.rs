@@ -91,11 +91,11 @@ pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option
     for &v in free {
         let i = v as usize;
         let Some(t) = term.target_g[i] else { continue };
-        if !(term.weight[i] > 0.0) {
+        if term.weight[i].is_nan() || term.weight[i] <= 0.0 {
             continue;
         }
         let hb = term.h_bar(i);
-        if !(hb.norm() > MIN_TANGENT_H) || !t.is_finite() {
+        if hb.norm().is_nan() || hb.norm() <= MIN_TANGENT_H || !t.is_finite() {
             continue;
         }
         let theta = hb.y.atan2(hb.x);
