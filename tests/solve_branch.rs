@@ -8,8 +8,8 @@
 //! that a row-by-row solve can make (alternate branches on alternate rows) fails the same
 //! measure for a line field, so the measure can tell.
 
-use grainline::field::{compute_field, FieldOptions, FieldResult};
 use grainline::fidelity::highlight_segments;
+use grainline::field::{compute_field, FieldOptions, FieldResult};
 use grainline::generate;
 use grainline::highlight::{InitialField, Lighting, Symmetry, View};
 use grainline::mesh::Mesh;
@@ -36,11 +36,8 @@ fn sheet(symmetry: Symmetry) -> (Mesh, FieldResult) {
 
 fn term<'a>(mesh: &Mesh, field: &'a FieldResult, symmetry: Symmetry) -> HighlightTerm<'a> {
     let n = mesh.num_vertices();
-    let target_g: Vec<Option<f64>> = mesh
-        .positions
-        .iter()
-        .map(|p| (p.y.abs() < BAND).then(|| (p.y / WIDTH).tanh()))
-        .collect();
+    let target_g: Vec<Option<f64>> =
+        mesh.positions.iter().map(|p| (p.y.abs() < BAND).then(|| (p.y / WIDTH).tanh())).collect();
     HighlightTerm {
         geometry: &field.geometry,
         h: &field.h,

@@ -499,6 +499,21 @@ fn blend(d: f64, radius: f64) -> f64 {
     1.0 - x * x * (3.0 - 2.0 * x)
 }
 
+/// A finite f64 ordered totally (the spanning tree's priority).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Clarity(f64);
+impl Eq for Clarity {}
+impl PartialOrd for Clarity {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Clarity {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+
 /// The position target ĝ* of every vertex with a hit (module docs, "Position"); other entries
 /// are the current targets.
 fn position_profile(
@@ -509,8 +524,10 @@ fn position_profile(
     width: f64,
 ) -> Vec<f64> {
     let n = found.len();
-    // oᵢ: a consistent orientation of a line field over the tube, by breadth-first search from
-    // the lowest vertex of each connected piece (k = 1: all +1).
+    // oᵢ: an orientation of a line field over the tube (k = 1: all +1), grown along a maximum
+    // spanning tree of |uᵢ·uⱼ| from the lowest vertex of each connected piece, so that it
+    // follows the edges where the start says clearly how two grains are oriented and leaves
+    // the disagreements of a rough start to edges where they turn by nearly a right angle.
     let mut orient = vec![0.0f64; n];
     let line_field = ctx.symmetry == crate::highlight::Symmetry::Line;
     for seed in 0..n {
@@ -518,18 +535,28 @@ fn position_profile(
             continue;
         }
         orient[seed] = 1.0;
-        let mut queue = std::collections::VecDeque::from([seed]);
-        while let Some(i) = queue.pop_front() {
+        // (clarity, Reverse(vertex), sign) — the clearest edge first, ties by the lower vertex.
+        let mut heap = std::collections::BinaryHeap::new();
+        let push = |heap: &mut std::collections::BinaryHeap<_>, i: usize, orient: &[f64]| {
             let ui = ctx.grain(&st.phi, i) * orient[i];
             for &j in ctx.geom.adjacency.neighbors(i) {
                 let j = j as usize;
                 if found[j].is_none() || orient[j] != 0.0 {
                     continue;
                 }
-                let same = !line_field || ctx.grain(&st.phi, j).dot(&ui) >= 0.0;
-                orient[j] = if same { 1.0 } else { -1.0 };
-                queue.push_back(j);
+                let d = if line_field { ctx.grain(&st.phi, j).dot(&ui) } else { 1.0 };
+                let d = if d.is_finite() { d } else { 0.0 };
+                let sign: i8 = if d >= 0.0 { 1 } else { -1 };
+                heap.push((Clarity(d.abs()), std::cmp::Reverse(j), sign));
             }
+        };
+        push(&mut heap, seed, &orient);
+        while let Some((_, std::cmp::Reverse(j), sign)) = heap.pop() {
+            if orient[j] != 0.0 {
+                continue;
+            }
+            orient[j] = f64::from(sign);
+            push(&mut heap, j, &orient);
         }
     }
     // The signed distance: the offset's component across the tangent, seen from the normal.

@@ -120,8 +120,9 @@ pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option
             // Agreement of the representatives, in the relative orientation the two had at the
             // start (line fields): the targets' signs were stated in those orientations.
             let pj = out[j] + g.transport[slot];
-            let rel =
-                if line && (phi[i] - phi[j] - g.transport[slot]).cos() < 0.0 { -1.0 } else { 1.0 };
+            // Weighted by how clear that orientation was: cos of the start angle between them
+            // (near a right angle, the start says nothing about it).
+            let rel = if line { (phi[i] - phi[j] - g.transport[slot]).cos() } else { 1.0 };
             for (b, sb) in s.iter_mut().enumerate() {
                 *sb += rel * (c[b] - pj).cos();
             }
