@@ -9,7 +9,7 @@ use grainline::mesh::Units;
 /// How to read a mesh file.
 #[derive(Debug, Args)]
 pub struct MeshArgs {
-    /// The mesh file (OBJ).
+    /// The mesh file: OBJ, STL (binary or ASCII) or PLY (ASCII or binary).
     pub mesh: PathBuf,
     /// Load only the object or group with this name (default: merge all).
     #[arg(long, value_name = "NAME")]
