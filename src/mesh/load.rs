@@ -1,4 +1,6 @@
-//! Loading OBJ files (tobj, or a parallel reader for large files) into a validated [`Mesh`].
+//! Loading OBJ files (tobj, or a parallel reader for large files) into a validated [`Mesh`];
+//! [`load_mesh`] also reads STL and PLY (`stl.rs`, `ply.rs`), which then go through the same
+//! steps (`raw.rs`) and give the same [`LoadReport`].
 //!
 //! # What the loaded mesh is
 //!
@@ -66,7 +68,8 @@ pub enum DegeneratePolicy {
 pub struct LoadOptions {
     /// Keep only the object (or group) with this name; `None` merges every object.
     pub object: Option<String>,
-    /// Weld positions closer than this distance (in file units) before anything else.
+    /// Weld positions closer than this distance (in file units) before anything else. `None`
+    /// welds nothing, except that [`load_mesh`] welds an STL at 0 (identical positions).
     pub weld: Option<f64>,
     /// Unit of the file's coordinates.
     pub units: Units,
