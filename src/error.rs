@@ -46,6 +46,18 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A binary mesh file (binary STL or PLY) that is truncated, inconsistent with its own
+    /// counts, or holds a bad value; `offset` is the byte where the problem was found and the
+    /// message names the element (e.g. `triangle 12`, `vertex element 7`).
+    #[error("{path}: byte {offset}: {message}")]
+    BinaryFile {
+        /// The file.
+        path: PathBuf,
+        /// 0-based byte offset of the element or field at fault.
+        offset: u64,
+        /// What is wrong, naming the element.
+        message: String,
+    },
     /// A face refers to a vertex, texture coordinate or normal that does not exist.
     #[error("{path}:{line}: {message}")]
     IndexOutOfRange {

@@ -11,6 +11,20 @@
 /// false zero-area ones.
 pub const MAX_COORDINATE: f64 = 1e75;
 
+/// Most triangles (after splitting polygons) a mesh file may hold: 1e9. Corners are indexed by
+/// `u32` and the half-edge structure needs 3·F < 2³² − 1, so 1.43e9 is the hard ceiling; 1e9
+/// keeps a margin (and is 50 GB of binary STL). STL and PLY counts are checked against it, and
+/// against the file's size, before anything is allocated for them.
+pub const MAX_FILE_TRIANGLES: usize = 1_000_000_000;
+
+/// Most vertices a mesh file may hold: 3·[`MAX_FILE_TRIANGLES`] (an STL lists three per
+/// triangle), below `u32::MAX` so every vertex has a `u32` index.
+pub const MAX_FILE_VERTICES: usize = 3 * MAX_FILE_TRIANGLES;
+
+/// Most corners one PLY face may list: 1e6 (a polygon is split into triangles; a list count
+/// beyond this is taken for a corrupt file rather than read).
+pub const MAX_POLYGON_CORNERS: usize = 1_000_000;
+
 /// `--threads` is capped at this many worker threads per available core.
 pub const THREADS_PER_CORE: usize = 4;
 
@@ -32,6 +46,13 @@ mod tests {
         assert_eq!(worker_threads(8, 2), (8, false));
         assert_eq!(worker_threads(0, 2), (1, false));
         assert_eq!(worker_threads(3, 0), (3, false));
+    }
+
+    #[test]
+    fn file_counts_fit_u32_indices() {
+        // Every corner and every vertex needs a u32 index; half-edges need 3·F < u32::MAX.
+        assert!(MAX_FILE_VERTICES < u32::MAX as usize);
+        assert!(3 * MAX_FILE_TRIANGLES < u32::MAX as usize);
     }
 
     #[test]

@@ -86,7 +86,7 @@ pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
     }
     plan.check()?;
     stages.stage("loading mesh");
-    let loaded = grainline::mesh::load::load_obj(&args.mesh.mesh, &args.mesh.load_options())?;
+    let loaded = grainline::mesh::load::load_mesh(&args.mesh.mesh, &args.mesh.load_options())?;
     let mesh = loaded.mesh;
     let lighting = match (light, light_position) {
         (Some(l), _) => l,

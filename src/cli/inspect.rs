@@ -23,7 +23,7 @@ pub struct InspectArgs {
 /// Runs `grainline inspect`.
 pub fn run(args: InspectArgs, _quiet: bool) -> anyhow::Result<()> {
     let path = &args.mesh.mesh;
-    let loaded = grainline::mesh::load::load_obj(path, &args.mesh.load_options().tolerant())?;
+    let loaded = grainline::mesh::load::load_mesh(path, &args.mesh.load_options().tolerant())?;
     let topo = Topology::new(&loaded.mesh)?;
     let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
     let report = InspectReport::new(path, &loaded, &topo, charts.as_ref());
@@ -41,7 +41,7 @@ fn text(r: &InspectReport) -> String {
     let u = r.units;
     let p = &r.problems;
     let b = &r.bounding_box;
-    let _ = writeln!(s, "{}", r.file);
+    let _ = writeln!(s, "{} ({})", r.file, r.format.to_uppercase());
     let _ = writeln!(
         s,
         "  {} vertices ({} in the file), {} edges, {} triangles ({} polygons split)",
@@ -103,6 +103,19 @@ fn text(r: &InspectReport) -> String {
         s,
         "  normals: {}",
         if r.has_normals { "per corner, from the file" } else { "none" }
+    );
+    let q = &r.quality;
+    let _ = writeln!(
+        s,
+        "  triangles: smallest angle {:.4}° ({}), {} sliver(s) with an angle below {}°; {} sharp \
+         edge(s) (dihedral > {}°, the preview's normals split at {} vertices)",
+        q.min_angle_deg,
+        q.min_angle_face,
+        q.slivers,
+        q.sliver_angle_deg,
+        q.crease_edges,
+        q.crease_angle_deg,
+        q.split_vertices
     );
     let _ = writeln!(
         s,

@@ -9,12 +9,13 @@ use grainline::mesh::Units;
 /// How to read a mesh file.
 #[derive(Debug, Args)]
 pub struct MeshArgs {
-    /// The mesh file (OBJ).
+    /// The mesh file: OBJ, STL (binary or ASCII) or PLY (ASCII or binary).
     pub mesh: PathBuf,
     /// Load only the object or group with this name (default: merge all).
     #[arg(long, value_name = "NAME")]
     pub object: Option<String>,
-    /// Weld vertices closer than TOL (file units) before anything else.
+    /// Weld vertices closer than TOL (file units) before anything else (an STL is welded at 0,
+    /// identical positions, without it).
     #[arg(long, value_name = "TOL")]
     pub weld: Option<f64>,
     /// Unit of the file's coordinates: mm, cm, m or in.

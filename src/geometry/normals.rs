@@ -163,3 +163,144 @@ pub fn normalize_or(v: Vector3<f64>, fallback: Vector3<f64>) -> Vector3<f64> {
         fallback
     }
 }
+
+/// The default crease angle (degrees): edges whose faces' normals differ by more than this are
+/// sharp (the scene key `mesh.crease_angle`).
+pub const DEFAULT_CREASE_ANGLE_DEG: f64 = 40.0;
+
+/// Shading normals per face corner that do not average across sharp edges, and what was split.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CornerNormals {
+    /// For each face, the unit normal at each of its three corners.
+    pub corners: Vec<[Vector3<f64>; 3]>,
+    /// Edges whose dihedral angle exceeds the crease angle (each counted once).
+    pub crease_edges: usize,
+    /// Vertices whose faces form two or more smooth sectors (their corners differ).
+    pub split_vertices: usize,
+}
+
+/// Whether the edge between faces with unit normals `a` and `b` is sharp at crease angle θ:
+/// the angle between the normals exceeds θ, i.e. aᵀb < cos θ (math.md §3, "Creases"). A face
+/// of zero area (zero normal) is sharp against every neighbour, so it joins no sector.
+#[inline]
+pub fn is_crease(a: &Vector3<f64>, b: &Vector3<f64>, cos_theta: f64) -> bool {
+    a == &Vector3::zeros() || b == &Vector3::zeros() || a.dot(b) < cos_theta
+}
+
+/// Crease-aware corner normals (math.md §3, "Creases").
+///
+/// Around each vertex its faces are joined into *smooth sectors*: two faces that share an edge
+/// at the vertex are in one sector unless that edge is sharp ([`is_crease`] with
+/// `crease_angle_deg`). A vertex with a single sector keeps `vertex_normals[v]` at all its
+/// corners (the normal the solver's frame uses), so a smooth mesh shades exactly as before. At
+/// a vertex with several sectors each corner takes its sector's normal: the corner-angle
+/// weighted sum of the sector's face normals, normalized (Eq. C1). On a flat sector that is the
+/// plane's normal, so flat faces meeting at a bend shade flat up to the bend.
+///
+/// `crease_angle_deg` ≥ 180 splits nothing; 0 splits every edge that is not exactly flat.
+/// The result is the same at any thread count (each vertex is computed on its own, in face
+/// order).
+pub fn corner_normals(
+    mesh: &Mesh,
+    vertex_faces: &VertexFaces,
+    faces: &[FaceData],
+    vertex_normals: &[Vector3<f64>],
+    crease_angle_deg: f64,
+) -> CornerNormals {
+    let cos_theta =
+        if crease_angle_deg >= 180.0 { -2.0 } else { crease_angle_deg.max(0.0).to_radians().cos() };
+    // Per vertex: the normal of each incident corner (None if the vertex is smooth), and the
+    // sharp edges from it to a vertex of larger index (so each edge is counted once).
+    let per_vertex: Vec<(Option<Vec<Vector3<f64>>>, usize)> = (0..mesh.num_vertices())
+        .into_par_iter()
+        .map(|v| sector_normals(mesh, v, vertex_faces.of(v), faces, cos_theta))
+        .collect();
+    let mut corners: Vec<[Vector3<f64>; 3]> = (0..mesh.num_faces())
+        .into_par_iter()
+        .map(|f| mesh.faces[f].map(|v| vertex_normals[v as usize]))
+        .collect();
+    let (mut split_vertices, mut crease_edges) = (0, 0);
+    for (v, (sectors, sharp)) in per_vertex.iter().enumerate() {
+        crease_edges += sharp;
+        if let Some(normals) = sectors {
+            split_vertices += 1;
+            for (&(f, c), n) in vertex_faces.of(v).iter().zip(normals) {
+                corners[f as usize][c as usize] = *n;
+            }
+        }
+    }
+    CornerNormals { corners, crease_edges, split_vertices }
+}
+
+/// The sector normal of each corner of vertex `v`'s fan (in fan order), or `None` when the fan
+/// is one smooth sector; and the number of sharp edges from `v` to vertices of larger index.
+fn sector_normals(
+    mesh: &Mesh,
+    v: usize,
+    fan: &[(u32, u8)],
+    faces: &[FaceData],
+    cos_theta: f64,
+) -> (Option<Vec<Vector3<f64>>>, usize) {
+    let k = fan.len();
+    if k < 2 {
+        return (None, 0);
+    }
+    // Union–find over the fan: faces sharing an edge (v, w) that is not sharp are joined. The
+    // edges at the vertex are keyed by their other endpoint w and sorted to find the pairs.
+    let mut parent: Vec<usize> = (0..k).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut spokes: Vec<(u32, usize)> = Vec::with_capacity(2 * k);
+    for (i, &(f, c)) in fan.iter().enumerate() {
+        let fv = mesh.faces[f as usize];
+        spokes.push((fv[(c as usize + 1) % 3], i));
+        spokes.push((fv[(c as usize + 2) % 3], i));
+    }
+    spokes.sort_unstable();
+    let (mut j, mut sharp) = (0, 0);
+    while j < spokes.len() {
+        let mut e = j + 1;
+        while e < spokes.len() && spokes[e].0 == spokes[j].0 {
+            e += 1;
+        }
+        let mut sharp_edge = false;
+        for a in j..e {
+            for b in a + 1..e {
+                let (fa, fb) = (spokes[a].1, spokes[b].1);
+                let (na, nb) =
+                    (&faces[fan[fa].0 as usize].normal, &faces[fan[fb].0 as usize].normal);
+                if is_crease(na, nb, cos_theta) {
+                    sharp_edge = true;
+                } else {
+                    let (ra, rb) = (find(&mut parent, fa), find(&mut parent, fb));
+                    parent[ra.max(rb)] = ra.min(rb);
+                }
+            }
+        }
+        sharp += usize::from(sharp_edge && spokes[j].0 as usize > v);
+        j = e;
+    }
+    let roots: Vec<usize> = (0..k).map(|i| find(&mut parent, i)).collect();
+    if roots.iter().all(|&r| r == roots[0]) {
+        return (None, sharp);
+    }
+    // Eq. C1: n_S = Σ_{f ∈ S} α_f n_f / |Σ α_f n_f|, summed in fan order.
+    let mut sums = vec![Vector3::zeros(); k];
+    for (i, &(f, c)) in fan.iter().enumerate() {
+        let d = &faces[f as usize];
+        sums[roots[i]] += d.angles[c as usize] * d.normal;
+    }
+    let normals = (0..k)
+        .map(|i| {
+            // A sector of zero-area faces only: the face's own (zero) normal; the renderer then
+            // falls back to the geometric normal.
+            normalize_or(sums[roots[i]], faces[fan[i].0 as usize].normal)
+        })
+        .collect();
+    (Some(normals), sharp)
+}

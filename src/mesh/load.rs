@@ -1,4 +1,6 @@
-//! Loading OBJ files (tobj, or a parallel reader for large files) into a validated [`Mesh`].
+//! Loading OBJ files (tobj, or a parallel reader for large files) into a validated [`Mesh`];
+//! [`load_mesh`] also reads STL and PLY (`stl.rs`, `ply.rs`), which then go through the same
+//! steps (`raw.rs`) and give the same [`LoadReport`].
 //!
 //! # What the loaded mesh is
 //!
@@ -47,7 +49,7 @@ use super::halfedge::HalfEdges;
 use super::parse::{self, Values};
 use super::scan::{self, Kind, Scan, NONE};
 use super::scan_parallel;
-use super::validate::{self, FileNames};
+use super::validate::{self, FileNames, Naming};
 use super::{weld, CornerAttribute, Mesh, Units};
 use crate::{Error, Result};
 
@@ -66,7 +68,8 @@ pub enum DegeneratePolicy {
 pub struct LoadOptions {
     /// Keep only the object (or group) with this name; `None` merges every object.
     pub object: Option<String>,
-    /// Weld positions closer than this distance (in file units) before anything else.
+    /// Weld positions closer than this distance (in file units) before anything else. `None`
+    /// welds nothing, except that [`load_mesh`] welds an STL at 0 (identical positions).
     pub weld: Option<f64>,
     /// Unit of the file's coordinates.
     pub units: Units,
@@ -104,9 +107,88 @@ impl LoadOptions {
     }
 }
 
+/// The file formats grainline reads a mesh from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeshFormat {
+    /// Wavefront OBJ (text).
+    #[default]
+    Obj,
+    /// STL, binary or ASCII.
+    Stl,
+    /// PLY, ASCII or binary (either byte order).
+    Ply,
+}
+
+impl MeshFormat {
+    /// The format of a file: by its content where that is unambiguous (a PLY's `ply` magic
+    /// line; a binary STL whose size is exactly 84 + 50·n for the n at byte 80 and whose
+    /// name ends in `.stl` or whose bytes are not text), else by its extension (`.stl`,
+    /// `.ply`, case-insensitive; anything else is read as OBJ).
+    pub fn detect(path: &Path, bytes: &[u8]) -> MeshFormat {
+        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+        if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+            return MeshFormat::Ply;
+        }
+        match ext.as_deref() {
+            Some("stl") => MeshFormat::Stl,
+            Some("ply") => MeshFormat::Ply,
+            _ if super::stl::binary_count(bytes).is_some() && bytes.contains(&0) => MeshFormat::Stl,
+            _ => MeshFormat::Obj,
+        }
+    }
+
+    /// The format's name as messages and reports write it (`obj`, `stl`, `ply`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "obj",
+            MeshFormat::Stl => "stl",
+            MeshFormat::Ply => "ply",
+        }
+    }
+}
+
+/// Loads and validates a mesh file of any format grainline reads (OBJ, STL, PLY; chosen by
+/// [`MeshFormat::detect`]). The mesh and report are what [`load_obj`] gives for an OBJ; for the
+/// others see `stl.rs` and `ply.rs`: an STL's three vertices per triangle are welded exactly
+/// (bit-identical positions) unless `options.weld` gives a tolerance, and PLY `u v` (`s t`,
+/// `texture_u texture_v`) and `nx ny nz` vertex properties become the per-corner UVs and
+/// normals. `options.object` applies to OBJ only (naming an object of another format is an
+/// error).
+pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
+    check_options(options)?;
+    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
+    let format = MeshFormat::detect(path, &bytes);
+    if format == MeshFormat::Obj {
+        drop(bytes);
+        return load_obj(path, options);
+    }
+    if let Some(name) = &options.object {
+        return Err(Error::ObjectNotFound {
+            path: path.to_owned(),
+            name: name.clone(),
+            available: format!("(none: objects are an OBJ notion, this is {})", format.as_str()),
+        });
+    }
+    match format {
+        MeshFormat::Stl => {
+            let raw = super::stl::read(path, &bytes, options.scale)?;
+            drop(bytes);
+            super::raw::build(path, raw, options, format, Naming::Stl, Some(0.0))
+        }
+        _ => {
+            let raw = super::ply::read(path, &bytes, options.scale)?;
+            drop(bytes);
+            super::raw::build(path, raw, options, format, Naming::Ply, None)
+        }
+    }
+}
+
 /// What loading did to the file's contents.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct LoadReport {
+    /// The file's format.
+    pub format: MeshFormat,
     /// Vertices as listed in the file.
     pub file_vertices: usize,
     /// Vertices removed because no face used them.
@@ -131,12 +213,18 @@ pub struct LoadReport {
     pub nonmanifold_vertices: usize,
     /// Edges whose two faces are oriented inconsistently (only non-zero when accepted).
     pub inconsistent_orientation_edges: usize,
-    /// 1-based file `v` number of every mesh vertex.
+    /// 1-based file `v` number of every mesh vertex (for STL and PLY: 1 + its 0-based place
+    /// among the file's vertices, three per triangle in an STL).
     #[serde(skip)]
     pub source_vertex: Vec<u32>,
-    /// 1-based line of the `f` statement of every mesh face.
+    /// 1-based line of the `f` statement of every mesh face (of its facet or element in an
+    /// ASCII STL or PLY; 0 in a binary file).
     #[serde(skip)]
     pub face_line: Vec<u32>,
+    /// The file's number of every mesh face's element: the 1-based triangle of an STL, the
+    /// 0-based face element of a PLY; empty for an OBJ.
+    #[serde(skip)]
+    pub face_index: Vec<u32>,
 }
 
 /// A loaded mesh and the report of what loading did.
@@ -174,7 +262,7 @@ pub use crate::limits::MAX_COORDINATE;
 /// Files of at least this many bytes are read by the parallel parser under [`ObjParser::Auto`].
 pub const PARALLEL_MIN_BYTES: usize = 4 << 20;
 
-/// Loads and validates an OBJ file (see the module documentation for what the mesh is).
+/// Loads and validates an OBJ file (any format: [`load_mesh`]; see the module documentation for what the mesh is).
 pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
     load_obj_with(path, options, ObjParser::Auto)
 }
@@ -644,8 +732,13 @@ impl Builder<'_> {
         report.nonmanifold_edges = problems.nonmanifold_edges.len();
         report.nonmanifold_vertices = problems.nonmanifold_vertices.len();
         report.inconsistent_orientation_edges = problems.inconsistent_edges.len();
-        let names =
-            FileNames { source_vertex: &report.source_vertex, face_line: &report.face_line };
+        let names = FileNames {
+            source_vertex: &report.source_vertex,
+            face_line: &report.face_line,
+            face_index: &[],
+            naming: Naming::Obj,
+            file_positions: &[],
+        };
         validate::check(
             self.path,
             &he,
@@ -696,7 +789,7 @@ fn used_vertices(
 }
 
 /// Zero area: a repeated vertex, or |(b − a) × (c − a)| ≤ 1e-12·ℓ² with ℓ the longest edge.
-fn is_degenerate(v: [u32; 3], pos: &[Vector3<f64>]) -> bool {
+pub(super) fn is_degenerate(v: [u32; 3], pos: &[Vector3<f64>]) -> bool {
     if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
         return true;
     }
@@ -707,7 +800,7 @@ fn is_degenerate(v: [u32; 3], pos: &[Vector3<f64>]) -> bool {
 }
 
 /// New index (file order) of every vertex used by a kept triangle, and the file index of each.
-fn compact_vertices(
+pub(super) fn compact_vertices(
     num_v: usize,
     tris: &[u32],
     corner_v: &[u32],
@@ -730,7 +823,7 @@ fn compact_vertices(
 }
 
 /// For every value, the first (smallest) index holding a bit-identical value.
-fn dedup_by_value(vals: &[Vector2<f64>]) -> Vec<u32> {
+pub(super) fn dedup_by_value(vals: &[Vector2<f64>]) -> Vec<u32> {
     let mut keyed: Vec<(u64, u64, u32)> = vals
         .par_iter()
         .enumerate()

@@ -64,6 +64,74 @@ pub struct MirroredChart {
     pub flipped: usize,
 }
 
+/// The angle below which a triangle counts as a sliver in [`QualityReport`] (degrees).
+pub const SLIVER_ANGLE_DEG: f64 = 5.0;
+
+/// Triangle shape and sharp edges.
+#[derive(Clone, Debug, Serialize)]
+pub struct QualityReport {
+    /// The smallest interior angle of any triangle, degrees.
+    pub min_angle_deg: f64,
+    /// The triangle with the smallest angle, as the file names it (`line 12`, `triangle 7`,
+    /// `face element 3`).
+    pub min_angle_face: String,
+    /// The sliver threshold ([`SLIVER_ANGLE_DEG`]).
+    pub sliver_angle_deg: f64,
+    /// Triangles with an angle below the threshold.
+    pub slivers: usize,
+    /// The crease angle the sharp edges are counted at (the default of `mesh.crease_angle`).
+    pub crease_angle_deg: f64,
+    /// Edges whose faces' normals differ by more than the crease angle (the preview does not
+    /// smooth across them).
+    pub crease_edges: usize,
+    /// Vertices where the preview's normal is split.
+    pub split_vertices: usize,
+}
+
+/// The name of mesh face `f` in the file's own terms.
+fn face_name(r: &super::load::LoadReport, f: usize) -> String {
+    use super::load::MeshFormat;
+    use super::validate::Naming;
+    let line = r.face_line.get(f).copied().unwrap_or(0);
+    let index = r.face_index.get(f).copied().unwrap_or(f as u32);
+    match r.format {
+        MeshFormat::Obj if line > 0 => format!("line {line}"),
+        MeshFormat::Obj => format!("face {f}"),
+        MeshFormat::Stl => Naming::Stl.face(line, index),
+        MeshFormat::Ply => Naming::Ply.face(line, index),
+    }
+}
+
+impl QualityReport {
+    /// Angles and creases of a loaded mesh.
+    pub fn new(loaded: &LoadedMesh) -> Self {
+        use crate::geometry::normals::{self, DEFAULT_CREASE_ANGLE_DEG};
+        let mesh = &loaded.mesh;
+        let fd = normals::face_data(mesh);
+        let mut min = (f64::INFINITY, 0usize);
+        let mut slivers = 0;
+        for (f, d) in fd.iter().enumerate() {
+            let a = d.angles.iter().copied().fold(f64::INFINITY, f64::min).to_degrees();
+            if a < min.0 {
+                min = (a, f);
+            }
+            slivers += usize::from(a < SLIVER_ANGLE_DEG);
+        }
+        let vf = super::VertexFaces::new(mesh);
+        let vn = vec![nalgebra::Vector3::zeros(); mesh.num_vertices()];
+        let c = normals::corner_normals(mesh, &vf, &fd, &vn, DEFAULT_CREASE_ANGLE_DEG);
+        QualityReport {
+            min_angle_deg: if min.0.is_finite() { min.0 } else { 0.0 },
+            min_angle_face: face_name(&loaded.report, min.1),
+            sliver_angle_deg: SLIVER_ANGLE_DEG,
+            slivers,
+            crease_angle_deg: DEFAULT_CREASE_ANGLE_DEG,
+            crease_edges: c.crease_edges,
+            split_vertices: c.split_vertices,
+        }
+    }
+}
+
 /// Problems found (and tolerated) while loading.
 #[derive(Clone, Debug, Serialize)]
 pub struct Problems {
@@ -88,6 +156,8 @@ pub struct InspectReport {
     pub format_version: u32,
     /// The mesh file.
     pub file: String,
+    /// Its format: `obj`, `stl` or `ply`.
+    pub format: &'static str,
     /// Unit of every length below.
     pub units: &'static str,
     /// Object and group names in the file.
@@ -122,6 +192,8 @@ pub struct InspectReport {
     pub uv: Option<UvReport>,
     /// Whether the file has a normal for every corner.
     pub has_normals: bool,
+    /// Slivers and sharp edges.
+    pub quality: QualityReport,
     /// Problems found.
     pub problems: Problems,
 }
@@ -158,6 +230,7 @@ impl InspectReport {
         InspectReport {
             format_version: INSPECT_FORMAT_VERSION,
             file: path.display().to_string(),
+            format: r.format.as_str(),
             units: mesh.units.as_str(),
             objects: r.objects.clone(),
             file_vertices: r.file_vertices,
@@ -175,6 +248,7 @@ impl InspectReport {
             boundary_vertices: topo.boundary_vertices().len(),
             uv,
             has_normals: mesh.normals.is_some(),
+            quality: QualityReport::new(loaded),
             problems: Problems {
                 degenerate_faces: r.dropped_degenerate_faces,
                 nonmanifold_edges: r.nonmanifold_edges,

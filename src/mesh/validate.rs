@@ -22,23 +22,64 @@ pub(crate) struct Problems {
     pub nonmanifold_vertices: Vec<VertexId>,
 }
 
+/// How a file format numbers its elements, for messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Naming {
+    /// OBJ: faces by line, vertices by their 1-based `v` number.
+    Obj,
+    /// STL: faces by their 1-based triangle number (and line in ASCII), vertices by position.
+    Stl,
+    /// PLY: faces and vertices by their 0-based element number (as the face lists number
+    /// vertices), and the line in ASCII.
+    Ply,
+}
+
+impl Naming {
+    /// A face, from its line (0 in a binary file) and its element number.
+    pub(crate) fn face(self, line: u32, index: u32) -> String {
+        let at = if line > 0 { format!(" (line {line})") } else { String::new() };
+        match self {
+            Naming::Obj => format!("line {line}"),
+            Naming::Stl => format!("triangle {index}{at}"),
+            Naming::Ply => format!("face element {index}{at}"),
+        }
+    }
+}
+
 /// How to name mesh elements in messages: by their numbers in the file.
 pub(crate) struct FileNames<'a> {
-    /// 1-based file `v` index of every mesh vertex.
+    /// 1-based file vertex number of every mesh vertex.
     pub source_vertex: &'a [u32],
-    /// 1-based line of every mesh face.
+    /// 1-based line of every mesh face (0 in a binary file).
     pub face_line: &'a [u32],
+    /// Element number of every mesh face (STL and PLY; empty for OBJ).
+    pub face_index: &'a [u32],
+    /// The file's numbering.
+    pub naming: Naming,
+    /// The file's vertex positions (an STL vertex is named by its position).
+    pub file_positions: &'a [nalgebra::Vector3<f64>],
 }
 
 impl FileNames<'_> {
-    fn vertex(&self, v: u32) -> u32 {
-        self.source_vertex.get(v as usize).copied().unwrap_or(v + 1)
+    fn vertex(&self, v: u32) -> String {
+        let n = self.source_vertex.get(v as usize).copied().unwrap_or(v + 1);
+        match self.naming {
+            Naming::Obj => n.to_string(),
+            Naming::Ply => (n - 1).to_string(),
+            Naming::Stl => match self.file_positions.get(n as usize - 1) {
+                Some(p) => crate::error::fmt_vec3(&[p.x, p.y, p.z]),
+                None => n.to_string(),
+            },
+        }
     }
 
     fn face(&self, f: u32) -> String {
-        match self.face_line.get(f as usize) {
-            Some(l) => format!("line {l}"),
-            None => format!("face {f}"),
+        let line = self.face_line.get(f as usize).copied();
+        let index = self.face_index.get(f as usize).copied();
+        match (self.naming, line, index) {
+            (Naming::Obj, Some(l), _) => format!("line {l}"),
+            (n, Some(l), Some(i)) => n.face(l, i),
+            _ => format!("face {f}"),
         }
     }
 }

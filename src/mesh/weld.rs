@@ -6,7 +6,8 @@
 //! vertex maps to the first occurrence of its cluster.
 //!
 //! Candidates are found on a grid of cell size `tol`: a vertex is compared with the vertices
-//! of the 27 cells around its own. With `tol == 0` only bit-identical positions weld.
+//! of the 27 cells around its own. With `tol == 0` only identical positions weld (bit-identical
+//! coordinates, −0 counting as +0).
 
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -22,7 +23,8 @@ pub fn weld_map(pos: &[Vector3<f64>], used: &[bool], tol: f64) -> Vec<u32> {
         if tol > 0.0 {
             [0, 1, 2].map(|k| (p[k] / cell).floor() as i64)
         } else {
-            [0, 1, 2].map(|k| p[k].to_bits() as i64)
+            // −0 + 0 = +0: the two zeros are one position (distance 0).
+            [0, 1, 2].map(|k| (p[k] + 0.0).to_bits() as i64)
         }
     };
     let mut keyed: Vec<([i64; 3], u32)> =
@@ -89,5 +91,8 @@ mod tests {
         assert_eq!(map, vec![0, 1, 0, 0]);
         let exact = weld_map(&pos, &[true; 4], 0.0);
         assert_eq!(exact, vec![0, 1, 2, 3]);
+        // −0 and +0 are at distance 0: they weld at tolerance 0.
+        let zeros = vec![Vector3::new(0.0, -0.0, 1.0), Vector3::new(-0.0, 0.0, 1.0)];
+        assert_eq!(weld_map(&zeros, &[true; 2], 0.0), vec![0, 0]);
     }
 }

@@ -164,7 +164,7 @@ pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
     let scene = &s.scene;
     if let Some(m) = &scene.mesh {
         let path = s.input(&m.0.path);
-        let loaded = crate::mesh::load::load_obj(&path, &m.load_options(scene.units)).map_err(
+        let loaded = crate::mesh::load::load_mesh(&path, &m.load_options(scene.units)).map_err(
             |e| match e {
                 // Inside a scene the switch is a key, not the command-line flag.
                 Error::NonManifold { path, message } => Error::NonManifold {

@@ -372,6 +372,18 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     if let Some(settings) = &scene.render {
         stages.start("render");
         let normals: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
+        // Shading normals split at creases (math.md §3, "Creases"); smooth vertices keep the
+        // solver's normal.
+        let crease_angle = scene
+            .mesh
+            .as_ref()
+            .map_or(crate::geometry::normals::DEFAULT_CREASE_ANGLE_DEG, |m| m.crease_angle());
+        let corner = {
+            let m = &prepared.mesh;
+            let vf = crate::mesh::VertexFaces::new(m);
+            let fd = crate::geometry::normals::face_data(m);
+            crate::geometry::normals::corner_normals(m, &vf, &fd, &normals, crease_angle)
+        };
         let u = g.directions_of(phi);
         let mut input = RenderInput::new(
             &prepared.mesh.positions,
@@ -380,6 +392,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             &u,
             symmetry,
         );
+        input.corner_normals = Some(&corner.corners);
         input.ell = Some(ell);
         input.critical = Some(critical);
         if settings.effects.strokes.is_some() {

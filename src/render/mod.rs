@@ -60,6 +60,10 @@ pub struct RenderInput<'a> {
     pub faces: &'a [[u32; 3]],
     /// Vertex normals (need not be unit; zero falls back to the face normal).
     pub normals: &'a [Vector3<f64>],
+    /// Shading normals per face corner (one `[n0, n1, n2]` per face, in the face's vertex
+    /// order), e.g. the crease-aware [`corner_normals`](crate::geometry::normals::corner_normals);
+    /// when given they replace `normals` for shading.
+    pub corner_normals: Option<&'a [[Vector3<f64>; 3]]>,
     /// The designed grain u per vertex (3D; projected to the tangent plane per sample).
     pub u: &'a [Vector3<f64>],
     /// k = 1 or k = 2 (the grain is then interpolated as a line, paper §4.4).
@@ -93,6 +97,7 @@ impl<'a> RenderInput<'a> {
             positions,
             faces,
             normals,
+            corner_normals: None,
             u,
             symmetry,
             ell: None,
@@ -126,6 +131,17 @@ impl<'a> RenderInput<'a> {
         {
             if let Some(v) = v {
                 finite(name, v)?;
+            }
+        }
+        if let Some(cn) = self.corner_normals {
+            if cn.len() != self.faces.len() {
+                return Err(bad(
+                    "corner_normals",
+                    format!("has {} entries for {} faces", cn.len(), self.faces.len()),
+                ));
+            }
+            if let Some(f) = cn.iter().position(|c| c.iter().flatten().any(|x| !x.is_finite())) {
+                return Err(bad("corner_normals", format!("face {f} is not finite")));
             }
         }
         if let Some(f) = self.faces.iter().position(|f| f.iter().any(|&i| i as usize >= n)) {
@@ -267,7 +283,12 @@ pub(crate) fn render_with(
     }
 
     let ctx = Ctx {
-        mesh: MeshData { positions: input.positions, faces: input.faces, normals: input.normals },
+        mesh: MeshData {
+            positions: input.positions,
+            faces: input.faces,
+            normals: input.normals,
+            corner_normals: input.corner_normals,
+        },
         vis: &vis,
         eye: camera.eye,
         symmetry: input.symmetry,

@@ -11,6 +11,8 @@ pub(crate) struct MeshData<'a> {
     pub positions: &'a [Vector3<f64>],
     pub faces: &'a [[u32; 3]],
     pub normals: &'a [Vector3<f64>],
+    /// Per-corner shading normals, replacing `normals` when present.
+    pub corner_normals: Option<&'a [[Vector3<f64>; 3]]>,
 }
 
 /// The surface seen at one sample.
@@ -54,7 +56,11 @@ impl MeshData<'_> {
         // The geometric normal is needed only for its side (and as a fallback normal).
         let geo = (ps[1] - ps[0]).cross(&(ps[2] - ps[0]));
         let unit_geo = || if geo.norm() > 0.0 { geo.normalize() } else { wo };
-        let ns = self.normals[i0] * w[0] + self.normals[i1] * w[1] + self.normals[i2] * w[2];
+        let cn = match self.corner_normals {
+            Some(c) => c[face],
+            None => [self.normals[i0], self.normals[i1], self.normals[i2]],
+        };
+        let ns = cn[0] * w[0] + cn[1] * w[1] + cn[2] * w[2];
         let mut n = if ns.norm() > 1e-12 && ns.iter().all(|c| c.is_finite()) {
             ns.normalize()
         } else {

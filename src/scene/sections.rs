@@ -11,17 +11,18 @@ use crate::highlight::{InitialField, Symmetry, View};
 use crate::mesh::load::{DegeneratePolicy, LoadOptions};
 use crate::{Error, Result};
 
-/// `mesh`: an OBJ file, written as a path (`"mesh": "kettle.obj"`) or as an object with load
-/// options.
+/// `mesh`: a mesh file (OBJ, STL or PLY), written as a path (`"mesh": "kettle.obj"`) or as an
+/// object with load options.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MeshFull {
-    /// The OBJ file, relative to the scene file.
+    /// The mesh file (OBJ, STL binary or ASCII, PLY ASCII or binary), relative to the scene file.
     pub path: String,
     /// Load only the object or group with this name (default: merge all).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub object: Option<String>,
-    /// Weld vertices closer than this (file units) before anything else.
+    /// Weld vertices closer than this (file units) before anything else (an STL is welded
+    /// exactly, at 0, when this is not given).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weld: Option<f64>,
     /// Uniform scale applied after loading (default 1).
@@ -33,6 +34,11 @@ pub struct MeshFull {
     /// Refuse zero-area faces instead of dropping them (default false).
     #[serde(default)]
     pub strict_degenerate: bool,
+    /// Crease angle in degrees, in [0, 180] (default 40): the preview does not average vertex
+    /// normals across an edge whose faces' normals differ by more than this (docs/math.md §3,
+    /// "Creases"); 180 turns it off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crease_angle: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -50,7 +56,10 @@ impl<'de> Deserialize<'de> for MeshSection {
         impl<'de> serde::de::Visitor<'de> for V {
             type Value = MeshSection;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a path to an OBJ file, or an object with `path` and load options")
+                f.write_str(
+                    "a path to a mesh file (OBJ, STL, PLY), or an object with `path` and load \
+                     options",
+                )
             }
             fn visit_str<E: serde::de::Error>(
                 self,
@@ -77,7 +86,7 @@ impl schemars::JsonSchema for MeshSection {
     fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
         let full = generator.subschema_for::<MeshFull>();
         schemars::json_schema!({
-            "description": "An OBJ file: a path relative to the scene, or an object with load options.",
+            "description": "A mesh file (OBJ, STL or PLY): a path relative to the scene, or an object with load options.",
             "anyOf": [{ "type": "string" }, full]
         })
     }
@@ -98,6 +107,14 @@ impl MeshSection {
                 ));
             }
         }
+        if let Some(a) = m.crease_angle {
+            if !(a.is_finite() && (0.0..=180.0).contains(&a)) {
+                return Err(Error::setting(
+                    "crease_angle",
+                    format!("must be in [0, 180] degrees, got {}", crate::error::fmt_num(a)),
+                ));
+            }
+        }
         if !(m.scale.is_finite() && m.scale > 0.0) {
             return Err(Error::setting(
                 "scale",
@@ -105,6 +122,12 @@ impl MeshSection {
             ));
         }
         Ok(())
+    }
+
+    /// The crease angle in degrees (`crease_angle`, default
+    /// [`DEFAULT_CREASE_ANGLE_DEG`](crate::geometry::normals::DEFAULT_CREASE_ANGLE_DEG)).
+    pub fn crease_angle(&self) -> f64 {
+        self.0.crease_angle.unwrap_or(crate::geometry::normals::DEFAULT_CREASE_ANGLE_DEG)
     }
 
     /// The loader's options for this section and the scene's units.

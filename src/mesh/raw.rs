@@ -1,0 +1,205 @@
+//! A mesh as an STL or PLY reader gives it ([`RawMesh`]: file vertices, triangles, optional
+//! per-vertex UVs and normals) and its conversion into a validated [`Mesh`] with the same steps
+//! as the OBJ loader: weld, drop zero-area faces, drop unreferenced vertices, scale, check the
+//! structure — and the same [`LoadReport`].
+
+use std::path::Path;
+
+use nalgebra::{Vector2, Vector3};
+use rayon::prelude::*;
+
+use super::halfedge::HalfEdges;
+use super::load::{
+    compact_vertices, dedup_by_value, is_degenerate, DegeneratePolicy, LoadOptions, LoadReport,
+    LoadedMesh, MeshFormat,
+};
+use super::validate::{self, FileNames, Naming};
+use super::{weld, CornerAttribute, Mesh};
+use crate::limits::MAX_COORDINATE;
+use crate::{Error, Result};
+
+/// File vertices and triangles before welding and validation.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RawMesh {
+    /// Every vertex of the file, in file order (an STL has three per triangle).
+    pub positions: Vec<Vector3<f64>>,
+    /// Triangles (polygons already split into fans), indices into `positions`.
+    pub faces: Vec<[u32; 3]>,
+    /// 1-based line of each triangle's element in a text file, 0 in a binary one.
+    pub face_line: Vec<u32>,
+    /// Each triangle's element in the file's numbering (1-based STL triangle, 0-based PLY face).
+    pub face_index: Vec<u32>,
+    /// Texture coordinates per file vertex (PLY `u v`, `s t`, `texture_u texture_v`).
+    pub uv: Option<Vec<Vector2<f64>>>,
+    /// Normals per file vertex (PLY `nx ny nz`).
+    pub normals: Option<Vec<Vector3<f64>>>,
+    /// Polygons of more than three corners split into triangles.
+    pub polygons_split: usize,
+}
+
+impl RawMesh {
+    /// An empty mesh with room for `v` vertices and `f` triangles.
+    pub fn with_capacity(v: usize, f: usize) -> Self {
+        RawMesh {
+            positions: Vec::with_capacity(v),
+            faces: Vec::with_capacity(f),
+            face_line: Vec::with_capacity(f),
+            face_index: Vec::with_capacity(f),
+            ..Default::default()
+        }
+    }
+
+    /// Appends a triangle with its line and element number.
+    pub fn push_face(&mut self, f: [u32; 3], line: u32, index: u32) {
+        self.faces.push(f);
+        self.face_line.push(line);
+        self.face_index.push(index);
+    }
+}
+
+/// Why a coordinate is refused.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum ValueError {
+    /// NaN or infinite.
+    NonFinite,
+    /// |x|·scale beyond [`MAX_COORDINATE`]; holds x.
+    TooLarge(f64),
+}
+
+/// Checks a position: finite, and every |coordinate|·scale within [`MAX_COORDINATE`] (the OBJ
+/// loader's bound).
+pub(crate) fn check_position(p: &Vector3<f64>, scale: f64) -> std::result::Result<(), ValueError> {
+    if !p.iter().all(|x| x.is_finite()) {
+        return Err(ValueError::NonFinite);
+    }
+    match p.iter().find(|x| x.abs() * scale > MAX_COORDINATE) {
+        Some(&x) => Err(ValueError::TooLarge(x)),
+        None => Ok(()),
+    }
+}
+
+/// Builds the validated mesh of a [`RawMesh`]. `default_weld` is the weld used when the
+/// options give none (STL: `Some(0.0)`, the exact weld).
+pub(crate) fn build(
+    path: &Path,
+    raw: RawMesh,
+    options: &LoadOptions,
+    format: MeshFormat,
+    naming: Naming,
+    default_weld: Option<f64>,
+) -> Result<LoadedMesh> {
+    let nv = raw.positions.len();
+    let corner_v: Vec<u32> = raw.faces.iter().flatten().copied().collect();
+    let mut used = vec![false; nv];
+    for &v in &corner_v {
+        used[v as usize] = true;
+    }
+    let rep = match options.weld.or(default_weld) {
+        Some(tol) => weld::weld_map(&raw.positions, &used, tol),
+        None => (0..nv as u32).collect(),
+    };
+    let flags: Vec<bool> = raw
+        .faces
+        .par_iter()
+        .map(|f| is_degenerate(f.map(|v| rep[v as usize]), &raw.positions))
+        .collect();
+    let tris: Vec<u32> = (0..raw.faces.len() as u32).filter(|&t| !flags[t as usize]).collect();
+    let dropped = raw.faces.len() - tris.len();
+    let face_name = |t: usize| naming.face(raw.face_line[t], raw.face_index[t]);
+    if dropped > 0 && options.degenerate == DegeneratePolicy::Error {
+        let bad: Vec<usize> = (0..raw.faces.len()).filter(|&t| flags[t]).collect();
+        let names: Vec<String> = bad.iter().take(5).map(|&t| face_name(t)).collect();
+        return Err(Error::DegenerateFaces {
+            path: path.to_owned(),
+            message: format!("{} zero-area face(s), at {}", bad.len(), names.join(", ")),
+        });
+    }
+    if tris.is_empty() {
+        let message = if dropped > 0 {
+            format!("no faces left: all {dropped} faces have zero area")
+        } else {
+            "no faces: empty mesh".to_string()
+        };
+        return Err(Error::EmptyMesh { path: path.to_owned(), message });
+    }
+    let (new_id, source) = compact_vertices(nv, &tris, &corner_v, &rep);
+    let welded = (0..nv).filter(|&i| used[i] && rep[i] as usize != i).count();
+    let mut report = LoadReport {
+        format,
+        file_vertices: nv,
+        welded_vertices: welded,
+        unreferenced_vertices: nv - source.len() - welded,
+        dropped_degenerate_faces: dropped,
+        file_triangles: raw.faces.len(),
+        polygons_split: raw.polygons_split,
+        ..Default::default()
+    };
+    let scale = options.scale;
+    let mut mesh = Mesh {
+        positions: source.iter().map(|&i| raw.positions[i as usize] * scale).collect(),
+        faces: tris
+            .iter()
+            .map(|&t| raw.faces[t as usize].map(|v| new_id[rep[v as usize] as usize]))
+            .collect(),
+        units: options.units,
+        ..Default::default()
+    };
+    report.face_line = tris.iter().map(|&t| raw.face_line[t as usize]).collect();
+    report.face_index = tris.iter().map(|&t| raw.face_index[t as usize]).collect();
+    report.source_vertex = source.iter().map(|&i| i + 1).collect();
+    if let Some(uv) = &raw.uv {
+        let canon = dedup_by_value(uv);
+        mesh.uv = Some(corner_attribute(&raw.faces, &tris, uv, Some(&canon)));
+    }
+    if let Some(n) = &raw.normals {
+        mesh.normals = Some(corner_attribute(&raw.faces, &tris, n, None));
+    }
+    let he = HalfEdges::new(mesh.num_vertices(), &mesh.faces)?;
+    let problems = validate::find_problems(&he);
+    report.nonmanifold_edges = problems.nonmanifold_edges.len();
+    report.nonmanifold_vertices = problems.nonmanifold_vertices.len();
+    report.inconsistent_orientation_edges = problems.inconsistent_edges.len();
+    let names = FileNames {
+        source_vertex: &report.source_vertex,
+        face_line: &report.face_line,
+        face_index: &report.face_index,
+        naming,
+        file_positions: &raw.positions,
+    };
+    validate::check(
+        path,
+        &he,
+        &problems,
+        &names,
+        options.allow_nonmanifold,
+        options.allow_inconsistent_orientation,
+    )?;
+    Ok(LoadedMesh { mesh, report })
+}
+
+/// A per-corner attribute from per-file-vertex values: the used values (after `canon`)
+/// compacted in file order.
+fn corner_attribute<T: Copy>(
+    faces: &[[u32; 3]],
+    tris: &[u32],
+    vals: &[T],
+    canon: Option<&[u32]>,
+) -> CornerAttribute<T> {
+    const NONE: u32 = u32::MAX;
+    let c = |i: u32| canon.map_or(i, |m| m[i as usize]);
+    let mut new_id = vec![NONE; vals.len()];
+    for &t in tris {
+        for v in faces[t as usize] {
+            new_id[c(v) as usize] = 0;
+        }
+    }
+    let mut values = Vec::new();
+    for (i, id) in new_id.iter_mut().enumerate() {
+        if *id == 0 {
+            *id = values.len() as u32;
+            values.push(vals[i]);
+        }
+    }
+    let corners = tris.iter().map(|&t| faces[t as usize].map(|v| new_id[c(v) as usize])).collect();
+    CornerAttribute { values, corners }
+}
