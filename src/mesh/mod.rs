@@ -13,7 +13,7 @@ pub mod report;
 mod scan;
 mod scan_parallel;
 pub mod topology;
-mod union_find;
+pub(crate) mod union_find;
 pub mod uv_charts;
 pub(crate) mod validate;
 pub mod vertex_faces;
