@@ -21,7 +21,8 @@ use super::linsys::Spd;
 use super::lscm::{half_cotangents, local_frame, push_laplacian};
 use crate::{Error, Result};
 
-/// The ARAP energy (Eq. A1) of `uv` with the best rotations, and the rotations.
+/// The rotations closest to each triangle's map (local step, Eq. A2).
+#[allow(clippy::needless_range_loop)] // k indexes the corners, the frames and the weights
 fn local_step(
     chart: &ChartMesh,
     frames: &[[Vector2<f64>; 3]],
@@ -48,6 +49,7 @@ fn local_step(
 }
 
 /// The ARAP energy of `uv` with rotations `r` (Eq. A1).
+#[allow(clippy::needless_range_loop)] // k indexes the corners, the frames and the weights
 fn energy(
     chart: &ChartMesh,
     frames: &[[Vector2<f64>; 3]],

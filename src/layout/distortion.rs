@@ -73,7 +73,7 @@ impl Stat {
         let total: f64 = pairs.iter().map(|p| p.1).sum();
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
         let max = pairs.last().map_or(0.0, |p| p.0);
-        if !(total > 0.0) {
+        if total <= 0.0 || total.is_nan() {
             return Stat { mean: max, p95: max, max };
         }
         let mean = pairs.iter().map(|p| p.0 * p.1).sum::<f64>() / total;
@@ -149,7 +149,8 @@ pub(crate) fn invalid(chart: &ChartMesh, uv: &[Vector2<f64>]) -> Option<&'static
     let mut angle_sum = vec![0.0f64; n];
     for t in &chart.tris {
         let u = t.map(|v| uv[v as usize]);
-        if !(signed_area(u) > 0.0) {
+        let a = signed_area(u);
+        if a <= 0.0 || a.is_nan() {
             return Some("a triangle is flipped or degenerate");
         }
         for k in 0..3 {

@@ -31,7 +31,7 @@ pub(crate) fn local_frame(p: [Vector3<f64>; 3]) -> [Vector2<f64>; 3] {
     let e1 = p[1] - p[0];
     let e2 = p[2] - p[0];
     let l = e1.norm();
-    if !(l > 0.0) {
+    if l <= 0.0 || l.is_nan() {
         return [Vector2::zeros(), Vector2::zeros(), Vector2::new(0.0, e2.norm())];
     }
     let x = e2.dot(&e1) / l;

@@ -366,7 +366,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
             corners[f as usize] = t.map(|v| v + offset);
             face_chart[f as usize] = k as u32;
             let (s1, s2, det) = m.sigma[i];
-            flipped += !(det > 0.0) as usize;
+            flipped += (det <= 0.0 || det.is_nan()) as usize;
             let a = s1 * s2;
             area_d.push(a.max(1.0 / a));
             angle_d.push(s1 / s2);
