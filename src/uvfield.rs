@@ -153,7 +153,8 @@ pub fn field_mesh(
     let uv = mesh.uv.as_ref().ok_or_else(|| {
         Error::setting(
             "toolpaths",
-            "the mesh has no UV coordinates (OBJ `vt`); toolpaths need a UV layout",
+            "the mesh has no UV coordinates (OBJ `vt`); toolpaths need a UV layout \
+             (`layout::flatten` or `grainline flatten` makes one)",
         )
     })?;
     let nv = mesh.num_vertices();
