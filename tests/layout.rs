@@ -349,43 +349,53 @@ fn check_gcode(shared: &std::path::Path, name: &str, ngc: &std::path::Path) {
 /// paper-crumpled2 the placement reaches about 0.90 today).
 const COVERAGE_FLOOR: f64 = 0.85;
 
+/// Runs `grainline run` on a corpus mesh scaled to about 100 mm across with a 3 mm brush, the
+/// smoothest line field, `cross_seams` on and `toolpaths.layout.mode` = `mode`; returns the
+/// run report (the program is `dir/part.ngc`).
+fn run_corpus(
+    shared: &std::path::Path,
+    dir: &std::path::Path,
+    name: &str,
+    mode: &str,
+) -> serde_json::Value {
+    let mesh = load_corpus(shared, name);
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    let scale = 100.0 / (hi - lo).norm();
+    let weld =
+        if name == "teapot.obj" { r#", "weld": 1e-6, "allow_nonmanifold": true"# } else { "" };
+    let scene = format!(
+        r#"{{"mesh": {{"path": "{}", "scale": {scale}{weld}}},
+           "view": {{"eye": [0, -300, 0]}},
+           "lights": [{{"type": "directional", "direction": [0.3, -0.5, 1]}}],
+           "field": {{"init": "smooth", "symmetry": "line"}},
+           "toolpaths": {{"gcode": "part.ngc", "coverage": {{}},
+             "layout": {{"mode": "{mode}"}},
+             "placement": {{"width": 3, "trace": {{"cross_seams": true}}}},
+             "gcode_options": {{"safe_z": 200}}}}}}"#,
+        shared.join("meshes").join(name).display()
+    );
+    let scene_path = dir.join("scene.json");
+    std::fs::write(&scene_path, scene).unwrap();
+    let report_path = dir.join("report.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(&scene_path)
+        .arg("--report")
+        .arg(&report_path)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap()
+}
+
 #[test]
 fn every_corpus_mesh_without_uvs_gets_strokes_and_gcode() {
     let Some(shared) = shared() else { return };
     let dir = std::env::temp_dir().join(format!("grainline-layout-run-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     for name in CORPUS {
-        let mesh = load_corpus(&shared, name);
-        let (lo, hi) = mesh.bounding_box().unwrap();
-        // About 100 mm across, a 3 mm brush: cheap, and meaningful.
-        let scale = 100.0 / (hi - lo).norm();
-        let weld =
-            if name == "teapot.obj" { r#", "weld": 1e-6, "allow_nonmanifold": true"# } else { "" };
         // Parts that have UVs are given a layout anyway (`mode: always`).
-        let scene = format!(
-            r#"{{"mesh": {{"path": "{}", "scale": {scale}{weld}}},
-               "view": {{"eye": [0, -300, 0]}},
-               "lights": [{{"type": "directional", "direction": [0.3, -0.5, 1]}}],
-               "field": {{"init": "smooth", "symmetry": "line"}},
-               "toolpaths": {{"gcode": "part.ngc", "coverage": {{}},
-                 "layout": {{"mode": "always"}},
-                 "placement": {{"width": 3, "trace": {{"cross_seams": true}}}},
-                 "gcode_options": {{"safe_z": 200}}}}}}"#,
-            shared.join("meshes").join(name).display()
-        );
-        let scene_path = dir.join("scene.json");
-        std::fs::write(&scene_path, scene).unwrap();
-        let report_path = dir.join("report.json");
-        let o = Command::new(env!("CARGO_BIN_EXE_grainline"))
-            .args(["--quiet", "run"])
-            .arg(&scene_path)
-            .arg("--report")
-            .arg(&report_path)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        let r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(&report_path).unwrap()).unwrap();
+        let r = run_corpus(&shared, &dir, name, "always");
         let stages: Vec<&str> =
             r["stages"].as_array().unwrap().iter().map(|s| s["stage"].as_str().unwrap()).collect();
         assert_eq!(&stages[..3], ["load", "layout", "field"], "{name}");
@@ -395,6 +405,29 @@ fn every_corpus_mesh_without_uvs_gets_strokes_and_gcode() {
         eprintln!("{name}: coverage {cov:.3}, {} charts", r["layout"]["charts"]);
         assert!(cov >= COVERAGE_FLOOR, "{name}: coverage {cov}");
         check_gcode(&shared, name, &dir.join("part.ngc"));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn generated_layouts_cover_as_well_as_the_meshes_own_uvs() {
+    // spot and blub come with artists' UVs (spot's with a mirrored chart); the same scene on
+    // the layout made for them must cover the part at least as well.
+    let Some(shared) = shared() else { return };
+    let dir = std::env::temp_dir().join(format!("grainline-layout-own-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in ["spot_triangulated.obj", "blub_quadrangulated.obj"] {
+        let cov =
+            |r: &serde_json::Value| r["toolpaths"]["job"]["coverage"]["fraction"].as_f64().unwrap();
+        let own = run_corpus(&shared, &dir, name, "auto");
+        assert!(own["layout"].is_null(), "{name}: its own UVs are used");
+        let made = run_corpus(&shared, &dir, name, "always");
+        assert!(
+            cov(&made) >= cov(&own),
+            "{name}: {} on the layout, {} on its own UVs",
+            cov(&made),
+            cov(&own)
+        );
     }
     std::fs::remove_dir_all(&dir).ok();
 }
