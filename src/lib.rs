@@ -41,6 +41,7 @@ pub mod field;
 pub mod generate;
 pub mod geometry;
 pub mod highlight;
+pub mod layout;
 pub mod limits;
 pub mod mesh;
 pub mod output;

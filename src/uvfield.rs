@@ -153,7 +153,8 @@ pub fn field_mesh(
     let uv = mesh.uv.as_ref().ok_or_else(|| {
         Error::setting(
             "toolpaths",
-            "the mesh has no UV coordinates (OBJ `vt`); toolpaths need a UV layout",
+            "the mesh has no UV coordinates (OBJ `vt`); toolpaths need a UV layout \
+             (`layout::flatten` or `grainline flatten` makes one)",
         )
     })?;
     let nv = mesh.num_vertices();
@@ -593,6 +594,9 @@ pub struct ToolpathSection {
     pub strokes_json: Option<String>,
     /// From the grain field to the UV field mesh (defaults: see [`UvFieldOptions`]).
     pub uv_field: UvFieldOptions,
+    /// The UV layout made for a part without one (defaults: see
+    /// [`LayoutOptions`](crate::layout::LayoutOptions)).
+    pub layout: crate::layout::LayoutOptions,
     /// Even-spacing placement (brush width, overlap, …). Lengths in scene units on the part.
     pub placement: PlacementOptions,
     /// Orientation, ordering, leads, Z.
@@ -691,6 +695,10 @@ impl ToolpathSection {
         }
         self.uv_field.validate().map_err(|e| match e {
             Error::Setting { key, message } => Error::setting(format!("uv_field.{key}"), message),
+            e => e,
+        })?;
+        self.layout.validate().map_err(|e| match e {
+            Error::Setting { key, message } => Error::setting(format!("layout.{key}"), message),
             e => e,
         })?;
         let mut all = self.job_options(units);

@@ -1,6 +1,7 @@
 //! Command-line definitions and dispatch. No algorithm lives here.
 
 mod field;
+mod flatten;
 mod inspect;
 mod mesh_args;
 mod optimize;
@@ -48,6 +49,8 @@ enum Command {
     Schema(schema::SchemaArgs),
     /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
     Panel(panel::PanelArgs),
+    /// A UV layout (charts, seams, LSCM / ARAP) for a part without one, written as OBJ with vt.
+    Flatten(flatten::FlattenArgs),
 }
 
 /// Runs the parsed command.
@@ -61,6 +64,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Run(a) => run::run(a, cli.quiet),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
         Command::Panel(a) => panel::run(a, cli.quiet),
+        Command::Flatten(a) => flatten::run(a, cli.quiet),
     }
 }
 

@@ -16,7 +16,7 @@ mod scan;
 mod scan_parallel;
 mod stl;
 pub mod topology;
-mod union_find;
+pub(crate) mod union_find;
 pub mod uv_charts;
 pub(crate) mod validate;
 pub mod vertex_faces;

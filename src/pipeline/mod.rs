@@ -15,7 +15,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 
 use crate::field::{compute_field, read_directions, FieldOptions, FieldResult};
-use crate::highlight::{InitialField, Lighting};
+use crate::highlight::Lighting;
 use crate::mesh::Mesh;
 use crate::scene::{InitKind, LoadedScene};
 use crate::{Error, Result};
@@ -86,6 +86,8 @@ pub struct Prepared {
     pub field_options: FieldOptions,
     /// Geometry, φ, h, ℓ, critical points.
     pub field: FieldResult,
+    /// The UV layout made for the part ([`prepare_with`] with `layout: true`), if one was.
+    pub layout: Option<crate::layout::LayoutReport>,
 }
 
 /// The highlight model's key light as the scene gives it.
@@ -129,6 +131,12 @@ pub fn key_light(scene: &crate::scene::Scene) -> Result<KeyLight> {
 
 /// Loads the part and computes the geometry, the initial field and its highlights.
 pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
+    prepare_with(s, stages, false)
+}
+
+/// [`prepare`], and when `layout` is true (the toolpaths need UVs) the part's UV layout is
+/// checked, or made, right after loading and before any long stage ([`ensure_layout`]).
+pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<Prepared> {
     let scene = &s.scene;
     let key = key_light(scene).map_err(|e| s.wrap(e))?;
     if let KeyLight::Directional(d) = key {
@@ -136,8 +144,21 @@ pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
         Lighting::new(d, scene.view.view())?;
     }
     stages.start("load");
-    let (mesh, mesh_name) = load_part(s)?;
+    let (mut mesh, mesh_name) = load_part(s)?;
     let lighting = key.lighting(scene.view.view(), &mesh)?;
+    // `field.init: "uv"` reads the part's own UVs, never a layout made for the toolpaths.
+    if matches!(scene.field.init, InitKind::Uv) && mesh.uv.is_none() {
+        return Err(s.wrap(Error::setting(
+            "field.init",
+            format!("\"uv\" needs UVs, and {mesh_name} has none"),
+        )));
+    }
+    let layout_report = if layout {
+        let options = scene.toolpaths.as_ref().map(|t| t.layout.clone()).unwrap_or_default();
+        ensure_layout(&mut mesh, &mesh_name, &options, stages)?
+    } else {
+        None
+    };
     stages.start("field");
     let directions = match (&scene.field.init, &scene.field.directions) {
         (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),
@@ -145,18 +166,68 @@ pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
     };
     let mut field_options = FieldOptions::new(lighting);
     field_options.init = scene.field.initial_field(directions);
-    if matches!(field_options.init, InitialField::Uv) && mesh.uv.is_none() {
-        return Err(s.wrap(Error::setting(
-            "field.init",
-            format!("\"uv\" needs UVs, and {mesh_name} has none"),
-        )));
-    }
     field_options.symmetry = scene.field.symmetry.symmetry();
     field_options.gradient_form = scene.field.gradient_form;
     field_options.geometry.normals = scene.field.normals;
     field_options.critical_threshold = scene.field.critical_threshold;
     let field = compute_field(&mesh, &field_options)?;
-    Ok(Prepared { mesh, mesh_name, field_options, field })
+    Ok(Prepared { mesh, mesh_name, field_options, field, layout: layout_report })
+}
+
+/// Makes sure `mesh` has a UV layout the toolpaths can use, as `options.mode` says: `auto`
+/// makes one when the part has no UVs, `always` replaces them, `never` refuses a part without
+/// UVs. A part whose UVs are all degenerate is refused (unless `always`). Called right after
+/// loading, so a part that cannot get a layout is refused before the field, the solve or the
+/// preview run (issue 14, item 7). Returns the layout's report when one was made.
+pub fn ensure_layout(
+    mesh: &mut Mesh,
+    mesh_name: &str,
+    options: &crate::layout::LayoutOptions,
+    stages: &mut Stages,
+) -> Result<Option<crate::layout::LayoutReport>> {
+    use crate::layout::LayoutMode;
+    let key = |e: Error| crate::scene::prefix("toolpaths.layout", e);
+    options.validate().map_err(key)?;
+    match (options.mode, &mesh.uv) {
+        (LayoutMode::Never, None) => {
+            return Err(Error::setting(
+                "toolpaths",
+                format!(
+                    "{mesh_name} has no UV coordinates (OBJ `vt`); toolpaths need a UV layout: \
+                     remove `toolpaths.layout.mode: \"never\"` to have one made, or make one \
+                     with `grainline flatten`"
+                ),
+            ));
+        }
+        (LayoutMode::Auto | LayoutMode::Never, Some(uv)) => {
+            let any_area = (0..uv.corners.len()).any(|f| {
+                let [a, b, c] = uv.face(f);
+                (b - a).perp(&(c - a)) != 0.0
+            });
+            if !any_area {
+                return Err(Error::setting(
+                    "toolpaths",
+                    format!(
+                        "every face of {mesh_name} has zero area in UV: toolpaths need a UV \
+                         layout; `toolpaths.layout.mode: \"always\"` replaces it with one made \
+                         for the part"
+                    ),
+                ));
+            }
+            return Ok(None);
+        }
+        _ => {}
+    }
+    stages.start("layout");
+    let layout = crate::layout::flatten(mesh, options).map_err(|e| match e {
+        Error::Numerical { stage, message } => Error::Numerical {
+            stage,
+            message: format!("{message} (making a UV layout for {mesh_name})"),
+        },
+        e => e,
+    })?;
+    mesh.uv = Some(layout.uv);
+    Ok(Some(layout.report))
 }
 
 /// Loads the scene's mesh (or meshes its outline).

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 
 use super::optimize::{optimize_stage, optimized_field_file, OptimizeStageReport};
-use super::{output_path, prepare, Observer, StageTime, Stages};
+use super::{output_path, prepare_with, Observer, StageTime, Stages};
 use crate::highlight::highlight_field_near;
 use crate::output::{json_compact, json_pretty, OutputPlan, Staged};
 use crate::render::{render, Camera, EditOverlay, RenderInput, RenderReport};
@@ -116,6 +116,9 @@ pub struct RunReport {
     pub faces: usize,
     /// Critical points (hᵀn above the threshold) of the final field.
     pub critical_points: usize,
+    /// The UV layout made for a part without one (charts, seams, distortion); absent when
+    /// the part's own UVs were used or no toolpaths were traced.
+    pub layout: Option<crate::layout::LayoutReport>,
     /// Edits and the solve (iterations, energies, constraint violations, singularities).
     pub optimize: Option<OptimizeStageReport>,
     /// Strokes, coverage, lengths.
@@ -240,7 +243,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     output_plan(s, options).check()?;
     let mut stages = Stages::new(observer);
     let mut staged = Staged::new();
-    let prepared = prepare(s, &mut stages)?;
+    // The layout is checked (or made) right after loading: a part that cannot get one is
+    // refused before the field, the solve or the preview run.
+    let prepared = prepare_with(s, &mut stages, plan.trace)?;
     let g = &prepared.field.geometry;
     let symmetry = prepared.field_options.symmetry;
     if plan.trace && prepared.mesh.uv.is_none() {
@@ -495,6 +500,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         vertices: prepared.mesh.num_vertices(),
         faces: prepared.mesh.num_faces(),
         critical_points: critical.iter().filter(|&&c| c).count(),
+        layout: prepared.layout.clone(),
         optimize: optimized.map(|o| o.report),
         toolpaths,
         as_brushed: as_brushed_figures,

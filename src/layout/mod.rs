@@ -1,0 +1,422 @@
+//! Automatic UV layouts for parts that arrive without one.
+//!
+//! [`flatten`] cuts a mesh into charts and flattens each one (math.md, "Flattening"):
+//!
+//! 1. Every edge-connected piece of the mesh is tried as one chart. A chart must be a disk
+//!    ([`charts`]); it is flattened by LSCM ([`lscm`], conformal) and, with
+//!    [`Method::Arap`], refined by ARAP ([`arap`], local/global, started from LSCM). It is
+//!    kept when the flattening is valid (no flipped triangle, no boundary crossing,
+//!    [`distortion`]) and the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most
+//!    [`LayoutOptions::max_stretch`]. A developable or nearly developable sheet therefore stays
+//!    one chart, flattened with little distortion.
+//! 2. A piece that is not kept is cut: along its sharp creases first, then by region growing
+//!    on normal cones, then by bisection ([`charts`]); each piece is tried again. Single
+//!    triangles flatten exactly, so every mesh gets a layout.
+//! 3. The charts are scaled to their surface area, packed into [0, 1]² at one common scale
+//!    ([`pack`]) and reported: charts, seams, area and angle distortion, edge-length error.
+//!
+//! The result is deterministic: no step depends on the thread count.
+
+pub mod arap;
+pub mod charts;
+pub mod distortion;
+mod linsys;
+pub mod lscm;
+pub mod pack;
+
+use std::collections::VecDeque;
+use std::time::Instant;
+
+use nalgebra::{Vector2, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::fmt_num;
+use crate::mesh::halfedge::HalfEdges;
+use crate::mesh::{CornerAttribute, Mesh};
+use crate::{Error, Result};
+use charts::ChartMesh;
+use distortion::{area_scale, invalid, FaceMeasures, Stat};
+
+/// How each chart is flattened.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Least-squares conformal maps (angles kept; areas may vary across a curved chart).
+    Lscm,
+    /// As-rigid-as-possible, started from LSCM (lengths kept as well as the surface allows).
+    #[default]
+    Arap,
+}
+
+impl Method {
+    /// The method's name as written in scenes and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Method::Lscm => "lscm",
+            Method::Arap => "arap",
+        }
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "lscm" => Ok(Method::Lscm),
+            "arap" => Ok(Method::Arap),
+            _ => Err(Error::invalid_arg(
+                "method",
+                format!("unknown method {s:?}; expected lscm or arap"),
+            )),
+        }
+    }
+}
+
+/// When the pipeline makes a layout (used by `grainline run` / `trace`; [`flatten`] ignores
+/// it).
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum LayoutMode {
+    /// Make a layout when the part has no UVs and toolpaths need them (the default).
+    #[default]
+    Auto,
+    /// Always make one, replacing the part's own UVs for the toolpaths.
+    Always,
+    /// Never: a part without UVs is refused (before any long stage runs).
+    Never,
+}
+
+/// Options of [`flatten`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct LayoutOptions {
+    /// When the pipeline makes a layout (`auto`, `always`, `never`). Default `auto`.
+    pub mode: LayoutMode,
+    /// `arap` (default) or `lscm`.
+    pub method: Method,
+    /// Edges whose dihedral angle exceeds this (degrees) are the first seams tried. In
+    /// (0, 180]. Default 40.
+    pub crease_angle_deg: f64,
+    /// Half-angle (degrees) of the normal cones grown into charts. In (0, 90]. Default 60.
+    pub cone_angle_deg: f64,
+    /// A chart is kept when the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most this.
+    /// At least 1. Default 2.
+    pub max_stretch: f64,
+    /// Largest number of ARAP local/global iterations per chart. At most 1000. Default 20.
+    pub arap_iterations: usize,
+    /// Gap between packed charts, as a fraction of the square root of the layout's area. In
+    /// [0, 0.5]. Default 0.01.
+    pub gap: f64,
+}
+
+impl Default for LayoutOptions {
+    fn default() -> Self {
+        LayoutOptions {
+            mode: LayoutMode::Auto,
+            method: Method::Arap,
+            crease_angle_deg: 40.0,
+            cone_angle_deg: 60.0,
+            max_stretch: 2.0,
+            arap_iterations: 20,
+            gap: 0.01,
+        }
+    }
+}
+
+impl LayoutOptions {
+    /// Range-checks every setting; keys are relative to this section.
+    pub fn validate(&self) -> Result<()> {
+        let range = |key: &str, v: f64, ok: bool, what: &str| {
+            if v.is_finite() && ok {
+                Ok(())
+            } else {
+                Err(Error::setting(key, format!("must be {what}, got {}", fmt_num(v))))
+            }
+        };
+        let c = self.crease_angle_deg;
+        range("crease_angle_deg", c, c > 0.0 && c <= 180.0, "in (0, 180]")?;
+        let k = self.cone_angle_deg;
+        range("cone_angle_deg", k, k > 0.0 && k <= 90.0, "in (0, 90]")?;
+        range("max_stretch", self.max_stretch, self.max_stretch >= 1.0, "at least 1")?;
+        range("gap", self.gap, (0.0..=0.5).contains(&self.gap), "in [0, 0.5]")?;
+        if self.arap_iterations > 1000 {
+            return Err(Error::setting(
+                "arap_iterations",
+                format!("must be at most 1000, got {}", self.arap_iterations),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// How many pieces each kind of cut made.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct Cuts {
+    /// Regions cut along sharp creases.
+    pub creases: usize,
+    /// Regions cut by normal-cone growing.
+    pub cones: usize,
+    /// Regions bisected.
+    pub bisections: usize,
+}
+
+/// What [`flatten`] made, and its distortion.
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct LayoutReport {
+    /// The method asked for.
+    pub method: Method,
+    /// Charts in the layout.
+    pub charts: usize,
+    /// Faces of the largest chart.
+    pub largest_chart_faces: usize,
+    /// Seam edges (mesh edges between two charts).
+    pub seam_edges: usize,
+    /// Total length of the seams on the part, scene units.
+    pub seam_length: f64,
+    /// max(σ₁σ₂, 1/(σ₁σ₂)) per face, area-weighted (1: areas kept).
+    pub area_distortion: Stat,
+    /// σ₁/σ₂ per face, area-weighted (1: angles kept).
+    pub angle_distortion: Stat,
+    /// Mean |UV angle − 3D angle| of each face's corners, degrees, area-weighted.
+    pub angle_error_deg: Stat,
+    /// |s·ℓ_uv − ℓ| / ℓ over every edge of every face, length-weighted (s = `uv_scale`).
+    pub edge_length_error: Stat,
+    /// UV triangles with signed area ≤ 0 (always 0: such charts are cut).
+    pub flipped_faces: usize,
+    /// Charts whose ARAP result was not valid, so their LSCM flattening was kept.
+    pub arap_fallbacks: usize,
+    /// ARAP local/global iterations over all charts.
+    pub arap_iterations: usize,
+    /// Cuts made.
+    pub cuts: Cuts,
+    /// UV × this ≈ scene units on the part (the layout's one scale).
+    pub uv_scale: f64,
+    /// Wall seconds.
+    pub seconds: f64,
+}
+
+/// A layout: per-corner UVs in [0, 1]², the chart of each face and the report.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    /// The UVs (one value per chart vertex).
+    pub uv: CornerAttribute<Vector2<f64>>,
+    /// The chart of each face.
+    pub face_chart: Vec<u32>,
+    /// Charts, seams and distortion.
+    pub report: LayoutReport,
+}
+
+/// One region waiting to be flattened, with the next cut to try on it.
+struct Region {
+    faces: Vec<u32>,
+    next_cut: u8,
+}
+
+/// Flattens one disk chart; `None` when the result is not valid or too stretched.
+fn flatten_chart(
+    chart: &ChartMesh,
+    pos: &[Vector3<f64>],
+    options: &LayoutOptions,
+    fallbacks: &mut usize,
+    iterations: &mut usize,
+) -> Option<Vec<Vector2<f64>>> {
+    let mut uv = lscm::lscm(chart, pos).ok()?;
+    let s = area_scale(chart, pos, &uv);
+    uv.iter_mut().for_each(|p| *p *= s);
+    let single = chart.tris.len() == 1;
+    if single {
+        return Some(uv);
+    }
+    let uv = match options.method {
+        Method::Lscm => invalid(chart, &uv).is_none().then_some(uv)?,
+        Method::Arap => match arap::arap(chart, pos, &uv, options.arap_iterations) {
+            Ok(run) if invalid(chart, &run.uv).is_none() => {
+                *iterations += run.iterations;
+                run.uv
+            }
+            _ => {
+                invalid(chart, &uv).is_none().then_some(())?;
+                *fallbacks += 1;
+                uv
+            }
+        },
+    };
+    let s = area_scale(chart, pos, &uv);
+    let m = FaceMeasures::new(chart, pos, &uv, s);
+    let stretch = Stat::of(&m.stretch(), &m.area, 1e12);
+    (stretch.p95 <= options.max_stretch).then_some(uv)
+}
+
+/// Makes a UV layout for `mesh` (see the module documentation).
+///
+/// ```
+/// use grainline::layout::{flatten, LayoutOptions};
+/// // An open cylinder is an annulus, not a disk: it is cut into charts, and as it is
+/// // developable, each chart is flattened without changing any length.
+/// let mut tube = grainline::generate::cylinder(30.0, 80.0, 32, 8);
+/// tube.uv = None;
+/// let layout = flatten(&tube, &LayoutOptions::default())?;
+/// assert!(layout.report.charts > 1);
+/// assert!(layout.report.edge_length_error.max < 1e-9);
+/// assert_eq!(layout.report.flipped_faces, 0);
+/// # Ok::<(), grainline::Error>(())
+/// ```
+pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
+    let start = Instant::now();
+    options.validate()?;
+    let nf = mesh.num_faces();
+    if nf == 0 {
+        return Err(Error::EmptyMesh {
+            path: "layout".into(),
+            message: "no faces to flatten".into(),
+        });
+    }
+    let he = HalfEdges::new(mesh.num_vertices(), &mesh.faces)?;
+    let normals = charts::face_normals(mesh);
+    let crease_cos = options.crease_angle_deg.to_radians().cos();
+    let cone_cos = options.cone_angle_deg.to_radians().cos();
+    let mut tag = vec![u32::MAX; nf];
+    let mut pos_in = vec![0u32; nf];
+    let mut next_id = 0u32;
+    let mut cuts = Cuts::default();
+    let (mut fallbacks, mut iterations) = (0usize, 0usize);
+
+    // The mesh's edge-connected pieces.
+    let all: Vec<u32> = (0..nf as u32).collect();
+    tag.iter_mut().for_each(|t| *t = 0);
+    next_id += 1;
+    let mut queue: VecDeque<Region> = charts::pieces(&all, &he, &tag, 0, |_| true)
+        .into_iter()
+        .map(|faces| Region { faces, next_cut: 0 })
+        .collect();
+    let mut accepted: Vec<(ChartMesh, Vec<Vector2<f64>>)> = Vec::new();
+    while let Some(region) = queue.pop_front() {
+        let id = next_id;
+        next_id += 1;
+        for (i, &f) in region.faces.iter().enumerate() {
+            tag[f as usize] = id;
+            pos_in[f as usize] = i as u32;
+        }
+        let chart = ChartMesh::new(&region.faces, &he, mesh, &tag, &pos_in, id);
+        if chart.is_disk() || chart.tris.len() == 1 {
+            let pos = chart.positions(mesh);
+            if let Some(uv) = flatten_chart(&chart, &pos, options, &mut fallbacks, &mut iterations)
+            {
+                accepted.push((chart, uv));
+                continue;
+            }
+        }
+        if region.faces.len() == 1 {
+            return Err(Error::Numerical {
+                stage: "layout",
+                message: format!("face {} cannot be flattened", region.faces[0]),
+            });
+        }
+        // Cut: creases, then normal cones, then bisection (each only when it splits).
+        let mut cut = region.next_cut;
+        let mut pieces = Vec::new();
+        if cut == 0 {
+            pieces = charts::pieces(&region.faces, &he, &tag, id, |h| {
+                let (f, g) = (h / 3, he.twin(h).map_or(h / 3, |t| t / 3));
+                normals[f as usize].dot(&normals[g as usize]) >= crease_cos
+            });
+            cut = 1;
+            if pieces.len() > 1 {
+                cuts.creases += 1;
+            }
+        }
+        if pieces.len() <= 1 && cut == 1 {
+            pieces = charts::cone_pieces(&region.faces, &he, &normals, &tag, id, cone_cos);
+            cut = 2;
+            if pieces.len() > 1 {
+                cuts.cones += 1;
+            }
+        }
+        if pieces.len() <= 1 {
+            pieces = charts::bisect(&region.faces, &he, &tag, id);
+            cut = 2;
+            cuts.bisections += 1;
+        }
+        queue.extend(pieces.into_iter().map(|faces| Region { faces, next_cut: cut }));
+    }
+
+    // Pack at one scale, then measure.
+    let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
+    let factor = pack::pack(&mut uvs, options.gap);
+    let uv_scale = 1.0 / factor;
+    let mut values = Vec::new();
+    let mut corners = vec![[0u32; 3]; nf];
+    let mut face_chart = vec![0u32; nf];
+    let (mut area_d, mut angle_d, mut angle_e, mut weights) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut edge_e, mut edge_w) = (Vec::new(), Vec::new());
+    let mut flipped = 0;
+    let mut largest = 0;
+    for (k, ((chart, _), uv)) in accepted.iter().zip(&uvs).enumerate() {
+        let offset = values.len() as u32;
+        values.extend_from_slice(uv);
+        largest = largest.max(chart.faces.len());
+        let pos = chart.positions(mesh);
+        let m = FaceMeasures::new(chart, &pos, uv, uv_scale);
+        for (i, (&f, t)) in chart.faces.iter().zip(&chart.tris).enumerate() {
+            corners[f as usize] = t.map(|v| v + offset);
+            face_chart[f as usize] = k as u32;
+            let (s1, s2, det) = m.sigma[i];
+            flipped += (det <= 0.0 || det.is_nan()) as usize;
+            let a = s1 * s2;
+            area_d.push(a.max(1.0 / a));
+            angle_d.push(s1 / s2);
+            weights.push(m.area[i]);
+            let p = t.map(|v| pos[v as usize]);
+            let q = t.map(|v| uv[v as usize] * uv_scale);
+            let mut err = 0.0;
+            for c in 0..3 {
+                let (a3, b3) = (p[(c + 1) % 3] - p[c], p[(c + 2) % 3] - p[c]);
+                let (a2, b2) = (q[(c + 1) % 3] - q[c], q[(c + 2) % 3] - q[c]);
+                let t3 = a3.cross(&b3).norm().atan2(a3.dot(&b3));
+                let t2 = a2.perp(&b2).atan2(a2.dot(&b2));
+                err += (t2 - t3).abs().to_degrees() / 3.0;
+                let l3 = a3.norm();
+                if l3 > 0.0 {
+                    edge_e.push(((a2.norm() - l3) / l3).abs());
+                    edge_w.push(l3);
+                }
+            }
+            angle_e.push(err);
+        }
+    }
+    let (mut seam_edges, mut seam_length) = (0, 0.0);
+    for h in 0..(3 * nf) as u32 {
+        if let Some(t) = he.twin(h) {
+            if h < t && face_chart[(h / 3) as usize] != face_chart[(t / 3) as usize] {
+                seam_edges += 1;
+                seam_length += (mesh.positions[he.dest(h) as usize]
+                    - mesh.positions[he.origin(h) as usize])
+                    .norm();
+            }
+        }
+    }
+    let cap = 1e12;
+    let report = LayoutReport {
+        method: options.method,
+        charts: accepted.len(),
+        largest_chart_faces: largest,
+        seam_edges,
+        seam_length,
+        area_distortion: Stat::of(&area_d, &weights, cap),
+        angle_distortion: Stat::of(&angle_d, &weights, cap),
+        angle_error_deg: Stat::of(&angle_e, &weights, 180.0),
+        edge_length_error: Stat::of(&edge_e, &edge_w, cap),
+        flipped_faces: flipped,
+        arap_fallbacks: fallbacks,
+        arap_iterations: iterations,
+        cuts,
+        uv_scale,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok(Layout { uv: CornerAttribute { values, corners }, face_chart, report })
+}
