@@ -395,6 +395,7 @@ impl<'a> Tracer<'a> {
                 start: StopReason::ClosedLoop,
                 end: StopReason::ClosedLoop,
                 length: fwd.length,
+                fill: false,
             });
         }
         let back = self.trace_half(seed, face, [-d[0], -d[1]], -1.0, &mut blocked);

@@ -36,7 +36,7 @@ fn constant_field_gives_parallel_strokes_d_sep_apart() {
     // Covering: the strips left at the sides are narrower than d_sep.
     assert!(xs[0] < d_sep && w - xs[xs.len() - 1] < d_sep, "xs = {xs:?}");
     // Strokes shorter than min_length (here: all, 6 mm long) are dropped and counted.
-    let short = PlacementOptions { min_length: 6.5, ..opts };
+    let short = PlacementOptions { min_length: Some(6.5), ..opts };
     let pl = place_strokes(&dom, &short).unwrap();
     assert!(pl.strokes.is_empty() && pl.dropped_short > 0);
 }
