@@ -3,7 +3,10 @@
 //!
 //! * `d_sep = width · (1 − overlap)`: the distance between neighbouring strokes;
 //!   `d_test = ratio · d_sep` (default ratio ½): a stroke being traced stops when it comes
-//!   closer than `d_test` to an accepted stroke (§3).
+//!   closer than `d_test` to an accepted stroke (§3) — after a run-on of `end_run · d_test`
+//!   of arc length (default 1) during which it stays `d_test / 2` away, so the wedge
+//!   beyond its end, between its neighbours, is brushed too (`end_run = 0`: the classic
+//!   stop).
 //! * Candidate seeds sit `d_sep` to either side of every sample of every accepted stroke,
 //!   in the order strokes were accepted (a FIFO queue, §3, "seed point selection"); a seed is
 //!   valid when it lies in the domain, outside every singularity's exclusion radius, and at
@@ -22,7 +25,9 @@
 //!   part of the strip), and the wider gaps between diverging strokes (the seed sits midway).
 //!   Fill strokes are marked ([`Stroke::fill`]) and counted, and do not seed further strokes.
 //! * Strokes shorter than `min_length` (default twice the brush width) are dropped and
-//!   counted; `min_length = 0` keeps all.
+//!   counted. With the default, a corner piece — a stroke with both ends on a chart edge —
+//!   and a fill stroke are kept down to one brush width: nothing else can brush that corner
+//!   or gap. An explicit `min_length` applies to every stroke; `0` keeps all.
 //!
 //! Distances are measured on the part's 3D lift when there is one ([`crate::Spacing`],
 //! `spacing.rs`), else with the metric, or in UV for [`Spacing::Uv`]. The sideways offset of
@@ -41,7 +46,7 @@ use crate::grid::HashGrid3;
 use crate::locate::{march, walk, March, Walk};
 use crate::mesh::Domain;
 use crate::spacing::{typical_stretch, Probe, Spacing, StrokeIndex};
-use crate::trace::{Stroke, TraceOptions, Tracer};
+use crate::trace::{StopReason, Stroke, TraceOptions, Tracer};
 
 /// Options of the even-spacing placement. Lengths in mm.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -58,10 +63,17 @@ pub struct PlacementOptions {
     /// Where spacing is measured. Default [`Spacing::Surface`].
     pub spacing: Spacing,
     /// Strokes shorter than this (mm, on the part) are dropped and counted in the report.
-    /// Default (`None`): twice the brush width; `0` keeps every stroke.
+    /// Default (`None`): twice the brush width, and one width for corner pieces (both ends
+    /// on a chart edge) and fill strokes. An explicit value applies to every stroke; `0`
+    /// keeps every stroke.
     pub min_length: Option<f64>,
     /// Exclusion radius around singularities, mm; `None` means `d_sep`.
     pub exclusion_radius: Option<f64>,
+    /// Run-on past the first approach, as a multiple of `d_test` (arc length): a stroke
+    /// that comes within `d_test` of another keeps going for up to `end_run · d_test` as
+    /// long as it stays `d_test / 2` away, so the wedge beyond its end, between its two
+    /// neighbours, is brushed too. `0` stops at `d_test` (Jobard & Lefer). Default 1.
+    pub end_run: f64,
     /// Seeds tried first, in order (UV). Default: the centre of the UV bounding box.
     pub seeds: Vec<Vec2>,
     /// Integration options. `max_step` is capped at `d_test / 2`; `exclusion_radius` is
@@ -78,6 +90,7 @@ impl Default for PlacementOptions {
             spacing: Spacing::Surface,
             min_length: None,
             exclusion_radius: None,
+            end_run: 1.0,
             seeds: Vec::new(),
             trace: TraceOptions::default(),
         }
@@ -100,7 +113,8 @@ impl PlacementOptions {
         self.test_ratio * self.d_sep()
     }
 
-    /// The minimum stroke length in force: `min_length`, else `2 · width`.
+    /// The minimum stroke length in force: `min_length`, else `2 · width` (corner pieces
+    /// and fill strokes: `width`, see the field).
     pub fn min_length(&self) -> f64 {
         self.min_length.unwrap_or(2.0 * self.width)
     }
@@ -123,6 +137,7 @@ impl PlacementOptions {
         if let Some(r) = self.exclusion_radius {
             non_negative("placement.exclusion_radius", r)?;
         }
+        non_negative("placement.end_run", self.end_run)?;
         for (i, s) in self.seeds.iter().enumerate() {
             if !(s[0].is_finite() && s[1].is_finite()) {
                 return Err(ToolpathError::NonFinite { what: "placement.seeds", index: i });
@@ -187,6 +202,8 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         d_sep,
         d_test,
         min_length: opts.min_length(),
+        relaxed_ends: opts.min_length.is_none(),
+        end_run: opts.end_run,
         dropped_short: 0,
         seeds_traced: 0,
         own: OwnPoints {
@@ -258,6 +275,10 @@ struct State<'a> {
     d_sep: f64,
     d_test: f64,
     min_length: f64,
+    /// The default minimum length is in force: corner pieces and fill strokes get half.
+    relaxed_ends: bool,
+    /// [`PlacementOptions::end_run`].
+    end_run: f64,
     dropped_short: usize,
     seeds_traced: usize,
     own: OwnPoints,
@@ -351,15 +372,16 @@ impl State<'_> {
         if self.index.within(self.dom, p, f, self.d_sep * slack) {
             return;
         }
-        if let Some(s) = self.trace(p, f) {
+        if let Some(s) = self.trace(p, f, false) {
             self.queue.push_back(self.strokes.len());
             self.strokes.push(s);
         }
     }
 
     /// Trace from a seed already found clear of the strokes; the stroke is inserted into
-    /// the index when it is long enough (else counted as dropped).
-    fn trace(&mut self, p: Vec2, f: u32) -> Option<Stroke> {
+    /// the index when it is long enough (else counted as dropped). With the default minimum
+    /// length, fill strokes and corner pieces are kept down to half of it.
+    fn trace(&mut self, p: Vec2, f: u32, fill: bool) -> Option<Stroke> {
         let (dom, d_test) = (self.dom, self.d_test);
         if self.tracer.near_singularity(p, f).is_some() {
             return None;
@@ -368,16 +390,34 @@ impl State<'_> {
         let own = &mut self.own;
         own.clear();
         let lifted = idx.lifted();
+        // Where each half first came within d_test of another stroke (signed arc length):
+        // the stroke runs on for up to `end_run · d_test` while it stays `d_test / 2` away,
+        // so the wedge beyond its end, between its two neighbours, is brushed too.
+        let mut first: [Option<f64>; 2] = [None, None];
+        let run = self.end_run * d_test;
         let s = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
             let pr = idx.probe(dom, q, fq);
-            idx.within_probe(dom, &pr, fq, d_test)
+            let close = idx.within_probe(dom, &pr, fq, d_test) && {
+                let half = usize::from(arc < 0.0);
+                let at = *first[half].get_or_insert(arc);
+                (arc - at).abs() >= run || idx.within_probe(dom, &pr, fq, 0.5 * d_test)
+            };
+            close
                 || vertex && {
                     let rv = idx.visit_radius(dom, fq, d_test);
                     own.approaches(&pr, lifted, arc, d_test, rv)
                 }
         })?;
         self.seeds_traced += 1;
-        if s.length < self.min_length || s.uv.len() < 2 {
+        // Corner pieces (both ends on a chart edge: nothing else can brush that corner) and
+        // fill strokes (placed to cover a gap) are kept down to half the minimum length.
+        let corner = s.start == StopReason::Boundary && s.end == StopReason::Boundary;
+        let least = if (corner || fill) && self.relaxed_ends {
+            0.5 * self.min_length
+        } else {
+            self.min_length
+        };
+        if s.length < least || s.uv.len() < 2 {
             self.dropped_short += 1;
             return None;
         }
@@ -426,7 +466,7 @@ impl State<'_> {
                     if self.index.within(dom, q, face, 0.5 * d * (1.0 + FILL_MIN)) {
                         continue;
                     }
-                    if let Some(mut s) = self.trace(q, face) {
+                    if let Some(mut s) = self.trace(q, face, true) {
                         s.fill = true;
                         self.strokes.push(s);
                         count += 1;

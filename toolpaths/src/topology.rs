@@ -134,8 +134,10 @@ pub(crate) fn overlapping_charts(dom: &crate::mesh::Domain) -> Vec<(usize, usize
             if cg == cf || pairs.contains(&(cf.min(cg), cf.max(cg))) {
                 continue;
             }
+            // A centroid inside or on the closed triangle: the open triangle of `f` meets
+            // the chart of `g` in interior points either way.
             let b = barycentric(dom.corners(g), p);
-            if b.iter().all(|&x| x > 1e-9) {
+            if b.iter().all(|&x| x >= -1e-12) {
                 pairs.insert((cf.min(cg), cf.max(cg)));
             }
         }
