@@ -641,7 +641,10 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
     let _ = writeln!(w, "(dialect: {dialect}; passes: {}; {units})", plan.passes.len());
     let n_sheets = plan.passes.iter().map(|p| p.sheet + 1).max().unwrap_or(1);
     if n_sheets > 1 {
-        let _ = writeln!(w, "(sheets: {n_sheets}, cut in order; the program pauses with M0 between them)");
+        let _ = writeln!(
+            w,
+            "(sheets: {n_sheets}, cut in order; the program pauses with M0 between them)"
+        );
     }
     let _ = writeln!(w, "G21 G90 G17 G94");
     if let Some((p, d)) = prog.blend {

@@ -65,64 +65,61 @@ impl PointGrid {
     }
 }
 
-/// A hashed uniform grid over 3D points (or UV points embedded at z = 0) for fixed-radius
-/// neighbour queries when distances are measured on the part's 3D lift. Only the occupied
-/// cells are stored, so a large part with small cells costs memory in proportion to its
-/// points. Lookups never iterate the hash map, so results do not depend on the hasher.
+/// A uniform grid over 3D points (or UV points embedded at z = 0) for fixed-radius
+/// neighbour queries when distances are measured on the part's 3D lift: a dense array of
+/// cells over the box `bbox` (padded by one cell), with the cell size grown until there are
+/// at most `MAX_CELLS` cells. Points outside the box go to the border cells, so queries stay
+/// supersets.
 #[derive(Debug, Clone)]
-pub(crate) struct HashGrid3 {
+pub(crate) struct Grid3 {
+    origin: [f64; 3],
     inv_cell: f64,
-    cells: std::collections::HashMap<[i64; 3], Vec<u32>, std::hash::BuildHasherDefault<Mix>>,
+    n: [usize; 3],
+    cells: Vec<Vec<u32>>,
 }
 
-/// A small multiplicative hasher for cell keys (FxHash's constant).
-#[derive(Default, Clone, Copy, Debug)]
-pub(crate) struct Mix(u64);
-
-impl std::hash::Hasher for Mix {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
+impl Grid3 {
+    /// A grid over `bbox` (`[min, max]`) with cubic cells of about `cell`.
+    pub(crate) fn new(bbox: [[f64; 3]; 2], cell: f64) -> Grid3 {
+        let ext = [0, 1, 2].map(|k| (bbox[1][k] - bbox[0][k]).max(0.0));
+        let mut cell = if cell.is_finite() && cell > 1e-12 { cell } else { 1e-12 };
+        let count = |c: f64| ext.map(|e| (e / c).ceil() as usize + 3);
+        // Grow the cells until the grid is small enough.
+        loop {
+            let n = count(cell);
+            let total = (n[0] as f64) * (n[1] as f64) * (n[2] as f64);
+            if total <= MAX_CELLS {
+                break;
+            }
+            cell *= (total / MAX_CELLS).cbrt().max(1.01);
         }
-    }
-    fn write_i64(&mut self, x: i64) {
-        self.write_u64(x as u64);
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn write_usize(&mut self, x: usize) {
-        self.write_u64(x as u64);
-    }
-}
-
-impl HashGrid3 {
-    /// A grid with cubic cells of edge `cell` (clamped to a tiny positive value).
-    pub(crate) fn new(cell: f64) -> HashGrid3 {
-        let cell = if cell.is_finite() && cell > 1e-12 { cell } else { 1e-12 };
-        HashGrid3 { inv_cell: 1.0 / cell, cells: Default::default() }
+        let n = count(cell);
+        let origin = [0, 1, 2].map(|k| bbox[0][k] - cell);
+        Grid3 { origin, inv_cell: 1.0 / cell, n, cells: vec![Vec::new(); n[0] * n[1] * n[2]] }
     }
 
-    fn key(&self, p: [f64; 3]) -> [i64; 3] {
-        // Saturating float-to-int casts keep far-away or non-finite points in border cells.
-        p.map(|x| (x * self.inv_cell).floor() as i64)
+    fn coord(&self, p: [f64; 3]) -> [isize; 3] {
+        [0, 1, 2].map(|k| ((p[k] - self.origin[k]) * self.inv_cell).floor() as isize)
+    }
+
+    fn clamp(&self, c: [isize; 3]) -> [usize; 3] {
+        [0, 1, 2].map(|k| c[k].clamp(0, self.n[k] as isize - 1) as usize)
+    }
+
+    fn index(&self, c: [usize; 3]) -> usize {
+        (c[2] * self.n[1] + c[1]) * self.n[0] + c[0]
     }
 
     /// Insert item `id` at `p`.
     pub(crate) fn insert(&mut self, p: [f64; 3], id: u32) {
-        let k = self.key(p);
-        self.cells.entry(k).or_default().push(id);
+        let i = self.index(self.clamp(self.coord(p)));
+        self.cells[i].push(id);
     }
 
     /// Empty the cell that holds `p`.
     pub(crate) fn clear_at(&mut self, p: [f64; 3]) {
-        let k = self.key(p);
-        if let Some(c) = self.cells.get_mut(&k) {
-            c.clear();
-        }
+        let i = self.index(self.clamp(self.coord(p)));
+        self.cells[i].clear();
     }
 
     /// Call `f(id)` for every item in cells within distance `r` of `p` (per axis; a superset
@@ -131,16 +128,15 @@ impl HashGrid3 {
         if !(r >= 0.0) {
             return;
         }
-        let lo = self.key([p[0] - r, p[1] - r, p[2] - r]);
-        let hi = self.key([p[0] + r, p[1] + r, p[2] + r]);
+        let lo = self.clamp(self.coord([p[0] - r, p[1] - r, p[2] - r]));
+        let hi = self.clamp(self.coord([p[0] + r, p[1] + r, p[2] + r]));
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    if let Some(c) = self.cells.get(&[x, y, z]) {
-                        for &id in c {
-                            if !f(id) {
-                                return;
-                            }
+                let row = (z * self.n[1] + y) * self.n[0];
+                for c in &self.cells[row + lo[0]..=row + hi[0]] {
+                    for &id in c {
+                        if !f(id) {
+                            return;
                         }
                     }
                 }

@@ -322,10 +322,8 @@ impl Domain {
         let seams = build_seams(&uv, &tris, &neighbors, &mesh.seams)?;
         let grid = FaceGrid::new(&uv, &tris, bbox);
         let (chart, chart_bbox) = build_charts(&uv, &tris, &neighbors);
-        let spacing_normals = mesh
-            .positions
-            .as_ref()
-            .map(|p| vertex_normals(p, &tris, mesh.normals.as_deref()));
+        let spacing_normals =
+            mesh.positions.as_ref().map(|p| vertex_normals(p, &tris, mesh.normals.as_deref()));
         Ok(Domain {
             uv,
             tris,

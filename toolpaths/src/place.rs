@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{in_range, non_negative, positive, Result, ToolpathError};
 use crate::field::Singularity;
 use crate::geom::{dot3, norm3, scale, sub, sub3, Metric, Vec2, Vec3};
-use crate::grid::HashGrid3;
+use crate::grid::Grid3;
 use crate::locate::{march, walk, March, Walk};
 use crate::mesh::Domain;
 use crate::spacing::{typical_stretch, Probe, Spacing, StrokeIndex};
@@ -74,6 +74,9 @@ pub struct PlacementOptions {
     /// long as it stays `d_test / 2` away, so the wedge beyond its end, between its two
     /// neighbours, is brushed too. `0` stops at `d_test` (Jobard & Lefer). Default 1.
     pub end_run: f64,
+    /// Fill the gaps left by the even spacing (module docs): strips along chart edges and
+    /// gaps wider than `1.1 d_sep`. Default true.
+    pub fill_gaps: bool,
     /// Seeds tried first, in order (UV). Default: the centre of the UV bounding box.
     pub seeds: Vec<Vec2>,
     /// Integration options. `max_step` is capped at `d_test / 2`; `exclusion_radius` is
@@ -91,6 +94,7 @@ impl Default for PlacementOptions {
             min_length: None,
             exclusion_radius: None,
             end_run: 1.0,
+            fill_gaps: true,
             seeds: Vec::new(),
             trace: TraceOptions::default(),
         }
@@ -188,6 +192,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     topts.exclusion_radius = exclusion;
     let sing = dom.singularities();
     let index = StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing);
+    let st_lift = index.lifted();
     let own_cell = if index.lifted() {
         3.0 * d_test
     } else {
@@ -207,7 +212,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         dropped_short: 0,
         seeds_traced: 0,
         own: OwnPoints {
-            grid: HashGrid3::new(own_cell),
+            grid: Grid3::new(crate::spacing::embedding_box(dom, st_lift), own_cell),
             pts: Vec::new(),
             closure: crate::trace::closure_radius(&topts),
         },
@@ -248,7 +253,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
             }
         }
     }
-    let fill_strokes = st.fill();
+    let fill_strokes = if opts.fill_gaps { st.fill() } else { 0 };
     Ok(Placement {
         width: opts.width,
         d_sep,
@@ -290,7 +295,7 @@ struct State<'a> {
 /// start, where the tracer closes the loop. Points are kept in the spacing measure's space
 /// (3D with a lift, UV with the query's metric without).
 struct OwnPoints {
-    grid: HashGrid3,
+    grid: Grid3,
     /// Position in the grid's space, UV, arc length.
     pts: Vec<(Vec3, Vec2, f64)>,
     /// The tracer's loop-closure radius.
@@ -466,6 +471,11 @@ impl State<'_> {
                     if self.index.within(dom, q, face, 0.5 * d * (1.0 + FILL_MIN)) {
                         continue;
                     }
+                    // Around a singularity the gap is the exclusion zone, left on purpose.
+                    let ex = self.tracer.opts.exclusion_radius;
+                    if self.tracer.near_singularity_within(q, face, ex + d).is_some() {
+                        continue;
+                    }
                     if let Some(mut s) = self.trace(q, face, true) {
                         s.fill = true;
                         self.strokes.push(s);
@@ -536,8 +546,7 @@ fn side_seeds(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<
     let metric = |g: u32| index.metric(dom, g);
     for (p, f, n) in candidates(dom, s, index, d_sep) {
         for side in [1.0, -1.0] {
-            if let March::Inside { p: q, face } = march(dom, metric, f, p, scale(n, side), d_sep)
-            {
+            if let March::Inside { p: q, face } = march(dom, metric, f, p, scale(n, side), d_sep) {
                 out.push((q, face));
             }
         }

@@ -345,7 +345,11 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
     let item_sheet: Vec<usize> = items
         .iter()
         .map(|it| {
-            it.faces.iter().flatten().next().map_or(0, |&f| sheet_of_chart[dom.chart[f as usize] as usize])
+            it.faces
+                .iter()
+                .flatten()
+                .next()
+                .map_or(0, |&f| sheet_of_chart[dom.chart[f as usize] as usize])
         })
         .collect();
     let n_sheets = item_sheet.iter().copied().max().map_or(1, |m| m + 1);

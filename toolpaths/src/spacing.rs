@@ -23,7 +23,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::geom::{dot3, norm3, point_segment_distance, sub3, Metric, Vec2, Vec3};
-use crate::grid::HashGrid3;
+use crate::grid::Grid3;
 use crate::locate::barycentric;
 use crate::mesh::Domain;
 use crate::trace::Stroke;
@@ -61,7 +61,7 @@ pub(crate) struct Probe {
 
 /// Stroke samples in a grid, for distance queries.
 pub(crate) struct StrokeIndex {
-    grid: HashGrid3,
+    grid: Grid3,
     pos: Vec<Vec3>,
     uv: Vec<Vec2>,
     nrm: Vec<Vec3>,
@@ -76,6 +76,27 @@ pub(crate) struct StrokeIndex {
 /// Whether distances are measured on the 3D lift.
 pub(crate) fn uses_lift(dom: &Domain, spacing: Spacing) -> bool {
     spacing == Spacing::Surface && dom.spacing_normals.is_some()
+}
+
+/// The box of the points a grid in the spacing space holds: the lift's box, or the UV box
+/// at z = 0.
+pub(crate) fn embedding_box(dom: &Domain, lift: bool) -> [[f64; 3]; 2] {
+    match (&dom.positions, lift) {
+        (Some(p), true) => {
+            let mut b = [[f64::INFINITY; 3], [f64::NEG_INFINITY; 3]];
+            for x in p {
+                for k in 0..3 {
+                    b[0][k] = b[0][k].min(x[k]);
+                    b[1][k] = b[1][k].max(x[k]);
+                }
+            }
+            b
+        }
+        _ => {
+            let u = dom.bbox;
+            [[u[0][0], u[0][1], 0.0], [u[1][0], u[1][1], 0.0]]
+        }
+    }
 }
 
 /// A query point at `p` in face `f`.
@@ -133,7 +154,7 @@ impl StrokeIndex {
         let lift = uses_lift(dom, spacing);
         let stretch = if lift { 1.0 } else { typical_stretch(dom, spacing) };
         StrokeIndex {
-            grid: HashGrid3::new(2.0 * d / stretch),
+            grid: Grid3::new(embedding_box(dom, lift), 2.0 * d / stretch),
             pos: Vec::new(),
             uv: Vec::new(),
             nrm: Vec::new(),
@@ -227,7 +248,8 @@ impl StrokeIndex {
         if self.lift {
             let y = self.pos[i];
             let ny = self.nrm[i];
-            if dot3(ny, q.n) < NORMAL_MIN {
+            // (Zero normals — a degenerate corner or given zero vectors — filter nothing.)
+            if dot3(ny, q.n) < NORMAL_MIN && dot3(ny, ny) > 0.5 && dot3(q.n, q.n) > 0.5 {
                 return f64::INFINITY;
             }
             let c = norm3(sub3(y, q.x));

@@ -144,7 +144,8 @@ pub fn write_svg(dom: &Domain, plan: &Plan, o: &SvgOptions) -> Result<String> {
     // keeps the layer name `strokes`.
     let n_sheets = plan.passes.iter().map(|p| p.sheet + 1).max().unwrap_or(1);
     for sheet in 0..n_sheets {
-        let name = if sheet == 0 { "strokes".to_string() } else { format!("strokes-sheet-{sheet}") };
+        let name =
+            if sheet == 0 { "strokes".to_string() } else { format!("strokes-sheet-{sheet}") };
         let mut g = layer(&name).set("stroke", "#000000").set("stroke-width", num(plan.width, dp));
         for pass in plan.passes.iter().filter(|p| p.sheet == sheet) {
             for piece in &pass.uv {

@@ -212,7 +212,13 @@ fn half_cylinder(warped: bool) -> Case {
     };
     let w = PI * R;
     let samples = planar_samples(w, H, |x, y| x.min(w - x).min(y).min(H - y));
-    Case { name: if warped { "cylinder warped" } else { "cylinder" }, mesh, world, sphere: None, samples }
+    Case {
+        name: if warped { "cylinder warped" } else { "cylinder" },
+        mesh,
+        world,
+        sphere: None,
+        samples,
+    }
 }
 
 /// Sample points on a `w × h` rectangle of the unrolled plane, pitch d_sep / 6.
@@ -237,7 +243,8 @@ fn sphere_band(latlong: bool) -> Case {
     const R: f64 = 30.0;
     let (lon_max, lat_max) = (45f64.to_radians(), 60f64.to_radians());
     let (ll, tris) = param_grid([-lon_max, lon_max], [-lat_max, lat_max], 60, 80);
-    let x_of = |lon: f64, lat: f64| [R * lat.cos() * lon.cos(), R * lat.cos() * lon.sin(), R * lat.sin()];
+    let x_of =
+        |lon: f64, lat: f64| [R * lat.cos() * lon.cos(), R * lat.cos() * lon.sin(), R * lat.sin()];
     let pos: Vec<Vec3> = ll.iter().map(|p| x_of(p[0], p[1])).collect();
     let nrm: Vec<Vec3> = pos.iter().map(|p| p.map(|c| c / R)).collect();
     let (uv, dirs): (Vec<Vec2>, Vec<Vec2>) = ll
@@ -417,7 +424,11 @@ fn flat_coverage(uv: &[Vec2], tris: &[[u32; 3]], pl: &Placement) -> f64 {
             for j in 0..n - i {
                 // Centroids of the upward sub-triangles of an n-subdivision (weights equal).
                 let (s, r) = ((i as f64 + 1.0 / 3.0) / n as f64, (j as f64 + 1.0 / 3.0) / n as f64);
-                let p = [a[0] + s * (b[0] - a[0]) + r * (c[0] - a[0]), a[1] + s * (b[1] - a[1]) + r * (c[1] - a[1]), 0.0];
+                let p = [
+                    a[0] + s * (b[0] - a[0]) + r * (c[0] - a[0]),
+                    a[1] + s * (b[1] - a[1]) + r * (c[1] - a[1]),
+                    0.0,
+                ];
                 let w = area;
                 tot += w;
                 if segs.nearest(p, usize::MAX, D_SEP) <= 0.5 * D_SEP {
@@ -435,8 +446,7 @@ fn disk_with_holes() -> (Vec<Vec2>, Vec<[u32; 3]>) {
     let (uv, tris) = param_grid([-30.0, 30.0], [-30.0, 30.0], 120, 120);
     let holes = [([-12.0, 0.0], 6.0), ([10.0, 8.0], 5.0), ([6.0, -14.0], 4.0)];
     let inside = |p: Vec2| {
-        p[0].hypot(p[1]) < 30.0
-            && holes.iter().all(|(c, r)| (p[0] - c[0]).hypot(p[1] - c[1]) > *r)
+        p[0].hypot(p[1]) < 30.0 && holes.iter().all(|(c, r)| (p[0] - c[0]).hypot(p[1] - c[1]) > *r)
     };
     let kept: Vec<[u32; 3]> = tris
         .into_iter()
@@ -475,7 +485,13 @@ fn rectangle_disk_with_holes_and_half_cylinder_are_covered() {
     let opts = PlacementOptions::new(D_SEP, 0.0);
     let pl = place_strokes(&dom, &opts).unwrap();
     let c = flat_coverage(&uv, &tris, &pl);
-    eprintln!("rectangle: coverage {:.2}%, {} strokes ({} fill), {} dropped", 100.0 * c, pl.strokes.len(), pl.fill_strokes, pl.dropped_short);
+    eprintln!(
+        "rectangle: coverage {:.2}%, {} strokes ({} fill), {} dropped",
+        100.0 * c,
+        pl.strokes.len(),
+        pl.fill_strokes,
+        pl.dropped_short
+    );
     assert!(c >= 0.99, "rectangle coverage {c}");
     // Short strokes are dropped by default (min_length = 2 × width) and counted; 0 keeps all.
     assert_eq!(pl.min_length, 2.0 * D_SEP);
@@ -484,7 +500,8 @@ fn rectangle_disk_with_holes_and_half_cylinder_are_covered() {
         let least = if corner || s.fill { D_SEP } else { 2.0 * D_SEP };
         assert!(s.length >= least, "{} mm", s.length);
     }
-    let keep = place_strokes(&dom, &PlacementOptions { min_length: Some(0.0), ..opts.clone() }).unwrap();
+    let keep =
+        place_strokes(&dom, &PlacementOptions { min_length: Some(0.0), ..opts.clone() }).unwrap();
     assert_eq!(keep.dropped_short, 0);
     assert!(pl.dropped_short > 0 && keep.strokes.iter().any(|s| s.length < 2.0 * D_SEP));
 
@@ -496,16 +513,58 @@ fn rectangle_disk_with_holes_and_half_cylinder_are_covered() {
     let pl = place_strokes(&dom, &opts).unwrap();
     let c = flat_coverage(&uv, &tris, &pl);
     if std::env::var_os("DBG").is_some() {
-        let lines: Vec<(Vec<Vec3>, bool)> = pl.strokes.iter().map(|s| (s.uv.iter().map(|p| [p[0], p[1], 0.0]).collect(), s.fill)).collect();
+        let lines: Vec<(Vec<Vec3>, bool)> = pl
+            .strokes
+            .iter()
+            .map(|s| (s.uv.iter().map(|p| [p[0], p[1], 0.0]).collect(), s.fill))
+            .collect();
         let segs = Segs::new(&lines, |_| true, D_SEP);
-        let dom2 = Domain::new(common::field_mesh((uv.clone(), tris.clone()), Symmetry::Line, |_| [1.0, 0.0])).unwrap();
+        let dom2 =
+            Domain::new(common::field_mesh((uv.clone(), tris.clone()), Symmetry::Line, |_| {
+                [1.0, 0.0]
+            }))
+            .unwrap();
         let _ = dom2;
-        for s in &pl.strokes { if s.uv.iter().any(|p| p[1] > 22.0) { eprintln!("S {} {:?} {:?} {:?} {:?} {:.2} n={}", s.fill, s.uv[0], s.uv[s.uv.len()-1], s.start, s.end, s.length, s.uv.len()); } }
-        for j in 0..60 { let mut row = String::new(); for i in 0..120 { let p=[-30.0 + i as f64*0.5+0.25, 30.0 - j as f64 - 0.5, 0.0];
-            let inside = p[0].hypot(p[1]) < 30.0 && [([-12.0, 0.0], 6.0), ([10.0, 8.0], 5.0), ([6.0, -14.0], 4.0)].iter().all(|(c, r): &([f64;2], f64)| (p[0] - c[0]).hypot(p[1] - c[1]) > *r);
-            row.push(if !inside {' '} else if segs.nearest(p, usize::MAX, D_SEP) <= 1.5 {'.'} else {'#'}); } eprintln!("{row}"); }
+        for s in &pl.strokes {
+            if s.uv.iter().any(|p| p[1] > 22.0) {
+                eprintln!(
+                    "S {} {:?} {:?} {:?} {:?} {:.2} n={}",
+                    s.fill,
+                    s.uv[0],
+                    s.uv[s.uv.len() - 1],
+                    s.start,
+                    s.end,
+                    s.length,
+                    s.uv.len()
+                );
+            }
+        }
+        for j in 0..60 {
+            let mut row = String::new();
+            for i in 0..120 {
+                let p = [-30.0 + i as f64 * 0.5 + 0.25, 30.0 - j as f64 - 0.5, 0.0];
+                let inside = p[0].hypot(p[1]) < 30.0
+                    && [([-12.0, 0.0], 6.0), ([10.0, 8.0], 5.0), ([6.0, -14.0], 4.0)]
+                        .iter()
+                        .all(|(c, r): &([f64; 2], f64)| (p[0] - c[0]).hypot(p[1] - c[1]) > *r);
+                row.push(if !inside {
+                    ' '
+                } else if segs.nearest(p, usize::MAX, D_SEP) <= 1.5 {
+                    '.'
+                } else {
+                    '#'
+                });
+            }
+            eprintln!("{row}");
+        }
     }
-    eprintln!("disk with holes: coverage {:.2}%, {} strokes ({} fill), {} dropped", 100.0 * c, pl.strokes.len(), pl.fill_strokes, pl.dropped_short);
+    eprintln!(
+        "disk with holes: coverage {:.2}%, {} strokes ({} fill), {} dropped",
+        100.0 * c,
+        pl.strokes.len(),
+        pl.fill_strokes,
+        pl.dropped_short
+    );
     assert!(c >= 0.99, "disk coverage {c}");
 
     for warped in [false, true] {
@@ -523,7 +582,13 @@ fn disk_with_holes_job_report_and_gcode() {
     let mesh = common::field_mesh((uv, tris), Symmetry::Line, |p| [1.0, 0.25 * (p[1] / 9.0).sin()]);
     let opts = JobOptions {
         placement: PlacementOptions::new(D_SEP, 0.0),
-        plan: PlanOptions { lead_in: 1.0, lead_out: 1.0, ramp_height: 1.0, overtravel: 1.0, ..Default::default() },
+        plan: PlanOptions {
+            lead_in: 1.0,
+            lead_out: 1.0,
+            ramp_height: 1.0,
+            overtravel: 1.0,
+            ..Default::default()
+        },
         coverage: Some(CoverageOptions::default()),
         gcode: Some(GcodeOptions::default()),
         ..Default::default()
@@ -547,7 +612,8 @@ fn disk_with_holes_job_report_and_gcode() {
 /// A single short stroke on a large sheet: the largest gap reaches the cap and says so.
 #[test]
 fn capped_largest_gap_is_flagged() {
-    let mesh = common::field_mesh(common::rect_mesh(60.0, 60.0, 30, 30), Symmetry::Line, |_| [0.0, 1.0]);
+    let mesh =
+        common::field_mesh(common::rect_mesh(60.0, 60.0, 30, 30), Symmetry::Line, |_| [0.0, 1.0]);
     let dom = Domain::new(mesh).unwrap();
     let mut pl = place_strokes(&dom, &PlacementOptions::new(1.0, 0.0)).unwrap();
     pl.strokes.truncate(1);
@@ -607,8 +673,12 @@ fn mirrored_and_overlapping_charts_all_get_strokes() {
     let opts = JobOptions { placement: PlacementOptions::new(D_SEP, 0.0), ..Default::default() };
     let out = generate(mesh, &opts).unwrap();
     assert_eq!(out.report.charts_with_strokes, 3);
-    let lines: Vec<(Vec<Vec3>, bool)> =
-        out.strokes_3d.iter().zip(&out.placement.strokes).map(|(l, s)| (l.clone(), s.fill)).collect();
+    let lines: Vec<(Vec<Vec3>, bool)> = out
+        .strokes_3d
+        .iter()
+        .zip(&out.placement.strokes)
+        .map(|(l, s)| (l.clone(), s.fill))
+        .collect();
     let segs = Segs::new(&lines, |_| true, D_SEP);
     for (k, origin) in [[0.0, 0.0], [40.0, 0.0], [0.0, 40.0]].iter().enumerate() {
         let (mut cov, mut tot) = (0.0, 0.0);
@@ -635,7 +705,8 @@ fn mirrored_and_overlapping_charts_all_get_strokes() {
     };
     let out = generate(mesh, &opts).unwrap();
     assert_eq!(out.report.charts_with_strokes, 3);
-    let sheets: std::collections::BTreeSet<usize> = out.plan.passes.iter().map(|p| p.sheet).collect();
+    let sheets: std::collections::BTreeSet<usize> =
+        out.plan.passes.iter().map(|p| p.sheet).collect();
     assert_eq!(sheets.into_iter().collect::<Vec<_>>(), vec![0, 1, 2]);
     assert!(out.plan.passes.windows(2).all(|w| w[0].sheet <= w[1].sheet));
     let svg = out.svg.unwrap();

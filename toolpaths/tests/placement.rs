@@ -66,7 +66,8 @@ fn spirals_stop_before_meeting_themselves() {
             for j in i + 1..s.uv.len() {
                 // Along a closed loop the arc distance is the shorter way round.
                 let along = arc[j] - arc[i];
-                let along = if s.is_closed() { along.min(arc[arc.len() - 1] - along) } else { along };
+                let along =
+                    if s.is_closed() { along.min(arc[arc.len() - 1] - along) } else { along };
                 if along > 1.2 * std::f64::consts::PI * d_test {
                     let d = (s.uv[i][0] - s.uv[j][0]).hypot(s.uv[i][1] - s.uv[j][1]);
                     assert!(d >= d_test * 0.999, "stroke comes back to itself at {d}");
