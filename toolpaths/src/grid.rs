@@ -125,7 +125,7 @@ impl Grid3 {
     /// Call `f(id)` for every item in cells within distance `r` of `p` (per axis; a superset
     /// of the items within `r`), in a fixed order. Stops early when `f` returns `false`.
     pub(crate) fn visit(&self, p: [f64; 3], r: f64, mut f: impl FnMut(u32) -> bool) {
-        if !(r >= 0.0) {
+        if r.is_nan() || r < 0.0 {
             return;
         }
         let lo = self.clamp(self.coord([p[0] - r, p[1] - r, p[2] - r]));

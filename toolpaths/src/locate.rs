@@ -241,7 +241,7 @@ pub(crate) fn march(
         }
         let mf = metric(f);
         let ln = mf.length(n);
-        if !(ln > 0.0) || best.1 == 3 {
+        if ln.is_nan() || ln <= 0.0 || best.1 == 3 {
             break;
         }
         let t_end = left / ln;

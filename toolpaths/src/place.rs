@@ -322,6 +322,12 @@ impl OwnPoints {
         let measure = |x: Vec3, uv: Vec2| -> (f64, Option<f64>) {
             let last = pts.last();
             if lifted {
+                // Own points across a UV seam (far in UV, near in 3D: a stroke that went
+                // round a closed part and is back at its own start) do not stop it: the
+                // stroke ends at the seam as without a lift.
+                if q.m.length(sub(uv, q.uv)) > 4.0 * r {
+                    return (f64::INFINITY, None);
+                }
                 let v = sub3(x, q.x);
                 let dist = norm3(v);
                 let along = last.and_then(|&(lx, _, _)| {

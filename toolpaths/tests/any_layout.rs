@@ -512,52 +512,6 @@ fn rectangle_disk_with_holes_and_half_cylinder_are_covered() {
     let dom = Domain::new(disk).unwrap();
     let pl = place_strokes(&dom, &opts).unwrap();
     let c = flat_coverage(&uv, &tris, &pl);
-    if std::env::var_os("DBG").is_some() {
-        let lines: Vec<(Vec<Vec3>, bool)> = pl
-            .strokes
-            .iter()
-            .map(|s| (s.uv.iter().map(|p| [p[0], p[1], 0.0]).collect(), s.fill))
-            .collect();
-        let segs = Segs::new(&lines, |_| true, D_SEP);
-        let dom2 =
-            Domain::new(common::field_mesh((uv.clone(), tris.clone()), Symmetry::Line, |_| {
-                [1.0, 0.0]
-            }))
-            .unwrap();
-        let _ = dom2;
-        for s in &pl.strokes {
-            if s.uv.iter().any(|p| p[1] > 22.0) {
-                eprintln!(
-                    "S {} {:?} {:?} {:?} {:?} {:.2} n={}",
-                    s.fill,
-                    s.uv[0],
-                    s.uv[s.uv.len() - 1],
-                    s.start,
-                    s.end,
-                    s.length,
-                    s.uv.len()
-                );
-            }
-        }
-        for j in 0..60 {
-            let mut row = String::new();
-            for i in 0..120 {
-                let p = [-30.0 + i as f64 * 0.5 + 0.25, 30.0 - j as f64 - 0.5, 0.0];
-                let inside = p[0].hypot(p[1]) < 30.0
-                    && [([-12.0, 0.0], 6.0), ([10.0, 8.0], 5.0), ([6.0, -14.0], 4.0)]
-                        .iter()
-                        .all(|(c, r): &([f64; 2], f64)| (p[0] - c[0]).hypot(p[1] - c[1]) > *r);
-                row.push(if !inside {
-                    ' '
-                } else if segs.nearest(p, usize::MAX, D_SEP) <= 1.5 {
-                    '.'
-                } else {
-                    '#'
-                });
-            }
-            eprintln!("{row}");
-        }
-    }
     eprintln!(
         "disk with holes: coverage {:.2}%, {} strokes ({} fill), {} dropped",
         100.0 * c,
@@ -632,12 +586,17 @@ fn capped_largest_gap_is_flagged() {
 /// (30 − x, y), exactly over A. Chart C: UV = (x + 10, y + 5), overlapping A. On the part
 /// they lie apart: A at the origin, B at x + 40, C at y + 40 (z = 0). Grain at 25° on the
 /// part.
-fn three_charts(lift: bool) -> (FieldMesh, [Box<dyn Fn(Vec2) -> Vec3>; 3]) {
+/// UV of a chart → a point on the part.
+type ToPart = Box<dyn Fn(Vec2) -> Vec3>;
+/// How a chart is laid out: part → UV, part → 3D, part direction → UV direction.
+type Layout = (fn(Vec2) -> Vec2, fn(Vec2) -> Vec3, fn(Vec2) -> Vec2);
+
+fn three_charts(lift: bool) -> (FieldMesh, [ToPart; 3]) {
     let (g, t) = common::rect_mesh(30.0, 20.0, 45, 30);
     let a = 25f64.to_radians();
     let d = [a.cos(), a.sin()];
     let (mut uv, mut tris, mut pos, mut dirs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let charts: [(fn(Vec2) -> Vec2, fn(Vec2) -> Vec3, fn(Vec2) -> Vec2); 3] = [
+    let charts: [Layout; 3] = [
         (|p| p, |p| [p[0], p[1], 0.0], |d| d),
         (|p| [30.0 - p[0], p[1]], |p| [p[0] + 40.0, p[1], 0.0], |d| [-d[0], d[1]]),
         (|p| [p[0] + 10.0, p[1] + 5.0], |p| [p[0], p[1] + 40.0, 0.0], |d| d),
@@ -655,7 +614,7 @@ fn three_charts(lift: bool) -> (FieldMesh, [Box<dyn Fn(Vec2) -> Vec3>; 3]) {
         mesh = mesh.with_lift(pos, Some(vec![[0.0, 0.0, 1.0]; n]));
     }
     // Inverse maps: UV of each chart → the part.
-    let back: [Box<dyn Fn(Vec2) -> Vec3>; 3] = [
+    let back: [ToPart; 3] = [
         Box::new(|p| [p[0], p[1], 0.0]),
         Box::new(|p| [30.0 - p[0] + 40.0, p[1], 0.0]),
         Box::new(|p| [p[0] - 10.0, p[1] - 5.0 + 40.0, 0.0]),
