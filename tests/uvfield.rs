@@ -92,7 +92,9 @@ fn cylinder_axial_grain_runs_along_the_axis_at_the_requested_surface_spacing() {
         assert!(d[0].abs() < 1e-4, "{d:?}");
     }
     let width = 2.0;
-    let opts = JobOptions { placement: PlacementOptions::new(width, 0.0), ..Default::default() };
+    // The evenly spaced strokes only: gap-filling strokes (issue 14) are not d_sep apart.
+    let placement = PlacementOptions { fill_gaps: false, ..PlacementOptions::new(width, 0.0) };
+    let opts = JobOptions { placement, ..Default::default() };
     let out = generate(fm, &opts).unwrap();
     // Each stroke is a line of constant s; neighbouring strokes are Δs · 2πr apart on the part.
     let mut s: Vec<f64> = out

@@ -7,7 +7,10 @@
 //!    `linesort --no-flip` through `../shared/tools/check-svg` when it is present.
 //! 3. Integration tolerance vs streamline error vs time on the annulus (circles known).
 //!
-//! `cargo run --release -p grainline-toolpaths --example bench_toolpaths [-- --quick] [--place-only]`
+//! 4. Tracing + spacing on the same sheet given as a 3D lift under a warped UV layout
+//!    (`--warped`, issue 14), against its isometric layout.
+//!
+//! `cargo run --release -p grainline-toolpaths --example bench_toolpaths [-- --quick] [--place-only] [--warped]`
 
 use std::f64::consts::PI;
 use std::path::PathBuf;
@@ -161,7 +164,11 @@ fn bench_cells(quick: bool, place_only: bool, order_only: bool) {
     let t = Instant::now();
     let dom = Domain::new(mesh).unwrap();
     let t_dom = secs(t);
-    let opts = PlacementOptions::new(d_sep, 0.0);
+    let mut opts = PlacementOptions::new(d_sep, 0.0);
+    if let Some(r) = std::env::var("BENCH_END_RUN").ok().and_then(|v| v.parse().ok()) {
+        opts.end_run = r;
+    }
+    opts.fill_gaps = std::env::var_os("BENCH_NO_FILL").is_none();
     let (t, c) = (Instant::now(), cpu());
     let pl = place_strokes(&dom, &opts).unwrap();
     let (t_place, c_place) = (secs(t), cpu() - c);
@@ -266,7 +273,91 @@ fn bench_annulus() {
     }
 }
 
+/// Issue 14: the same 100 × 100 mm sheet and Taylor–Green lattice, but given as a 3D lift
+/// (the sheet at z = 0) under a warped UV layout, `u = x`, `v = y (1 + c (x/W)² (y/H)²)`
+/// with `c = 2/3` (stretched 3:1 towards one corner, sheared), so spacing is measured on
+/// the lift. Tracing + spacing (gap filling included; `BENCH_NO_FILL=1` leaves it out) is
+/// timed `BENCH_RUNS` times (default 3), then compared with the isometric layout of the same
+/// lift; `BENCH_COVERAGE=1` also measures coverage.
+fn bench_warped() {
+    let n = 707;
+    let cells = 40.0;
+    let d_sep: f64 = std::env::var("BENCH_DSEP").ok().and_then(|v| v.parse().ok()).unwrap_or(0.23);
+    let runs: usize = std::env::var("BENCH_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let side = 100.0;
+    let cell = side / cells;
+    let cc = 2.0 / 3.0;
+    let (xy, tris) = grid_mesh(side, side, n, n);
+    let nf = tris.len();
+    let pos: Vec<Vec3> = xy.iter().map(|p| [p[0], p[1], 0.0]).collect();
+    let nrm = vec![[0.0, 0.0, 1.0]; pos.len()];
+    for warped in [true, false] {
+        let (uv, dirs): (Vec<Vec2>, Vec<Vec2>) = xy
+            .iter()
+            .map(|p| {
+                let (x, y) = (p[0], p[1]);
+                let (a, b) = (PI * x / cell, PI * y / cell);
+                let t = [a.sin() * b.cos(), -a.cos() * b.sin()];
+                if !warped {
+                    return (*p, t);
+                }
+                let q = cc * (x / side).powi(2) / (side * side);
+                let v = y * (1.0 + q * y * y);
+                let dv_dx = 2.0 * cc * x * y.powi(3) / side.powi(4);
+                let dv_dy = 1.0 + 3.0 * q * y * y;
+                ([x, v], [t[0], dv_dx * t[0] + dv_dy * t[1]])
+            })
+            .unzip();
+        let mesh = FieldMesh::new(uv, tris.clone(), Directions::Vectors(dirs), Symmetry::Vector)
+            .with_lift(pos.clone(), Some(nrm.clone()));
+        let t = Instant::now();
+        let dom = Domain::new(mesh).unwrap();
+        let t_dom = secs(t);
+        let fill_gaps = std::env::var_os("BENCH_NO_FILL").is_none();
+        let opts = PlacementOptions { fill_gaps, ..PlacementOptions::new(d_sep, 0.0) };
+        let (mut wall, mut cpus) = (Vec::new(), Vec::new());
+        let mut last = None;
+        for _ in 0..runs.max(1) {
+            let (t, c) = (Instant::now(), cpu());
+            let pl = place_strokes(&dom, &opts).unwrap();
+            wall.push(secs(t));
+            cpus.push(cpu() - c);
+            last = Some(pl);
+        }
+        let pl = last.unwrap();
+        let (w0, w1, w2) = stats(wall);
+        let (c0, c1, c2) = stats(cpus);
+        let label = if warped { "warped" } else { "isometric" };
+        println!(
+            "{label}: {nf} triangles (lift, spacing on the part), Domain::new {t_dom:.3} s; tracing + \
+             spacing x{runs}: wall min/median/max {w0:.3}/{w1:.3}/{w2:.3} s, CPU {c0:.2}/{c1:.2}/{c2:.2} s \
+             -> {} strokes ({} fill, {} dropped short), {:.0} mm",
+            pl.strokes.len(),
+            pl.fill_strokes,
+            pl.dropped_short,
+            pl.strokes.iter().map(|s| s.length).sum::<f64>(),
+        );
+        if std::env::var_os("BENCH_COVERAGE").is_some() {
+            let cov = coverage(
+                &dom,
+                &pl,
+                &CoverageOptions { resolution: Some(d_sep / 2.0), keep_map: false },
+            )
+            .unwrap();
+            println!(
+                "{label}: coverage {:.2}%, largest gap {:.3} mm",
+                100.0 * cov.fraction,
+                cov.largest_gap
+            );
+        }
+    }
+}
+
 fn main() {
+    if std::env::args().any(|a| a == "--warped") {
+        bench_warped();
+        return;
+    }
     if std::env::args().any(|a| a == "--order-only") {
         bench_cells(false, false, true);
         bench_sheet();

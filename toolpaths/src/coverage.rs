@@ -6,7 +6,12 @@
 //! to the nearest stroke (same metric as the spacing), capped at `4 d_sep`. Coverage is the
 //! area-weighted fraction (weight = UV pixel area × `√(EG − F²)`) of pixels with distance ≤
 //! `d_sep / 2`; the largest gap is twice the largest distance (the diameter of the largest
-//! stroke-free disc centred on a pixel).
+//! stroke-free disc centred on a pixel), and `largest_gap_capped` says when that distance
+//! reached the cap (the true gap is then at least the value given).
+//!
+//! Each chart is rasterized on its own (pixels of the common raster inside the chart's UV
+//! box, located in that chart only), so charts that overlap in UV are each measured; the gap
+//! map keeps the larger distance where charts overlap.
 
 use serde::{Deserialize, Serialize};
 
@@ -73,6 +78,10 @@ pub struct Coverage {
     pub largest_gap: f64,
     /// UV centre of that disc.
     pub largest_gap_at: Vec2,
+    /// Whether `largest_gap` is the capped value (the stroke-free disc is at least that
+    /// wide; there may be no stroke at all nearby).
+    #[serde(default)]
+    pub largest_gap_capped: bool,
     /// The raster, if kept.
     pub map: Option<GapMap>,
 }
@@ -95,36 +104,47 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
     let mut dist = vec![-1f32; nx * ny];
     let (mut covered, mut total) = (0.0, 0.0);
     let mut worst = (0.0, [0.0, 0.0]);
-    let mut hint: Option<(u32, Vec2)> = None;
-    for j in 0..ny {
-        for i in 0..nx {
-            let p = [b[0][0] + (i as f64 + 0.5) * pixel, b[0][1] + (j as f64 + 0.5) * pixel];
-            let face = match hint {
-                Some((f, q)) => match walk(dom, f, q, p) {
-                    Walk::Inside { face, .. } => Some(face),
-                    Walk::Exit { .. } => dom.grid.locate(dom, p).map(|x| x.0),
-                },
-                None => dom.grid.locate(dom, p).map(|x| x.0),
-            };
-            let Some(f) = face else { continue };
-            hint = Some((f, p));
-            // Expanding search: most pixels have a stroke within d_sep / 2.
-            let mut r = 0.5 * d_sep;
-            let d = loop {
-                let d = index.nearest(dom, p, f, r);
-                if d < r || r >= cap {
-                    break d;
+    for (chart, cb) in dom.chart_bbox.iter().enumerate() {
+        let chart = Some(chart as u32);
+        let span = |lo: f64, hi: f64, o: f64, n: usize| {
+            let a = (((lo - o) / pixel).floor().max(0.0) as usize).min(n - 1);
+            let b = (((hi - o) / pixel).ceil().max(0.0) as usize).min(n);
+            (a, b.max(a + 1))
+        };
+        let (i0, i1) = span(cb[0][0], cb[1][0], b[0][0], nx);
+        let (j0, j1) = span(cb[0][1], cb[1][1], b[0][1], ny);
+        let mut hint: Option<(u32, Vec2)> = None;
+        for j in j0..j1 {
+            for i in i0..i1 {
+                let p = [b[0][0] + (i as f64 + 0.5) * pixel, b[0][1] + (j as f64 + 0.5) * pixel];
+                let face = match hint {
+                    Some((f, q)) => match walk(dom, f, q, p) {
+                        Walk::Inside { face, .. } => Some(face),
+                        Walk::Exit { .. } => dom.grid.locate_in(dom, p, chart).map(|x| x.0),
+                    },
+                    None => dom.grid.locate_in(dom, p, chart).map(|x| x.0),
+                };
+                let Some(f) = face else { continue };
+                hint = Some((f, p));
+                // Expanding search: most pixels have a stroke within d_sep / 2.
+                let mut r = 0.5 * d_sep;
+                let d = loop {
+                    let d = index.nearest(dom, p, f, r);
+                    if d < r || r >= cap {
+                        break d;
+                    }
+                    r = (2.0 * r).min(cap);
+                };
+                let px = &mut dist[j * nx + i];
+                *px = px.max(d as f32);
+                let wgt = dom.metric[f as usize].area_factor();
+                total += wgt;
+                if d <= 0.5 * d_sep {
+                    covered += wgt;
                 }
-                r = (2.0 * r).min(cap);
-            };
-            dist[j * nx + i] = d as f32;
-            let wgt = dom.metric[f as usize].area_factor();
-            total += wgt;
-            if d <= 0.5 * d_sep {
-                covered += wgt;
-            }
-            if d > worst.0 {
-                worst = (d, p);
+                if d > worst.0 {
+                    worst = (d, p);
+                }
             }
         }
     }
@@ -132,6 +152,7 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
         fraction: if total > 0.0 { covered / total } else { 0.0 },
         largest_gap: 2.0 * worst.0,
         largest_gap_at: worst.1,
+        largest_gap_capped: worst.0 >= cap,
         map: o.keep_map.then_some(GapMap {
             origin: b[0],
             pixel,

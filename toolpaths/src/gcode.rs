@@ -639,6 +639,13 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
     let w = &mut g;
     let _ = writeln!(w, "(grainline-toolpaths job: {})", sanitize(&o.job));
     let _ = writeln!(w, "(dialect: {dialect}; passes: {}; {units})", plan.passes.len());
+    let n_sheets = plan.passes.iter().map(|p| p.sheet + 1).max().unwrap_or(1);
+    if n_sheets > 1 {
+        let _ = writeln!(
+            w,
+            "(sheets: {n_sheets}, cut in order; the program pauses with M0 between them)"
+        );
+    }
     let _ = writeln!(w, "G21 G90 G17 G94");
     if let Some((p, d)) = prog.blend {
         let _ = writeln!(w, "G64 P{}", num(p, d));
@@ -659,6 +666,33 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
         }
     }
     for (i, (stroke, moves)) in prog.passes.iter().enumerate() {
+        // A new sheet (charts overlapping in UV, flat mode): the tool is at safe Z after
+        // the previous pass; stop the spindle, pause for the operator to load the next
+        // sheet (M0, resumed with cycle start), restart the spindle.
+        let sheet = plan.passes.get(i).map_or(0, |p| p.sheet);
+        if i > 0 && plan.passes.get(i - 1).is_some_and(|p| p.sheet != sheet) {
+            let _ = writeln!(w, "(sheet {sheet}: load sheet {sheet}, then cycle start)");
+            let spindle = o.dialect != Dialect::Plain;
+            if spindle {
+                match &o.spindle {
+                    Spindle::None => {}
+                    Spindle::Speed(_) => {
+                        let _ = writeln!(w, "M5");
+                    }
+                    Spindle::Snippet { off, .. } => snippet(w, off),
+                }
+            }
+            let _ = writeln!(w, "M0");
+            if spindle {
+                match &o.spindle {
+                    Spindle::None => {}
+                    Spindle::Speed(s) => {
+                        let _ = writeln!(w, "M3 S{}", num(*s, 0));
+                    }
+                    Spindle::Snippet { on, .. } => snippet(w, on),
+                }
+            }
+        }
         let _ = writeln!(w, "(pass {i}: stroke {stroke})");
         for (j, m) in moves.iter().enumerate() {
             match *m {

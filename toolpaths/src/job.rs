@@ -107,6 +107,14 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
         None
     };
     let mut report = Report::new(&placement, &plan, cov.as_ref(), t);
+    report.charts = dom.chart_count();
+    let mut with = vec![false; dom.chart_count()];
+    for s in &placement.strokes {
+        for &f in &s.faces {
+            with[dom.chart[f as usize] as usize] = true;
+        }
+    }
+    report.charts_with_strokes = with.iter().filter(|&&w| w).count();
     if gcode.is_some() && plan.passes.is_empty() {
         report.warnings.push(format!(
             "the G-code program has no passes ({} strokes placed, {} skipped for tilt); written \

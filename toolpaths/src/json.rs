@@ -41,6 +41,9 @@ pub struct StrokeRecord {
     pub end: StopReason,
     /// Closed loop.
     pub closed: bool,
+    /// A gap-filling stroke ([`crate::Stroke::fill`]); written only when true.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fill: bool,
 }
 
 /// The whole strokes file.
@@ -90,6 +93,7 @@ pub fn strokes_file(placement: &Placement, plan: &Plan) -> StrokesFile {
             start: p.stops[0],
             end: p.stops[1],
             closed: p.stops[1] == StopReason::ClosedLoop,
+            fill: placement.strokes.get(p.stroke).is_some_and(|s| s.fill),
         })
         .collect();
     StrokesFile {

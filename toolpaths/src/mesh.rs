@@ -132,6 +132,65 @@ impl FieldMesh {
     }
 }
 
+/// Connected components of the face adjacency, numbered by lowest face, and their UV boxes.
+fn build_charts(uv: &[Vec2], tris: &[[u32; 3]], nb: &[[u32; 3]]) -> (Vec<u32>, Vec<[Vec2; 2]>) {
+    let mut chart = vec![NONE; tris.len()];
+    let mut boxes = Vec::new();
+    let mut stack = Vec::new();
+    for f0 in 0..tris.len() {
+        if chart[f0] != NONE {
+            continue;
+        }
+        let c = boxes.len() as u32;
+        let mut bb = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
+        chart[f0] = c;
+        stack.push(f0 as u32);
+        while let Some(f) = stack.pop() {
+            for &v in &tris[f as usize] {
+                let p = uv[v as usize];
+                for k in 0..2 {
+                    bb[0][k] = bb[0][k].min(p[k]);
+                    bb[1][k] = bb[1][k].max(p[k]);
+                }
+            }
+            for &g in &nb[f as usize] {
+                if g != NONE && chart[g as usize] == NONE {
+                    chart[g as usize] = c;
+                    stack.push(g);
+                }
+            }
+        }
+        boxes.push(bb);
+    }
+    (chart, boxes)
+}
+
+/// Unit vertex normals: the given ones, else the sum of the incident faces' area vectors.
+fn vertex_normals(p: &[Vec3], tris: &[[u32; 3]], given: Option<&[Vec3]>) -> Vec<Vec3> {
+    use crate::geom::{cross3, norm3, sub3};
+    let mut n = match given {
+        Some(g) => g.to_vec(),
+        None => {
+            let mut n = vec![[0.0; 3]; p.len()];
+            for t in tris {
+                let [a, b, c] = t.map(|v| p[v as usize]);
+                let w = cross3(sub3(b, a), sub3(c, a));
+                for &v in t {
+                    for k in 0..3 {
+                        n[v as usize][k] += w[k];
+                    }
+                }
+            }
+            n
+        }
+    };
+    for x in &mut n {
+        let l = norm3(*x);
+        *x = if l > 0.0 && l.is_finite() { x.map(|c| c / l) } else { [0.0; 3] };
+    }
+    n
+}
+
 /// Sentinel for "no neighbour" in [`Domain`] adjacency.
 pub(crate) const NONE: u32 = u32::MAX;
 
@@ -163,6 +222,14 @@ pub struct Domain {
     pub(crate) seams: BTreeMap<(u32, u8), SeamLink>,
     pub(crate) grid: FaceGrid,
     pub(crate) bbox: [Vec2; 2],
+    /// Chart (connected component of the UV adjacency, seams not followed) of each face.
+    /// Charts are numbered in order of their lowest face.
+    pub(crate) chart: Vec<u32>,
+    /// UV bounding box of each chart.
+    pub(crate) chart_bbox: Vec<[Vec2; 2]>,
+    /// Unit vertex normals used by the 3D spacing measure (the given normals, else area-
+    /// weighted face normals); present with the lift.
+    pub(crate) spacing_normals: Option<Vec<Vec3>>,
     /// Singularities, found on first use.
     sing: OnceLock<Vec<Singularity>>,
 }
@@ -254,6 +321,9 @@ impl Domain {
         let neighbors = build_adjacency(&tris)?;
         let seams = build_seams(&uv, &tris, &neighbors, &mesh.seams)?;
         let grid = FaceGrid::new(&uv, &tris, bbox);
+        let (chart, chart_bbox) = build_charts(&uv, &tris, &neighbors);
+        let spacing_normals =
+            mesh.positions.as_ref().map(|p| vertex_normals(p, &tris, mesh.normals.as_deref()));
         Ok(Domain {
             uv,
             tris,
@@ -267,6 +337,9 @@ impl Domain {
             seams,
             grid,
             bbox,
+            chart,
+            chart_bbox,
+            spacing_normals,
             sing: OnceLock::new(),
         })
     }
@@ -274,6 +347,22 @@ impl Domain {
     /// The field's singularities ([`crate::singularities`]), computed once and cached.
     pub fn singularities(&self) -> &[Singularity] {
         self.sing.get_or_init(|| crate::field::singularities(self))
+    }
+
+    /// Number of charts (connected pieces of the UV layout; seams do not join them).
+    pub fn chart_count(&self) -> usize {
+        self.chart_bbox.len()
+    }
+
+    /// The chart of face `f` (charts are numbered in order of their lowest face).
+    pub fn chart_of(&self, f: FaceId) -> usize {
+        self.chart[f.0 as usize] as usize
+    }
+
+    /// Pairs of charts `(a, b)`, `a < b`, whose UV triangles overlap (share interior
+    /// points): such charts are separate sheets. Ascending order.
+    pub fn overlapping_charts(&self) -> Vec<(usize, usize)> {
+        crate::topology::overlapping_charts(self)
     }
 
     /// Number of triangles.

@@ -110,5 +110,6 @@ pub(crate) fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) ->
         xyz,
         stops,
         length: it.length,
+        sheet: 0,
     }
 }

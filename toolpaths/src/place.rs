@@ -3,7 +3,10 @@
 //!
 //! * `d_sep = width · (1 − overlap)`: the distance between neighbouring strokes;
 //!   `d_test = ratio · d_sep` (default ratio ½): a stroke being traced stops when it comes
-//!   closer than `d_test` to an accepted stroke (§3).
+//!   closer than `d_test` to an accepted stroke (§3) — after a run-on of `end_run · d_test`
+//!   of arc length (default 1) during which it stays `d_test / 2` away, so the wedge
+//!   beyond its end, between its neighbours, is brushed too (`end_run = 0`: the classic
+//!   stop).
 //! * Candidate seeds sit `d_sep` to either side of every sample of every accepted stroke,
 //!   in the order strokes were accepted (a FIFO queue, §3, "seed point selection"); a seed is
 //!   valid when it lies in the domain, outside every singularity's exclusion radius, and at
@@ -12,8 +15,25 @@
 //!   fallback seeds with pitch `d_sep` is scanned in row order. Everything is sequential and
 //!   deterministic.
 //!
-//! Distances use the surface metric unless [`Spacing::Uv`] is chosen; the sideways offset of
-//! a seed is `d_sep` along the metric normal of the stroke ([`Metric::unit_normal`]).
+//! * Every chart (connected piece of the UV layout) is its own sheet: the fallback raster
+//!   scans each chart's UV box and locates its points in that chart only, so charts that
+//!   overlap in UV (a mirrored half face laid over the other half) all get strokes.
+//! * **Gap filling** (after the queue and the raster): beside every stroke, at every
+//!   candidate, a point that is farther than `d_sep / 2` from all strokes (uncovered) seeds
+//!   a *fill* stroke traced with the same `d_test`: the strip between the last stroke and a
+//!   chart edge that runs along the strokes (the seed sits in the middle of the uncovered
+//!   part of the strip), and the wider gaps between diverging strokes (the seed sits midway).
+//!   Fill strokes are marked ([`Stroke::fill`]) and counted, and do not seed further strokes.
+//! * Strokes shorter than `min_length` (default twice the brush width) are dropped and
+//!   counted. With the default, a corner piece — a stroke with both ends on a chart edge —
+//!   and a fill stroke are kept down to one brush width: nothing else can brush that corner
+//!   or gap. An explicit `min_length` applies to every stroke; `0` keeps all.
+//!
+//! Distances are measured on the part's 3D lift when there is one ([`crate::Spacing`],
+//! `spacing.rs`), else with the metric, or in UV for [`Spacing::Uv`]. The sideways offset of
+//! a seed is `d_sep` **on the surface**: a march along the surface normal of the stroke
+//! ([`Metric::unit_normal`]) across the triangles, each with its own metric
+//! (`locate::march`), so a stretched or sheared layout does not change where seeds land.
 
 use std::collections::VecDeque;
 
@@ -21,12 +41,12 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{in_range, non_negative, positive, Result, ToolpathError};
 use crate::field::Singularity;
-use crate::geom::{add, scale, sub, Metric, Vec2};
-use crate::grid::PointGrid;
-use crate::locate::{walk, Walk};
+use crate::geom::{dot3, norm3, scale, sub, sub3, Metric, Vec2, Vec3};
+use crate::grid::Grid3;
+use crate::locate::{march, walk, March, Walk};
 use crate::mesh::Domain;
-use crate::spacing::{typical_stretch, Spacing, StrokeIndex};
-use crate::trace::{Stroke, TraceOptions, Tracer};
+use crate::spacing::{typical_stretch, Probe, Spacing, StrokeIndex};
+use crate::trace::{StopReason, Stroke, TraceOptions, Tracer};
 
 /// Options of the even-spacing placement. Lengths in mm.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -42,10 +62,21 @@ pub struct PlacementOptions {
     pub test_ratio: f64,
     /// Where spacing is measured. Default [`Spacing::Surface`].
     pub spacing: Spacing,
-    /// Strokes shorter than this (mm) are dropped. Default 0 (keep all).
-    pub min_length: f64,
+    /// Strokes shorter than this (mm, on the part) are dropped and counted in the report.
+    /// Default (`None`): twice the brush width, and one width for corner pieces (both ends
+    /// on a chart edge) and fill strokes. An explicit value applies to every stroke; `0`
+    /// keeps every stroke.
+    pub min_length: Option<f64>,
     /// Exclusion radius around singularities, mm; `None` means `d_sep`.
     pub exclusion_radius: Option<f64>,
+    /// Run-on past the first approach, as a multiple of `d_test` (arc length): a stroke
+    /// that comes within `d_test` of another keeps going for up to `end_run · d_test` as
+    /// long as it stays `d_test / 2` away, so the wedge beyond its end, between its two
+    /// neighbours, is brushed too. `0` stops at `d_test` (Jobard & Lefer). Default 1.
+    pub end_run: f64,
+    /// Fill the gaps left by the even spacing (module docs): strips along chart edges and
+    /// gaps wider than `1.1 d_sep`. Default true.
+    pub fill_gaps: bool,
     /// Seeds tried first, in order (UV). Default: the centre of the UV bounding box.
     pub seeds: Vec<Vec2>,
     /// Integration options. `max_step` is capped at `d_test / 2`; `exclusion_radius` is
@@ -60,8 +91,10 @@ impl Default for PlacementOptions {
             overlap: 0.0,
             test_ratio: 0.5,
             spacing: Spacing::Surface,
-            min_length: 0.0,
+            min_length: None,
             exclusion_radius: None,
+            end_run: 1.0,
+            fill_gaps: true,
             seeds: Vec::new(),
             trace: TraceOptions::default(),
         }
@@ -84,6 +117,12 @@ impl PlacementOptions {
         self.test_ratio * self.d_sep()
     }
 
+    /// The minimum stroke length in force: `min_length`, else `2 · width` (corner pieces
+    /// and fill strokes: `width`, see the field).
+    pub fn min_length(&self) -> f64 {
+        self.min_length.unwrap_or(2.0 * self.width)
+    }
+
     /// Reject NaN and out-of-range values with a clear error.
     pub fn validate(&self) -> Result<()> {
         positive("placement.width", self.width)?;
@@ -96,10 +135,13 @@ impl PlacementOptions {
                 reason: "must be in (0, 1]",
             });
         }
-        non_negative("placement.min_length", self.min_length)?;
+        if let Some(l) = self.min_length {
+            non_negative("placement.min_length", l)?;
+        }
         if let Some(r) = self.exclusion_radius {
             non_negative("placement.exclusion_radius", r)?;
         }
+        non_negative("placement.end_run", self.end_run)?;
         for (i, s) in self.seeds.iter().enumerate() {
             if !(s[0].is_finite() && s[1].is_finite()) {
                 return Err(ToolpathError::NonFinite { what: "placement.seeds", index: i });
@@ -128,6 +170,10 @@ pub struct Placement {
     pub exclusion_radius: f64,
     /// Strokes traced but dropped for being shorter than `min_length`.
     pub dropped_short: usize,
+    /// The minimum stroke length used, mm.
+    pub min_length: f64,
+    /// Accepted strokes that are gap-filling strokes ([`Stroke::fill`]).
+    pub fill_strokes: usize,
     /// Seeds that passed the validity tests and were traced.
     pub seeds_traced: usize,
     /// Field evaluations (Runge–Kutta stages).
@@ -145,19 +191,28 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     topts.min_step = topts.min_step.min(topts.max_step);
     topts.exclusion_radius = exclusion;
     let sing = dom.singularities();
+    let index = StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing);
+    let st_lift = index.lifted();
+    let own_cell = if index.lifted() {
+        3.0 * d_test
+    } else {
+        3.0 * d_test / typical_stretch(dom, opts.spacing)
+    };
     let mut st = State {
         dom,
         tracer: Tracer::new(dom, sing, &topts),
-        index: StrokeIndex::new(dom, d_test + 0.5 * topts.max_step, opts.spacing),
+        index,
         strokes: Vec::new(),
         queue: VecDeque::new(),
         d_sep,
         d_test,
-        min_length: opts.min_length,
+        min_length: opts.min_length(),
+        relaxed_ends: opts.min_length.is_none(),
+        end_run: opts.end_run,
         dropped_short: 0,
         seeds_traced: 0,
         own: OwnPoints {
-            grid: PointGrid::new(dom.bbox, 3.0 * d_test / typical_stretch(dom, opts.spacing)),
+            grid: Grid3::new(crate::spacing::embedding_box(dom, st_lift), own_cell),
             pts: Vec::new(),
             closure: crate::trace::closure_radius(&topts),
         },
@@ -169,32 +224,36 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
     }
     for p in initial {
         if let Some((f, _)) = dom.grid.locate(dom, p) {
-            st.try_seed(p, f);
+            st.try_seed(p, f, SEED_SLACK);
             st.drain();
         }
     }
-    // Fallback raster of seeds, row by row.
+    // Fallback raster of seeds, row by row, chart by chart (overlapping charts are
+    // separate sheets: each raster point is located in its own chart).
     let pitch = d_sep / typical_stretch(dom, opts.spacing);
-    let b = dom.bbox;
-    let nx = (((b[1][0] - b[0][0]) / pitch).ceil() as usize).min(1 << 14) + 1;
-    let ny = (((b[1][1] - b[0][1]) / pitch).ceil() as usize).min(1 << 14) + 1;
-    let mut hint: Option<u32> = None;
-    for j in 0..ny {
-        for i in 0..nx {
-            let p = [b[0][0] + (i as f64 + 0.5) * pitch, b[0][1] + (j as f64 + 0.5) * pitch];
-            let located = match hint {
-                Some(h) => match walk(dom, h, dom_centroid(dom, h), p) {
-                    Walk::Inside { face, .. } => Some(face),
-                    Walk::Exit { .. } => dom.grid.locate(dom, p).map(|x| x.0),
-                },
-                None => dom.grid.locate(dom, p).map(|x| x.0),
-            };
-            let Some(f) = located else { continue };
-            hint = Some(f);
-            st.try_seed(p, f);
-            st.drain();
+    for (chart, b) in dom.chart_bbox.iter().enumerate() {
+        let chart = chart as u32;
+        let nx = (((b[1][0] - b[0][0]) / pitch).ceil() as usize).min(1 << 14) + 1;
+        let ny = (((b[1][1] - b[0][1]) / pitch).ceil() as usize).min(1 << 14) + 1;
+        let mut hint: Option<u32> = None;
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = [b[0][0] + (i as f64 + 0.5) * pitch, b[0][1] + (j as f64 + 0.5) * pitch];
+                let located = match hint {
+                    Some(h) => match walk(dom, h, dom_centroid(dom, h), p) {
+                        Walk::Inside { face, .. } => Some(face),
+                        Walk::Exit { .. } => dom.grid.locate_in(dom, p, Some(chart)).map(|x| x.0),
+                    },
+                    None => dom.grid.locate_in(dom, p, Some(chart)).map(|x| x.0),
+                };
+                let Some(f) = located else { continue };
+                hint = Some(f);
+                st.try_seed(p, f, SEED_SLACK);
+                st.drain();
+            }
         }
     }
+    let fill_strokes = if opts.fill_gaps { st.fill() } else { 0 };
     Ok(Placement {
         width: opts.width,
         d_sep,
@@ -202,6 +261,8 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         spacing: opts.spacing,
         exclusion_radius: exclusion,
         dropped_short: st.dropped_short,
+        min_length: st.min_length,
+        fill_strokes,
         seeds_traced: st.seeds_traced,
         field_evaluations: st.tracer.evals,
         strokes: st.strokes,
@@ -219,6 +280,10 @@ struct State<'a> {
     d_sep: f64,
     d_test: f64,
     min_length: f64,
+    /// The default minimum length is in force: corner pieces and fill strokes get half.
+    relaxed_ends: bool,
+    /// [`PlacementOptions::end_run`].
+    end_run: f64,
     dropped_short: usize,
     seeds_traced: usize,
     own: OwnPoints,
@@ -227,10 +292,12 @@ struct State<'a> {
 /// The points of the stroke being traced, for the self-approach test: a stroke stops when
 /// it comes within `d_test` of its own points more than `π · d_test` away along it (a
 /// spiral, or a loop that does not close exactly), except on the final approach to its
-/// start, where the tracer closes the loop.
+/// start, where the tracer closes the loop. Points are kept in the spacing measure's space
+/// (3D with a lift, UV with the query's metric without).
 struct OwnPoints {
-    grid: PointGrid,
-    pts: Vec<(Vec2, f64)>,
+    grid: Grid3,
+    /// Position in the grid's space, UV, arc length.
+    pts: Vec<(Vec3, Vec2, f64)>,
     /// The tracer's loop-closure radius.
     closure: f64,
 }
@@ -238,30 +305,60 @@ struct OwnPoints {
 impl OwnPoints {
     /// Forget the previous stroke in time proportional to its size.
     fn clear(&mut self) {
-        for &(p, _) in &self.pts {
-            self.grid.clear_at(p);
+        for &(x, _, _) in &self.pts {
+            self.grid.clear_at(x);
         }
         self.pts.clear();
     }
 
-    /// Whether `p` (at arc length `arc`) is within `r` (UV radius `r_uv`) of an own point
-    /// far along the stroke; then records `p`. Own points within `2r` of the seed that lie
-    /// ahead of `p` within `closure` of its track are exempt: the stroke is about to close.
-    fn approaches(&mut self, m: &Metric, p: Vec2, arc: f64, r: f64, r_uv: f64) -> bool {
+    /// Whether `q` (at arc length `arc`) is within `r` (grid radius `r_visit`) of an own
+    /// point far along the stroke; then records `q`. Own points within `2r` of the seed that
+    /// lie ahead of `q` within `closure` of its track are exempt: the stroke is about to
+    /// close.
+    fn approaches(&mut self, q: &Probe, lifted: bool, arc: f64, r: f64, r_visit: f64) -> bool {
         let skip = std::f64::consts::PI * r;
-        let heading = self.pts.last().map(|&(q, _)| sub(p, q));
         let (pts, closure) = (&self.pts, self.closure);
+        // (vector to an own point, heading) → (distance, component along the heading).
+        let measure = |x: Vec3, uv: Vec2| -> (f64, Option<f64>) {
+            let last = pts.last();
+            if lifted {
+                // Own points across a UV seam (far in UV, near in 3D: a stroke that went
+                // round a closed part and is back at its own start) do not stop it: the
+                // stroke ends at the seam as without a lift.
+                if q.m.length(sub(uv, q.uv)) > 4.0 * r {
+                    return (f64::INFINITY, None);
+                }
+                let v = sub3(x, q.x);
+                let dist = norm3(v);
+                let along = last.and_then(|&(lx, _, _)| {
+                    let h = sub3(q.x, lx);
+                    let lh = norm3(h);
+                    (lh > 0.0).then(|| dot3(v, h) / lh)
+                });
+                (dist, along)
+            } else {
+                let v = sub(uv, q.uv);
+                let dist = q.m.length(v);
+                let along = last.and_then(|&(_, luv, _)| {
+                    let h = sub(q.uv, luv);
+                    let lh = q.m.length(h);
+                    (lh > 0.0).then(|| q.m.inner(v, h) / lh)
+                });
+                (dist, along)
+            }
+        };
         let mut hit = false;
-        self.grid.visit(p, r_uv, |i| {
-            let (q, s) = pts[i as usize];
-            let v = sub(q, p);
-            let dist = m.length(v);
-            if (s - arc).abs() <= skip || dist >= r {
+        self.grid.visit(q.x, r_visit, |i| {
+            let (x, uv, s) = pts[i as usize];
+            if (s - arc).abs() <= skip {
+                return true;
+            }
+            let (dist, along) = measure(x, uv);
+            if dist >= r {
                 return true;
             }
             if s.abs() <= 2.0 * r {
-                if let Some(h) = heading.filter(|h| m.length(*h) > 0.0) {
-                    let along = m.inner(v, h) / m.length(h);
+                if let Some(along) = along {
                     let across = (dist * dist - along * along).max(0.0).sqrt();
                     if along > 0.0 && across < closure {
                         return true;
@@ -272,72 +369,159 @@ impl OwnPoints {
             false
         });
         if !hit {
-            self.grid.insert(p, self.pts.len() as u32);
-            self.pts.push((p, arc));
+            self.grid.insert(q.x, self.pts.len() as u32);
+            self.pts.push((q.x, q.uv, arc));
         }
         hit
     }
 }
 
 impl State<'_> {
-    /// Trace from `p` (in face `f`) if it is a valid seed; accept the stroke if long enough.
-    fn try_seed(&mut self, p: Vec2, f: u32) {
-        let (dom, d_test) = (self.dom, self.d_test);
-        if self.index.within(dom, p, f, self.d_sep * SEED_SLACK)
-            || self.tracer.near_singularity(p, f).is_some()
-        {
+    /// Trace from `p` (in face `f`) if it lies at least `d_sep · slack` from every stroke
+    /// and outside the exclusion zones; accept the stroke if long enough.
+    fn try_seed(&mut self, p: Vec2, f: u32, slack: f64) {
+        if self.index.within(self.dom, p, f, self.d_sep * slack) {
             return;
+        }
+        if let Some(s) = self.trace(p, f, false) {
+            self.queue.push_back(self.strokes.len());
+            self.strokes.push(s);
+        }
+    }
+
+    /// Trace from a seed already found clear of the strokes; the stroke is inserted into
+    /// the index when it is long enough (else counted as dropped). With the default minimum
+    /// length, fill strokes and corner pieces are kept down to half of it.
+    fn trace(&mut self, p: Vec2, f: u32, fill: bool) -> Option<Stroke> {
+        let (dom, d_test) = (self.dom, self.d_test);
+        if self.tracer.near_singularity(p, f).is_some() {
+            return None;
         }
         let idx = &self.index;
         let own = &mut self.own;
         own.clear();
-        let Some(s) = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
-            idx.within(dom, q, fq, d_test)
+        let lifted = idx.lifted();
+        // Where each half first came within d_test of another stroke (signed arc length):
+        // the stroke runs on for up to `end_run · d_test` while it stays `d_test / 2` away,
+        // so the wedge beyond its end, between its two neighbours, is brushed too.
+        let mut first: [Option<f64>; 2] = [None, None];
+        let run = self.end_run * d_test;
+        let s = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
+            let pr = idx.probe(dom, q, fq);
+            let close = idx.within_probe(dom, &pr, fq, d_test) && {
+                let half = usize::from(arc < 0.0);
+                let at = *first[half].get_or_insert(arc);
+                (arc - at).abs() >= run || idx.within_probe(dom, &pr, fq, 0.5 * d_test)
+            };
+            close
                 || vertex && {
-                    let m = idx.metric(dom, fq);
-                    own.approaches(&m, q, arc, d_test, idx.uv_radius(dom, fq, d_test))
+                    let rv = idx.visit_radius(dom, fq, d_test);
+                    own.approaches(&pr, lifted, arc, d_test, rv)
                 }
-        }) else {
-            return;
-        };
+        })?;
         self.seeds_traced += 1;
-        if s.length < self.min_length || s.uv.len() < 2 {
+        // Corner pieces (both ends on a chart edge: nothing else can brush that corner) and
+        // fill strokes (placed to cover a gap) are kept down to half the minimum length.
+        let corner = s.start == StopReason::Boundary && s.end == StopReason::Boundary;
+        let least = if (corner || fill) && self.relaxed_ends {
+            0.5 * self.min_length
+        } else {
+            self.min_length
+        };
+        if s.length < least || s.uv.len() < 2 {
             self.dropped_short += 1;
-            return;
+            return None;
         }
         self.index.insert(dom, &s);
-        self.queue.push_back(self.strokes.len());
-        self.strokes.push(s);
+        Some(s)
     }
 
     /// Seed beside every queued stroke until the queue is empty.
     fn drain(&mut self) {
         while let Some(si) = self.queue.pop_front() {
             for (p, f) in side_seeds(self.dom, &self.strokes[si], &self.index, self.d_sep) {
-                self.try_seed(p, f);
+                self.try_seed(p, f, SIDE_SLACK);
             }
         }
+    }
+
+    /// Gap filling (module docs): returns the number of fill strokes accepted.
+    fn fill(&mut self) -> usize {
+        let (dom, d) = (self.dom, self.d_sep);
+        let mut count = 0;
+        let n0 = self.strokes.len();
+        for si in 0..n0 {
+            let cands = candidates(dom, &self.strokes[si], &self.index, d);
+            for (p, f, n) in cands {
+                for side in [1.0, -1.0] {
+                    let dir = scale(n, side);
+                    let metric = |g: u32| self.index.metric(dom, g);
+                    let at = match march(dom, metric, f, p, dir, d) {
+                        March::Inside { p: q, face } => {
+                            let nd = self.index.nearest(dom, q, face, d);
+                            if nd >= d * SIDE_SLACK || nd <= FILL_MIN * d {
+                                continue;
+                            }
+                            0.5 * (d + nd)
+                        }
+                        March::Exit { travelled, .. } => {
+                            if travelled <= 0.5 * d * (1.0 + FILL_MIN) {
+                                continue;
+                            }
+                            0.5 * (travelled + 0.5 * d)
+                        }
+                    };
+                    let March::Inside { p: q, face } = march(dom, metric, f, p, dir, at) else {
+                        continue;
+                    };
+                    if self.index.within(dom, q, face, 0.5 * d * (1.0 + FILL_MIN)) {
+                        continue;
+                    }
+                    // Around a singularity the gap is the exclusion zone, left on purpose.
+                    let ex = self.tracer.opts.exclusion_radius;
+                    if self.tracer.near_singularity_within(q, face, ex + d).is_some() {
+                        continue;
+                    }
+                    if let Some(mut s) = self.trace(q, face, true) {
+                        s.fill = true;
+                        self.strokes.push(s);
+                        count += 1;
+                    }
+                }
+            }
+        }
+        count
     }
 }
 
 /// A seed counts as `d_sep` away when at least `d_sep · SEED_SLACK` away (round-off).
 const SEED_SLACK: f64 = 1.0 - 1e-6;
 
+/// Side seeds are marched `d_sep` on the surface; the index measures the distance back to
+/// the stroke from 3D chords and normals (eq. S1), which agrees to about 1e-4 relative, so
+/// side seeds get this looser test.
+const SIDE_SLACK: f64 = 1.0 - 1e-3;
+
+/// Gap filling ignores uncovered bands narrower than this fraction of `d_sep`.
+const FILL_MIN: f64 = 0.1;
+
 fn dom_centroid(dom: &Domain, f: u32) -> Vec2 {
     let c = dom.corners(f);
     [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0]
 }
 
-/// Candidate seeds `d_sep` to the left and right of every sample of `s`, located.
-fn side_seeds(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<(Vec2, u32)> {
-    let mut out = Vec::with_capacity(2 * s.uv.len());
+/// Candidate points of `s`: every `d_sep / 2` of arc length (plus both ends of each piece),
+/// with their face and the unit surface normal of the stroke there (UV, unit in the
+/// spacing metric of the face).
+fn candidates(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<(Vec2, u32, Vec2)> {
+    let mut out = Vec::new();
     for piece in s.pieces() {
         let pts = &s.uv[piece.clone()];
         if pts.len() < 2 {
             continue;
         }
-        // Candidates every d_sep / 2 of arc length (plus both ends): a seed anywhere in a
-        // gap grows both ways, so denser candidates only repeat the same tests.
+        // A seed anywhere in a gap grows both ways, so denser candidates only repeat the
+        // same tests.
         let mut since = f64::INFINITY;
         for i in 0..pts.len() {
             let k = piece.start + i;
@@ -355,12 +539,21 @@ fn side_seeds(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<
             if l <= 0.0 {
                 continue;
             }
-            let n = m.unit_normal(scale(t, 1.0 / l));
-            for side in [1.0, -1.0] {
-                let q = add(pts[i], scale(n, side * d_sep));
-                if let Walk::Inside { face, .. } = walk(dom, f, pts[i], q) {
-                    out.push((q, face));
-                }
+            out.push((pts[i], f, m.unit_normal(scale(t, 1.0 / l))));
+        }
+    }
+    out
+}
+
+/// Candidate seeds `d_sep` on the surface to the left and right of the candidate points of
+/// `s`, located (points beyond the chart edge are left out).
+fn side_seeds(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<(Vec2, u32)> {
+    let mut out = Vec::new();
+    let metric = |g: u32| index.metric(dom, g);
+    for (p, f, n) in candidates(dom, s, index, d_sep) {
+        for side in [1.0, -1.0] {
+            if let March::Inside { p: q, face } = march(dom, metric, f, p, scale(n, side), d_sep) {
+                out.push((q, face));
             }
         }
     }

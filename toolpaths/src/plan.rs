@@ -178,6 +178,9 @@ pub struct Pass {
     pub stops: [StopReason; 2],
     /// Surface length of the stroke, mm.
     pub length: f64,
+    /// Sheet of the pass (flat mode: charts that overlap in UV go on separate sheets,
+    /// numbered from 0; always 0 when surface following or when no charts overlap).
+    pub sheet: usize,
 }
 
 /// The ordered passes.
@@ -333,28 +336,78 @@ pub fn ordering_ends(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
 /// Build the ordered passes from a placement (see the module docs).
 pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Plan> {
     let (items, skipped_tilt) = plan_items(dom, placement, opts)?;
-    let ends: Vec<Ends> = items.iter().map(ends_of).collect();
-    let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &opts.order);
+    // Sheets: in flat mode (XY = UV) charts that overlap in UV cannot be cut on one sheet;
+    // each sheet is ordered on its own, from home, and cut in sheet order.
+    let sheet_of_chart = match opts.z_mode {
+        ZMode::Flat { .. } => sheets(dom),
+        ZMode::SurfaceFollowing { .. } => vec![0; dom.chart_count()],
+    };
+    let item_sheet: Vec<usize> = items
+        .iter()
+        .map(|it| {
+            it.faces
+                .iter()
+                .flatten()
+                .next()
+                .map_or(0, |&f| sheet_of_chart[dom.chart[f as usize] as usize])
+        })
+        .collect();
+    let n_sheets = item_sheet.iter().copied().max().map_or(1, |m| m + 1);
     let mut passes = Vec::with_capacity(items.len());
-    for &k in &ordering.order {
-        let mut it = items[k].clone();
-        if let Some(v) = ordering.entry[k] {
-            let at = ring_index(it.machine.len(), v);
-            rotate_loop(&mut it, at);
+    let (mut travel, mut travel_between, mut travel_greedy) = (0.0, 0.0, 0.0);
+    for sheet in 0..n_sheets {
+        let ids: Vec<usize> = (0..items.len()).filter(|&k| item_sheet[k] == sheet).collect();
+        if ids.is_empty() {
+            continue;
         }
-        let flip = ordering.flipped[k];
-        passes.push(make_pass(dom, &it, flip, opts));
+        let ends: Vec<Ends> = ids.iter().map(|&k| ends_of(&items[k])).collect();
+        let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &opts.order);
+        for &j in &ordering.order {
+            let mut it = items[ids[j]].clone();
+            if let Some(v) = ordering.entry[j] {
+                let at = ring_index(it.machine.len(), v);
+                rotate_loop(&mut it, at);
+            }
+            let flip = ordering.flipped[j];
+            let mut pass = make_pass(dom, &it, flip, opts);
+            pass.sheet = sheet;
+            passes.push(pass);
+        }
+        travel += ordering.travel;
+        travel_between += ordering.travel_between;
+        travel_greedy += ordering.travel_greedy;
     }
     Ok(Plan {
         passes,
         skipped_tilt,
-        travel: ordering.travel,
-        travel_between: ordering.travel_between,
-        travel_greedy: ordering.travel_greedy,
+        travel,
+        travel_between,
+        travel_greedy,
         width: placement.width,
         home: opts.order.home,
         tolerance: opts.tolerance,
     })
+}
+
+/// Sheet of each chart: charts that overlap in UV get different sheets (greedy colouring
+/// in chart order, lowest free sheet first); without overlaps every chart is on sheet 0.
+pub(crate) fn sheets(dom: &Domain) -> Vec<usize> {
+    let n = dom.chart_count();
+    let mut sheet = vec![0usize; n];
+    let pairs = dom.overlapping_charts();
+    if pairs.is_empty() {
+        return sheet;
+    }
+    let mut adj = vec![Vec::new(); n];
+    for &(a, b) in &pairs {
+        adj[a].push(b);
+        adj[b].push(a);
+    }
+    for c in 0..n {
+        let used: Vec<usize> = adj[c].iter().filter(|&&o| o < c).map(|&o| sheet[o]).collect();
+        sheet[c] = (0..).find(|s| !used.contains(s)).unwrap_or(0);
+    }
+    sheet
 }
 
 /// Largest angle (degrees) between the surface normal and +Z along a stroke.

@@ -48,6 +48,19 @@ pub struct Report {
     pub singularities: usize,
     /// Strokes dropped as shorter than `min_length`.
     pub dropped_short: usize,
+    /// The minimum stroke length used, mm (`placement.min_length`, default twice the width).
+    #[serde(default)]
+    pub min_length: f64,
+    /// Gap-filling strokes among `stroke_count` (placed along chart edges and in wide gaps
+    /// after the evenly spaced strokes).
+    #[serde(default)]
+    pub fill_strokes: usize,
+    /// Charts (sheets) of the UV layout, and how many of them received strokes.
+    #[serde(default)]
+    pub charts: usize,
+    /// Charts with at least one stroke.
+    #[serde(default)]
+    pub charts_with_strokes: usize,
     /// Strokes skipped for tilt (stroke index, tilt in degrees).
     pub skipped_tilt: Vec<(usize, f64)>,
     /// Field evaluations during tracing.
@@ -113,6 +126,10 @@ impl Report {
             stop_reasons,
             singularities: placement.singularities.len(),
             dropped_short: placement.dropped_short,
+            min_length: placement.min_length,
+            fill_strokes: placement.fill_strokes,
+            charts: 0,
+            charts_with_strokes: 0,
             skipped_tilt: plan.skipped_tilt.clone(),
             field_evaluations: placement.field_evaluations,
             timings,

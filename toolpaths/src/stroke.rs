@@ -58,6 +58,9 @@ pub struct Stroke {
     pub end: StopReason,
     /// Length on the surface, mm (seam jumps excluded).
     pub length: f64,
+    /// A gap-filling stroke (placed after the evenly spaced ones to cover the strips along
+    /// chart edges and the wider gaps between diverging strokes; see [`crate::place_strokes`]).
+    pub fill: bool,
 }
 
 impl Stroke {
@@ -97,5 +100,13 @@ pub(crate) fn join(back: Half, fwd: Half) -> Stroke {
     uv.extend_from_slice(&fwd.uv[1..]);
     faces.extend_from_slice(&fwd.faces[1..]);
     breaks.extend(fwd.breaks.iter().map(|&j| j + nb - 1));
-    Stroke { uv, faces, breaks, start: back.stop, end: fwd.stop, length: back.length + fwd.length }
+    Stroke {
+        uv,
+        faces,
+        breaks,
+        start: back.stop,
+        end: fwd.stop,
+        length: back.length + fwd.length,
+        fill: false,
+    }
 }

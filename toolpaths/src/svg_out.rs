@@ -140,15 +140,22 @@ pub fn write_svg(dom: &Domain, plan: &Plan, o: &SvgOptions) -> Result<String> {
         }
         doc = doc.add(g);
     }
-    let mut g = layer("strokes").set("stroke", "#000000").set("stroke-width", num(plan.width, dp));
-    for pass in &plan.passes {
-        for piece in &pass.uv {
-            if piece.len() >= 2 {
-                g = g.add(Path::new().set("d", d_of(piece, false)));
+    // One strokes layer per sheet (charts overlapping in UV, flat mode); a single sheet
+    // keeps the layer name `strokes`.
+    let n_sheets = plan.passes.iter().map(|p| p.sheet + 1).max().unwrap_or(1);
+    for sheet in 0..n_sheets {
+        let name =
+            if sheet == 0 { "strokes".to_string() } else { format!("strokes-sheet-{sheet}") };
+        let mut g = layer(&name).set("stroke", "#000000").set("stroke-width", num(plan.width, dp));
+        for pass in plan.passes.iter().filter(|p| p.sheet == sheet) {
+            for piece in &pass.uv {
+                if piece.len() >= 2 {
+                    g = g.add(Path::new().set("d", d_of(piece, false)));
+                }
             }
         }
+        doc = doc.add(g);
     }
-    doc = doc.add(g);
     if o.travel {
         let mut g = layer("travel").set("stroke", "#ff0000").set("stroke-width", "0.1");
         let mut prev: Option<Vec2> = None;

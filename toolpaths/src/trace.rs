@@ -136,7 +136,11 @@ impl<'a> Tracer<'a> {
     /// Distance from `p` (in face `f`) to the nearest singularity if below the exclusion
     /// radius, with that singularity's position.
     pub fn near_singularity(&self, p: Vec2, f: u32) -> Option<Vec2> {
-        let r = self.opts.exclusion_radius;
+        self.near_singularity_within(p, f, self.opts.exclusion_radius)
+    }
+
+    /// The nearest singularity within surface distance `r` of `p` (in face `f`), if any.
+    pub fn near_singularity_within(&self, p: Vec2, f: u32, r: f64) -> Option<Vec2> {
         if r <= 0.0 || self.sing.is_empty() {
             return None;
         }
@@ -395,6 +399,7 @@ impl<'a> Tracer<'a> {
                 start: StopReason::ClosedLoop,
                 end: StopReason::ClosedLoop,
                 length: fwd.length,
+                fill: false,
             });
         }
         let back = self.trace_half(seed, face, [-d[0], -d[1]], -1.0, &mut blocked);

@@ -54,10 +54,27 @@ fn spacing_statistics_on_a_sphere_patch() {
         [a.cos(), a.sin()]
     });
     let dom = Domain::new(mesh).unwrap();
-    let opts = PlacementOptions::new(1.0, 0.0);
+    // The classic Jobard–Lefer stop (no run-on past d_test): strokes stay d_test apart.
+    let opts = PlacementOptions { end_run: 0.0, ..PlacementOptions::new(1.0, 0.0) };
     let (d_sep, d_test) = (opts.d_sep(), opts.d_test());
     let pl = place_strokes(&dom, &opts).unwrap();
     assert!(pl.strokes.len() > 10);
+    // With the default run-on, stroke ends come no closer than d_test / 2.
+    let run_on = place_strokes(&dom, &PlacementOptions::new(1.0, 0.0)).unwrap();
+    let lifted: Vec<Vec<Vec3>> =
+        run_on.strokes.iter().map(|s| s.uv.iter().map(|p| sphere(p[0], p[1])).collect()).collect();
+    for (i, s) in lifted.iter().enumerate() {
+        for p in s {
+            for (j, o) in lifted.iter().enumerate() {
+                if j != i {
+                    for w in o.windows(2) {
+                        let d = dist_point_segment(*p, w[0], w[1]);
+                        assert!(d >= 0.5 * d_test * (1.0 - 1e-3), "run-on ends {d} apart");
+                    }
+                }
+            }
+        }
+    }
     let lifted: Vec<Vec<Vec3>> =
         pl.strokes.iter().map(|s| s.uv.iter().map(|p| sphere(p[0], p[1])).collect()).collect();
     let (mut ok_len, mut total_len) = (0.0, 0.0);
