@@ -344,10 +344,9 @@ fn check_gcode(shared: &std::path::Path, name: &str, ngc: &std::path::Path) {
     );
 }
 
-/// Coverage every corpus mesh reaches with the current placement on its generated layout
-/// (the issue's 95 % needs items 1–2, the placement, as well: on the exactly flattened
-/// paper-crumpled2 the placement reaches about 0.90 today).
-const COVERAGE_FLOOR: f64 = 0.85;
+/// Coverage every corpus mesh must reach on its generated layout (issue 14: 95 %; with the
+/// surface-measured spacing and gap filling the corpus reaches 0.976–0.996).
+const COVERAGE_FLOOR: f64 = 0.95;
 
 /// Runs `grainline run` on a corpus mesh scaled to about 100 mm across with a 3 mm brush, the
 /// smoothest line field, `cross_seams` on and `toolpaths.layout.mode` = `mode`; returns the
