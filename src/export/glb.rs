@@ -39,9 +39,8 @@ impl Bin {
     }
 
     fn align(&mut self) {
-        while self.bytes.len() % 4 != 0 {
-            self.bytes.push(0);
-        }
+        let pad = (4 - self.bytes.len() % 4) % 4;
+        self.bytes.resize(self.bytes.len() + pad, 0);
     }
 }
 
