@@ -540,3 +540,35 @@ fn strokes_node() {
     validate("kettle with strokes", &glb);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Bad requests are refused naming the flag or the scene key: no output path, and strokes
+/// asked for without a `toolpaths` section.
+#[test]
+fn errors_name_the_key() {
+    let dir = std::env::temp_dir().join(format!("grainline-gltf-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run = |args: &[&str], scene: &Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_grainline"))
+            .args(["--quiet", "export"])
+            .arg(scene)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let kettle = root().join("examples/kettle/scene.json");
+    let e = run(&[], &kettle);
+    assert!(e.contains("--glb"), "{e}");
+    let text = std::fs::read_to_string(&kettle).unwrap();
+    let mut scene: Value = serde_json::from_str(&text).unwrap();
+    scene.as_object_mut().unwrap().remove("toolpaths");
+    scene["mesh"] = json!(root().join("examples/data/kettle.obj"));
+    let p = dir.join("scene.json");
+    std::fs::write(&p, scene.to_string()).unwrap();
+    let glb = dir.join("x.glb").display().to_string();
+    let e = run(&["--glb", &glb, "--strokes"], &p);
+    assert!(e.contains("export.strokes") && e.contains("toolpaths"), "{e}");
+    assert!(!dir.join("x.glb").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
