@@ -404,7 +404,9 @@ fn check_three(name: &str, x: &Exported) -> (f64, f64) {
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
-    eprintln!("{name}: three.js: {}", String::from_utf8_lossy(&o.stdout).trim());
+    let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+    eprintln!("{name}: three.js: {}", stdout.trim());
+    check_view(name, &serde_json::from_str::<Value>(stdout.trim()).unwrap()["info"], key);
     let (three, mask) = read_three(&x.dir.join("three.f32"));
     let (turned, _) = read_three(&x.dir.join("three-turned.f32"));
     let preview = read_pfm(&x.dir.join("preview.pfm"));
@@ -450,6 +452,32 @@ fn check_three(name: &str, x: &Exported) -> (f64, f64) {
         std::fs::copy(x.dir.join("three.png"), out.join(format!("gltf-{name}-three.png"))).unwrap();
     }
     (d, d_turned)
+}
+
+/// The file's camera and key light, as three.js loaded them (world coordinates: metres, +Y up),
+/// against the scene's, turned by the same node transform: same eye, forward, up (orthogonalized)
+/// and field of view; the light towards the (possibly moved) key light with its irradiance.
+fn check_view(name: &str, info: &Value, key: &Value) {
+    let v = |x: &Value| [0, 1, 2].map(|k| x[k].as_f64().unwrap());
+    let dist = |a: [f64; 3], b: [f64; 3]| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt();
+    let (fc, ex) = (&info["file_camera"], &info["expected"]);
+    assert!(fc.is_object(), "{name}: the file has no camera: {info}");
+    let eye = v(&ex["eye"]);
+    let scale = eye.iter().map(|c| c * c).sum::<f64>().sqrt();
+    assert!(dist(v(&fc["eye"]), eye) < 1e-5 * scale, "{name}: camera {fc} vs {ex}");
+    let f = v(&ex["forward"]);
+    assert!(dist(v(&fc["forward"]), f) < 1e-5, "{name}: camera {fc} vs {ex}");
+    let u = v(&ex["up"]);
+    let uf: f64 = (0..3).map(|k| u[k] * f[k]).sum();
+    let w = [0, 1, 2].map(|k| u[k] - uf * f[k]);
+    let n = w.iter().map(|c| c * c).sum::<f64>().sqrt();
+    assert!(dist(v(&fc["up"]), w.map(|c| c / n)) < 1e-5, "{name}: camera {fc} vs {ex}");
+    assert!((fc["fov_deg"].as_f64().unwrap() - ex["fov_deg"].as_f64().unwrap()).abs() < 1e-6);
+    let fl = &info["file_light"];
+    assert!(fl.is_object() && fl["count"] == 1, "{name}: the file has no single key light: {info}");
+    assert!(dist(v(&fl["towards"]), v(&ex["light"])) < 1e-5, "{name}: light {fl} vs {ex}");
+    let e = key.get("irradiance").and_then(Value::as_f64).unwrap_or(1.0);
+    assert!((fl["intensity"].as_f64().unwrap() - e).abs() < 1e-9, "{name}: light {fl}");
 }
 
 fn example(name: &str, three: bool) {

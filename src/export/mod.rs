@@ -80,6 +80,54 @@ pub struct ExportOptions {
     pub up: [f64; 3],
     /// The name of the mesh, node and material.
     pub name: String,
+    /// The scene's camera, written as a glTF perspective camera (a node `view`), so a viewer
+    /// can open on the designed view.
+    pub camera: Option<ViewCamera>,
+    /// The key light: direction towards it (scene coordinates) and irradiance, written as a
+    /// `KHR_lights_punctual` directional light (a node `key light`).
+    pub key_light: Option<([f64; 3], f64)>,
+}
+
+/// The scene's pinhole camera, in scene coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewCamera {
+    /// Eye position.
+    pub eye: [f64; 3],
+    /// The point at the image centre.
+    pub target: [f64; 3],
+    /// Up direction.
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    pub fov_deg: f64,
+}
+
+/// `q` applied to `v` (q = (x, y, z, w), unit): v + 2w(q×v) + 2q×(q×v).
+fn rotate(q: [f64; 4], v: Vector3<f64>) -> Vector3<f64> {
+    let qv = Vector3::new(q[0], q[1], q[2]);
+    let t = 2.0 * qv.cross(&v);
+    v + q[3] * t + qv.cross(&t)
+}
+
+/// The unit quaternion (x, y, z, w) of the rotation whose matrix has columns `x`, `y`, `z`
+/// (orthonormal, right-handed), by Shepperd's method.
+fn quaternion_of(x: Vector3<f64>, y: Vector3<f64>, z: Vector3<f64>) -> [f64; 4] {
+    let (m00, m11, m22) = (x.x, y.y, z.z);
+    let tr = m00 + m11 + m22;
+    let q = if tr > 0.0 {
+        let s = 2.0 * (tr + 1.0).sqrt();
+        [(y.z - z.y) / s, (z.x - x.z) / s, (x.y - y.x) / s, 0.25 * s]
+    } else if m00 > m11 && m00 > m22 {
+        let s = 2.0 * (1.0 + m00 - m11 - m22).sqrt();
+        [0.25 * s, (y.x + x.y) / s, (z.x + x.z) / s, (y.z - z.y) / s]
+    } else if m11 > m22 {
+        let s = 2.0 * (1.0 + m11 - m00 - m22).sqrt();
+        [(y.x + x.y) / s, 0.25 * s, (z.y + y.z) / s, (z.x - x.z) / s]
+    } else {
+        let s = 2.0 * (1.0 + m22 - m00 - m11).sqrt();
+        [(z.x + x.z) / s, (z.y + y.z) / s, 0.25 * s, (x.y - y.x) / s]
+    };
+    let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+    q.map(|c| c / n)
 }
 
 /// Figures of an export.
@@ -382,13 +430,58 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
             n_strokes = 0;
         }
     }
+    // The camera and the key light, in glTF's world (metres, +Y up): the part node's transform
+    // applied to the scene's coordinates.
+    let world_dir = |v: [f64; 3]| rotate(rotation, Vector3::from(v));
+    let mut cameras = Vec::new();
+    if let Some(c) = options.camera.filter(|c| {
+        let f = Vector3::from(c.target) - Vector3::from(c.eye);
+        f.norm() > 0.0 && f.cross(&Vector3::from(c.up)).norm() > 1e-9 * f.norm()
+    }) {
+        let fwd = world_dir(c.target) - world_dir(c.eye);
+        let dist = fwd.norm() * scale;
+        let back = -fwd.normalize();
+        let right = fwd.cross(&world_dir(c.up)).normalize();
+        let up = back.cross(&right);
+        let eye = world_dir(c.eye) * scale;
+        cameras.push(json!({
+            "name": "view", "type": "perspective",
+            "perspective": { "yfov": c.fov_deg.to_radians(), "znear": 1e-3 * dist }
+        }));
+        nodes.push(json!({
+            "name": "view", "camera": 0, "translation": [eye.x, eye.y, eye.z],
+            "rotation": quaternion_of(right, up, back)
+        }));
+    }
+    let mut lights = Vec::new();
+    if let Some((d, irradiance)) = options
+        .key_light
+        .filter(|(d, e)| e.is_finite() && *e >= 0.0 && Vector3::from(*d).norm() > 0.0)
+    {
+        // The light shines along its node's −Z: +Z points towards the light.
+        let z = world_dir(d).normalize();
+        let x = perpendicular(&z);
+        let y = z.cross(&x);
+        lights.push(json!({
+            "name": "key", "type": "directional", "color": [1.0, 1.0, 1.0],
+            "intensity": irradiance
+        }));
+        nodes.push(json!({
+            "name": "key light", "rotation": quaternion_of(x, y, z),
+            "extensions": { "KHR_lights_punctual": { "light": 0 } }
+        }));
+    }
     let node_ids: Vec<usize> = (0..nodes.len()).collect();
-    let doc = json!({
+    let mut used = vec!["KHR_materials_anisotropy"];
+    if !lights.is_empty() {
+        used.push("KHR_lights_punctual");
+    }
+    let mut doc = json!({
         "asset": {
             "version": "2.0",
             "generator": concat!("grainline ", env!("CARGO_PKG_VERSION"))
         },
-        "extensionsUsed": ["KHR_materials_anisotropy"],
+        "extensionsUsed": used,
         "scene": 0,
         "scenes": [{ "name": name, "nodes": node_ids }],
         "nodes": nodes,
@@ -398,6 +491,12 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
         "bufferViews": views,
         "buffers": [{ "byteLength": bin.bytes.len() }]
     });
+    if !cameras.is_empty() {
+        doc["cameras"] = json!(cameras);
+    }
+    if !lights.is_empty() {
+        doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": lights } });
+    }
     let text = serde_json::to_vec(&doc)
         .map_err(|e| Error::Numerical { stage: "glTF JSON", message: e.to_string() })?;
     let bytes = glb::container(&text, &bin.bytes);
@@ -421,6 +520,20 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Shepperd's quaternion rotates the basis vectors onto the matrix's columns.
+    #[test]
+    fn quaternion_of_a_frame() {
+        for (a, b) in [(0.3, -0.5), (2.0, 1.0), (-3.0, 0.2), (0.0, 3.1)] {
+            let z = Vector3::new(f64::cos(a) * f64::sin(b), f64::sin(a) * f64::sin(b), f64::cos(b));
+            let x = perpendicular(&z);
+            let y = z.cross(&x);
+            let q = quaternion_of(x, y, z);
+            assert!((rotate(q, Vector3::x()) - x).norm() < 1e-12);
+            assert!((rotate(q, Vector3::y()) - y).norm() < 1e-12);
+            assert!((rotate(q, Vector3::z()) - z).norm() < 1e-12);
+        }
+    }
 
     /// The rotations take their axis to +Y (checked by rotating the vector by hand:
     /// v' = v + 2w(q×v) + 2q×(q×v)).
@@ -482,6 +595,8 @@ mod tests {
             units: Units::Mm,
             up: [0.0, 0.0, 1.0],
             name: "square".into(),
+            camera: None,
+            key_light: None,
         };
         let out = export_glb(&input, &options).unwrap();
         assert_eq!(out.report.vertices, 4);

@@ -512,6 +512,21 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             units: prepared.mesh.units,
             up: scene.view.up,
             name,
+            camera: Some(crate::export::ViewCamera {
+                eye: scene.view.eye,
+                target: scene.view.target,
+                up: scene.view.up,
+                fov_deg: scene.view.fov_deg,
+            }),
+            // The key light as the highlight model used it (a light edit may have moved it).
+            key_light: crate::render::key_light_index(&scene.lights).and_then(|i| {
+                match &scene.lights[i] {
+                    crate::render::LightSpec::Directional { irradiance, .. } => {
+                        Some(([lighting.light.x, lighting.light.y, lighting.light.z], *irradiance))
+                    }
+                    _ => None,
+                }
+            }),
         };
         let x = crate::export::export_glb(&input, &options)?;
         write_out(&mut staged, &out(p), &x.glb)?;

@@ -7,6 +7,8 @@
 // JOB.json: { "glb": path, "width": 512, "height": 512,
 //             "camera": { "eye": [x,y,z], "target": [x,y,z], "up": [x,y,z], "fov_deg": f },
 //             "light": { "direction": [x,y,z] (towards the light), "irradiance": E },
+//             (when the file has its own camera and KHR_lights_punctual light, those are used
+//             and reported beside these, as "file_camera" / "file_light" and "expected"),
 //             "renders": [ { "rotate_anisotropy_deg": 0 (added to anisotropyRotation: a
 //                              deliberate error, for the test that must fail),
 //                            "raw": out path (linear RGBA f32, little-endian, rows top to bottom),
@@ -59,15 +61,46 @@ window.render = async (job) => {
   const eye = v(job.camera.eye).applyMatrix4(M), target = v(job.camera.target).applyMatrix4(M);
   const up = v(job.camera.up).transformDirection(M);
   const dist = eye.distanceTo(target);
-  const camera = new THREE.PerspectiveCamera(job.camera.fov_deg, W / H, 1e-3 * dist, 100 * dist);
-  camera.position.copy(eye);
-  camera.up.copy(up);
-  camera.lookAt(target);
-  const light = new THREE.DirectionalLight(0xffffff, job.light.irradiance);
-  light.position.copy(v(job.light.direction).transformDirection(M));
-  light.target.position.set(0, 0, 0);
-  scene.add(light);
-  scene.add(light.target);
+  const toLight = v(job.light.direction).transformDirection(M);
+  info.expected = { eye: eye.toArray(), forward: target.clone().sub(eye).normalize().toArray(),
+    up: up.toArray(), fov_deg: job.camera.fov_deg, light: toLight.toArray() };
+  // The file's own camera and key light (KHR_lights_punctual), when it has them, are used for
+  // the render: the test then checks them too.
+  let camera;
+  if (gltf.cameras.length > 0) {
+    camera = gltf.cameras[0];
+    camera.aspect = W / H;
+    camera.near = 1e-3 * dist;
+    camera.far = 100 * dist;
+    camera.updateProjectionMatrix();
+    camera.updateMatrixWorld(true);
+    const f = new THREE.Vector3();
+    camera.getWorldDirection(f);
+    const u = new THREE.Vector3(0, 1, 0).transformDirection(camera.matrixWorld);
+    info.file_camera = { eye: new THREE.Vector3().setFromMatrixPosition(camera.matrixWorld).toArray(),
+      forward: f.toArray(), up: u.toArray(), fov_deg: camera.fov };
+  } else {
+    camera = new THREE.PerspectiveCamera(job.camera.fov_deg, W / H, 1e-3 * dist, 100 * dist);
+    camera.position.copy(eye);
+    camera.up.copy(up);
+    camera.lookAt(target);
+  }
+  const fileLights = [];
+  gltf.scene.traverse((o) => { if (o.isDirectionalLight) fileLights.push(o); });
+  if (fileLights.length > 0) {
+    const l = fileLights[0];
+    l.updateMatrixWorld(true);
+    l.target.updateMatrixWorld(true);
+    const p = new THREE.Vector3().setFromMatrixPosition(l.matrixWorld);
+    const t = new THREE.Vector3().setFromMatrixPosition(l.target.matrixWorld);
+    info.file_light = { towards: p.sub(t).normalize().toArray(), intensity: l.intensity, count: fileLights.length };
+  } else {
+    const light = new THREE.DirectionalLight(0xffffff, job.light.irradiance);
+    light.position.copy(toLight);
+    light.target.position.set(0, 0, 0);
+    scene.add(light);
+    scene.add(light.target);
+  }
   const rt = new THREE.WebGLRenderTarget(W, H, { type: THREE.FloatType, format: THREE.RGBAFormat });
   const results = [];
   for (const r of job.renders) {
