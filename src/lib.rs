@@ -36,6 +36,7 @@
 pub mod allocator;
 pub mod edit;
 pub mod error;
+pub mod export;
 pub mod fidelity;
 pub mod field;
 pub mod generate;

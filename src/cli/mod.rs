@@ -1,5 +1,6 @@
 //! Command-line definitions and dispatch. No algorithm lives here.
 
+mod export;
 mod field;
 mod flatten;
 mod inspect;
@@ -45,6 +46,8 @@ enum Command {
     /// The scene's preview alone: PNG and optional linear PFM (strokes traced only if an effect
     /// needs them).
     Render(render::RenderArgs),
+    /// The part and its grain as glTF 2.0 binary with KHR_materials_anisotropy (docs/gltf.md).
+    Export(export::ExportArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
     /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
@@ -61,6 +64,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Schema(a) => schema::run(a),
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
+        Command::Export(a) => export::run(a, cli.quiet),
         Command::Run(a) => run::run(a, cli.quiet),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
         Command::Panel(a) => panel::run(a, cli.quiet),

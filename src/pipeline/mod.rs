@@ -1,9 +1,10 @@
 //! The scene job: the stages a scene's outputs need, and nothing else.
 //!
 //! `prepare` (load the part, geometry, initial field, ℓ) always runs; the solve runs only when
-//! the scene has edits; the strokes are traced only when a toolpath output or a strokes /
-//! as-brushed render effect asks for them; the preview renders only when the scene has a
-//! `render` section. Every stage is timed, and the times add up to the run's wall time.
+//! the scene has edits; the strokes are traced only when a toolpath output, a strokes /
+//! as-brushed render effect or `export.strokes` / `export.as_brushed` asks for them; the preview
+//! renders only when the scene has a `render` section, the glTF file only with `export.glb`.
+//! Every stage is timed, and the times add up to the run's wall time.
 
 pub mod optimize;
 pub mod run;

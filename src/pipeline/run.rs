@@ -37,15 +37,20 @@ pub struct StagePlan {
     pub trace: bool,
     /// The scene has a `render` section.
     pub render: bool,
-    /// The as-brushed field is needed (as-brushed effect).
+    /// The as-brushed field is needed (as-brushed effect, or `export.as_brushed`).
     pub as_brushed: bool,
+    /// The scene asks for a glTF export (`export.glb`).
+    pub export: bool,
 }
 
 impl StagePlan {
     /// The stages `scene` needs.
     pub fn of(scene: &crate::scene::Scene) -> StagePlan {
         let fx = scene.render.as_ref().map(|r| &r.effects);
-        let as_brushed = fx.is_some_and(|f| f.as_brushed.is_some());
+        let ex = scene.export.as_ref().filter(|e| e.glb.is_some());
+        let export_needs_strokes = ex.is_some_and(|e| e.strokes || e.as_brushed);
+        let as_brushed =
+            fx.is_some_and(|f| f.as_brushed.is_some()) || ex.is_some_and(|e| e.as_brushed);
         let render_needs_strokes =
             fx.is_some_and(|f| f.strokes.is_some() || f.as_brushed.is_some() || f.gap.is_some());
         let toolpath_outputs = scene
@@ -54,9 +59,10 @@ impl StagePlan {
             .is_some_and(|t| t.svg.is_some() || t.gcode.is_some() || t.strokes_json.is_some());
         StagePlan {
             solve: !scene.edits.is_empty(),
-            trace: toolpath_outputs || render_needs_strokes,
+            trace: toolpath_outputs || render_needs_strokes || export_needs_strokes,
             render: scene.render.is_some(),
             as_brushed,
+            export: ex.is_some(),
         }
     }
 }
@@ -127,6 +133,9 @@ pub struct RunReport {
     pub as_brushed: Option<AsBrushedFigures>,
     /// The preview's passes, times and counters.
     pub render: Option<RenderReport>,
+    /// The glTF export: vertices, splits, the material written (`export.glb`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub export: Option<crate::export::ExportReport>,
     /// Files written.
     pub outputs: Vec<String>,
 }
@@ -162,6 +171,9 @@ pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> OutputPlan {
         if let Some(p) = &r.linear {
             plan.output("render.linear", out(p));
         }
+    }
+    if let Some(p) = scene.export.as_ref().and_then(|e| e.glb.as_ref()) {
+        plan.output("export.glb", out(p));
     }
     if let Some(p) = &options.report {
         plan.output("the run report", p.clone());
@@ -480,6 +492,64 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         }
         render_report = Some(r.report);
     }
+    let mut export_report = None;
+    if let Some((e, p)) = scene.export.as_ref().and_then(|e| e.glb.as_ref().map(|p| (e, p))) {
+        stages.start("export");
+        let normals: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
+        let (u, phi_e) = match (&brushed, e.as_brushed) {
+            (Some(b), true) => {
+                let u: Vec<Vector3<f64>> = b.u.iter().map(|v| Vector3::from(*v)).collect();
+                let phi_b = g.angles_of(&u);
+                (u, phi_b)
+            }
+            _ => (g.directions_of(phi), phi.clone()),
+        };
+        let singular: Vec<u32> = match symmetry {
+            crate::highlight::Symmetry::Line => {
+                crate::solve::singularities::singularities(&prepared.mesh, g, &phi_e, 2)
+                    .iter()
+                    .map(|s| s.face)
+                    .collect()
+            }
+            crate::highlight::Symmetry::Oriented => Vec::new(),
+        };
+        let input = crate::export::ExportInput {
+            positions: &prepared.mesh.positions,
+            faces: &prepared.mesh.faces,
+            normals: &normals,
+            u: &u,
+            symmetry,
+            singular_faces: &singular,
+            strokes: e.strokes.then_some(strokes_3d.as_slice()),
+        };
+        let name = Path::new(&prepared.mesh_name)
+            .file_stem()
+            .map_or_else(|| "part".to_string(), |s| s.to_string_lossy().into_owned());
+        let options = crate::export::ExportOptions {
+            material: scene.material.clone(),
+            units: prepared.mesh.units,
+            up: scene.view.up,
+            name,
+            camera: Some(crate::export::ViewCamera {
+                eye: scene.view.eye,
+                target: scene.view.target,
+                up: scene.view.up,
+                fov_deg: scene.view.fov_deg,
+            }),
+            // The key light as the highlight model used it (a light edit may have moved it).
+            key_light: crate::render::key_light_index(&scene.lights).and_then(|i| {
+                match &scene.lights[i] {
+                    crate::render::LightSpec::Directional { irradiance, .. } => {
+                        Some(([lighting.light.x, lighting.light.y, lighting.light.z], *irradiance))
+                    }
+                    _ => None,
+                }
+            }),
+        };
+        let x = crate::export::export_glb(&input, &options)?;
+        write_out(&mut staged, &out(p), &x.glb)?;
+        export_report = Some(x.report);
+    }
     let as_brushed_figures = brushed.as_ref().map(|b| AsBrushedFigures {
         compared: b.compared,
         median_deg: b.median_deg,
@@ -505,6 +575,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         toolpaths,
         as_brushed: as_brushed_figures,
         render: render_report,
+        export: export_report,
         outputs,
     };
     if let Some(p) = &options.report {

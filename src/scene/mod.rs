@@ -60,6 +60,10 @@ pub struct Scene {
     /// The preview image; absent: no rendering.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub render: Option<crate::render::RenderSettings>,
+    /// Files for other programs: the part with its grain as glTF 2.0 binary
+    /// (`export.glb`, docs/gltf.md); absent: no export.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub export: Option<crate::export::ExportSection>,
 }
 
 impl Scene {
@@ -141,6 +145,15 @@ impl Scene {
             crate::render::validate_with_lights(r, &self.lights)?;
         }
         self.solver.validate().map_err(|e| prefix("solver", e))?;
+        if let Some(e) = &self.export {
+            if (e.strokes || e.as_brushed) && self.toolpaths.is_none() {
+                let key = if e.strokes { "export.strokes" } else { "export.as_brushed" };
+                return Err(Error::setting(
+                    key,
+                    "needs the strokes: add a `toolpaths` section (its placement sets them)",
+                ));
+            }
+        }
         Ok(())
     }
 }

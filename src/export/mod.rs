@@ -1,0 +1,614 @@
+//! The part and its grain as glTF 2.0 binary (.glb) with `KHR_materials_anisotropy`, for the
+//! designer's own viewer (three.js, Babylon.js, Blender, ...). docs/gltf.md has the format, the
+//! material mapping and the conventions; in short:
+//!
+//! - the triangle mesh with POSITION, NORMAL, TANGENT (xyz = the grain u, w = +1) and indices,
+//!   in the scene's length unit; the node's `scale` turns it into metres (0.001 for mm) and its
+//!   `rotation` turns the scene's `view.up` axis into glTF's +Y;
+//! - one metallic material with `KHR_materials_anisotropy` { `anisotropyStrength`,
+//!   `anisotropyRotation` = π/2 }: the anisotropy direction (TANGENT turned by the rotation,
+//!   i.e. the bitangent n × u) is where the extension *raises* the roughness, across the
+//!   grooves ([`material`]);
+//! - a line field (k = 2) oriented per triangle, vertices split where the sign changes and
+//!   around singular faces ([`orient`]);
+//! - optionally the brush strokes as a second node of LINES;
+//! - deterministic bytes: no time stamp, fixed key order, face order kept.
+//!
+//! The caller writes the bytes atomically (`output::Staged`).
+
+pub mod glb;
+pub mod material;
+pub mod orient;
+
+use nalgebra::Vector3;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+use crate::highlight::Symmetry;
+use crate::mesh::Units;
+use crate::render::Material;
+use crate::{Error, Result};
+
+pub use material::{gltf_material, GltfMaterial};
+
+/// The scene's `export` section: files for other programs.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ExportSection {
+    /// glTF 2.0 binary (.glb) of the part with its grain as tangents and an anisotropic
+    /// material (`KHR_materials_anisotropy`), written by `grainline run` and `grainline export`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glb: Option<String>,
+    /// Also write the brush strokes as a second node of line primitives (needs `toolpaths`).
+    #[serde(default)]
+    pub strokes: bool,
+    /// Write the grain rebuilt from the strokes (the as-brushed field) instead of the designed
+    /// one (needs `toolpaths`).
+    #[serde(default)]
+    pub as_brushed: bool,
+}
+
+/// What [`export_glb`] exports: the mesh and its per-vertex fields, borrowed.
+#[derive(Clone, Copy, Debug)]
+pub struct ExportInput<'a> {
+    /// Vertex positions, in the scene's unit.
+    pub positions: &'a [Vector3<f64>],
+    /// Triangles, counter-clockwise around their outward normal.
+    pub faces: &'a [[u32; 3]],
+    /// Unit vertex normals.
+    pub normals: &'a [Vector3<f64>],
+    /// The grain per vertex (tangent; projected and normalized here).
+    pub u: &'a [Vector3<f64>],
+    /// k = 1 (oriented) or k = 2 (line field: oriented per triangle, vertices split).
+    pub symmetry: Symmetry,
+    /// Faces of non-zero index (`solve::singularities`), isolated when k = 2.
+    pub singular_faces: &'a [u32],
+    /// Brush strokes (3D polylines, scene unit), written as a second node when given.
+    pub strokes: Option<&'a [Vec<Vector3<f64>>]>,
+}
+
+/// Options of [`export_glb`].
+#[derive(Clone, Debug)]
+pub struct ExportOptions {
+    /// The scene's material, mapped to glTF ([`gltf_material`]).
+    pub material: Material,
+    /// The unit of the positions (the node's scale turns it into metres).
+    pub units: Units,
+    /// The scene's up direction (`view.up`), turned into glTF's +Y by the node's rotation
+    /// when it is closest to a coordinate axis.
+    pub up: [f64; 3],
+    /// The name of the mesh, node and material.
+    pub name: String,
+    /// The scene's camera, written as a glTF perspective camera (a node `view`), so a viewer
+    /// can open on the designed view.
+    pub camera: Option<ViewCamera>,
+    /// The key light: direction towards it (scene coordinates) and irradiance, written as a
+    /// `KHR_lights_punctual` directional light (a node `key light`).
+    pub key_light: Option<([f64; 3], f64)>,
+}
+
+/// The scene's pinhole camera, in scene coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewCamera {
+    /// Eye position.
+    pub eye: [f64; 3],
+    /// The point at the image centre.
+    pub target: [f64; 3],
+    /// Up direction.
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    pub fov_deg: f64,
+}
+
+/// `q` applied to `v` (q = (x, y, z, w), unit): v + 2w(q×v) + 2q×(q×v).
+fn rotate(q: [f64; 4], v: Vector3<f64>) -> Vector3<f64> {
+    let qv = Vector3::new(q[0], q[1], q[2]);
+    let t = 2.0 * qv.cross(&v);
+    v + q[3] * t + qv.cross(&t)
+}
+
+/// The unit quaternion (x, y, z, w) of the rotation whose matrix has columns `x`, `y`, `z`
+/// (orthonormal, right-handed), by Shepperd's method.
+fn quaternion_of(x: Vector3<f64>, y: Vector3<f64>, z: Vector3<f64>) -> [f64; 4] {
+    let (m00, m11, m22) = (x.x, y.y, z.z);
+    let tr = m00 + m11 + m22;
+    let q = if tr > 0.0 {
+        let s = 2.0 * (tr + 1.0).sqrt();
+        [(y.z - z.y) / s, (z.x - x.z) / s, (x.y - y.x) / s, 0.25 * s]
+    } else if m00 > m11 && m00 > m22 {
+        let s = 2.0 * (1.0 + m00 - m11 - m22).sqrt();
+        [0.25 * s, (y.x + x.y) / s, (z.x + x.z) / s, (y.z - z.y) / s]
+    } else if m11 > m22 {
+        let s = 2.0 * (1.0 + m11 - m00 - m22).sqrt();
+        [(y.x + x.y) / s, 0.25 * s, (z.y + y.z) / s, (z.x - x.z) / s]
+    } else {
+        let s = 2.0 * (1.0 + m22 - m00 - m11).sqrt();
+        [(z.x + x.z) / s, (z.y + y.z) / s, 0.25 * s, (x.y - y.x) / s]
+    };
+    let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+    q.map(|c| c / n)
+}
+
+/// Figures of an export.
+#[derive(Clone, Debug, Serialize)]
+pub struct ExportReport {
+    /// glTF vertices written (mesh vertices plus the split copies).
+    pub vertices: usize,
+    /// Mesh vertices.
+    pub mesh_vertices: usize,
+    /// Triangles.
+    pub triangles: usize,
+    /// Mesh vertices written more than once (k = 2 sign changes and isolated faces).
+    pub split_vertices: usize,
+    /// Faces given vertices of their own (inconsistent or singular, k = 2).
+    pub isolated_faces: usize,
+    /// Vertices whose grain was zero or along the normal (tangent set to an arbitrary
+    /// perpendicular).
+    pub fallback_tangents: usize,
+    /// Strokes written as lines (0 without the strokes node).
+    pub strokes: usize,
+    /// Line segments of the strokes node.
+    pub stroke_segments: usize,
+    /// The node's uniform scale (scene unit → metres).
+    pub scale: f64,
+    /// The node's rotation quaternion (x, y, z, w).
+    pub rotation: [f64; 4],
+    /// The material as written.
+    pub material: GltfMaterial,
+    /// Size of the .glb.
+    pub bytes: usize,
+}
+
+/// The .glb and its figures.
+#[derive(Clone, Debug)]
+pub struct ExportOutput {
+    /// The .glb file's bytes.
+    pub glb: Vec<u8>,
+    /// Figures.
+    pub report: ExportReport,
+}
+
+/// The quaternion (x, y, z, w) turning the coordinate axis closest to `up` into +Y
+/// (identity when `up` is closest to +Y or is not finite).
+pub fn up_rotation(up: [f64; 3]) -> [f64; 4] {
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let a = up.map(f64::abs);
+    if !up.iter().all(|c| c.is_finite()) || a == [0.0; 3] {
+        return [0.0, 0.0, 0.0, 1.0];
+    }
+    if a[2] > a[0] && a[2] > a[1] {
+        // −90° about x takes +z to +y; +90° takes −z to +y.
+        if up[2] > 0.0 {
+            [-h, 0.0, 0.0, h]
+        } else {
+            [h, 0.0, 0.0, h]
+        }
+    } else if a[0] > a[1] {
+        // +90° about z takes +x to +y.
+        if up[0] > 0.0 {
+            [0.0, 0.0, h, h]
+        } else {
+            [0.0, 0.0, -h, h]
+        }
+    } else if up[1] > 0.0 {
+        [0.0, 0.0, 0.0, 1.0]
+    } else {
+        [1.0, 0.0, 0.0, 0.0]
+    }
+}
+
+/// A unit vector perpendicular to the unit `n` (deterministic).
+fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
+    let a = n.map(f64::abs);
+    let axis = if a.x <= a.y && a.x <= a.z {
+        Vector3::x()
+    } else if a.y <= a.z {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    n.cross(&axis).normalize()
+}
+
+fn check_finite(what: &str, i: usize, v: &Vector3<f64>) -> Result<()> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::invalid_arg("export input", format!("vertex {i}: {what} is not finite")))
+    }
+}
+
+/// The part as glTF 2.0 binary (module docs). Errors name the vertex or face of a bad input.
+pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<ExportOutput> {
+    let nv = input.positions.len();
+    if input.normals.len() != nv || input.u.len() != nv {
+        return Err(Error::invalid_arg(
+            "export input",
+            format!(
+                "{nv} positions, {} normals and {} grain vectors: they must match",
+                input.normals.len(),
+                input.u.len()
+            ),
+        ));
+    }
+    if input.faces.is_empty() {
+        return Err(Error::invalid_arg("export input", "no triangles"));
+    }
+    for (f, t) in input.faces.iter().enumerate() {
+        if let Some(&v) = t.iter().find(|&&v| v as usize >= nv) {
+            return Err(Error::invalid_arg(
+                "export input",
+                format!("face {f} refers to vertex {v}, the mesh has {nv}"),
+            ));
+        }
+    }
+    // Unit normals and unit tangents in the tangent plane.
+    let mut normals = Vec::with_capacity(nv);
+    let mut tangents = Vec::with_capacity(nv);
+    let mut fallback = 0;
+    for i in 0..nv {
+        check_finite("position", i, &input.positions[i])?;
+        check_finite("normal", i, &input.normals[i])?;
+        check_finite("grain", i, &input.u[i])?;
+        if input.positions[i].iter().any(|c| c.abs() > f64::from(f32::MAX) / 2.0) {
+            return Err(Error::invalid_arg(
+                "export input",
+                format!("vertex {i}: position too large for 32-bit floats"),
+            ));
+        }
+        let n = input.normals[i];
+        let n = if n.norm() > 1e-12 { n.normalize() } else { Vector3::z() };
+        let u = input.u[i] - n * n.dot(&input.u[i]);
+        let t = if u.norm() > 1e-9 * (1.0 + input.u[i].norm()) {
+            u.normalize()
+        } else {
+            fallback += 1;
+            perpendicular(&n)
+        };
+        normals.push(n);
+        tangents.push(t);
+    }
+    let oriented = match input.symmetry {
+        Symmetry::Line => orient::orient_line_field(input.faces, &tangents, input.singular_faces),
+        Symmetry::Oriented => orient::identity(input.faces, nv),
+    };
+    let mut bin = glb::Bin::default();
+    let mut views: Vec<Value> = Vec::new();
+    let mut accessors: Vec<Value> = Vec::new();
+    let view = |bin_slice: (usize, usize), target: u32, views: &mut Vec<Value>| -> usize {
+        views.push(json!({
+            "buffer": 0, "byteOffset": bin_slice.0, "byteLength": bin_slice.1, "target": target
+        }));
+        views.len() - 1
+    };
+    const ARRAY_BUFFER: u32 = 34962;
+    const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+    const FLOAT: u32 = 5126;
+    const UNSIGNED_INT: u32 = 5125;
+    let f32s = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
+    // POSITION with its bounds (required by the spec).
+    let pos: Vec<[f32; 3]> =
+        oriented.vertex.iter().map(|&v| f32s(&input.positions[v as usize])).collect();
+    let bounds = |p: &[[f32; 3]]| {
+        let mut lo = [f32::MAX; 3];
+        let mut hi = [f32::MIN; 3];
+        for q in p {
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        (lo, hi)
+    };
+    let (lo, hi) = bounds(&pos);
+    let count = pos.len();
+    let v_pos = view(bin.push_f32(pos.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
+    accessors.push(json!({
+        "bufferView": v_pos, "componentType": FLOAT, "count": count, "type": "VEC3",
+        "min": lo, "max": hi
+    }));
+    let unit32 = |v: &Vector3<f64>| {
+        // Renormalized in f32 so the stored vector is unit to f32 precision.
+        let w = f32s(v);
+        let l = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        [w[0] / l, w[1] / l, w[2] / l]
+    };
+    let nrm: Vec<[f32; 3]> =
+        oriented.vertex.iter().map(|&v| unit32(&normals[v as usize])).collect();
+    let v_nrm = view(bin.push_f32(nrm.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
+    accessors.push(json!({
+        "bufferView": v_nrm, "componentType": FLOAT, "count": count, "type": "VEC3"
+    }));
+    let tan: Vec<[f32; 4]> = oriented
+        .vertex
+        .iter()
+        .zip(&oriented.sign)
+        .map(|(&v, &s)| {
+            let t = unit32(&(tangents[v as usize] * s));
+            [t[0], t[1], t[2], 1.0]
+        })
+        .collect();
+    let v_tan = view(bin.push_f32(tan.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
+    accessors.push(json!({
+        "bufferView": v_tan, "componentType": FLOAT, "count": count, "type": "VEC4"
+    }));
+    let v_idx = view(
+        bin.push_u32(oriented.faces.iter().flatten().copied()),
+        ELEMENT_ARRAY_BUFFER,
+        &mut views,
+    );
+    accessors.push(json!({
+        "bufferView": v_idx, "componentType": UNSIGNED_INT, "count": 3 * oriented.faces.len(),
+        "type": "SCALAR"
+    }));
+    let m = gltf_material(&options.material);
+    let scale = options.units.in_mm() / 1000.0;
+    let rotation = up_rotation(options.up);
+    let name = &options.name;
+    let mut materials = vec![json!({
+        "name": name,
+        "pbrMetallicRoughness": {
+            "baseColorFactor": [m.base_color[0], m.base_color[1], m.base_color[2], 1.0],
+            "metallicFactor": m.metallic,
+            "roughnessFactor": m.roughness
+        },
+        "extensions": { "KHR_materials_anisotropy": {
+            "anisotropyStrength": m.anisotropy_strength,
+            "anisotropyRotation": m.anisotropy_rotation
+        } }
+    })];
+    let mut meshes = vec![json!({
+        "name": name,
+        "primitives": [{
+            "attributes": { "POSITION": 0, "NORMAL": 1, "TANGENT": 2 },
+            "indices": 3, "material": 0, "mode": 4
+        }]
+    })];
+    let node = |mesh: usize, name: String| json!({ "name": name, "mesh": mesh, "scale": [scale, scale, scale], "rotation": rotation });
+    let mut nodes = vec![node(0, name.clone())];
+    let (mut n_strokes, mut n_segments) = (0, 0);
+    if let Some(strokes) = input.strokes {
+        let mut pts: Vec<[f32; 3]> = Vec::new();
+        let mut idx: Vec<u32> = Vec::new();
+        for (s, line) in strokes.iter().enumerate() {
+            let mut q: Vec<[f32; 3]> = Vec::with_capacity(line.len());
+            for (j, p) in line.iter().enumerate() {
+                if !p.iter().all(|c| c.is_finite()) {
+                    return Err(Error::invalid_arg(
+                        "export input",
+                        format!("stroke {s}, point {j} is not finite"),
+                    ));
+                }
+                // Repeated points would be left unused (a validator notes unused data).
+                if q.last() != Some(&f32s(p)) {
+                    q.push(f32s(p));
+                }
+            }
+            if q.len() < 2 {
+                continue;
+            }
+            let k0 = pts.len() as u32;
+            for j in 1..q.len() as u32 {
+                idx.extend([k0 + j - 1, k0 + j]);
+            }
+            pts.extend(q);
+            n_strokes += 1;
+        }
+        if !idx.is_empty() {
+            // Only the points the segments use are kept (a validator warns about unused ones).
+            let (lo, hi) = bounds(&pts);
+            let vp = view(bin.push_f32(pts.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
+            accessors.push(json!({
+                "bufferView": vp, "componentType": FLOAT, "count": pts.len(), "type": "VEC3",
+                "min": lo, "max": hi
+            }));
+            let vi = view(bin.push_u32(idx.iter().copied()), ELEMENT_ARRAY_BUFFER, &mut views);
+            accessors.push(json!({
+                "bufferView": vi, "componentType": UNSIGNED_INT, "count": idx.len(),
+                "type": "SCALAR"
+            }));
+            n_segments = idx.len() / 2;
+            materials.push(json!({
+                "name": "strokes",
+                "pbrMetallicRoughness": {
+                    "baseColorFactor": [0.9, 0.35, 0.05, 1.0],
+                    "metallicFactor": 0.0,
+                    "roughnessFactor": 1.0
+                }
+            }));
+            let a = accessors.len();
+            meshes.push(json!({
+                "name": "strokes",
+                "primitives": [{
+                    "attributes": { "POSITION": a - 2 }, "indices": a - 1, "material": 1,
+                    "mode": 1
+                }]
+            }));
+            nodes.push(node(1, "strokes".into()));
+        } else {
+            n_strokes = 0;
+        }
+    }
+    // The camera and the key light, in glTF's world (metres, +Y up): the part node's transform
+    // applied to the scene's coordinates.
+    let world_dir = |v: [f64; 3]| rotate(rotation, Vector3::from(v));
+    let mut cameras = Vec::new();
+    if let Some(c) = options.camera.filter(|c| {
+        let f = Vector3::from(c.target) - Vector3::from(c.eye);
+        f.norm() > 0.0 && f.cross(&Vector3::from(c.up)).norm() > 1e-9 * f.norm()
+    }) {
+        let fwd = world_dir(c.target) - world_dir(c.eye);
+        let dist = fwd.norm() * scale;
+        let back = -fwd.normalize();
+        let right = fwd.cross(&world_dir(c.up)).normalize();
+        let up = back.cross(&right);
+        let eye = world_dir(c.eye) * scale;
+        cameras.push(json!({
+            "name": "view", "type": "perspective",
+            "perspective": { "yfov": c.fov_deg.to_radians(), "znear": 1e-3 * dist }
+        }));
+        nodes.push(json!({
+            "name": "view", "camera": 0, "translation": [eye.x, eye.y, eye.z],
+            "rotation": quaternion_of(right, up, back)
+        }));
+    }
+    let mut lights = Vec::new();
+    if let Some((d, irradiance)) = options
+        .key_light
+        .filter(|(d, e)| e.is_finite() && *e >= 0.0 && Vector3::from(*d).norm() > 0.0)
+    {
+        // The light shines along its node's −Z: +Z points towards the light.
+        let z = world_dir(d).normalize();
+        let x = perpendicular(&z);
+        let y = z.cross(&x);
+        lights.push(json!({
+            "name": "key", "type": "directional", "color": [1.0, 1.0, 1.0],
+            "intensity": irradiance
+        }));
+        nodes.push(json!({
+            "name": "key light", "rotation": quaternion_of(x, y, z),
+            "extensions": { "KHR_lights_punctual": { "light": 0 } }
+        }));
+    }
+    let node_ids: Vec<usize> = (0..nodes.len()).collect();
+    let mut used = vec!["KHR_materials_anisotropy"];
+    if !lights.is_empty() {
+        used.push("KHR_lights_punctual");
+    }
+    let mut doc = json!({
+        "asset": {
+            "version": "2.0",
+            "generator": concat!("grainline ", env!("CARGO_PKG_VERSION"))
+        },
+        "extensionsUsed": used,
+        "scene": 0,
+        "scenes": [{ "name": name, "nodes": node_ids }],
+        "nodes": nodes,
+        "meshes": meshes,
+        "materials": materials,
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{ "byteLength": bin.bytes.len() }]
+    });
+    if !cameras.is_empty() {
+        doc["cameras"] = json!(cameras);
+    }
+    if !lights.is_empty() {
+        doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": lights } });
+    }
+    let text = serde_json::to_vec(&doc)
+        .map_err(|e| Error::Numerical { stage: "glTF JSON", message: e.to_string() })?;
+    let bytes = glb::container(&text, &bin.bytes);
+    let report = ExportReport {
+        vertices: count,
+        mesh_vertices: nv,
+        triangles: oriented.faces.len(),
+        split_vertices: oriented.split_vertices,
+        isolated_faces: oriented.isolated_faces,
+        fallback_tangents: fallback,
+        strokes: n_strokes,
+        stroke_segments: n_segments,
+        scale,
+        rotation,
+        material: m,
+        bytes: bytes.len(),
+    };
+    Ok(ExportOutput { glb: bytes, report })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Shepperd's quaternion rotates the basis vectors onto the matrix's columns.
+    #[test]
+    fn quaternion_of_a_frame() {
+        for (a, b) in [(0.3, -0.5), (2.0, 1.0), (-3.0, 0.2), (0.0, 3.1)] {
+            let z = Vector3::new(f64::cos(a) * f64::sin(b), f64::sin(a) * f64::sin(b), f64::cos(b));
+            let x = perpendicular(&z);
+            let y = z.cross(&x);
+            let q = quaternion_of(x, y, z);
+            assert!((rotate(q, Vector3::x()) - x).norm() < 1e-12);
+            assert!((rotate(q, Vector3::y()) - y).norm() < 1e-12);
+            assert!((rotate(q, Vector3::z()) - z).norm() < 1e-12);
+        }
+    }
+
+    /// The rotations take their axis to +Y (checked by rotating the vector by hand:
+    /// v' = v + 2w(q×v) + 2q×(q×v)).
+    #[test]
+    fn up_axis_goes_to_y() {
+        let rot = |q: [f64; 4], v: Vector3<f64>| {
+            let qv = Vector3::new(q[0], q[1], q[2]);
+            let t = 2.0 * qv.cross(&v);
+            v + q[3] * t + qv.cross(&t)
+        };
+        for up in [
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -2.0],
+            [1.0, 0.1, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.1, 1.0, 0.2],
+        ] {
+            let q = up_rotation(up);
+            let a = up.map(f64::abs);
+            let k = if a[2] > a[0] && a[2] > a[1] {
+                2
+            } else if a[0] > a[1] {
+                0
+            } else {
+                1
+            };
+            let mut axis = Vector3::zeros();
+            axis[k] = up[k].signum();
+            let r = rot(q, axis);
+            assert!((r - Vector3::y()).norm() < 1e-12, "{up:?} → {r:?}");
+        }
+    }
+
+    /// A square of two triangles with k = 2 signs flipped at alternate vertices: a valid GLB
+    /// whose JSON names the extension, and a bad face index is an error naming the face.
+    #[test]
+    fn square() {
+        let p = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(10.0, 0.0, 0.0),
+            Vector3::new(0.0, 10.0, 0.0),
+            Vector3::new(10.0, 10.0, 0.0),
+        ];
+        let n = [Vector3::z(); 4];
+        let u = [Vector3::x(), -Vector3::x(), Vector3::x(), -Vector3::x()];
+        let faces = [[0, 1, 2], [2, 1, 3]];
+        let input = ExportInput {
+            positions: &p,
+            faces: &faces,
+            normals: &n,
+            u: &u,
+            symmetry: Symmetry::Line,
+            singular_faces: &[],
+            strokes: None,
+        };
+        let options = ExportOptions {
+            material: Material::default(),
+            units: Units::Mm,
+            up: [0.0, 0.0, 1.0],
+            name: "square".into(),
+            camera: None,
+            key_light: None,
+        };
+        let out = export_glb(&input, &options).unwrap();
+        assert_eq!(out.report.vertices, 4);
+        assert_eq!(out.report.scale, 0.001);
+        let json_len = u32::from_le_bytes(out.glb[12..16].try_into().unwrap()) as usize;
+        let doc: Value = serde_json::from_slice(&out.glb[20..20 + json_len]).unwrap();
+        assert_eq!(doc["extensionsUsed"][0], "KHR_materials_anisotropy");
+        assert_eq!(doc["accessors"][0]["max"], json!([10.0, 10.0, 0.0]));
+        // Same input, same bytes.
+        assert_eq!(export_glb(&input, &options).unwrap().glb, out.glb);
+        let bad = [[0, 1, 7]];
+        let e = export_glb(&ExportInput { faces: &bad, ..input }, &options).unwrap_err();
+        assert!(e.to_string().contains("face 0 refers to vertex 7"), "{e}");
+    }
+}
