@@ -219,7 +219,13 @@ fn row(o: &Outcome) -> String {
     let figs = if f.samples == 0 {
         format!("– | – | – ({})", f.note.as_deref().unwrap_or("nothing measured").replace('|', "/"))
     } else {
-        format!("{:.1} % | {:.3} | {:.3}", 100.0 * f.within, f.p95, f.median)
+        let off = if f.off_part > 0 {
+            let all = (f.off_part + f.samples) as f64;
+            format!(" ({:.0} % out of reach)", 100.0 * f.off_part as f64 / all)
+        } else {
+            String::new()
+        };
+        format!("{:.1} %{off} | {:.3} | {:.3}", 100.0 * f.within, f.p95, f.median)
     };
     format!(
         "| {} | {} | {} | {} | {} | {} → {} | {} | {}{mono} | {:.2} |",

@@ -181,8 +181,27 @@ pub struct EditFidelity {
     pub singular_after: usize,
     /// within ≥ 0.9, p95 ≤ 0.10 and singular_after ≤ singular_before.
     pub landed: bool,
+    /// Target samples left out because they lie on none of the support's faces (bend and
+    /// expand: W(C0) beyond the part's boundary, or where the surface turns away from the
+    /// brush plane); not counted in `samples`.
+    pub off_part: usize,
     /// Why the edit could not be measured, or what missed.
     pub note: Option<String>,
+}
+
+/// Whether planar point `p` lies in one of the triangles `tris` (a small tolerance).
+fn on_faces(tris: &[[Vector2<f64>; 3]], p: &Vector2<f64>) -> bool {
+    tris.iter().any(|t| {
+        let (e1, e2, d) = (t[1] - t[0], t[2] - t[0], p - t[0]);
+        let det = e1.x * e2.y - e1.y * e2.x;
+        if det.abs() <= 1e-14 * (e1.norm_squared() + e2.norm_squared()) || !det.is_finite() {
+            return false;
+        }
+        let v = (d.x * e2.y - d.y * e2.x) / det;
+        let w = (e1.x * d.y - e1.y * d.x) / det;
+        let tol = -1e-6;
+        v >= tol && w >= tol && v + w <= 1.0 - tol
+    })
 }
 
 /// g = hᵀu at the three corners of a face; line fields: corners aligned to the first one.
@@ -506,6 +525,7 @@ pub fn edit_fidelity(
         singular_before: 0,
         singular_after: 0,
         landed: false,
+        off_part: 0,
         note: None,
     };
     if !(radius.is_finite() && radius > 0.0) {
@@ -544,8 +564,17 @@ pub fn edit_fidelity(
                 .iter()
                 .map(|s| s.map(|p| to_plane(&p)))
                 .collect();
-            let samples =
+            let all_samples =
                 warp_samples(&c0, *kind, *strength, options.sample_spacing, options.compare_radius);
+            // Samples of W(C0) on none of the support's faces (seen in the brush plane) lie
+            // beyond the part, or where the surface turns away from the plane out of the
+            // brush's reach: no grain the edit may change puts a highlight there. They are
+            // counted and left out.
+            let tris: Vec<[Vector2<f64>; 3]> =
+                faces.iter().map(|&f| mesh.face_positions(f).map(|p| to_plane(&p))).collect();
+            let samples: Vec<Vector2<f64>> =
+                all_samples.iter().copied().filter(|p| on_faces(&tris, p)).collect();
+            fid.off_part = all_samples.len() - samples.len();
             let c1: Vec<[Vector3<f64>; 2]> = segments_on(mesh, h, u_after, symmetry, &faces)
                 .iter()
                 .map(|s| s.map(|p| to_plane(&p)))
@@ -570,6 +599,20 @@ pub fn edit_fidelity(
             (d, samples.is_empty(), empty_c1)
         }
     };
+    let off_note = (fid.off_part > 0).then(|| {
+        let all = fid.off_part + distances.len();
+        format!(
+            "{} of {all} samples of the warped highlight ({:.0} %) lie beyond the part or out of \
+             the brush's reach (on none of its faces seen in the brush plane) and are left out: no \
+             grain can put a highlight there",
+            fid.off_part,
+            100.0 * fid.off_part as f64 / all as f64
+        )
+    });
+    if empty_target && fid.off_part > 0 {
+        fid.note = off_note;
+        return Ok(fid);
+    }
     if empty_target {
         fid.note = Some(match shape {
             EditShape::Warp { .. } => format!(
@@ -608,9 +651,19 @@ pub fn edit_fidelity(
     if fid.singular_after > fid.singular_before {
         missed.push(format!("singular triangles {} → {}", fid.singular_before, fid.singular_after));
     }
+    let all = fid.off_part + fid.samples;
+    if fid.off_part as f64 > (1.0 - GOAL_WITHIN) * all as f64 {
+        missed.push(format!(
+            "{:.0} % of the target is out of reach (goal ≤ {:.0} %)",
+            100.0 * fid.off_part as f64 / all as f64,
+            100.0 * (1.0 - GOAL_WITHIN)
+        ));
+    }
     fid.landed = missed.is_empty();
-    if !fid.landed {
-        fid.note = Some(missed.join("; "));
+    let notes: Vec<String> =
+        off_note.into_iter().chain((!fid.landed).then(|| missed.join("; "))).collect();
+    if !notes.is_empty() {
+        fid.note = Some(notes.join("; "));
     }
     Ok(fid)
 }

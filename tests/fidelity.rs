@@ -531,3 +531,40 @@ fn reports_carry_the_figures_and_the_cli_warns_about_misses() {
     assert_eq!(rr["optimize"]["fidelity"], r["fidelity"]);
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn a_warped_highlight_beyond_the_support_is_out_of_reach_and_reported() {
+    // The support stops at y = 0.25 (faces with a corner there reach y = 0.275): the bent line
+    // rises to C + S(1 − C²)²/2 = 0.49, so its middle leaves the support's faces.
+    let pl = Plane::new();
+    let before = pl.field(|_, y| y - C);
+    let after = pl.field(|x, y| y - bent_line(x));
+    let support: Vec<u32> = pl
+        .within(1.0, Vector2::zeros())
+        .into_iter()
+        .filter(|&v| pl.mesh.positions[v as usize].y <= 0.25 + 1e-9)
+        .collect();
+    let f = pl.fidelity(Symmetry::Oriented, &before, &after, &warp(WarpKind::Bend, S, support));
+    // The share of the bent line (inside |W| < 0.85, by arc length) above the faces' edge.
+    let (mut above, mut total) = (0.0, 0.0);
+    let n = 20000;
+    for k in 0..n {
+        let (x0, x1) = (-1.0 + 2.0 * k as f64 / n as f64, -1.0 + 2.0 * (k + 1) as f64 / n as f64);
+        let (y0, y1) = (bent_line(x0), bent_line(x1));
+        let m = Vector2::new(0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        if m.norm() >= 0.85 {
+            continue;
+        }
+        let len = (x1 - x0).hypot(y1 - y0);
+        total += len;
+        if m.y > 0.275 {
+            above += len;
+        }
+    }
+    let share = f.off_part as f64 / (f.off_part + f.samples) as f64;
+    assert!((share - above / total).abs() < 0.05, "{share} vs {}: {f:?}", above / total);
+    // The reachable rest is exactly on the solved highlight, and the edit does not land.
+    assert!(f.within > 0.999 && f.p95 < 0.005, "{f:?}");
+    assert!(!f.landed, "{f:?}");
+    assert!(f.note.as_deref().unwrap().contains("out of reach"), "{f:?}");
+}
