@@ -4,6 +4,7 @@
 
 mod cg;
 pub mod fabrication;
+pub(crate) mod factor;
 pub mod fill;
 pub mod highlight_term;
 pub mod lm;
