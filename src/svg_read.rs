@@ -147,7 +147,7 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
         ));
     }
     let has = |k: &str| root.attribute(k).is_some();
-    if !has("viewBox") && !(has("width") && has("height")) {
+    if !(has("viewBox") || (has("width") && has("height"))) {
         return Err(parse_error(
             name,
             doc.text_pos_at(root.range().start).row as usize,
@@ -235,12 +235,14 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
     drop(doc);
     let doc = usvg::roxmltree::Document::parse_with_options(&tagged, xml())
         .map_err(|e| parse_error(name, 0, format!("not a readable SVG: {e}")))?;
-    let mut opt = usvg::Options::default();
     // No file is read on the document's behalf, and no embedded image decoded.
-    opt.resources_dir = None;
-    opt.image_href_resolver = usvg::ImageHrefResolver {
-        resolve_data: Box::new(|_, _, _| None),
-        resolve_string: Box::new(|_, _| None),
+    let opt = usvg::Options {
+        resources_dir: None,
+        image_href_resolver: usvg::ImageHrefResolver {
+            resolve_data: Box::new(|_, _, _| None),
+            resolve_string: Box::new(|_, _| None),
+        },
+        ..usvg::Options::default()
     };
     let tree = usvg::Tree::from_xmltree(&doc, &opt).map_err(|e| {
         let message = match e {

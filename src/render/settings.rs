@@ -448,12 +448,12 @@ impl RenderSettings {
 }
 
 impl RenderSettings {
-    /// Bytes the render is estimated to hold at once, counted from the buffers it allocates:
-    /// per supersample 16 (visibility) + 12 (radiance) + 16 per image half (overlay layer);
-    /// + 12 for the as-brushed radiance (+ 12 more for its difference); + 32 for LIC
-    /// (directions, cells, values); + 16 for highlight curves (g and u); + 8 for the coverage
-    /// resolve when supersampled. Per output pixel and half: 28 (resolved radiance and layer)
-    /// + 3 (8-bit image) + 3 (PNG) + 12 with a linear output; + 4 for LIC.
+    /// Bytes the render is estimated to hold at once, counted from the buffers it allocates.
+    /// Per supersample: 16 (visibility), 12 (radiance), 16 per image half (overlay layer),
+    /// 12 for the as-brushed radiance and 12 more for its difference, 32 for LIC
+    /// (directions, cells, values), 16 for highlight curves (g and u), 8 for the coverage
+    /// resolve when supersampled. Per output pixel and half: 28 (resolved radiance and
+    /// layer), 3 (8-bit image), 3 (PNG), 12 with a linear output; 4 more for LIC.
     pub fn memory_estimate(&self) -> u64 {
         let (per_sample, per_pixel) = self.memory_per_sample_and_pixel();
         let s = u64::from(self.supersample);
