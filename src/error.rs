@@ -187,15 +187,6 @@ pub fn fmt_vec3(v: &[f64; 3]) -> String {
     format!("({}, {}, {})", fmt_num(v[0]), fmt_num(v[1]), fmt_num(v[2]))
 }
 
-/// A sparse Cholesky failure in words (faer's own text is its `Debug` form).
-pub(crate) fn describe_llt(e: &faer::sparse::linalg::LltError) -> String {
-    use faer::sparse::linalg::LltError;
-    match e {
-        LltError::Numeric(n) => describe_pivot(n),
-        LltError::Generic(g) => describe_faer(g),
-    }
-}
-
 /// A numeric Cholesky failure in words.
 pub(crate) fn describe_pivot(e: &faer::linalg::cholesky::llt::factor::LltError) -> String {
     match e {
@@ -231,13 +222,12 @@ mod tests {
     #[test]
     fn item15_solver_failures_are_described_in_words() {
         use faer::linalg::cholesky::llt::factor::LltError as Numeric;
-        use faer::sparse::linalg::LltError;
-        let e = describe_llt(&LltError::Numeric(Numeric::NonPositivePivot { index: 1 }));
+        let e = describe_pivot(&Numeric::NonPositivePivot { index: 1 });
         assert_eq!(
             e,
             "the system is not positive definite (pivot 1 of the factorization is not > 0)"
         );
-        let e = describe_llt(&LltError::Generic(faer::sparse::FaerError::OutOfMemory));
+        let e = describe_faer(&faer::sparse::FaerError::OutOfMemory);
         assert_eq!(e, "out of memory");
         let e = describe_creation(&faer::sparse::CreationError::OutOfBounds { row: 3, col: 9 });
         assert_eq!(e, "entry (3, 9) lies outside the matrix");

@@ -51,6 +51,7 @@ pub mod pipeline;
 pub mod render;
 pub mod scene;
 pub mod solve;
+pub mod svg_read;
 pub mod uvfield;
 
 pub use error::{Error, Result};

@@ -25,6 +25,55 @@ pub const MAX_FILE_VERTICES: usize = 3 * MAX_FILE_TRIANGLES;
 /// beyond this is taken for a corrupt file rather than read).
 pub const MAX_POLYGON_CORNERS: usize = 1_000_000;
 
+/// Most triangles a panel (`outline`, `grainline panel`) may be estimated to get:
+/// 4 × 10⁶ (the refinement's own guard adds at most 2 × 10⁶ vertices, about as many
+/// triangles again). The estimate, made from the outline before any triangle is built, is
+/// `A / (½ · √3/4 · e²) + P / e` for an outline of area `A` and perimeter `P` meshed with a
+/// longest edge `e`: the refinement's area bound per triangle, plus the boundary splits.
+pub const MAX_PANEL_TRIANGLES: f64 = 4e6;
+
+/// Most bytes a render may be estimated to hold (4 GiB): the per-sample buffers
+/// (visibility, radiance, overlay layers, LIC, highlight curves, the as-brushed shading) and
+/// the per-pixel ones, from [`crate::render::RenderSettings::memory_estimate`].
+pub const MAX_RENDER_BYTES: u64 = 4 << 30;
+
+/// Most bytes a sparse Cholesky factor (the smoothest field, the stencil blend, the harmonic
+/// fill, the solve's normal equations) may take: 8 GiB. Its size is known from the symbolic
+/// analysis (linear in the matrix) before the numeric factorization allocates it.
+pub const MAX_FACTOR_BYTES: u64 = 8 << 30;
+
+/// Most points an SVG (outline or curve edit) may flatten to: 10⁷ (160 MB). Counted while
+/// flattening, so a drawing past it stops there (arcs of radius 10³⁰ at a 0.01 mm tolerance
+/// would otherwise give billions).
+pub const MAX_SVG_POINTS: usize = 10_000_000;
+
+/// Most stroke samples a placement may be estimated to take (`A / (d_sep · h)`; see
+/// [`grainline_toolpaths::budget`]).
+pub use grainline_toolpaths::budget::MAX_STROKE_SAMPLES;
+
+/// Largest `toolpaths.plan.order.neighbours`.
+pub use grainline_toolpaths::budget::MAX_NEIGHBOURS;
+
+/// The work a scene asks for, estimated as soon as its part is loaded (before the field, the
+/// solve, the strokes or the render start) and refused past its budget, naming the key:
+/// the strokes' samples (`toolpaths.placement.*`, over the part's surface area).
+/// The render's memory and the ordering's neighbours are checked with the scene itself
+/// (`Scene::validate`), the panel's triangles before the outline is meshed.
+pub fn check_scene_work(
+    scene: &crate::scene::Scene,
+    mesh: &crate::mesh::Mesh,
+) -> crate::Result<()> {
+    let traced = crate::pipeline::run::StagePlan::of(scene).trace;
+    if let (true, Some(t)) = (traced, &scene.toolpaths) {
+        // Placement lengths are in scene units on the part, and the UV field is scaled to
+        // the part's area, so the mesh's surface area is the area the strokes cover.
+        t.placement
+            .check_budget(mesh.area())
+            .map_err(|e| crate::scene::prefix("toolpaths", crate::uvfield::toolpath_error(e)))?;
+    }
+    Ok(())
+}
+
 /// `--threads` is capped at this many worker threads per available core.
 pub const THREADS_PER_CORE: usize = 4;
 

@@ -631,6 +631,7 @@ pub fn toolpath_error(e: ToolpathError) -> Error {
             format!("{reason}, got {}", crate::error::fmt_num(value)),
         ),
         ToolpathError::Gcode { key, message } => Error::setting(section_key(key), message),
+        ToolpathError::Budget { key, message } => Error::setting(section_key(key), message),
         e @ ToolpathError::OutsideEnvelope { .. } => {
             Error::setting("gcode_options.envelope", e.to_string())
         }

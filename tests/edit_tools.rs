@@ -403,11 +403,26 @@ fn svg_paths_flatten_within_tolerance() {
     assert_eq!(sq.len(), 4);
     assert!((sq[2] - Vector2::new(0.15, 0.7)).norm() < 1e-9);
     assert!((sq[3] - sq[0]).norm() < 1e-12);
-    assert!(parse_svg_polylines(
+    // Arcs are read (usvg): the quarter circle from (0, 0) to (1, 1) with the sweep flag set
+    // turns about the centre (0, 1) (the other centre, (1, 0), would turn the other way), so
+    // in UV (u = x, v = 1 − y) every point is at distance 1 from the origin, within the
+    // tolerance plus the cubic approximation of the arc (2.7e-4 of the radius).
+    let arc = parse_svg_polylines(
         r#"<svg viewBox="0 0 1 1"><path d="M0 0 A 1 1 0 0 1 1 1"/></svg>"#,
-        1e-3
+        1e-3,
     )
-    .is_err());
+    .unwrap();
+    assert_eq!(arc.len(), 1);
+    assert!(arc[0].len() > 4);
+    for p in &arc[0] {
+        assert!((p.norm() - 1.0).abs() < 1e-3 + 3e-4, "{p:?}");
+    }
+    assert!((arc[0][0] - Vector2::new(0.0, 1.0)).norm() < 1e-6);
+    assert!((arc[0].last().unwrap() - Vector2::new(1.0, 0.0)).norm() < 1e-6);
+    // A syntax error names its line.
+    let e = parse_svg_polylines("<svg viewBox=\"0 0 1 1\">\n<path d=\"M0 0 L1 1\">\n</svg>", 1e-3)
+        .unwrap_err();
+    assert!(e.starts_with("line 3: not a readable SVG"), "{e}");
 }
 
 #[test]

@@ -12,11 +12,12 @@
 //! first order), so the closest point of a segment is the G-orthogonal projection; the UV tangent
 //! τ becomes J τ, projected onto the tangent plane. The chart giving the smallest distance wins.
 //!
-//! **SVG.** The `d` attribute of every `<path>` is parsed with the `svg` crate: M/L/H/V/C/S/Q/T/Z,
-//! absolute and relative; Bézier curves are flattened to chords within `tolerance` (UV units).
-//! The viewBox (or, without one, `0 0 width height`) maps to the UV square: u = (x − x₀)/w,
-//! v = 1 − (y − y₀)/h (SVG's y points down, v up). Elliptical arcs and `transform` attributes
-//! are refused with an error (convert arcs to Béziers and flatten transforms in the editor).
+//! **SVG.** Every shape of the file (read by [`crate::svg_read`], usvg: paths with every
+//! command, arcs included, rects, circles, ellipses, lines, polylines, polygons, `<use>`,
+//! transforms, styles; `display: none` left out) is flattened to chords within `tolerance`
+//! (UV units). The viewBox (or, without one, `0 0 width height`) maps to the UV square:
+//! u = (x − x₀)/w, v = 1 − (y − y₀)/h (SVG's y points down, v up), stretched to it whatever
+//! the root's `preserveAspectRatio`. A closed subpath ends with its first point again.
 //!
 //! **Magnitude.** ℓ* has the length max(|ℓᵢ|, median |ℓ|): a curve asks for a clear highlight
 //! direction even where the current ℓ is nearly zero.
@@ -35,8 +36,6 @@ use std::path::Path;
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
-use svg::node::element::path::{Command, Data, Position};
-use svg::parser::Event;
 
 use super::{check_radius, check_weight, Context, EditReport, State};
 use crate::{Error, Result};
@@ -123,11 +122,7 @@ fn check_polylines<const N: usize>(key: &str, lines: &[Vec<[f64; N]>]) -> Result
 pub fn read_svg_polylines(path: &Path, tolerance: f64) -> Result<Vec<Vec<Vector2<f64>>>> {
     let text = std::fs::read_to_string(path)
         .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
-    parse_svg_polylines(&text, tolerance).map_err(|message| Error::Parse {
-        path: path.to_path_buf(),
-        line: 0,
-        message,
-    })
+    svg_polylines(&text, path, tolerance)
 }
 
 /// Parses SVG text into UV polylines; the error is a message (the caller adds the file).
@@ -135,214 +130,46 @@ pub fn parse_svg_polylines(
     text: &str,
     tolerance: f64,
 ) -> std::result::Result<Vec<Vec<Vector2<f64>>>, String> {
-    let mut view: Option<[f64; 4]> = None;
-    let mut paths: Vec<String> = Vec::new();
-    for event in svg::read(text).map_err(|e| e.to_string())? {
-        match event {
-            Event::Error(e) => return Err(format!("SVG syntax: {e}")),
-            Event::Tag(name, _, attrs) => {
-                if attrs.contains_key("transform") {
-                    return Err(format!(
-                        "<{name}> has a transform attribute, which is not supported; flatten \
-                         transforms in the editor"
-                    ));
-                }
-                if name == "svg" && view.is_none() {
-                    view = Some(view_box(&attrs)?);
-                }
-                if name == "path" {
-                    if let Some(d) = attrs.get("d") {
-                        paths.push(d.to_string());
-                    }
-                }
-            }
-            _ => {}
-        }
-    }
-    let view = view.ok_or("no <svg> element")?;
-    let to_uv =
-        |p: Vector2<f64>| Vector2::new((p.x - view[0]) / view[2], 1.0 - (p.y - view[1]) / view[3]);
-    let tol = tolerance * view[2].min(view[3]);
+    svg_polylines(text, Path::new("svg"), tolerance).map_err(|e| match e {
+        Error::Parse { line: 0, message, .. } => message,
+        Error::Parse { line, message, .. } => format!("line {line}: {message}"),
+        e => e.to_string(),
+    })
+}
+
+/// The shapes of an SVG ([`crate::svg_read`]) as UV polylines: the canvas (the viewBox, or
+/// `0 0 width height`) maps to the UV square, u = x / W, v = 1 − y / H.
+fn svg_polylines(text: &str, name: &Path, tolerance: f64) -> Result<Vec<Vec<Vector2<f64>>>> {
+    // The viewBox maps onto the whole UV square, whatever the aspect ratio of the root's
+    // width and height (as this reader always did); tolerance in UV units.
+    let options = crate::svg_read::ReadOptions {
+        tolerance: crate::svg_read::Tolerance::OfCanvas(tolerance),
+        stretch: true,
+    };
+    let drawing = crate::svg_read::read_with(text, name, &options)?;
+    let (w, h) = (drawing.width_px, drawing.height_px);
     let mut out = Vec::new();
-    for d in &paths {
-        let data = Data::parse(d).map_err(|e| format!("path data {d:?}: {e}"))?;
-        for line in flatten(&data, tol)? {
+    for shape in drawing.shapes {
+        for sub in shape.subpaths {
+            let mut line: Vec<Vector2<f64>> =
+                sub.points.iter().map(|p| Vector2::new(p[0] / w, 1.0 - p[1] / h)).collect();
+            if sub.closed {
+                // A closed subpath ends where it starts.
+                line.push(line[0]);
+            }
             if line.len() >= 2 {
-                out.push(line.into_iter().map(to_uv).collect());
+                out.push(line);
             }
         }
     }
     if out.is_empty() {
-        return Err("no path with at least two points".into());
+        return Err(Error::Parse {
+            path: name.to_path_buf(),
+            line: 0,
+            message: "no path with at least two points".into(),
+        });
     }
     Ok(out)
-}
-
-fn view_box(attrs: &svg::node::Attributes) -> std::result::Result<[f64; 4], String> {
-    if let Some(vb) = attrs.get("viewBox") {
-        let v: Vec<f64> = vb
-            .split(|c: char| c.is_whitespace() || c == ',')
-            .filter(|s| !s.is_empty())
-            .map(|s| s.parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| format!("viewBox {:?}: expected four numbers", vb.to_string()))?;
-        if v.len() == 4 && v.iter().all(|x| x.is_finite()) && v[2] > 0.0 && v[3] > 0.0 {
-            return Ok([v[0], v[1], v[2], v[3]]);
-        }
-        return Err(format!("viewBox {:?}: expected x y width height, sizes > 0", vb.to_string()));
-    }
-    let size = |key: &str| {
-        attrs.get(key).and_then(|s| {
-            let s = s.trim();
-            let end = s.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(s.len());
-            s[..end].parse::<f64>().ok().filter(|x| *x > 0.0 && x.is_finite())
-        })
-    };
-    match (size("width"), size("height")) {
-        (Some(w), Some(h)) => Ok([0.0, 0.0, w, h]),
-        _ => Err("the <svg> element has neither a viewBox nor a width and height".into()),
-    }
-}
-
-/// Flattens path data into polylines (one per subpath), in SVG coordinates.
-fn flatten(data: &Data, tol: f64) -> std::result::Result<Vec<Vec<Vector2<f64>>>, String> {
-    let mut lines: Vec<Vec<Vector2<f64>>> = Vec::new();
-    let mut cur = Vector2::zeros();
-    let mut start = Vector2::zeros();
-    // The reflected control point of the previous C/S (cubic) or Q/T (quadratic).
-    let mut last_cubic: Option<Vector2<f64>> = None;
-    let mut last_quad: Option<Vector2<f64>> = None;
-    let push = |lines: &mut Vec<Vec<Vector2<f64>>>, p: Vector2<f64>| {
-        if let Some(l) = lines.last_mut() {
-            l.push(p);
-        }
-    };
-    for cmd in data.iter() {
-        let (pos, params): (Option<&Position>, Vec<f64>) = match cmd {
-            Command::Move(p, a)
-            | Command::Line(p, a)
-            | Command::HorizontalLine(p, a)
-            | Command::VerticalLine(p, a)
-            | Command::QuadraticCurve(p, a)
-            | Command::SmoothQuadraticCurve(p, a)
-            | Command::CubicCurve(p, a)
-            | Command::SmoothCubicCurve(p, a)
-            | Command::EllipticalArc(p, a) => (Some(p), a.iter().map(|&x| x as f64).collect()),
-            Command::Close => (None, Vec::new()),
-        };
-        let rel = matches!(pos, Some(Position::Relative));
-        let abs = |base: Vector2<f64>, x: f64, y: f64| {
-            if rel {
-                base + Vector2::new(x, y)
-            } else {
-                Vector2::new(x, y)
-            }
-        };
-        let arity = match cmd {
-            Command::Move(..) | Command::Line(..) | Command::SmoothQuadraticCurve(..) => 2,
-            Command::HorizontalLine(..) | Command::VerticalLine(..) => 1,
-            Command::QuadraticCurve(..) | Command::SmoothCubicCurve(..) => 4,
-            Command::CubicCurve(..) => 6,
-            Command::EllipticalArc(..) => {
-                return Err(
-                    "elliptical arcs (A) are not supported; convert them to Bézier curves".into()
-                )
-            }
-            Command::Close => 0,
-        };
-        if arity == 0 {
-            if lines.last().is_some_and(|l| !l.is_empty()) {
-                push(&mut lines, start);
-            }
-            cur = start;
-            lines.push(Vec::new());
-            if let Some(l) = lines.last_mut() {
-                l.push(start);
-            }
-            last_cubic = None;
-            last_quad = None;
-            continue;
-        }
-        if params.is_empty() || params.len() % arity != 0 {
-            return Err(format!(
-                "a command has {} numbers, not a multiple of {arity}",
-                params.len()
-            ));
-        }
-        for (k, a) in params.chunks(arity).enumerate() {
-            let (mut nc, mut nq) = (None, None);
-            match cmd {
-                Command::Move(..) if k == 0 => {
-                    cur = abs(cur, a[0], a[1]);
-                    start = cur;
-                    lines.push(vec![cur]);
-                }
-                Command::Move(..) | Command::Line(..) => {
-                    cur = abs(cur, a[0], a[1]);
-                    push(&mut lines, cur);
-                }
-                Command::HorizontalLine(..) => {
-                    cur.x = if rel { cur.x + a[0] } else { a[0] };
-                    push(&mut lines, cur);
-                }
-                Command::VerticalLine(..) => {
-                    cur.y = if rel { cur.y + a[0] } else { a[0] };
-                    push(&mut lines, cur);
-                }
-                Command::CubicCurve(..) | Command::SmoothCubicCurve(..) => {
-                    let (c1, c2, end) = if matches!(cmd, Command::CubicCurve(..)) {
-                        (abs(cur, a[0], a[1]), abs(cur, a[2], a[3]), abs(cur, a[4], a[5]))
-                    } else {
-                        let c1 = last_cubic.map_or(cur, |c| cur * 2.0 - c);
-                        (c1, abs(cur, a[0], a[1]), abs(cur, a[2], a[3]))
-                    };
-                    let m = (cur - c1 * 2.0 + c2).norm().max((c1 - c2 * 2.0 + end).norm());
-                    let n = segments(6.0 * m, tol);
-                    for s in 1..=n {
-                        let t = s as f64 / n as f64;
-                        let mt = 1.0 - t;
-                        let p = cur * (mt * mt * mt)
-                            + c1 * (3.0 * mt * mt * t)
-                            + c2 * (3.0 * mt * t * t)
-                            + end * (t * t * t);
-                        push(&mut lines, p);
-                    }
-                    nc = Some(c2);
-                    cur = end;
-                }
-                Command::QuadraticCurve(..) | Command::SmoothQuadraticCurve(..) => {
-                    let (c, end) = if matches!(cmd, Command::QuadraticCurve(..)) {
-                        (abs(cur, a[0], a[1]), abs(cur, a[2], a[3]))
-                    } else {
-                        (last_quad.map_or(cur, |c| cur * 2.0 - c), abs(cur, a[0], a[1]))
-                    };
-                    let n = segments(2.0 * (cur - c * 2.0 + end).norm(), tol);
-                    for s in 1..=n {
-                        let t = s as f64 / n as f64;
-                        let mt = 1.0 - t;
-                        push(&mut lines, cur * (mt * mt) + c * (2.0 * mt * t) + end * (t * t));
-                    }
-                    nq = Some(c);
-                    cur = end;
-                }
-                Command::EllipticalArc(..) | Command::Close => {}
-            }
-            last_cubic = nc;
-            last_quad = nq;
-        }
-    }
-    Ok(lines)
-}
-
-/// Chords needed for a curve whose second derivative is bounded by `m`: the chord error is at
-/// most m/(8n²).
-fn segments(m: f64, tol: f64) -> usize {
-    let n = (m / (8.0 * tol)).sqrt().ceil();
-    if n.is_finite() {
-        (n as usize).clamp(1, 1000)
-    } else {
-        1
-    }
 }
 
 /// The closest point of segment ab to p in the metric G: (parameter t, squared G-distance).

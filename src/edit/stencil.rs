@@ -22,7 +22,6 @@
 use faer::c64;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Side;
 use serde::{Deserialize, Serialize};
 
 use super::support::{distances, resolve_centre, Centre, Metric};
@@ -187,10 +186,7 @@ fn blend_band(ctx: &Context, phi: &mut [f64], band: &[usize], k: f64) -> Result<
             message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
         }
     })?;
-    let llt = a.sp_cholesky(Side::Lower).map_err(|e| Error::Numerical {
-        stage: "stencil blend",
-        message: format!("Cholesky: {}", crate::error::describe_llt(&e)),
-    })?;
+    let llt = crate::solve::factor::Factor::new(a.as_ref(), "stencil blend")?;
     llt.solve_in_place(rhs.as_mut());
     for (r, &i) in band.iter().enumerate() {
         let zi = rhs[(r, 0)];

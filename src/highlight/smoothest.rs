@@ -17,7 +17,6 @@
 use faer::c64;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Side;
 
 use super::Symmetry;
 use crate::geometry::laplacian::cotan_weights;
@@ -92,10 +91,7 @@ pub fn smoothest_field(
             message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
         }
     })?;
-    let llt = a.sp_cholesky(Side::Lower).map_err(|e| Error::Numerical {
-        stage: "smoothest field",
-        message: format!("Cholesky: {}", crate::error::describe_llt(&e)),
-    })?;
+    let llt = crate::solve::factor::Factor::new(a.as_ref(), "smoothest field")?;
 
     // Deterministic start: golden-angle phases.
     let mut z: Vec<c64> = (0..n)

@@ -1,18 +1,18 @@
 //! Sparse symmetric positive definite systems for the flattening methods: assembled from
 //! (row, column, value) entries and solved with the project's solver, faer's sparse Cholesky
-//! factorization (the one `highlight::smoothest` and `edit::stencil` use), factored once and
+//! factorization (`solve::factor`, as `highlight::smoothest` and `edit::stencil` use, its size
+//! bounded before it is allocated), factored once and
 //! reused for every right-hand side (ARAP solves the same matrix at each iteration).
 
 use faer::prelude::*;
-use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Side;
 
+use crate::solve::factor::Factor;
 use crate::{Error, Result};
 
 /// A factored SPD matrix of size `n`.
 pub(crate) struct Spd {
-    llt: Llt<usize, f64>,
+    llt: Factor<f64>,
     n: usize,
 }
 
@@ -45,10 +45,8 @@ impl Spd {
                 message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
             }
         })?;
-        let llt = a.sp_cholesky(Side::Lower).map_err(|e| Error::Numerical {
-            stage,
-            message: format!("Cholesky: {}", crate::error::describe_llt(&e)),
-        })?;
+        // The factor's size is bounded before it is allocated (limits::MAX_FACTOR_BYTES).
+        let llt = Factor::new(a.as_ref(), stage)?;
         Ok(Spd { llt, n })
     }
 

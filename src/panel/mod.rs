@@ -1,21 +1,23 @@
 //! Flat sheet-metal panels: a closed outline (with holes) read from an SVG, meshed with a
 //! refined constrained Delaunay triangulation, UV = XY in millimetres.
 //!
-//! * **SVG geometry.** `path` (every command of SVG 1.1 §8.3, absolute and relative),
-//!   `polygon`, `rect` (square corners), `circle` and `ellipse` elements give closed loops;
-//!   `line` and `polyline` are open and refused. `transform` attributes (on the element and
-//!   its ancestor groups) are applied. Anything inside `defs`, `clipPath`, `mask`, `symbol`,
-//!   `pattern` and `marker` is ignored.
+//! * **SVG** is read by [`crate::svg_read`] (usvg): every shape (`path` with every command of
+//!   SVG 1.1 §8.3 absolute and relative, `polygon`, `rect` with its `rx`/`ry` corners,
+//!   `circle`, `ellipse`, and `line` or `polyline` when they close), `<use>` instances,
+//!   transforms on the element, its groups and the root, CSS styles; elements with
+//!   `display: none` and the content of `defs`, `clipPath`, `mask`, `marker` and `pattern`
+//!   draw nothing and are left out. Negative sizes are refused.
 //! * **Units.** The root's `width`/`height` (with `mm`, `cm`, `in`, `pt`, `pc`, `px` or no
-//!   unit = px at 96 per inch) and `viewBox` give millimetres per user unit (uniform scale,
-//!   the `xMidYMid meet` default when the aspect ratios differ); without a `viewBox` one user
-//!   unit is one px. The panel's X is the SVG x, its Y points up: `Y = (bottom of the
-//!   viewport) − y`, so the part is not mirrored and its faces are counter-clockwise seen from
-//!   +Z.
+//!   unit = px at 96 per inch) and `viewBox` give millimetres per user unit (the root's
+//!   `preserveAspectRatio`, default `xMidYMid meet`, when the aspect ratios differ); without a
+//!   `viewBox` one user unit is one px. A root with neither a `viewBox` nor both sizes is
+//!   refused (its units are unknown). The panel's X is the SVG x, its Y points up:
+//!   `Y = (bottom of the viewport) − y`, so the part is not mirrored and its faces are
+//!   counter-clockwise seen from +Z.
 //! * **Curves** are flattened to within `tolerance` mm: Béziers with Wang's bound on the
 //!   number of chords (`n = ⌈√(d(d−1)/8 · max‖Δ²P‖ / tol)⌉`; Wang, Zheng & Sederberg,
-//!   *Computer Graphics and Geometric Modeling*, 2nd ed., §10.5), arcs and circles with the
-//!   sagitta bound `Δθ ≤ 2 acos(1 − tol / r)`.
+//!   *Computer Graphics and Geometric Modeling*, 2nd ed., §10.5); arcs, circles, ellipses
+//!   and rounded corners are cubic Béziers in usvg (within 2.7 × 10⁻⁴ of the radius).
 //! * **Inside/outside** is the even-odd rule: a loop inside an outline is a hole, a loop inside
 //!   a hole is an island. Loops may not touch or cross themselves or each other; open,
 //!   self-intersecting and zero-area loops, and a file without any, are errors naming the file
@@ -126,8 +128,11 @@ pub struct PanelResult {
 pub struct Loop {
     /// Points in mm (not repeated at the end).
     pub points: Vec<[f64; 2]>,
-    /// "path element #3 (id \"hole\")".
+    /// `path element on line 7 (id "hole")`, or `subpath 2 of path element on line 7` when
+    /// the element has several.
     pub element: String,
+    /// 1-based line of the element in the file (0 when not from a file).
+    pub line: usize,
 }
 
 fn signed_area(p: &[[f64; 2]]) -> f64 {
@@ -203,15 +208,18 @@ fn check_simple(loops: &[Loop], name: &Path) -> Result<()> {
                 continue;
             }
             let at = s.a;
-            let what = if s.lp == t.lp {
-                format!("{} crosses or touches itself", loops[s.lp].element)
+            let (what, line) = if s.lp == t.lp {
+                (format!("{} crosses or touches itself", loops[s.lp].element), loops[s.lp].line)
             } else {
                 let (x, y) = (s.lp.min(t.lp), s.lp.max(t.lp));
-                format!("{} crosses or touches {}", loops[x].element, loops[y].element)
+                (
+                    format!("{} crosses or touches {}", loops[x].element, loops[y].element),
+                    loops[x].line,
+                )
             };
             return Err(Error::Parse {
                 path: name.to_path_buf(),
-                line: 0,
+                line,
                 message: format!("{what} near ({:.3}, {:.3}) mm", at[0], at[1]),
             });
         }
@@ -265,11 +273,12 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
             message: "no closed outline".into(),
         });
     }
+    check_budget(loops, opts)?;
     check_simple(loops, name)?;
     if let Some(l) = loops.iter().find(|l| signed_area(&l.points).abs() <= 1e-12) {
         return Err(Error::Parse {
             path: name.to_path_buf(),
-            line: 0,
+            line: l.line,
             message: format!("{}: a subpath encloses no area", l.element),
         });
     }
@@ -393,6 +402,90 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
         max_edge: longest,
         refinement_complete: complete,
     })
+}
+
+/// The panel's size, estimated from its loops before any triangle is built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PanelEstimate {
+    /// Sum of the loops' areas, mm² (an upper bound of the even-odd area: holes count as
+    /// area too; linear in the points, where the even-odd area is not).
+    pub area: f64,
+    /// Total length of the loops, mm.
+    pub perimeter: f64,
+    /// Triangles: `A / (½ · √3/4 · e²) + P / e` with a longest edge `e`, else twice the
+    /// boundary points (the angle criterion alone adds few).
+    pub triangles: f64,
+}
+
+/// Estimates the triangles of meshing `loops` with `max_edge` ([`crate::limits::MAX_PANEL_TRIANGLES`]).
+pub fn estimate(loops: &[Loop], max_edge: Option<f64>) -> PanelEstimate {
+    let area: f64 = loops.iter().map(|l| signed_area(&l.points).abs()).sum();
+    let perimeter: f64 = loops
+        .iter()
+        .map(|l| {
+            let n = l.points.len();
+            (0..n)
+                .map(|i| {
+                    let (a, b) = (l.points[i], l.points[(i + 1) % n]);
+                    (b[0] - a[0]).hypot(b[1] - a[1])
+                })
+                .sum::<f64>()
+        })
+        .sum();
+    let points: usize = loops.iter().map(|l| l.points.len()).sum();
+    let triangles = match max_edge {
+        Some(e) => area / (0.5 * 3f64.sqrt() / 4.0 * e * e) + perimeter / e + points as f64,
+        None => 2.0 * points as f64,
+    };
+    PanelEstimate { area, perimeter, triangles }
+}
+
+/// Refuses a panel whose estimated triangles exceed [`crate::limits::MAX_PANEL_TRIANGLES`],
+/// naming `max_edge` (the scene's `outline.max_edge`, the CLI's `--max-edge`).
+fn check_budget(loops: &[Loop], opts: &PanelOptions) -> Result<()> {
+    let e = estimate(loops, opts.max_edge);
+    let budget = crate::limits::MAX_PANEL_TRIANGLES;
+    if e.triangles.is_finite() && e.triangles <= budget {
+        return Ok(());
+    }
+    let fmt = crate::error::fmt_num;
+    let area = format!("{:.0} mm²", e.area);
+    let perimeter = format!("{:.0} mm", e.perimeter);
+    match opts.max_edge {
+        Some(m) => Err(Error::setting(
+            "max_edge",
+            format!(
+                "{} mm on an outline of {area} and {perimeter} gives about {:.2e} triangles, \
+                 beyond the budget of {budget:.0e}; use a longer edge (at least {} mm here)",
+                fmt(m),
+                e.triangles,
+                round_up_2((4.7 * e.area / budget).sqrt().max(2.0 * e.perimeter / budget))
+            ),
+        )),
+        None => Err(Error::setting(
+            "tolerance",
+            format!(
+                "the flattened outline has {:.0} points, about {:.2e} triangles, beyond the \
+                 budget of {budget:.0e}; use a coarser tolerance",
+                e.triangles / 2.0,
+                e.triangles
+            ),
+        )),
+    }
+}
+
+/// `x` rounded up to two significant digits, as text (`0.0766…` → `0.077`).
+fn round_up_2(x: f64) -> String {
+    if !(x.is_finite() && x > 0.0) {
+        return crate::error::fmt_num(x);
+    }
+    let e = x.log10().floor() as i32 - 1;
+    let v = (x / 10f64.powi(e)).ceil();
+    if e >= 0 {
+        format!("{}", v * 10f64.powi(e))
+    } else {
+        format!("{:.*}", (-e) as usize, v * 10f64.powi(e))
+    }
 }
 
 /// Reads an outline SVG and meshes it (see the module documentation).

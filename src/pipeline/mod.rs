@@ -146,6 +146,8 @@ pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Resul
     }
     stages.start("load");
     let (mut mesh, mesh_name) = load_part(s)?;
+    // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
+    crate::limits::check_scene_work(scene, &mesh)?;
     let lighting = key.lighting(scene.view.view(), &mesh)?;
     // `field.init: "uv"` reads the part's own UVs, never a layout made for the toolpaths.
     if matches!(scene.field.init, InitKind::Uv) && mesh.uv.is_none() {
@@ -269,7 +271,17 @@ pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
         min_angle_deg: o.min_angle,
         ..crate::panel::PanelOptions::default()
     };
-    let panel = crate::panel::panel_from_svg(&s.input(&o.path), &options)?;
+    let panel = crate::panel::panel_from_svg(&s.input(&o.path), &options).map_err(|e| match e {
+        // The panel's keys as the scene spells them.
+        Error::Setting { key, message } => {
+            let key = match key.as_str() {
+                "min_angle_deg" => "min_angle".to_string(),
+                k => k.to_string(),
+            };
+            crate::scene::prefix("outline", Error::Setting { key, message })
+        }
+        e => e,
+    })?;
     Ok((panel.mesh, o.path.clone()))
 }
 

@@ -415,6 +415,26 @@ impl RenderSettings {
                 format!("width × height × supersample² = {n} exceeds {MAX_SAMPLES}"),
             ));
         }
+        let bytes = self.memory_estimate();
+        let (per_sample, per_pixel) = self.memory_per_sample_and_pixel();
+        let budget = crate::limits::MAX_RENDER_BYTES;
+        if bytes > budget {
+            let gib = |b: u64| format!("{:.2} GiB", b as f64 / f64::from(1u32 << 30));
+            return Err(Error::setting(
+                "",
+                format!(
+                    "width × height × supersample² = {} × {} × {}² = {n} samples would hold \
+                     about {} ({per_sample} bytes per sample and {per_pixel} per pixel with these \
+                     effects), beyond the budget of {}; lower render.width, render.height or \
+                     render.supersample, or drop an effect (lic, highlight_curves, as_brushed)",
+                    self.width,
+                    self.height,
+                    self.supersample,
+                    gib(bytes),
+                    gib(budget)
+                ),
+            ));
+        }
         check_range("exposure", self.exposure, -40.0, 40.0)?;
         check_colour("background", &self.background, 1.0)?;
         if self.output.is_empty() {
@@ -424,6 +444,53 @@ impl RenderSettings {
             return Err(Error::setting("linear", "must name a file or be null"));
         }
         self.effects.validate()
+    }
+}
+
+impl RenderSettings {
+    /// Bytes the render is estimated to hold at once, counted from the buffers it allocates.
+    /// Per supersample: 16 (visibility), 12 (radiance), 16 per image half (overlay layer),
+    /// 12 for the as-brushed radiance and 12 more for its difference, 32 for LIC
+    /// (directions, cells, values), 16 for highlight curves (g and u), 8 for the coverage
+    /// resolve when supersampled. Per output pixel and half: 28 (resolved radiance and
+    /// layer), 3 (8-bit image), 3 (PNG), 12 with a linear output; 4 more for LIC.
+    pub fn memory_estimate(&self) -> u64 {
+        let (per_sample, per_pixel) = self.memory_per_sample_and_pixel();
+        let s = u64::from(self.supersample);
+        let pixels = u64::from(self.width) * u64::from(self.height);
+        let samples = pixels * s * s;
+        samples.saturating_mul(per_sample).saturating_add(pixels.saturating_mul(per_pixel))
+    }
+
+    /// Bytes per supersample and per output pixel ([`Self::memory_estimate`]).
+    pub fn memory_per_sample_and_pixel(&self) -> (u64, u64) {
+        let fx = &self.effects;
+        let s = u64::from(self.supersample);
+        let halves: u64 = match &fx.as_brushed {
+            Some(a) if a.mode == AsBrushedMode::SideBySide => 2,
+            _ => 1,
+        };
+        let mut per_sample = 16 + 12 + 16 * halves;
+        if let Some(a) = &fx.as_brushed {
+            per_sample += 12;
+            if a.mode == AsBrushedMode::Difference {
+                per_sample += 12;
+            }
+        }
+        if fx.lic.is_some() {
+            per_sample += 32;
+        }
+        if fx.highlight_curves.is_some() {
+            per_sample += 16;
+        }
+        if s > 1 {
+            per_sample += 8;
+        }
+        let mut per_pixel = halves * (28 + 3 + 3 + if self.linear.is_some() { 12 } else { 0 });
+        if fx.lic.is_some() {
+            per_pixel += 4;
+        }
+        (per_sample, per_pixel)
     }
 }
 

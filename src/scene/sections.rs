@@ -155,7 +155,8 @@ impl MeshSection {
 pub struct OutlineSection {
     /// The SVG file whose paths are the closed outline and its holes.
     pub path: String,
-    /// Longest triangle edge in millimetres (default: 1/20 of the outline's diagonal).
+    /// Longest triangle edge in millimetres (default: none, the angle criterion alone decides);
+    /// refused when the panel would get more than about 4 × 10⁶ triangles.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_edge: Option<f64>,
     /// Smallest triangle angle in degrees sought by the refinement (default 25, at most 30).

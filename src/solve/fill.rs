@@ -20,7 +20,6 @@
 use faer::c64;
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::Side;
 
 use crate::geometry::Geometry;
 
@@ -79,7 +78,7 @@ pub fn harmonic_fill(
         triplets.push(Triplet::new(c, c, c64::new(d + 1e-10 * mean.max(1e-300), 0.0)));
     }
     let a = SparseColMat::<usize, c64>::try_new_from_triplets(n, n, &triplets).ok()?;
-    let llt = a.sp_cholesky(Side::Lower).ok()?;
+    let llt = super::factor::Factor::new(a.as_ref(), "harmonic fill").ok()?;
     llt.solve_in_place(rhs.as_mut());
     let scale = rhs.col(0).iter().map(|z| z.norm()).fold(0.0f64, f64::max);
     let mut out = phi.to_vec();

@@ -5,6 +5,7 @@
 pub mod branch;
 mod cg;
 pub mod fabrication;
+pub(crate) mod factor;
 pub mod fill;
 pub mod highlight_term;
 pub mod lm;

@@ -102,6 +102,16 @@ pub enum ToolpathError {
         /// Strokes skipped for tilt.
         skipped_tilt: usize,
     },
+    /// The job's estimated work exceeds a documented budget ([`crate::budget`]); `key` is the
+    /// option to change (`placement.width`, `plan.order.neighbours`, …) and the message gives
+    /// the estimate and the budget.
+    #[error("{key}: {message}")]
+    Budget {
+        /// The option's key path from [`crate::JobOptions`].
+        key: &'static str,
+        /// The estimate, the budget and what to change.
+        message: String,
+    },
     /// In surface-following mode the surface normal tilts too far from the tool axis.
     #[error(
         "stroke {stroke}: surface normal tilts {angle_deg:.2}° from the tool axis, above the \

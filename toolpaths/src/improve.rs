@@ -90,7 +90,8 @@ impl<'t, 'e> Search<'t, 'e> {
         for (p, &s) in seq.iter().enumerate() {
             pos[s] = p;
         }
-        let k = k.max(1);
+        // More candidates than strokes list nothing more (the lists are already complete).
+        let k = k.clamp(1, n.max(1));
         let mut s = Search {
             tour,
             flip,

@@ -30,6 +30,7 @@
 
 mod bound;
 mod buckets;
+pub mod budget;
 mod coverage;
 mod error;
 mod field;
@@ -54,6 +55,7 @@ mod topology;
 mod trace;
 
 pub use bound::{travel_bound, BoundOptions, TravelBound};
+pub use budget::{PlacementEstimate, MAX_NEIGHBOURS, MAX_STROKE_SAMPLES};
 pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};
 pub use error::{Result, ToolpathError};
 pub use field::{singularities, Singularity};

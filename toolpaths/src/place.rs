@@ -181,8 +181,16 @@ pub struct Placement {
 }
 
 /// Place evenly spaced strokes over the domain (see the module docs).
+///
+/// The work is estimated first ([`PlacementOptions::check_budget`], over the domain's area in
+/// the spacing's metric) and refused past [`crate::budget::MAX_STROKE_SAMPLES`].
 pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement> {
     opts.validate()?;
+    let area = match opts.spacing {
+        Spacing::Surface => dom.surface_area(),
+        Spacing::Uv => (0..dom.face_count() as u32).map(|f| dom.uv_area(f)).sum(),
+    };
+    opts.check_budget(area)?;
     let d_sep = opts.d_sep();
     let d_test = opts.d_test();
     let exclusion = opts.exclusion_radius.unwrap_or(d_sep);

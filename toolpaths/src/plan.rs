@@ -126,6 +126,7 @@ impl PlanOptions {
         non_negative("plan.overtravel", self.overtravel)?;
         finite("plan.order.home[0]", self.order.home[0])?;
         finite("plan.order.home[1]", self.order.home[1])?;
+        crate::budget::check_neighbours(self.order.neighbours)?;
         match self.z_mode {
             ZMode::Flat { surface_z } => {
                 finite("plan.z_mode.surface_z", surface_z)?;
