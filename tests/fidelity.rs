@@ -1,4 +1,4 @@
-//! The edit-fidelity measure (src/fidelity.rs, issue 13) against fields built by hand on a flat
+//! The edit-fidelity measure (src/fidelity/, issue 13) against fields built by hand on a flat
 //! plane, where the key highlight {hᵀu = 0} is a known line or circle: with a constant half
 //! vector h and u = (cos φ, sin φ, 0), hᵀu = |h_t| cos(φ − θ_h), so φ = θ_h + π/2 + s(p) gives
 //! hᵀu = −|h_t| sin s(p), whose zero set near s = 0 is {s = 0}.

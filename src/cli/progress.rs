@@ -83,7 +83,7 @@ pub fn warn_about(report: &grainline::pipeline::optimize::OptimizeStageReport) {
     }
 }
 
-/// One warning per edit that did not land (issue 13's fidelity measure, src/fidelity.rs): the
+/// One warning per edit that did not land (issue 13's fidelity measure, src/fidelity/): the
 /// share of the target highlight within tolerance, the 95th-percentile distance and the singular
 /// triangles before and after, or why the edit could not be measured. Printed unless `--quiet`.
 pub fn warn_missed(report: &grainline::pipeline::optimize::OptimizeStageReport) {

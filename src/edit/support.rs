@@ -640,7 +640,7 @@ fn cell_of(p: &Vector2<f64>, lo: &Vector2<f64>, cell: f64, dim: usize) -> (usize
 }
 
 /// Barycentric coordinates of q in triangle t (None for a degenerate triangle).
-fn barycentric(q: &Vector2<f64>, t: &[Vector2<f64>; 3]) -> Option<[f64; 3]> {
+pub(crate) fn barycentric(q: &Vector2<f64>, t: &[Vector2<f64>; 3]) -> Option<[f64; 3]> {
     let (e1, e2, d) = (t[1] - t[0], t[2] - t[0], q - t[0]);
     let det = e1.x * e2.y - e1.y * e2.x;
     let scale = e1.norm_squared() + e2.norm_squared();
