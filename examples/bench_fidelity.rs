@@ -150,10 +150,10 @@ fn main() {
         }
     }
     println!(
-        "| case | V | edit | energy | within 0.05 r | p95 (× r) | median (× r) | singular before → \
-         after | iterations | stop | optimize stage (s) |"
+        "| case | V (+refined) | edit | energy | within 0.05 r | p95 (× r) | median (× r) | singular \
+         before → after | iterations | stop | optimize stage (s) | prepare (s) |"
     );
-    println!("|---|---:|---|---|---:|---:|---:|---:|---:|---|---:|");
+    println!("|---|---:|---|---|---:|---:|---:|---:|---:|---|---:|---:|");
     for o in &rows {
         println!("{}", row(o));
     }
@@ -201,7 +201,7 @@ fn row(o: &Outcome) -> String {
     let energy = if o.energy_key { o.energy.clone() } else { format!("{} (today)", o.energy) };
     if let Some(e) = &o.error {
         return format!(
-            "| {} | {} | {} | {} | – | – | – | – | – | error: {} | – |",
+            "| {} | {} | {} | {} | – | – | – | – | – | error: {} | – | – |",
             o.case,
             o.vertices,
             o.edit,
@@ -211,7 +211,7 @@ fn row(o: &Outcome) -> String {
     }
     let Some(f) = &o.figures else {
         return format!(
-            "| {} | {} | {} | {} | – | – | – | – | – | no figures | – |",
+            "| {} | {} | {} | {} | – | – | – | – | – | no figures | – | – |",
             o.case, o.vertices, o.edit, energy
         );
     };
@@ -228,9 +228,9 @@ fn row(o: &Outcome) -> String {
         format!("{:.1} %{off} | {:.3} | {:.3}", 100.0 * f.within, f.p95, f.median)
     };
     format!(
-        "| {} | {} | {} | {} | {} | {} → {} | {} | {}{mono} | {:.2} |",
+        "| {} | {} | {} | {} | {} | {} → {} | {} | {}{mono} | {:.2} | {:.2} |",
         o.case,
-        o.vertices,
+        vertices(o),
         o.edit,
         energy,
         figs,
@@ -238,8 +238,18 @@ fn row(o: &Outcome) -> String {
         f.singular_after,
         o.iterations,
         o.stop,
-        o.seconds
+        o.seconds,
+        o.prepare_seconds
     )
+}
+
+/// "V" or "V (+added)" when the mesh was refined inside the brush.
+fn vertices(o: &Outcome) -> String {
+    if o.vertices_added > 0 {
+        format!("{} (+{})", o.vertices - o.vertices_added, o.vertices_added)
+    } else {
+        o.vertices.to_string()
+    }
 }
 
 fn usage(msg: &str) -> ! {

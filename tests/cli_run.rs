@@ -82,6 +82,7 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
             stage_names(&r),
             [
                 "load",
+                "refine",
                 "field",
                 "edits",
                 "solve",
@@ -265,8 +266,12 @@ fn trace_writes_the_strokes_of_a_given_field_and_flags_override_the_scene() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
     let r = report(&rep);
-    // The field came from the file: no edits and no solve ran.
-    assert_eq!(stage_names(&r), ["load", "field", "read field", "toolpaths", "write toolpaths"]);
+    // The field came from the file: no edits and no solve ran (the part is refined inside
+    // the scene's brush as the optimize run that wrote the field refined it).
+    assert_eq!(
+        stage_names(&r),
+        ["load", "refine", "field", "read field", "toolpaths", "write toolpaths"]
+    );
     // The same strokes as the scene's own solve (the FIELD.json holds that solve's grain).
     let o = run(&[
         "--quiet",
@@ -335,4 +340,57 @@ fn render_command_writes_only_the_preview() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("missing.json"), "{err}");
     assert_eq!(err.matches("os error").count(), 1, "cause printed twice: {err}");
+}
+
+#[test]
+fn a_field_of_the_unrefined_part_is_traced_on_its_own_triangles() {
+    // The vase's bend is finer than its triangles, so `optimize` refines the part inside the
+    // brush; a FIELD.json written with `mesh.refine.mode: "none"` (or before refinement
+    // existed) has the part's own vertex count and must still trace with the default scene.
+    let d = dir("unrefined");
+    write_part(&d);
+    let sc = scene(&d, BEND, TOOLPATHS, "");
+    let refined = d.join("refined.json");
+    let o = run(&["--quiet", "optimize", sc.to_str().unwrap(), "--out", refined.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&sc).unwrap();
+    let own_sc = d.join("own.json");
+    std::fs::write(
+        &own_sc,
+        text.replace(
+            r#""mesh": "vase.obj""#,
+            r#""mesh": {"path": "vase.obj", "refine": {"mode": "none"}}"#,
+        ),
+    )
+    .unwrap();
+    let own = d.join("own-field.json");
+    let o = run(&["--quiet", "optimize", own_sc.to_str().unwrap(), "--out", own.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let count = |p: &Path| report(p)["u"].as_array().unwrap().len();
+    let obj_vertices = std::fs::read_to_string(d.join("vase.obj"))
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("v "))
+        .count();
+    assert_eq!(count(&own), obj_vertices, "mode none keeps the part's vertices");
+    assert!(count(&refined) > obj_vertices, "the default refines inside the brush");
+    for field in [&own, &refined] {
+        let rep = d.join("trace-report.json");
+        let _ = std::fs::remove_file(&rep);
+        let svg = d.join("t.svg");
+        let _ = std::fs::remove_file(&svg);
+        let o = run(&[
+            "--quiet",
+            "trace",
+            sc.to_str().unwrap(),
+            "--field",
+            field.to_str().unwrap(),
+            "--svg",
+            svg.to_str().unwrap(),
+            "--report",
+            rep.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(report(&rep)["vertices"].as_u64().unwrap() as usize, count(field));
+    }
 }

@@ -24,6 +24,7 @@
 
 pub mod curve;
 pub mod light;
+pub mod resolution;
 pub mod stencil;
 pub mod support;
 pub mod warp;

@@ -266,9 +266,40 @@ fn segments_on(
         .collect()
 }
 
+/// [`segments_on`], with the unit normal of each segment's face.
+fn segments_with_normals(
+    mesh: &Mesh,
+    h: &[Vector3<f64>],
+    u: &[Vector3<f64>],
+    symmetry: Symmetry,
+    faces: &[usize],
+) -> (Vec<[Vector3<f64>; 2]>, Vec<Vector3<f64>>) {
+    let n = mesh.num_vertices();
+    let mut segs = Vec::new();
+    let mut normals = Vec::new();
+    for &f in faces {
+        let Some(face) = mesh.faces.get(f) else { continue };
+        if face.iter().any(|&v| v as usize >= n) {
+            continue;
+        }
+        let Some(g) = corner_g(face, h, u, symmetry) else { continue };
+        let p = mesh.face_positions(f);
+        if let Some(s) = zero_segment(&p, &g) {
+            segs.push(s);
+            normals.push(
+                (p[1] - p[0]).cross(&(p[2] - p[0])).try_normalize(1e-300).unwrap_or_default(),
+            );
+        }
+    }
+    (segs, normals)
+}
+
 /// Nearest-segment queries: segments bucketed in a sparse uniform grid.
 struct SegmentGrid {
     segs: Vec<[Vector3<f64>; 2]>,
+    /// Per segment, the unit normal of the face it lies on (distances are then measured in
+    /// that face's plane, leaving out the offset along the normal), or zero (in space).
+    normals: Vec<Vector3<f64>>,
     cell: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
 }
@@ -294,7 +325,18 @@ impl SegmentGrid {
                 }
             }
         }
-        SegmentGrid { segs, cell, cells }
+        let normals = vec![Vector3::zeros(); segs.len()];
+        SegmentGrid { segs, normals, cell, cells }
+    }
+
+    /// A grid whose distances are measured in the plane of each segment's face (`normals`, one
+    /// unit normal per segment).
+    fn in_planes(segs: Vec<[Vector3<f64>; 2]>, normals: Vec<Vector3<f64>>, reach: f64) -> Self {
+        let mut g = SegmentGrid::new(segs, reach);
+        if normals.len() == g.segs.len() {
+            g.normals = normals;
+        }
+        g
     }
 
     /// The distance from `p` to the nearest segment, or `cap` if none is closer.
@@ -318,13 +360,17 @@ impl SegmentGrid {
                         };
                         for &k in list {
                             let s = &self.segs[k as usize];
-                            best = best.min(point_segment_distance(p, &s[0], &s[1]));
+                            let n = &self.normals[k as usize];
+                            let q = p - n * (p - s[0]).dot(n);
+                            best = best.min(point_segment_distance(&q, &s[0], &s[1]));
                         }
                     }
                 }
             }
-            // Every cell of a later ring is at least ring·cell away from p.
-            if best <= ring as f64 * self.cell {
+            // Every cell of a later ring is at least ring·cell away from p (one ring more when
+            // distances are measured in the faces' planes, which can be a little shorter).
+            let slack = if self.normals.iter().any(|n| n.norm_squared() > 0.0) { 1.0 } else { 0.0 };
+            if best <= (ring as f64 - slack) * self.cell {
                 break;
             }
         }
@@ -584,10 +630,14 @@ pub fn edit_fidelity(
         }
         EditShape::Curve { polylines, .. } => {
             let samples = curve_samples(polylines, options.sample_spacing * radius, radius);
-            let c1 = segments_on(mesh, h, u_after, symmetry, &any);
+            // Distances along the surface: in the plane of the face C1 crosses, leaving out
+            // an offset along its normal (the drawn curve lies on the part as it was drawn on,
+            // a refined mesh's new vertices a little off its facets; the tool itself measures
+            // the offset across the curve's tangent in the tangent plane).
+            let (c1, normals) = segments_with_normals(mesh, h, u_after, symmetry, &any);
             let empty_c1 = c1.is_empty();
             let cap = MAX_DISTANCE * radius;
-            let grid = SegmentGrid::new(c1, cap);
+            let grid = SegmentGrid::in_planes(c1, normals, cap);
             let d: Vec<f64> = samples.iter().map(|p| grid.nearest(p, cap) / radius).collect();
             (d, samples.is_empty(), empty_c1)
         }
@@ -746,6 +796,18 @@ mod tests {
             assert_eq!(grid.nearest(&p, 4.0), brute, "{p:?}");
         }
         assert_eq!(SegmentGrid::new(Vec::new(), 1.0).nearest(&Vector3::zeros(), 1.0), 1.0);
+    }
+
+    #[test]
+    fn in_plane_distances_leave_out_the_offset_along_the_face_normal() {
+        // A segment on the plane z = 0 from (0, 0, 0) to (1, 0, 0); a point 0.3 across it
+        // and 0.4 above the plane is 0.5 away in space and 0.3 in the plane.
+        let segs = vec![[Vector3::zeros(), Vector3::x()]];
+        let p = Vector3::new(0.5, 0.3, 0.4);
+        let space = SegmentGrid::new(segs.clone(), 2.0).nearest(&p, 2.0);
+        let plane = SegmentGrid::in_planes(segs, vec![Vector3::z()], 2.0).nearest(&p, 2.0);
+        assert!((space - 0.5).abs() < 1e-12, "{space}");
+        assert!((plane - 0.3).abs() < 1e-12, "{plane}");
     }
 
     #[test]

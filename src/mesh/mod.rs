@@ -11,6 +11,7 @@ pub mod load;
 mod parse;
 mod ply;
 mod raw;
+pub mod refine;
 pub mod report;
 mod scan;
 mod scan_parallel;

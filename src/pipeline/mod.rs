@@ -89,6 +89,8 @@ pub struct Prepared {
     pub field: FieldResult,
     /// The UV layout made for the part ([`prepare_with`] with `layout: true`), if one was.
     pub layout: Option<crate::layout::LayoutReport>,
+    /// The refinement made inside the edits' brushes (`mesh.refine`), if any.
+    pub refinement: Option<RefinementReport>,
 }
 
 /// The highlight model's key light as the scene gives it.
@@ -162,11 +164,20 @@ pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Resul
     } else {
         None
     };
-    stages.start("field");
-    let directions = match (&scene.field.init, &scene.field.directions) {
+    let mut directions = match (&scene.field.init, &scene.field.directions) {
         (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),
         _ => None,
     };
+    let refinement = refine_for_edits(s, &mut mesh, stages)?;
+    if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
+        // A line or vector field read per vertex: each new vertex gets the mean of its edge's
+        // two directions (aligned first, so a line field's ±u do not cancel).
+        r.refined.extend(d, |a, b| {
+            let s = if a.dot(b) < 0.0 { a - b } else { a + b };
+            s.try_normalize(1e-300).unwrap_or(*a)
+        });
+    }
+    stages.start("field");
     let mut field_options = FieldOptions::new(lighting);
     field_options.init = scene.field.initial_field(directions);
     field_options.symmetry = scene.field.symmetry.symmetry();
@@ -174,7 +185,70 @@ pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Resul
     field_options.geometry.normals = scene.field.normals;
     field_options.critical_threshold = scene.field.critical_threshold;
     let field = compute_field(&mesh, &field_options)?;
-    Ok(Prepared { mesh, mesh_name, field_options, field, layout: layout_report })
+    let refinement = refinement.map(|r| r.report);
+    Ok(Prepared { mesh, mesh_name, field_options, field, layout: layout_report, refinement })
+}
+
+/// What [`refine_for_edits`] did.
+struct Refinement {
+    refined: crate::mesh::refine::Refined,
+    report: RefinementReport,
+}
+
+/// The mesh refinement made for the edits (`mesh.refine`, docs/math.md §12).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RefinementReport {
+    /// Vertices of the part as loaded.
+    pub vertices_before: usize,
+    /// Vertices added (appended after the part's own, which keep their indices).
+    pub vertices_added: usize,
+    /// Faces of the part that were split.
+    pub faces_split: usize,
+    /// Levels of splitting.
+    pub levels: usize,
+    /// The longest edge allowed inside the finest brush, scene units.
+    pub finest_edge: f64,
+}
+
+/// Refines the part inside the edits' brushes where its triangles are coarser than
+/// `mesh.refine.edge` × the brush radius ([`crate::edit::resolution`],
+/// [`crate::mesh::refine`]). `None` when nothing was split (or `mesh.refine.mode: "none"`).
+fn refine_for_edits(
+    s: &LoadedScene,
+    mesh: &mut Mesh,
+    stages: &mut Stages,
+) -> Result<Option<Refinement>> {
+    let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
+    if settings.mode == crate::scene::RefineMode::None || s.scene.edits.is_empty() {
+        return Ok(None);
+    }
+    let edits = optimize::resolved_edits(s);
+    let key = |e: Error| crate::scene::prefix("edits", e);
+    let target =
+        crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
+    let finest = target.iter().copied().fold(f64::INFINITY, f64::min);
+    if !finest.is_finite() {
+        return Ok(None);
+    }
+    stages.start("refine");
+    let options = crate::mesh::refine::RefineOptions {
+        max_new_vertices: settings.max_vertices,
+        budget_key: "mesh.refine.max_vertices",
+        ..Default::default()
+    };
+    let refined = crate::mesh::refine::refine(mesh, &target, &options)?;
+    if refined.added() == 0 {
+        return Ok(None);
+    }
+    let report = RefinementReport {
+        vertices_before: mesh.num_vertices(),
+        vertices_added: refined.added(),
+        faces_split: refined.faces_split,
+        levels: refined.levels,
+        finest_edge: finest,
+    };
+    *mesh = refined.mesh.clone();
+    Ok(Some(Refinement { refined, report }))
 }
 
 /// Makes sure `mesh` has a UV layout the toolpaths can use, as `options.mode` says: `auto`

@@ -53,29 +53,36 @@ pub struct OptimizeStageReport {
     pub edited_vertices: usize,
     /// The solver.
     pub solver: OptimizeReport,
+    /// The refinement made for the edits before the field was computed (`mesh.refine`);
+    /// absent when nothing was split.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<super::RefinementReport>,
     /// Did each edit land? One entry per bend, expand and curve edit: the key highlight of the
     /// solved field against the edit's target ([`crate::fidelity`]).
     pub fidelity: Vec<EditFidelity>,
+}
+
+/// The scene's edits with their file paths resolved (relative to the scene file).
+pub(crate) fn resolved_edits(s: &LoadedScene) -> Vec<Edit> {
+    s.scene
+        .edits
+        .iter()
+        .map(|e| match e {
+            Edit::Curve(c) if c.svg.is_some() => {
+                let mut c = c.clone();
+                c.svg = c.svg.clone().map(|p| s.input(&p).display().to_string());
+                Edit::Curve(c)
+            }
+            other => other.clone(),
+        })
+        .collect()
 }
 
 /// Applies the edits and solves for φ.
 pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Result<Optimized> {
     stages.start("edits");
     let settings = &s.scene.solver;
-    // Paths in edits are relative to the scene file.
-    let edits: Vec<Edit> = s
-        .scene
-        .edits
-        .iter()
-        .map(|e| match e {
-            Edit::Curve(c) if c.svg.is_some() => {
-                let mut c = c.clone();
-                c.svg = c.svg.map(|p| s.input(&p).display().to_string());
-                Edit::Curve(c)
-            }
-            other => other.clone(),
-        })
-        .collect();
+    let edits = resolved_edits(s);
     let g = &p.field.geometry;
     let symmetry = p.field_options.symmetry;
     let form = p.field_options.gradient_form;
@@ -135,6 +142,7 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
             key_light_position: er.lighting.light_position.map(|p| [p.x, p.y, p.z]),
             edited_vertices: er.support.iter().filter(|&&s| s).count(),
             solver: solved.report,
+            refinement: p.refinement.clone(),
             fidelity,
         },
     })

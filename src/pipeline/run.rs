@@ -257,7 +257,19 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     let mut staged = Staged::new();
     // The layout is checked (or made) right after loading: a part that cannot get one is
     // refused before the field, the solve or the preview run.
-    let prepared = prepare_with(s, &mut stages, plan.trace)?;
+    let mut prepared = prepare_with(s, &mut stages, plan.trace)?;
+    if let (Some(path), Some(r)) = (&options.field, &prepared.refinement) {
+        // A given field of the part as loaded (written with `mesh.refine.mode: "none"`, or
+        // before refinement existed) is traced on the part's own triangles.
+        let n = crate::field::FieldFile::read(path).map(|f| f.u.len());
+        if n.is_ok_and(|n| n == r.vertices_before) {
+            let mut own = s.clone();
+            if let Some(m) = own.scene.mesh.as_mut() {
+                m.0.refine.mode = crate::scene::RefineMode::None;
+            }
+            prepared = prepare_with(&own, &mut stages, plan.trace)?;
+        }
+    }
     let g = &prepared.field.geometry;
     let symmetry = prepared.field_options.symmetry;
     if plan.trace && prepared.mesh.uv.is_none() {
@@ -282,9 +294,17 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
                     path: path.clone(),
                     line: 0,
                     message: format!(
-                        "has {} vertices, the scene's mesh has {}",
+                        "has {} vertices, the scene's mesh has {}{}",
                         f.u.len(),
-                        prepared.mesh.num_vertices()
+                        prepared.mesh.num_vertices(),
+                        match &prepared.refinement {
+                            Some(r) => format!(
+                                " ({} of the part's own and {} added inside the edits' \
+                                 brushes, `mesh.refine`)",
+                                r.vertices_before, r.vertices_added
+                            ),
+                            None => String::new(),
+                        }
                     ),
                 });
             }

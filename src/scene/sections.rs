@@ -39,6 +39,77 @@ pub struct MeshFull {
     /// "Creases"); 180 turns it off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub crease_angle: Option<f64>,
+    /// Refinement of the part inside the edits' brushes (default: where an edit needs it;
+    /// docs/math.md §12).
+    #[serde(default, skip_serializing_if = "RefineSettings::is_default")]
+    pub refine: RefineSettings,
+}
+
+/// `mesh.refine`: a brush or a drawn curve finer than the part's triangles cannot be followed
+/// by a grain that lives on vertices, so the triangles inside each bend, expand and curve are
+/// split (new vertices appended; the part's own keep their indices) until no edge is longer
+/// than `edge` × the brush radius (for a curve, × the smaller of its radius and width).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RefineSettings {
+    /// `edits` (the default) refines inside the edits' brushes; `none` keeps the part's
+    /// triangles as they are.
+    #[serde(default)]
+    pub mode: RefineMode,
+    /// The longest edge allowed inside a brush, as a fraction of its radius (default 1/3).
+    #[serde(default = "default_refine_edge")]
+    pub edge: f64,
+    /// Most vertices refinement may add (default 2,000,000); past it the scene is refused.
+    #[serde(default = "default_refine_budget")]
+    pub max_vertices: usize,
+}
+
+/// `mesh.refine.mode`.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum RefineMode {
+    /// Refine inside the edits' brushes where the triangles are too coarse.
+    #[default]
+    Edits,
+    /// Never refine.
+    None,
+}
+
+fn default_refine_edge() -> f64 {
+    1.0 / 3.0
+}
+
+fn default_refine_budget() -> usize {
+    2_000_000
+}
+
+impl Default for RefineSettings {
+    fn default() -> Self {
+        RefineSettings {
+            mode: RefineMode::Edits,
+            edge: default_refine_edge(),
+            max_vertices: default_refine_budget(),
+        }
+    }
+}
+
+impl RefineSettings {
+    fn is_default(&self) -> bool {
+        *self == RefineSettings::default()
+    }
+
+    /// Range-checks `edge` (in [0.05, 2]); keys are relative to `mesh.refine`.
+    pub fn validate(&self) -> Result<()> {
+        if !(self.edge.is_finite() && (0.05..=2.0).contains(&self.edge)) {
+            return Err(Error::setting(
+                "edge",
+                format!("must be within [0.05, 2], got {}", crate::error::fmt_num(self.edge)),
+            ));
+        }
+        Ok(())
+    }
 }
 
 fn one() -> f64 {
@@ -115,6 +186,7 @@ impl MeshSection {
                 ));
             }
         }
+        m.refine.validate().map_err(|e| crate::scene::prefix("refine", e))?;
         if !(m.scale.is_finite() && m.scale > 0.0) {
             return Err(Error::setting(
                 "scale",

@@ -806,6 +806,10 @@ pub struct Outcome {
     pub stop: String,
     /// Wall seconds of the edits and the solve.
     pub seconds: f64,
+    /// Wall seconds of preparing the part with the edit (load, refinement, field).
+    pub prepare_seconds: f64,
+    /// Vertices the refinement added inside the brush (`mesh.refine`).
+    pub vertices_added: usize,
     /// Total energy of the start and after each accepted iteration.
     pub energies: Vec<f64>,
     /// Continuation stage of each accepted iteration.
@@ -861,7 +865,12 @@ pub fn run_edit(
     let mut scene = p.scene.clone();
     scene.scene.edits = vec![edit];
     scene.scene.solver = settings;
-    let mesh = &p.prepared.mesh;
+    // The part is prepared again with the edit in the scene, as `grainline run` does: the
+    // mesh is refined inside the brush where its triangles are too coarse (`mesh.refine`).
+    let t = Instant::now();
+    let refined = prepare(&scene, &mut Stages::new(&Silent)).map_err(|e| e.to_string())?;
+    let prepare_seconds = t.elapsed().as_secs_f64();
+    let mesh = &refined.mesh;
     let mut out = Outcome {
         case: case.name.clone(),
         edit: tool.into(),
@@ -873,13 +882,15 @@ pub fn run_edit(
         max_iterations: scene.scene.solver.max_iterations,
         stop: String::new(),
         seconds: 0.0,
+        prepare_seconds,
+        vertices_added: refined.refinement.as_ref().map_or(0, |r| r.vertices_added),
         energies: Vec::new(),
         stages: Vec::new(),
         error: None,
     };
     let mut stages = Stages::new(&Silent);
     let t = Instant::now();
-    let o = match optimize_stage(&scene, &p.prepared, &mut stages) {
+    let o = match optimize_stage(&scene, &refined, &mut stages) {
         Ok(o) => o,
         Err(e) => {
             out.error = Some(e.to_string());

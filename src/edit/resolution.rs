@@ -1,0 +1,217 @@
+//! Where the edits need a finer mesh (docs/math.md §12), before any field exists.
+//!
+//! The grain lives on vertices and the highlight a designer sees is the zero set of its linear
+//! interpolant per triangle, so a warp or a drawn curve that bends within one triangle cannot
+//! be followed, whatever the solver does. Each bend and expand asks for edges no longer than
+//! `edge` × its radius on the faces that reach into its ball; each curve asks for `edge` ×
+//! min(radius, width) on the faces that reach into its tube. Stencils and the light tools set
+//! directions, not positions, and ask for nothing.
+//!
+//! The regions are Euclidean balls and tubes: they contain the geodesic supports the tools
+//! use later, so a face of a support is never left coarse. A region that holds none of the
+//! part's vertices asks for nothing: its tool refuses it as before (a brush smaller than the
+//! triangles is most often a slip of units, and refinement is not meant to hide it).
+
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use super::curve::read_svg_polylines;
+use super::support::Centre;
+use super::{at_edit, Edit};
+use crate::mesh::Mesh;
+use crate::Result;
+
+/// One region of an edit: a polyline (one point for a brush) and its reach, and the edge
+/// length wanted inside it.
+struct Region {
+    lines: Vec<Vec<Vector3<f64>>>,
+    reach: f64,
+    edge: f64,
+}
+
+/// The edge length each face of `mesh` needs for `edits` (`f64::INFINITY` where none asks),
+/// with `edge` the fraction of a brush radius (or a curve's width) an edge may span.
+pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Vec<f64>> {
+    let mut target = vec![f64::INFINITY; mesh.num_faces()];
+    for (k, e) in edits.iter().enumerate() {
+        let Some(region) = region_of(mesh, e).map_err(|err| at_edit(k, e.tool(), err))? else {
+            continue;
+        };
+        let want = edge * region.edge;
+        if !(want.is_finite() && want > 0.0) {
+            continue;
+        }
+        mark(mesh, &region, want, &mut target);
+    }
+    Ok(target)
+}
+
+fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
+    Ok(match e {
+        Edit::Bend(w) | Edit::Expand(w) => {
+            let p = match &w.centre {
+                Centre::Vertex(i) => match mesh.positions.get(*i as usize) {
+                    Some(p) => *p,
+                    None => return Ok(None), // the tool reports the bad index
+                },
+                Centre::Point(p) => Vector3::from(*p),
+            };
+            Some(Region { lines: vec![vec![p]], reach: w.radius, edge: w.radius })
+        }
+        Edit::Curve(c) => {
+            let lines: Vec<Vec<Vector3<f64>>> = if let Some(pts) = &c.points {
+                pts.iter().map(|l| l.iter().map(|p| Vector3::from(*p)).collect()).collect()
+            } else {
+                let uv = match (&c.uv, &c.svg) {
+                    (Some(uv), _) => uv
+                        .iter()
+                        .map(|l| l.iter().map(|p| nalgebra::Vector2::new(p[0], p[1])).collect())
+                        .collect(),
+                    (None, Some(svg)) => read_svg_polylines(Path::new(svg), c.tolerance)?,
+                    (None, None) => return Ok(None),
+                };
+                crate::fidelity::lift_uv_polylines(mesh, &uv)
+            };
+            let width = c.width.unwrap_or(c.radius).min(c.radius);
+            Some(Region { lines, reach: c.radius, edge: width })
+        }
+        Edit::Stencil(_) | Edit::Light(_) | Edit::MoveLight(_) => None,
+    })
+}
+
+/// Lowers `target` to `want` on every face that reaches within `region.reach` of its lines.
+fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
+    let pts = region.lines.iter().flatten();
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for p in pts.filter(|p| p.iter().all(|c| c.is_finite())) {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    if !(lo.x <= hi.x) {
+        return;
+    }
+    let n = mesh.num_vertices();
+    // A brush or tube that holds none of the part's vertices is refused by its tool (a radius
+    // smaller than the triangles is most often a slip of units); refinement does not rescue it.
+    let holds_a_vertex = mesh.positions.iter().any(|p| {
+        let near = (0..3).all(|i| p[i] >= lo[i] - region.reach && p[i] <= hi[i] + region.reach);
+        near && region.lines.iter().any(|l| polyline_distance(p, l) <= region.reach)
+    });
+    if !holds_a_vertex {
+        return;
+    }
+    for (f, face) in mesh.faces.iter().enumerate() {
+        if face.iter().any(|&v| v as usize >= n) {
+            continue;
+        }
+        let p = face.map(|v| mesh.positions[v as usize]);
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let rho = p.iter().map(|q| (q - c).norm()).fold(0.0, f64::max);
+        let reach = region.reach + rho;
+        let outside = (0..3).any(|i| c[i] < lo[i] - reach || c[i] > hi[i] + reach);
+        if outside || !(reach.is_finite()) {
+            continue;
+        }
+        let d = region.lines.iter().map(|l| polyline_distance(&c, l)).fold(f64::INFINITY, f64::min);
+        if d <= reach {
+            target[f] = target[f].min(want);
+        }
+    }
+}
+
+fn polyline_distance(p: &Vector3<f64>, line: &[Vector3<f64>]) -> f64 {
+    match line {
+        [] => f64::INFINITY,
+        [a] => (p - a).norm(),
+        _ => line
+            .windows(2)
+            .map(|w| {
+                let ab = w[1] - w[0];
+                let l2 = ab.norm_squared();
+                let t = if l2 > 0.0 { ((p - w[0]).dot(&ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
+                (p - w[0] - ab * t).norm()
+            })
+            .fold(f64::INFINITY, f64::min),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::edit::curve::CurveEdit;
+    use crate::edit::warp::WarpEdit;
+
+    fn strip() -> Mesh {
+        // Ten unit squares along x, two triangles each.
+        let mut pos = Vec::new();
+        for i in 0..=10 {
+            pos.push(Vector3::new(i as f64, 0.0, 0.0));
+            pos.push(Vector3::new(i as f64, 1.0, 0.0));
+        }
+        let mut faces = Vec::new();
+        for i in 0..10u32 {
+            let (a, b, c, d) = (2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1);
+            faces.push([a, b, c]);
+            faces.push([a, c, d]);
+        }
+        Mesh::from_triangles(pos, faces)
+    }
+
+    #[test]
+    fn a_brush_asks_for_its_fraction_of_the_radius_on_the_faces_it_reaches() {
+        let m = strip();
+        let bend: Edit = Edit::Bend(WarpEdit {
+            centre: Centre::Point([2.5, 0.5, 0.0]),
+            radius: 1.0,
+            metric: Default::default(),
+            strength: 0.8,
+            direction: None,
+            weight: 1.0,
+        });
+        let t = edit_resolution(&m, &[bend], 1.0 / 3.0).unwrap();
+        // Faces of squares 1, 2, 3 (centroids within 1 + their reach of x = 2.5) ask for 1/3;
+        // squares 5 and beyond ask for nothing.
+        for (f, v) in t.iter().enumerate() {
+            let square = f / 2;
+            if (1..=3).contains(&square) {
+                assert!((v - 1.0 / 3.0).abs() < 1e-12, "face {f}: {v}");
+            }
+            if square >= 5 {
+                assert!(v.is_infinite(), "face {f}: {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_brush_between_the_vertices_asks_for_nothing() {
+        let m = strip();
+        let tiny: Edit = Edit::Expand(WarpEdit {
+            centre: Centre::Point([2.5, 0.5, 0.0]),
+            radius: 0.01,
+            metric: Default::default(),
+            strength: 0.8,
+            direction: None,
+            weight: 1.0,
+        });
+        let t = edit_resolution(&m, &[tiny], 1.0 / 3.0).unwrap();
+        assert!(t.iter().all(|v| v.is_infinite()));
+    }
+
+    #[test]
+    fn a_curve_asks_for_the_smaller_of_radius_and_width_along_its_tube() {
+        let m = strip();
+        let curve: Edit = Edit::Curve(CurveEdit {
+            svg: None,
+            uv: None,
+            points: Some(vec![vec![[0.0, 0.5, 0.0], [4.0, 0.5, 0.0]]]),
+            radius: 0.6,
+            weight: 1.0,
+            tolerance: 1e-3,
+            width: Some(0.3),
+        });
+        let t = edit_resolution(&m, &[curve], 0.5).unwrap();
+        assert!((t[0] - 0.15).abs() < 1e-12);
+        assert!(t[19].is_infinite());
+    }
+}
