@@ -677,10 +677,17 @@ fn draw_vectors(
         }
     }
     if let (Some(es), Some(e)) = (&fx.edits, input.edits) {
+        // One arrow per screen cell of ¾ of an arrow's length, first come first drawn: a dense
+        // (or refined) brush shows its target directions instead of a solid blot.
+        let cell = 0.75 * es.arrow_px;
+        let mut taken = std::collections::HashSet::new();
         for (p, d) in &e.targets {
             let (Some(a), Some((b, _))) = (pp.visible(p), pp.out.project(&(p + d * 1e-3))) else {
                 continue;
             };
+            if !taken.insert(((a[0] / cell).floor() as i64, (a[1] / cell).floor() as i64)) {
+                continue;
+            }
             let b = [b[0] + pp.x0, b[1]];
             let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
             let n = dx.hypot(dy);
