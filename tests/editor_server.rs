@@ -10,7 +10,9 @@
 //! - only the embedded assets and the scene's own file are served: traversal in every
 //!   spelling gets a 404 (or 400), never a file;
 //! - malformed requests get a 4xx and the server keeps answering;
-//! - SIGTERM and SIGINT end it within a second.
+//! - SIGTERM and SIGINT end it within a second;
+//! - after commits and an undo, the FIELD.json the server shows for its newest version is byte
+//!   for byte the one `grainline run` writes for the saved scene.
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
@@ -30,7 +32,10 @@ impl Drop for Server {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
-        let _ = std::fs::remove_dir_all(&self.dir);
+        // Kept when the test failed, to look at.
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
     }
 }
 
@@ -46,7 +51,7 @@ fn scene_dir(name: &str) -> PathBuf {
         dir.join("scene.json"),
         r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
             "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-            "field": {"init": "uv", "symmetry": "line"}}"#,
+            "field": {"init": "uv", "symmetry": "line", "output": "field.json"}}"#,
     )
     .unwrap();
     dir
@@ -82,8 +87,26 @@ fn raw(port: u16, request: &[u8]) -> (Option<u16>, String) {
     let _ = s.read_to_end(&mut buf);
     let text = String::from_utf8_lossy(&buf).to_string();
     let status = text.split_whitespace().nth(1).and_then(|c| c.parse().ok());
-    let body = text.split_once("\r\n\r\n").map(|(_, b)| b.to_string()).unwrap_or_default();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    let chunked = head
+        .lines()
+        .any(|l| l.to_ascii_lowercase().starts_with("transfer-encoding:") && l.contains("chunked"));
+    let body = if chunked { dechunk(body) } else { body.to_string() };
     (status, body)
+}
+
+/// The body of a `Transfer-Encoding: chunked` response (RFC 9112 §7.1).
+fn dechunk(mut rest: &str) -> String {
+    let mut out = String::new();
+    while let Some((size, after)) = rest.split_once("\r\n") {
+        let n = usize::from_str_radix(size.split(';').next().unwrap().trim(), 16).unwrap();
+        if n == 0 {
+            break;
+        }
+        out.push_str(&after[..n]);
+        rest = &after[n + 2..];
+    }
+    out
 }
 
 fn get_with_host(port: u16, path: &str, host: &str) -> (Option<u16>, String) {
@@ -368,4 +391,59 @@ fn ends_on(signal: &str, code: i32) {
 fn sigterm_and_sigint_end_it_within_a_second() {
     ends_on("TERM", 143);
     ends_on("INT", 130);
+}
+
+/// Waits (bounded) until the newest version is solved; returns it.
+fn solved(port: u16) -> u64 {
+    let mut after = 0;
+    for _ in 0..60 {
+        let st: Value =
+            serde_json::from_str(&get(port, &format!("/api/state?after={after}")).1).unwrap();
+        if let Some(e) = st["error"].as_array() {
+            assert!(e[0] != st["version"], "the solve failed: {}", e[1]);
+        }
+        if st["solved_version"] == st["version"] {
+            return st["version"].as_u64().unwrap();
+        }
+        after = st["solved_version"].as_u64().unwrap_or(0);
+    }
+    panic!("never solved");
+}
+
+#[test]
+fn saved_scene_reproduces_the_shown_field_byte_for_byte() {
+    let srv = start("save");
+    let p = srv.port;
+    let commit = |edit: &str| {
+        let (s, b) =
+            post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {edit}}}"#));
+        assert_eq!(s, Some(200), "{edit}: {b}");
+    };
+    commit(
+        r#"{"tool": "bend", "centre": {"point": [0, -30, 5]}, "radius": 25, "strength": 0.7, "direction": [1, 0, 0.2]}"#,
+    );
+    commit(r#"{"tool": "stencil", "centre": {"point": [25, -20, -20]}, "radius": 12}"#);
+    commit(
+        r#"{"tool": "expand", "centre": {"point": [-20, -20, 20]}, "radius": 15, "strength": 0.5}"#,
+    );
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    let v = solved(p);
+    let (s, shown) = get(p, &format!("/api/field.json?version={v}"));
+    assert_eq!(s, Some(200));
+    std::fs::write(srv.dir.join("shown.json"), &shown).unwrap();
+    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
+    let scene = srv.dir.join("scene.json");
+    let saved = std::fs::read_to_string(&scene).unwrap();
+    let parsed = grainline::scene::Scene::from_str(&saved, &scene).unwrap();
+    let tools: Vec<&str> = parsed.edits.iter().map(|e| e.tool()).collect();
+    assert_eq!(tools, ["bend", "stencil"]);
+    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
+    assert!(ran.contains("phi_before"), "not an optimized field");
+    assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
 }

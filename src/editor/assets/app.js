@@ -61,6 +61,8 @@ geometry.computeBoundingSphere();
 geometry.computeBoundingBox();
 
 // ---- the material: the scene's BRDF, lights and tone map ----
+// Both sides are drawn, as in the preview: a back face keeps its outward normal, so it is black
+// (ω_out below the surface), e.g. the inside of an open part.
 const MAX_LIGHTS = 8;
 const m = info.material;
 const brdfKind = { ashikhmin_shirley: 0, ward: 1, ggx: 2 }[m.brdf.kind] ?? 0;
@@ -102,7 +104,7 @@ function setLights(keyDirection) {
 }
 setLights(null);
 const material = new THREE.ShaderMaterial({
-  uniforms, vertexShader, fragmentShader, side: THREE.FrontSide,
+  uniforms, vertexShader, fragmentShader, side: THREE.DoubleSide,
   polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
 });
 const part = new THREE.Mesh(geometry, material);
