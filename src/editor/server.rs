@@ -225,7 +225,10 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
                 Some(solved) if path == "/api/grain" => {
                     Reply::ok("application/octet-stream", super::grain_bytes(&solved))
                 }
-                Some(solved) => Reply::ok("application/json", solved.field_json.clone()),
+                Some(solved) => match s.field_json(&solved) {
+                    Ok(b) => Reply::ok("application/json", b.to_vec()),
+                    Err(e) => Reply::error(500, e.to_string()),
+                },
                 None => Reply::error(409, "that version is not the newest solved one"),
             }
         }

@@ -9,17 +9,16 @@
 //! saved scene is byte for byte the one the page showed.
 
 use std::path::Path;
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant};
 
-use nalgebra::Vector3;
 use serde::Serialize;
 
 use crate::edit::{Edit, WarpKind};
 use crate::fidelity::{highlight_segments, EditFidelity};
 use crate::field::FieldFile;
 use crate::highlight::Symmetry;
-use crate::pipeline::optimize::{optimize_stage, optimized_field_file};
+use crate::pipeline::optimize::{optimize_stage, optimized_field_file, Optimized};
 use crate::pipeline::run::StagePlan;
 use crate::pipeline::{prepare_with, Prepared, Silent, Stages};
 use crate::scene::{LoadedScene, Scene};
@@ -29,13 +28,14 @@ use crate::{Error, Result};
 pub const UNDO_DEPTH: usize = 200;
 
 /// One solved field, ready for the page.
-#[derive(Debug)]
 pub struct Solved {
     /// The state version it was computed for.
     pub version: u64,
-    /// FIELD.json exactly as `grainline run` writes it (`field.output`) for the same edits.
-    pub field_json: Vec<u8>,
-    /// The grain u per vertex (world space, unit), as in FIELD.json.
+    /// The edits' and the solver's result (`None` without edits: the initial field).
+    optimized: Option<Optimized>,
+    /// FIELD.json, made when first asked for ([`Session::field_json`]).
+    field_json: OnceLock<std::result::Result<Vec<u8>, String>>,
+    /// The grain u per vertex (world space, unit), as FIELD.json's `u`.
     pub u: Vec<[f32; 3]>,
     /// The key light's highlight curves: segments of the zero set of g = hᵀu per triangle.
     pub segments: Vec<[f32; 6]>,
@@ -47,12 +47,14 @@ pub struct Solved {
     pub stop: String,
     /// Did the bend / expand / curve edits land ([`crate::fidelity`]).
     pub fidelity: Vec<EditFidelity>,
-    /// Seconds the solve took (targets, solve, FIELD.json, curves).
+    /// Vertices inside an edit's support.
+    pub edited_vertices: usize,
+    /// Seconds the solve took (targets, solve, grain, curves; FIELD.json is made later).
     pub seconds: f64,
 }
 
 /// What the page asked for and what the solver has done.
-#[derive(Debug, Default)]
+#[derive(Default)]
 struct State {
     /// The committed edits.
     edits: Vec<Edit>,
@@ -314,44 +316,75 @@ impl Session {
         Ok(self.loaded.path.clone())
     }
 
-    /// Solves `edits` exactly as `grainline run` would solve a scene file holding them.
+    /// Solves `edits` exactly as `grainline run` would solve a scene file holding them: the
+    /// grain, the highlight curves and the critical points for the page; FIELD.json is made
+    /// from the same result when asked for ([`Session::field_json`]).
     pub fn solve(&self, edits: &[Edit], version: u64) -> Result<Solved> {
         let start = Instant::now();
         let text = self.scene_text(edits)?;
         let scene = Scene::from_str(&text, &self.loaded.path)?;
         let s = LoadedScene { scene, ..self.loaded.clone() };
         let p = &self.prepared;
-        let (file, h, stop, key_light, fidelity) = if s.scene.edits.is_empty() {
-            let file = FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field)?;
+        let g = &p.field.geometry;
+        let symmetry: Symmetry = p.field_options.symmetry;
+        let (optimized, u, stop, key_light, fidelity, edited) = if s.scene.edits.is_empty() {
             let l = p.field_options.lighting.light;
-            (file, p.field.h.clone(), "none".to_string(), [l.x, l.y, l.z], Vec::new())
+            let u = g.directions_of(&p.field.phi);
+            (None, u, "none".to_string(), [l.x, l.y, l.z], Vec::new(), 0)
         } else {
             let mut stages = Stages::new(&Silent);
             let o = optimize_stage(&s, p, &mut stages).map_err(|e| s.wrap(e))?;
-            let file = optimized_field_file(p, &o)?;
-            let stop = o.report.solver.stop.to_string();
-            (file, o.h, stop, o.report.key_light, o.report.fidelity)
+            let u = g.directions_of(&o.phi);
+            let r = &o.report;
+            let (stop, key, fid, edited) =
+                (r.solver.stop.to_string(), r.key_light, r.fidelity.clone(), r.edited_vertices);
+            (Some(o), u, stop, key, fid, edited)
         };
-        let field_json = crate::output::json_compact(&file)?;
-        let u: Vec<Vector3<f64>> = file.u.iter().map(|v| Vector3::from(*v)).collect();
-        let symmetry: Symmetry = p.field_options.symmetry;
-        let segments = highlight_segments(&p.mesh, &h, &u, symmetry)
+        if let Some(i) = u.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
+            return Err(Error::invalid_arg(
+                "solve",
+                format!("the grain at vertex {i} is not finite"),
+            ));
+        }
+        let h = optimized.as_ref().map_or(&p.field.h, |o| &o.h);
+        let segments = highlight_segments(&p.mesh, h, &u, symmetry)
             .iter()
             .map(|[a, b]| [a.x, a.y, a.z, b.x, b.y, b.z].map(|c| c as f32))
             .collect();
+        let critical = optimized.as_ref().map_or(&p.field.critical, |o| &o.critical);
         let critical =
-            file.critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
+            critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
         Ok(Solved {
             version,
-            field_json,
-            u: file.u.iter().map(|v| v.map(|c| c as f32)).collect(),
+            optimized,
+            field_json: OnceLock::new(),
+            u: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
             segments,
             critical,
             key_light,
             stop,
             fidelity,
+            edited_vertices: edited,
             seconds: start.elapsed().as_secs_f64(),
         })
+    }
+
+    /// FIELD.json of a solved field, exactly as `grainline run` writes it (`field.output`) for
+    /// a scene file holding the same edits: [`optimized_field_file`] (or the initial field's
+    /// file without edits) through [`crate::output::json_compact`]. Made once per result.
+    pub fn field_json<'a>(&self, solved: &'a Solved) -> Result<&'a [u8]> {
+        let p = &self.prepared;
+        let made = solved.field_json.get_or_init(|| {
+            let file = match &solved.optimized {
+                Some(o) => optimized_field_file(p, o),
+                None => FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field),
+            };
+            file.and_then(|f| crate::output::json_compact(&f)).map_err(|e| e.to_string())
+        });
+        match made {
+            Ok(b) => Ok(b.as_slice()),
+            Err(e) => Err(Error::invalid_arg("field.json", e.clone())),
+        }
     }
 
     /// The solver thread's loop: solves the latest version, drops a result that is stale when
