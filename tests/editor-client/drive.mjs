@@ -25,6 +25,12 @@ if (!existsSync(chromium)) {
   process.exit(2);
 }
 const out = (name) => join(job.out_dir, name);
+// A bound on the whole drive: a page that never settles fails the test instead of hanging it.
+const watchdog = setTimeout(() => {
+  console.error('drive.mjs: no result after 300 s');
+  process.exit(1);
+}, 300000);
+watchdog.unref();
 const problems = [];
 let browser;
 try {
