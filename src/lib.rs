@@ -35,6 +35,7 @@
 
 pub mod allocator;
 pub mod edit;
+pub mod editor;
 pub mod error;
 pub mod export;
 pub mod fidelity;

@@ -1,5 +1,6 @@
 //! Command-line definitions and dispatch. No algorithm lives here.
 
+mod edit;
 mod export;
 mod field;
 mod flatten;
@@ -48,6 +49,9 @@ enum Command {
     Render(render::RenderArgs),
     /// The part and its grain as glTF 2.0 binary with KHR_materials_anisotropy (docs/gltf.md).
     Export(export::ExportArgs),
+    /// The interactive editor: a local page (http://127.0.0.1:PORT/, the first line on stdout)
+    /// that sculpts the highlights with the mouse and saves the edits into the scene file.
+    Edit(edit::EditArgs),
     /// The JSON Schema of the scene file (docs/scene.md), for editors' completion.
     Schema(schema::SchemaArgs),
     /// A flat panel mesh (OBJ, mm, UV = XY) from a closed SVG outline with holes.
@@ -65,6 +69,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Trace(a) => trace::run(a, cli.quiet),
         Command::Render(a) => render::run(a, cli.quiet),
         Command::Export(a) => export::run(a, cli.quiet),
+        Command::Edit(a) => edit::run(a, cli.quiet),
         Command::Run(a) => run::run(a, cli.quiet),
         Command::Optimize(a) => optimize::run(a, cli.quiet),
         Command::Panel(a) => panel::run(a, cli.quiet),

@@ -1,0 +1,126 @@
+//! One drag step of `grainline edit` on a ~50k-vertex part with a 1–2k-vertex brush (issue 16:
+//! ≤ 30 ms median): the edit's targets, the solve, the new grain and the key light's highlight
+//! curves for the page — what the editor's solver thread does for each preview
+//! ([`grainline::editor::Session::solve`]) — plus encoding the grain for the page
+//! ([`grainline::editor::grain_bytes`]). FIELD.json is not part of a step (it is made when the
+//! page or a test asks for it); its cost is printed apart.
+//!
+//! `cargo run --release --example bench_editor` (GRAINLINE_BENCH_STEPS to change the 30 steps).
+
+use std::time::Instant;
+
+use grainline::edit::{Centre, Edit, Metric, WarpEdit};
+use grainline::editor::{grain_bytes, Session};
+
+fn main() {
+    let steps: usize =
+        std::env::var("GRAINLINE_BENCH_STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
+    let dir = std::env::temp_dir().join(format!("grainline-bench-editor-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // A cylinder r = 30, h = 80 brushed around: 320 × 156 quads → 50,240 vertices.
+    let mesh = grainline::generate::cylinder(30.0, 80.0, 320, 156);
+    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&mesh, "bench"))
+        .unwrap();
+    std::fs::write(
+        dir.join("scene.json"),
+        r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
+            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+            "field": {"init": "uv", "symmetry": "line"}}"#,
+    )
+    .unwrap();
+    let t = Instant::now();
+    let session = Session::open(&dir.join("scene.json")).unwrap();
+    let open_s = t.elapsed().as_secs_f64();
+    let n = session.prepared().mesh.num_vertices();
+    // The key highlight of the initial field near the front: where a designer would press.
+    let first = session.solve(&[], 0).unwrap();
+    let front = first
+        .segments
+        .iter()
+        .map(|s| [(s[0] + s[3]) / 2.0, (s[1] + s[4]) / 2.0, (s[2] + s[5]) / 2.0])
+        .filter(|p| p[1] < 0.0)
+        .min_by(|a, b| a[2].abs().total_cmp(&b[2].abs()))
+        .expect("a highlight on the front");
+    let centre = [f64::from(front[0]), f64::from(front[1]), f64::from(front[2])];
+    let radius = 11.0;
+    let edit = |k: usize| {
+        Edit::Bend(WarpEdit {
+            centre: Centre::Point(centre),
+            radius,
+            metric: Metric::Geodesic,
+            strength: 0.05 + 0.9 * k as f64 / steps as f64,
+            direction: Some([0.0, 0.0, 1.0]),
+            weight: 1.0,
+        })
+    };
+    let mut times = Vec::with_capacity(steps);
+    let mut support = 0;
+    let mut last = None;
+    for k in 0..steps {
+        let t = Instant::now();
+        let solved = session.solve(&[edit(k)], k as u64 + 1).unwrap();
+        let bytes = grain_bytes(&solved);
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        std::hint::black_box(bytes);
+        support = solved.edited_vertices;
+        last = Some(solved);
+    }
+    let last = last.unwrap();
+    // Where a step's time goes: the stages of optimize_stage ("edits": targets, "solve": the
+    // solver incl. the highlight field before/after, fidelity, critical points), then the
+    // page's grain and highlight curves.
+    let loaded = grainline::scene::LoadedScene::read(&dir.join("scene.json")).unwrap();
+    let mut parts: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
+    for k in 0..steps.min(10) {
+        let t = Instant::now();
+        let text = session.scene_text(&[edit(k)]).unwrap();
+        let scene = grainline::scene::Scene::from_str(&text, &loaded.path).unwrap();
+        let s = grainline::scene::LoadedScene { scene, ..loaded.clone() };
+        parts.entry("0 scene text + parse".into()).or_default().push(t.elapsed().as_secs_f64());
+        let observer = grainline::pipeline::Silent;
+        let mut stages = grainline::pipeline::Stages::new(&observer);
+        let o = grainline::pipeline::optimize::optimize_stage(&s, session.prepared(), &mut stages)
+            .unwrap();
+        for st in stages.into_times() {
+            parts.entry(format!("1 optimize_stage: {}", st.stage)).or_default().push(st.seconds);
+        }
+        let t = Instant::now();
+        let g = &session.prepared().field.geometry;
+        let u = g.directions_of(&o.phi);
+        parts.entry("2 grain u".into()).or_default().push(t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        let segs = grainline::fidelity::highlight_segments(
+            &session.prepared().mesh,
+            &o.h,
+            &u,
+            session.prepared().field_options.symmetry,
+        );
+        std::hint::black_box(segs);
+        parts.entry("3 highlight curves".into()).or_default().push(t.elapsed().as_secs_f64());
+    }
+    for (name, mut v) in parts {
+        v.sort_by(f64::total_cmp);
+        println!("  {name}: median {:.1} ms", v[v.len() / 2] * 1e3);
+    }
+    let t = Instant::now();
+    let json_len = session.field_json(&last).unwrap().len();
+    let json_ms = t.elapsed().as_secs_f64() * 1e3;
+    times.sort_by(f64::total_cmp);
+    let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
+    println!(
+        "bench_editor: {n} vertices, brush radius {radius} mm with {support} vertices in its \
+         support, {steps} drag steps (bend, strength 0.05 → 0.95)"
+    );
+    println!(
+        "  one drag step (targets, solve, grain, highlight curves, encoding): median {:.1} ms, \
+         p90 {:.1} ms, min {:.1} ms, max {:.1} ms",
+        q(0.5),
+        q(0.9),
+        times[0],
+        times[times.len() - 1]
+    );
+    println!("  session open (load, geometry, initial field): {:.0} ms", open_s * 1e3);
+    println!("  FIELD.json when asked for: {json_ms:.0} ms ({:.1} MB)", json_len as f64 / 1e6);
+    println!("  solver: {}; fidelity: {:?}", last.stop, last.fidelity.first().map(|f| f.landed));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,466 @@
+// grainline edit: the page. The part in WebGL shaded with the scene's BRDF and the current
+// grain (brdf.js), the key light's highlight curves and critical points over it, orbit / pan /
+// zoom (OrbitControls), and the scene's tools driven by the mouse. Every change is sent to the
+// server, which solves it off the request thread; the page long-polls /api/state and loads the
+// newest solved grain. window.editor exposes the state for tests.
+import * as THREE from './three.module.js';
+import { OrbitControls } from './OrbitControls.js';
+import { vertexShader, fragmentShader } from './brdf.js';
+
+const $ = (id) => document.getElementById(id);
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+const editor = {
+  ready: false, version: 0, solvedVersion: null, displayedVersion: null, state: null,
+  error: null, saved: 0, lastEdit: null, info: null,
+};
+window.editor = editor;
+
+async function api(path, body) {
+  const r = await fetch(path, {
+    method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify(body ?? {}),
+  });
+  const j = await r.json().catch(() => ({ error: `HTTP ${r.status}` }));
+  if (!r.ok) throw new Error(j.error || `HTTP ${r.status}`);
+  return j;
+}
+
+function status(text, isError) {
+  const el = $('status');
+  el.textContent = text;
+  el.classList.toggle('error', !!isError);
+}
+
+const info = await (await fetch('/api/info')).json();
+editor.info = info;
+$('scene-name').textContent = `${info.scene} · ${info.vertices} vertices`;
+
+// ---- the mesh: non-indexed, so that a line field's corners can be aligned per triangle ----
+const meshBuf = await (await fetch('/api/mesh')).arrayBuffer();
+const head = new Uint32Array(meshBuf, 0, 2);
+const nv = head[0], nf = head[1];
+const vpos = new Float32Array(meshBuf, 8, 3 * nv);
+const vnor = new Float32Array(meshBuf, 8 + 12 * nv, 3 * nv);
+const faces = new Uint32Array(meshBuf, 8 + 24 * nv, 3 * nf);
+const cpos = new Float32Array(9 * nf), cnor = new Float32Array(9 * nf), cgrain = new Float32Array(9 * nf);
+for (let k = 0; k < 3 * nf; k++) {
+  const v = faces[k];
+  for (let c = 0; c < 3; c++) {
+    cpos[3 * k + c] = vpos[3 * v + c];
+    cnor[3 * k + c] = vnor[3 * v + c];
+  }
+}
+const geometry = new THREE.BufferGeometry();
+geometry.setAttribute('position', new THREE.BufferAttribute(cpos, 3));
+geometry.setAttribute('normal', new THREE.BufferAttribute(cnor, 3));
+const grainAttr = new THREE.BufferAttribute(cgrain, 3);
+grainAttr.setUsage(THREE.DynamicDrawUsage);
+geometry.setAttribute('grain', grainAttr);
+geometry.computeBoundingSphere();
+geometry.computeBoundingBox();
+
+// ---- the material: the scene's BRDF, lights and tone map ----
+// Both sides are drawn, as in the preview: a back face keeps its outward normal, so it is black
+// (ω_out below the surface), e.g. the inside of an open part.
+const MAX_LIGHTS = 8;
+const m = info.material;
+const brdfKind = { ashikhmin_shirley: 0, ward: 1, ggx: 2 }[m.brdf.kind] ?? 0;
+const param = brdfKind === 0 ? [m.brdf.nu, m.brdf.nv, 0]
+  : brdfKind === 1 ? [m.brdf.alpha_x, m.brdf.alpha_y, m.brdf.rho_s] : [m.brdf.alpha_u, m.brdf.alpha_v, 0];
+const fr = info.fresnel;
+const v3 = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+const uniforms = {
+  uBrdf: { value: brdfKind }, uParam: { value: v3(param) },
+  uRs: { value: v3(m.brdf.rs ?? [0, 0, 0]) }, uDiffuse: { value: v3(m.diffuse) },
+  uFresnel: { value: { none: 0, schlick: 1, conductor: 2 }[fr.kind] },
+  uF0: { value: v3(fr.f0 ?? [0, 0, 0]) }, uEta: { value: v3(fr.eta ?? [1, 1, 1]) },
+  uK: { value: v3(fr.k ?? [0, 0, 0]) },
+  uLightCount: { value: 0 }, uLightType: { value: new Array(MAX_LIGHTS).fill(0) },
+  uLightVec: { value: Array.from({ length: MAX_LIGHTS }, () => new THREE.Vector3()) },
+  uLightE: { value: Array.from({ length: MAX_LIGHTS }, () => new THREE.Vector3()) },
+  uToneMap: { value: { none: 0, exposure: 1, reinhard: 2 }[info.tone_map] ?? 2 },
+  uExposure: { value: info.exposure },
+  uBrush: { value: new THREE.Vector3() }, uBrushRadius: { value: 0 },
+};
+function setLights(keyDirection) {
+  let k = 0;
+  info.lights.forEach((l, i) => {
+    if (k >= MAX_LIGHTS || (l.type !== 'directional' && l.type !== 'point')) return;
+    const c = l.colour ?? [1, 1, 1];
+    if (l.type === 'directional') {
+      const d = i === info.key_light && keyDirection ? keyDirection : l.direction;
+      uniforms.uLightType.value[k] = 0;
+      uniforms.uLightVec.value[k].copy(v3(d).normalize());
+      uniforms.uLightE.value[k].set(c[0] * l.irradiance, c[1] * l.irradiance, c[2] * l.irradiance);
+    } else {
+      uniforms.uLightType.value[k] = 1;
+      uniforms.uLightVec.value[k].copy(v3(l.position));
+      uniforms.uLightE.value[k].set(c[0] * l.intensity, c[1] * l.intensity, c[2] * l.intensity);
+    }
+    k++;
+  });
+  uniforms.uLightCount.value = k;
+}
+setLights(null);
+const material = new THREE.ShaderMaterial({
+  uniforms, vertexShader, fragmentShader, side: THREE.DoubleSide,
+  polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+});
+const part = new THREE.Mesh(geometry, material);
+
+// ---- overlays: highlight curves (the zero set of hᵀu), critical points, the drawn curve ----
+const curveGeom = new THREE.BufferGeometry();
+const curves = new THREE.LineSegments(curveGeom, new THREE.LineBasicMaterial({ color: 0xffc400 }));
+const critGeom = new THREE.BufferGeometry();
+const critical = new THREE.Points(critGeom, new THREE.PointsMaterial({ color: 0xff40ff, size: 5, sizeAttenuation: false }));
+const strokeGeom = new THREE.BufferGeometry();
+const stroke = new THREE.Line(strokeGeom, new THREE.LineBasicMaterial({ color: 0x40e0ff }));
+stroke.frustumCulled = false;
+curves.frustumCulled = false;
+critical.frustumCulled = false;
+
+// ---- renderer, camera, controls ----
+THREE.ColorManagement.enabled = false;
+const canvas = $('view');
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+renderer.setPixelRatio(window.devicePixelRatio || 1);
+const bg = info.background;
+renderer.setClearColor(new THREE.Color(bg[0], bg[1], bg[2]), 1);
+const scene = new THREE.Scene();
+scene.add(part, curves, critical, stroke);
+const view = info.view;
+const diag = info.diagonal;
+const camera = new THREE.PerspectiveCamera(view.fov_deg, 1, diag * 1e-3, diag * 100 + v3(view.eye).distanceTo(v3(view.target)) * 4);
+
+let gesture = null;
+// The tools' listener is added before OrbitControls', so it can take a press on the part.
+canvas.addEventListener('pointerdown', onDown);
+const controls = new OrbitControls(camera, canvas);
+controls.enableDamping = false;
+function resetView() {
+  camera.up.copy(v3(view.up).normalize());
+  camera.position.copy(v3(view.eye));
+  controls.target.copy(v3(view.target));
+  camera.lookAt(controls.target);
+  controls.update();
+  requestRender();
+}
+
+let renderQueued = false;
+function requestRender() {
+  if (renderQueued) return;
+  renderQueued = true;
+  requestAnimationFrame(() => {
+    renderQueued = false;
+    resize();
+    renderer.render(scene, camera);
+    editor.frames = (editor.frames ?? 0) + 1;
+  });
+}
+function resize() {
+  const w = canvas.clientWidth, h = canvas.clientHeight;
+  const pr = renderer.getPixelRatio();
+  if (canvas.width !== Math.floor(w * pr) || canvas.height !== Math.floor(h * pr)) {
+    renderer.setSize(w, h, false);
+    camera.aspect = w / Math.max(h, 1);
+    camera.updateProjectionMatrix();
+  }
+}
+controls.addEventListener('change', requestRender);
+window.addEventListener('resize', requestRender);
+
+// ---- controls: tool, radius, strength, toggles ----
+let tool = 'orbit';
+let ringShown = true; // the brush ring under the pointer
+function setTool(t) {
+  tool = t;
+  for (const r of document.querySelectorAll('input[name=tool]')) r.checked = r.value === t;
+  if (t === 'orbit') uniforms.uBrushRadius.value = 0;
+  requestRender();
+}
+for (const r of document.querySelectorAll('input[name=tool]')) r.addEventListener('change', () => setTool(r.value));
+const rmin = diag / 400, rmax = diag / 2;
+let radius = Math.min(Math.max(info.radius, rmin), rmax);
+function setRadius(r) {
+  radius = Math.min(Math.max(r, rmin), rmax);
+  $('radius').value = Math.round(1000 * Math.log(radius / rmin) / Math.log(rmax / rmin));
+  $('radius-value').textContent = `${radius.toPrecision(3)} ${info.units}`;
+  if (uniforms.uBrushRadius.value > 0) uniforms.uBrushRadius.value = radius;
+  requestRender();
+}
+$('radius').addEventListener('input', () => setRadius(rmin * Math.pow(rmax / rmin, $('radius').value / 1000)));
+setRadius(radius);
+const strength = () => Number($('strength').value);
+const showStrength = () => { $('strength-value').textContent = strength().toFixed(2); };
+$('strength').addEventListener('input', showStrength);
+showStrength();
+$('show-curves').addEventListener('change', () => { curves.visible = $('show-curves').checked; requestRender(); });
+$('show-critical').addEventListener('change', () => { critical.visible = $('show-critical').checked; requestRender(); });
+$('reset-view').addEventListener('click', resetView);
+$('undo').addEventListener('click', () => change('/api/undo'));
+$('redo').addEventListener('click', () => change('/api/redo'));
+$('save').addEventListener('click', save);
+
+// ---- the grain from the server ----
+const symmetryLine = info.symmetry === 'line';
+async function loadGrain(version) {
+  const r = await fetch(`/api/grain?version=${version}`);
+  if (!r.ok) return false; // superseded meanwhile: the next poll brings the newer one
+  const buf = await r.arrayBuffer();
+  const h = new Uint32Array(buf, 0, 4);
+  const n = h[0], s = h[1], c = h[2];
+  const u = new Float32Array(buf, 16, 3 * n);
+  const seg = new Float32Array(buf, 16 + 12 * n, 6 * s);
+  const crit = new Uint32Array(buf, 16 + 12 * n + 24 * s, c);
+  for (let f = 0; f < nf; f++) {
+    const a = faces[3 * f];
+    const ua = [u[3 * a], u[3 * a + 1], u[3 * a + 2]];
+    for (let k = 0; k < 3; k++) {
+      const v = faces[3 * f + k];
+      let x = u[3 * v], y = u[3 * v + 1], z = u[3 * v + 2];
+      // A line field's directions are defined up to sign: align the corners to the first.
+      if (symmetryLine && x * ua[0] + y * ua[1] + z * ua[2] < 0) { x = -x; y = -y; z = -z; }
+      cgrain[9 * f + 3 * k] = x; cgrain[9 * f + 3 * k + 1] = y; cgrain[9 * f + 3 * k + 2] = z;
+    }
+  }
+  grainAttr.needsUpdate = true;
+  curveGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
+  const cp = new Float32Array(3 * c);
+  for (let i = 0; i < c; i++) for (let k = 0; k < 3; k++) cp[3 * i + k] = vpos[3 * crit[i] + k];
+  critGeom.setAttribute('position', new THREE.BufferAttribute(cp, 3));
+  editor.displayedVersion = version;
+  editor.segments = seg;
+  requestRender();
+  return true;
+}
+
+function applyState(st) {
+  editor.state = st;
+  editor.version = st.version;
+  editor.solvedVersion = st.solved_version;
+  if (st.key_light) setLights(st.key_light);
+  $('undo').disabled = st.undo === 0;
+  $('redo').disabled = st.redo === 0;
+  $('save').textContent = st.dirty ? 'Save *' : 'Save';
+  const err = st.error && st.error[0] > (st.solved_version ?? 0) ? st.error[1] : null;
+  editor.error = err;
+  const landed = st.fidelity.map((f) => `#${f.index} ${f.tool}: ${f.landed ? 'landed' : 'missed'} (${(100 * f.within).toFixed(0)} %)`);
+  const line = [
+    `version ${st.version}${st.solving ? ' · solving…' : ''}`,
+    st.solved_version != null ? `shown ${st.solved_version} · solver: ${st.stop} · ${(1000 * st.seconds).toFixed(0)} ms` : 'solving…',
+    ...landed,
+  ].join('\n');
+  status(err ? `${line}\n${err}` : line, !!err);
+  $('edits').textContent = st.edits.map((e, i) => `${i}: ${e.tool} r=${(e.radius ?? 0).toPrecision(3)}`).join('\n');
+}
+
+async function poll() {
+  let after = 0;
+  for (;;) {
+    try {
+      const st = await (await fetch(`/api/state?after=${after}`)).json();
+      applyState(st);
+      if (st.solved_version != null && st.solved_version !== editor.displayedVersion) {
+        await loadGrain(st.solved_version);
+      }
+      after = Math.max(st.solved_version ?? 0, st.error ? st.error[0] : 0);
+      editor.ready = editor.displayedVersion != null;
+    } catch (e) {
+      status(`lost the server: ${e.message}`, true);
+      await sleep(1000);
+    }
+  }
+}
+
+/** Resolves once the newest version is solved and shown (or failed). */
+editor.whenIdle = async () => {
+  for (;;) {
+    const st = editor.state;
+    if (st && !inflight && !pending && !gesture) {
+      const failed = st.error && st.error[0] === st.version;
+      if (failed || (st.solved_version === st.version && editor.displayedVersion === st.version)) {
+        await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+        return { version: st.version, error: failed ? st.error[1] : null };
+      }
+    }
+    await sleep(20);
+  }
+};
+
+// ---- changes: previews coalesce (one request in flight, the newest waiting) ----
+let inflight = false, pending = null;
+function preview(edit) {
+  pending = edit;
+  if (!inflight) flush();
+}
+async function flush() {
+  while (pending) {
+    const e = pending;
+    pending = null;
+    inflight = true;
+    try { applyState(await api('/api/edit', { action: 'preview', edit: e })); } catch (err) { status(err.message, true); }
+    inflight = false;
+  }
+}
+async function settle() {
+  pending = null;
+  while (inflight) await sleep(5);
+}
+async function change(path, body) {
+  await settle();
+  try { applyState(await api(path, body)); } catch (err) { status(err.message, true); }
+}
+async function commit(edit) {
+  editor.lastEdit = edit;
+  await change('/api/edit', { action: 'commit', edit });
+}
+async function save() {
+  await settle();
+  try {
+    const r = await api('/api/save', {});
+    applyState(r.state);
+    editor.saved++;
+    status(`saved ${r.saved}`);
+  } catch (err) { status(err.message, true); }
+}
+
+// ---- picking and the tools ----
+const raycaster = new THREE.Raycaster();
+function ndc(ev) {
+  const r = canvas.getBoundingClientRect();
+  return new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
+}
+function pick(ev) {
+  raycaster.setFromCamera(ndc(ev), camera);
+  const hit = raycaster.intersectObject(part, false)[0];
+  if (!hit) return null;
+  return { point: hit.point.clone(), normal: hit.face.normal.clone() };
+}
+function onPlane(ev, p0, n0) {
+  raycaster.setFromCamera(ndc(ev), camera);
+  const plane = new THREE.Plane().setFromNormalAndCoplanarPoint(n0, p0);
+  const out = new THREE.Vector3();
+  return raycaster.ray.intersectPlane(plane, out) ? out : null;
+}
+const arr = (v) => [v.x, v.y, v.z];
+
+function onDown(ev) {
+  if (ev.button !== 0 || tool === 'orbit') return;
+  const hit = pick(ev);
+  if (!hit) return;
+  controls.enabled = false;
+  canvas.setPointerCapture(ev.pointerId);
+  gesture = { tool, p0: hit.point, n0: hit.normal, points: [hit.point], edit: null };
+  if (tool === 'curve') strokeGeom.setFromPoints(gesture.points);
+}
+function warpEdit(g, p1) {
+  const d = p1.clone().sub(g.p0);
+  const len = d.length();
+  if (len < 1e-3 * radius) return null;
+  // At the brush centre a warp moves the highlight by s·r/2 (bend: d(0, 0) = 1/2): the drag's
+  // length sets s so the highlight follows the pointer, up to the strength control.
+  const range = info.strength[g.tool];
+  const s = Math.min(2 * len / radius, strength(), range[1] * 0.999);
+  return { tool: g.tool, centre: { point: arr(g.p0) }, radius, strength: Number(s.toFixed(6)), direction: arr(d.normalize()) };
+}
+canvas.addEventListener('pointermove', (ev) => {
+  if (tool !== 'orbit' && !gesture && ringShown) {
+    const hit = pick(ev);
+    uniforms.uBrushRadius.value = hit ? radius : 0;
+    if (hit) uniforms.uBrush.value.copy(hit.point);
+    requestRender();
+  }
+  if (!gesture) return;
+  if (gesture.tool === 'bend' || gesture.tool === 'expand') {
+    const p1 = onPlane(ev, gesture.p0, gesture.n0);
+    const e = p1 && warpEdit(gesture, p1);
+    if (e) { gesture.edit = e; preview(e); }
+  } else if (gesture.tool === 'curve') {
+    const hit = pick(ev);
+    const last = gesture.points[gesture.points.length - 1];
+    if (hit && hit.point.distanceTo(last) > radius / 8) {
+      gesture.points.push(hit.point);
+      strokeGeom.setFromPoints(gesture.points);
+      requestRender();
+    }
+  }
+});
+async function onUp(ev) {
+  if (!gesture) return;
+  const g = gesture;
+  gesture = null;
+  controls.enabled = true;
+  try { canvas.releasePointerCapture(ev.pointerId); } catch (_) { /* already released */ }
+  if (g.tool === 'bend' || g.tool === 'expand') {
+    if (g.edit) await commit(g.edit); else await change('/api/edit', { action: 'cancel' });
+  } else if (g.tool === 'stencil') {
+    await commit({ tool: 'stencil', centre: { point: arr(g.p0) }, radius });
+  } else if (g.tool === 'curve') {
+    strokeGeom.setFromPoints([]);
+    if (g.points.length >= 2) await commit({ tool: 'curve', points: [g.points.map(arr)], radius });
+  }
+  requestRender();
+}
+canvas.addEventListener('pointerup', onUp);
+canvas.addEventListener('pointercancel', onUp);
+
+window.addEventListener('keydown', (ev) => {
+  if (ev.target instanceof HTMLInputElement && ev.target.type === 'text') return;
+  const k = ev.key.toLowerCase();
+  const mod = ev.ctrlKey || ev.metaKey;
+  if (mod && k === 'z') { ev.preventDefault(); change(ev.shiftKey ? '/api/redo' : '/api/undo'); return; }
+  if (mod && k === 'y') { ev.preventDefault(); change('/api/redo'); return; }
+  if (mod && k === 's') { ev.preventDefault(); save(); return; }
+  if (mod || ev.altKey) return;
+  const tools = { o: 'orbit', b: 'bend', e: 'expand', s: 'stencil', c: 'curve' };
+  if (tools[k]) setTool(tools[k]);
+  else if (k === 'h') { $('show-curves').click(); }
+  else if (k === 'p') { $('show-critical').click(); }
+  else if (k === 'r') resetView();
+  else if (k === '[') setRadius(radius / 1.15);
+  else if (k === ']') setRadius(radius * 1.15);
+  else if (k === 'escape' && gesture) {
+    gesture = null;
+    controls.enabled = true;
+    strokeGeom.setFromPoints([]);
+    change('/api/edit', { action: 'cancel' });
+  }
+});
+
+// ---- hooks for tests and scripts ----
+editor.setTool = setTool;
+editor.setRadius = setRadius;
+editor.resetView = resetView;
+editor.radius = () => radius;
+editor.setOverlays = (on) => {
+  curves.visible = critical.visible = on;
+  ringShown = on;
+  if (!on) uniforms.uBrushRadius.value = 0;
+  $('show-curves').checked = $('show-critical').checked = on;
+  requestRender();
+};
+/** Page coordinates (CSS px) of a world point, and whether it is the visible surface there. */
+editor.project = (p) => {
+  const v = v3(p).project(camera);
+  const r = canvas.getBoundingClientRect();
+  const x = r.left + (v.x + 1) / 2 * r.width, y = r.top + (1 - v.y) / 2 * r.height;
+  raycaster.setFromCamera(new THREE.Vector2(v.x, v.y), camera);
+  const hit = raycaster.intersectObject(part, false)[0];
+  const visible = !!hit && hit.point.distanceTo(v3(p)) < 1e-3 * diag + 0.01 * radius;
+  return { x, y, visible };
+};
+/** The shown highlight segments' midpoints (world) with their page coordinates. */
+editor.highlightPoints = () => {
+  const s = editor.segments ?? new Float32Array(0);
+  const out = [];
+  for (let i = 0; i + 5 < s.length; i += 6) {
+    const w = [(s[i] + s[i + 3]) / 2, (s[i + 1] + s[i + 4]) / 2, (s[i + 2] + s[i + 5]) / 2];
+    out.push({ world: w, ...editor.project(w) });
+  }
+  return out;
+};
+
+resetView();
+poll();

@@ -1,0 +1,297 @@
+//! The editor's HTTP routes and the rules every request passes first.
+//!
+//! Rules, in order (each refusal is a 4xx with a JSON `{"error": …}` body; the server goes on):
+//! 1. the request target is an origin-form path (`/…`, at most 2 KiB): else 400;
+//! 2. exactly one `Host` header, equal to `127.0.0.1:PORT` or `localhost:PORT` of this server:
+//!    else 403 (a page on another name that resolves to 127.0.0.1 — DNS rebinding — gets
+//!    nothing);
+//! 3. a `POST` carries `Origin: http://127.0.0.1:PORT` (or `localhost`), `Content-Type:
+//!    application/json`, and no `Sec-Fetch-Site` other than `same-origin`: else 403 / 415
+//!    (another site's page cannot write);
+//! 4. only `GET`, `HEAD` and `POST`: else 405; a body of at most 1 MiB: else 413;
+//! 5. the path is one of a fixed table (embedded assets, the API, `/files/scene.json`): else
+//!    404. No part of a URL is ever used as a file path, so there is nothing to traverse.
+//!
+//! Routes:
+//! - `GET /` and `/assets/…`: the page ([`super::assets`]);
+//! - `GET /api/info`: [`super::info_json`]; `GET /api/mesh`: [`super::mesh_bytes`];
+//! - `GET /api/state[?after=V]`: [`super::StateView`], waiting up to 10 s for a solve newer
+//!   than V;
+//! - `GET /api/grain?version=V`: [`super::grain_bytes`] of version V (409 when it is not the
+//!   newest solved one); `GET /api/field.json?version=V`: its FIELD.json;
+//! - `GET /files/scene.json`: the scene file as it is on disk;
+//! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
+//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state.
+
+use std::io::Read;
+use std::sync::Arc;
+use std::time::Duration;
+
+use serde::Deserialize;
+use serde_json::json;
+use tiny_http::{Header, Method, Request, Response};
+
+use super::session::{Change, Session};
+
+/// The largest request body read (bytes).
+pub const MAX_BODY: usize = 1 << 20;
+/// The longest request target (bytes).
+pub const MAX_TARGET: usize = 2048;
+/// How long `GET /api/state?after=V` waits for a newer solve.
+pub const LONG_POLL: Duration = Duration::from_secs(10);
+
+/// What every request thread shares.
+pub struct Context {
+    session: Arc<Session>,
+    hosts: [String; 2],
+    origins: [String; 2],
+}
+
+impl Context {
+    /// The routes of `session` on 127.0.0.1:`port`.
+    pub fn new(session: Arc<Session>, port: u16) -> Context {
+        Context {
+            session,
+            hosts: [format!("127.0.0.1:{port}"), format!("localhost:{port}")],
+            origins: [format!("http://127.0.0.1:{port}"), format!("http://localhost:{port}")],
+        }
+    }
+}
+
+/// A response before it is sent.
+struct Reply {
+    status: u16,
+    content_type: &'static str,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn ok(content_type: &'static str, body: Vec<u8>) -> Reply {
+        Reply { status: 200, content_type, body }
+    }
+    fn json(value: &serde_json::Value) -> Reply {
+        Reply::ok("application/json", value.to_string().into_bytes())
+    }
+    fn error(status: u16, message: impl Into<String>) -> Reply {
+        let body = json!({ "error": message.into() }).to_string().into_bytes();
+        Reply { status, content_type: "application/json", body }
+    }
+}
+
+fn header(name: &str, value: &str) -> Option<Header> {
+    Header::from_bytes(name.as_bytes(), value.as_bytes()).ok()
+}
+
+/// The values of the headers named `name` (case-insensitive).
+fn values<'a>(rq: &'a Request, name: &str) -> Vec<&'a str> {
+    rq.headers()
+        .iter()
+        .filter(|h| h.field.as_str().as_str().eq_ignore_ascii_case(name))
+        .map(|h| h.value.as_str())
+        .collect()
+}
+
+/// Answers one request; never panics on its content.
+pub fn handle(ctx: &Context, mut rq: Request) {
+    let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| route(ctx, &mut rq)))
+        .unwrap_or_else(|_| Reply::error(500, "internal error"));
+    let mut response = Response::from_data(reply.body).with_status_code(reply.status);
+    let is_html = reply.content_type.starts_with("text/html");
+    let mut headers = vec![
+        header("Content-Type", reply.content_type),
+        header("Cache-Control", "no-store"),
+        header("X-Content-Type-Options", "nosniff"),
+        header("X-Frame-Options", "DENY"),
+        header("Referrer-Policy", "no-referrer"),
+        header("Cross-Origin-Resource-Policy", "same-origin"),
+    ];
+    if is_html {
+        headers.push(header(
+            "Content-Security-Policy",
+            "default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; \
+             img-src 'self' data: blob:; base-uri 'none'; form-action 'none'; \
+             frame-ancestors 'none'",
+        ));
+    }
+    for h in headers.into_iter().flatten() {
+        response.add_header(h);
+    }
+    let _ = rq.respond(response);
+}
+
+fn route(ctx: &Context, rq: &mut Request) -> Reply {
+    let target = rq.url().to_string();
+    if target.len() > MAX_TARGET {
+        return Reply::error(414, "request target too long");
+    }
+    if !target.starts_with('/') || target.starts_with("//") {
+        return Reply::error(400, "the request target must be a path");
+    }
+    let hosts = values(rq, "Host");
+    match hosts.as_slice() {
+        [h] if ctx.hosts.iter().any(|o| o.eq_ignore_ascii_case(h)) => {}
+        [] => return Reply::error(400, "no Host header"),
+        _ => return Reply::error(403, "wrong Host: this server answers only its own address"),
+    }
+    let (path, query) = match target.split_once('?') {
+        Some((p, q)) => (p.to_string(), q.to_string()),
+        None => (target.clone(), String::new()),
+    };
+    match rq.method().clone() {
+        Method::Get | Method::Head => get(ctx, &path, &query),
+        Method::Post => {
+            if let Some(r) = check_write(ctx, rq) {
+                return r;
+            }
+            let body = match read_body(rq) {
+                Ok(b) => b,
+                Err(r) => return r,
+            };
+            post(ctx, &path, &body)
+        }
+        _ => Reply::error(405, "only GET, HEAD and POST"),
+    }
+}
+
+/// The cross-origin rules of a write; `None` when it may go on.
+fn check_write(ctx: &Context, rq: &Request) -> Option<Reply> {
+    let origins = values(rq, "Origin");
+    match origins.as_slice() {
+        [o] if ctx.origins.iter().any(|x| x.eq_ignore_ascii_case(o)) => {}
+        _ => return Some(Reply::error(403, "cross-origin write refused (Origin)")),
+    }
+    if values(rq, "Sec-Fetch-Site").iter().any(|s| !s.eq_ignore_ascii_case("same-origin")) {
+        return Some(Reply::error(403, "cross-origin write refused (Sec-Fetch-Site)"));
+    }
+    let json_type = values(rq, "Content-Type").iter().any(|t| {
+        t.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case("application/json"))
+    });
+    if !json_type {
+        return Some(Reply::error(415, "a write is application/json"));
+    }
+    None
+}
+
+fn read_body(rq: &mut Request) -> Result<Vec<u8>, Reply> {
+    if rq.body_length().is_some_and(|n| n > MAX_BODY) {
+        return Err(Reply::error(413, format!("a body is at most {MAX_BODY} bytes")));
+    }
+    let mut body = Vec::new();
+    match rq.as_reader().take(MAX_BODY as u64 + 1).read_to_end(&mut body) {
+        Ok(_) if body.len() > MAX_BODY => {
+            Err(Reply::error(413, format!("a body is at most {MAX_BODY} bytes")))
+        }
+        Ok(_) => Ok(body),
+        Err(e) => Err(Reply::error(400, format!("reading the body: {e}"))),
+    }
+}
+
+/// The value of `key` in a query string of `k=v` pairs, as a number.
+fn query_u64(query: &str, key: &str) -> Result<Option<u64>, Reply> {
+    for pair in query.split('&').filter(|p| !p.is_empty()) {
+        let (k, v) = pair.split_once('=').unwrap_or((pair, ""));
+        if k == key {
+            return v
+                .parse::<u64>()
+                .map(Some)
+                .map_err(|_| Reply::error(400, format!("{key}: expected a number")));
+        }
+    }
+    Ok(None)
+}
+
+fn get(ctx: &Context, path: &str, query: &str) -> Reply {
+    if let Some(a) = super::assets::find(path) {
+        return Reply::ok(a.content_type, a.bytes.to_vec());
+    }
+    let s = &ctx.session;
+    match path {
+        "/api/info" => Reply::json(&super::info_json(s)),
+        "/api/mesh" => Reply::ok("application/octet-stream", super::mesh_bytes(s)),
+        "/api/state" => {
+            let after = match query_u64(query, "after") {
+                Ok(a) => a,
+                Err(r) => return r,
+            };
+            let view = s.view(after, LONG_POLL);
+            Reply::json(&serde_json::to_value(view).unwrap_or_default())
+        }
+        "/api/grain" | "/api/field.json" => {
+            let version = match query_u64(query, "version") {
+                Ok(v) => v,
+                Err(r) => return r,
+            };
+            match s.solved(version) {
+                Some(solved) if path == "/api/grain" => {
+                    Reply::ok("application/octet-stream", super::grain_bytes(&solved))
+                }
+                Some(solved) => match s.field_json(&solved) {
+                    Ok(b) => Reply::ok("application/json", b.to_vec()),
+                    Err(e) => Reply::error(500, e.to_string()),
+                },
+                None => Reply::error(409, "that version is not the newest solved one"),
+            }
+        }
+        // No icon: an empty answer instead of a 404 in the page's console.
+        "/favicon.ico" => Reply { status: 204, content_type: "image/x-icon", body: Vec::new() },
+        "/files/scene.json" => match std::fs::read(s.path()) {
+            Ok(b) => Reply::ok("application/json", b),
+            Err(e) => Reply::error(404, format!("the scene file: {e}")),
+        },
+        _ => Reply::error(404, "not found"),
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EditRequest {
+    action: String,
+    #[serde(default)]
+    edit: Option<serde_json::Value>,
+}
+
+fn post(ctx: &Context, path: &str, body: &[u8]) -> Reply {
+    let s = &ctx.session;
+    let change = match path {
+        "/api/edit" => {
+            let rq: EditRequest = match serde_json::from_slice(body) {
+                Ok(r) => r,
+                Err(e) => return Reply::error(400, format!("the request: {e}")),
+            };
+            let edit = match rq.edit.map(serde_json::from_value::<crate::edit::Edit>) {
+                None => None,
+                Some(Ok(e)) => Some(e),
+                Some(Err(e)) => return Reply::error(400, format!("edit: {e}")),
+            };
+            match (rq.action.as_str(), edit) {
+                ("preview", Some(e)) => Change::Preview(e),
+                ("commit", Some(e)) => Change::Commit(e),
+                ("cancel", None) => Change::Cancel,
+                _ => {
+                    return Reply::error(
+                        400,
+                        "action: \"preview\" or \"commit\" with an edit, or \"cancel\"",
+                    )
+                }
+            }
+        }
+        "/api/undo" => Change::Undo,
+        "/api/redo" => Change::Redo,
+        "/api/save" => {
+            return match s.save() {
+                Ok(p) => {
+                    let view = s.view(None, Duration::ZERO);
+                    Reply::json(&json!({ "saved": p.display().to_string(), "state": view }))
+                }
+                Err(e) => Reply::error(500, format!("saving: {e}")),
+            }
+        }
+        _ => return Reply::error(404, "not found"),
+    };
+    match s.change(change) {
+        Ok(_) => {
+            Reply::json(&serde_json::to_value(s.view(None, Duration::ZERO)).unwrap_or_default())
+        }
+        Err(e) => Reply::error(400, e.to_string()),
+    }
+}

@@ -1,0 +1,433 @@
+//! The editor's state: the scene as read, the part prepared once, the list of edits with its
+//! undo and redo stacks, the edit being dragged, and the solver thread that turns the latest
+//! list into a field (latest request wins; a result that is stale when it is ready is dropped).
+//!
+//! Every field the page is shown is computed from the scene **text** that saving would write
+//! ([`Session::scene_text`]), read back by [`Scene::from_str`] and run through the same stages
+//! as `grainline run` ([`crate::pipeline::prepare_with`], [`optimize_stage`],
+//! [`optimized_field_file`], [`crate::output::json_compact`]): so the FIELD.json of a run on the
+//! saved scene is byte for byte the one the page showed.
+
+use std::path::Path;
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+
+use crate::edit::{Edit, WarpKind};
+use crate::fidelity::{highlight_segments, EditFidelity};
+use crate::field::FieldFile;
+use crate::highlight::Symmetry;
+use crate::pipeline::optimize::{optimize_stage, optimized_field_file, Optimized};
+use crate::pipeline::run::StagePlan;
+use crate::pipeline::{prepare_with, Prepared, Silent, Stages};
+use crate::scene::{LoadedScene, Scene};
+use crate::{Error, Result};
+
+/// Undo steps kept (older ones are forgotten).
+pub const UNDO_DEPTH: usize = 200;
+
+/// One solved field, ready for the page.
+pub struct Solved {
+    /// The state version it was computed for.
+    pub version: u64,
+    /// The edits' and the solver's result (`None` without edits: the initial field).
+    optimized: Option<Optimized>,
+    /// FIELD.json, made when first asked for ([`Session::field_json`]).
+    field_json: OnceLock<std::result::Result<Vec<u8>, String>>,
+    /// The grain u per vertex (world space, unit), as FIELD.json's `u`.
+    pub u: Vec<[f32; 3]>,
+    /// The key light's highlight curves: segments of the zero set of g = hᵀu per triangle.
+    pub segments: Vec<[f32; 6]>,
+    /// Critical vertices (hᵀn above the threshold) of the solved field.
+    pub critical: Vec<u32>,
+    /// The key light after the edits (direction towards it).
+    pub key_light: [f64; 3],
+    /// The solver's stop reason (`none` without edits).
+    pub stop: String,
+    /// Did the bend / expand / curve edits land ([`crate::fidelity`]).
+    pub fidelity: Vec<EditFidelity>,
+    /// Vertices inside an edit's support.
+    pub edited_vertices: usize,
+    /// Seconds the solve took (targets, solve, grain, curves; FIELD.json is made later).
+    pub seconds: f64,
+}
+
+/// What the page asked for and what the solver has done.
+#[derive(Default)]
+struct State {
+    /// The committed edits.
+    edits: Vec<Edit>,
+    /// The edit being dragged (solved after the committed ones, not yet committed).
+    preview: Option<Edit>,
+    undo: Vec<Vec<Edit>>,
+    redo: Vec<Vec<Edit>>,
+    /// Bumped on every change of `edits` or `preview`.
+    version: u64,
+    /// The newest field computed for the version that was current when it was ready.
+    solved: Option<Arc<Solved>>,
+    /// The newest solve that failed: its version and message.
+    error: Option<(u64, String)>,
+    /// The version whose committed edits were last saved (or read from the file).
+    saved_edits: Vec<Edit>,
+    /// Results dropped because a newer request arrived while they were computed.
+    dropped: u64,
+    /// The solver thread is computing this version.
+    solving: Option<u64>,
+}
+
+/// A summary of the state for the page (`GET /api/state`).
+#[derive(Clone, Debug, Serialize)]
+pub struct StateView {
+    /// The current version (edits + preview).
+    pub version: u64,
+    /// The version of the newest solved field (`None` before the first one).
+    pub solved_version: Option<u64>,
+    /// The newest failed solve's version and message.
+    pub error: Option<(u64, String)>,
+    /// The committed edits, as the scene file would hold them.
+    pub edits: Vec<Edit>,
+    /// Whether an edit is being dragged.
+    pub previewing: bool,
+    /// Undo steps available.
+    pub undo: usize,
+    /// Redo steps available.
+    pub redo: usize,
+    /// The committed edits differ from the file's.
+    pub dirty: bool,
+    /// Stale results dropped so far.
+    pub dropped: u64,
+    /// The solver is busy.
+    pub solving: bool,
+    /// Of the solved field: solver stop reason, key light, fidelity, seconds.
+    pub stop: Option<String>,
+    /// The key light of the solved field.
+    pub key_light: Option<[f64; 3]>,
+    /// The fidelity figures of the solved field.
+    pub fidelity: Vec<EditFidelity>,
+    /// Seconds the newest solve took.
+    pub seconds: Option<f64>,
+}
+
+/// What a change asks for (`POST /api/edit`).
+#[derive(Clone, Debug)]
+pub enum Change {
+    /// Solve with this edit after the committed ones (a drag in progress).
+    Preview(Edit),
+    /// Append this edit to the committed ones.
+    Commit(Edit),
+    /// Drop the preview.
+    Cancel,
+    /// Back to the list before the last commit.
+    Undo,
+    /// Forward again.
+    Redo,
+}
+
+/// The editor's session: shared by the request threads and the solver thread.
+pub struct Session {
+    loaded: LoadedScene,
+    prepared: Prepared,
+    state: Mutex<State>,
+    changed: Condvar,
+}
+
+impl Session {
+    /// Reads the scene and prepares the part (load, geometry, initial field) as `grainline run`
+    /// would (a UV layout is made when the scene's toolpaths need one and the part has none).
+    pub fn open(path: &Path) -> Result<Session> {
+        let loaded = LoadedScene::read(path)?;
+        let plan = StagePlan::of(&loaded.scene);
+        let mut stages = Stages::new(&Silent);
+        let prepared =
+            prepare_with(&loaded, &mut stages, plan.trace).map_err(|e| loaded.wrap(e))?;
+        let edits = loaded.scene.edits.clone();
+        let state = State { saved_edits: edits.clone(), edits, version: 1, ..State::default() };
+        Ok(Session { loaded, prepared, state: Mutex::new(state), changed: Condvar::new() })
+    }
+
+    fn lock(&self) -> MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The scene file.
+    pub fn path(&self) -> &Path {
+        &self.loaded.path
+    }
+
+    /// The scene as read.
+    pub fn scene(&self) -> &Scene {
+        &self.loaded.scene
+    }
+
+    /// The prepared part.
+    pub fn prepared(&self) -> &Prepared {
+        &self.prepared
+    }
+
+    /// The scene file's text with `edits` as its edits: pretty JSON ending in a newline, every
+    /// other key as read (comments and key order of the user's file are not kept).
+    pub fn scene_text(&self, edits: &[Edit]) -> Result<String> {
+        let mut scene = self.loaded.scene.clone();
+        scene.edits = edits.to_vec();
+        let bytes = crate::output::json_pretty(&scene)?;
+        String::from_utf8(bytes).map_err(|e| Error::invalid_arg("scene", e.to_string()))
+    }
+
+    /// Checks an edit from the page: the tools the page drives (bend, expand, stencil, curve
+    /// from 3D points or UV polylines), their numbers in range. A curve from an SVG file is
+    /// refused: the page may not name files.
+    pub fn check_edit(&self, e: &Edit) -> Result<()> {
+        match e {
+            Edit::Bend(_) | Edit::Expand(_) | Edit::Stencil(_) => {}
+            Edit::Curve(c) if c.svg.is_none() => {}
+            Edit::Curve(_) => {
+                return Err(Error::setting("svg", "the editor takes curves as points, not files"))
+            }
+            other => {
+                return Err(Error::setting(
+                    "tool",
+                    format!("the editor does not drive the `{}` tool yet", other.tool()),
+                ))
+            }
+        }
+        e.validate()?;
+        let n = self.prepared.mesh.num_vertices();
+        let centre = match e {
+            Edit::Bend(w) | Edit::Expand(w) => Some(&w.centre),
+            Edit::Stencil(s) => Some(&s.centre),
+            _ => None,
+        };
+        if let Some(crate::edit::Centre::Vertex(v)) = centre {
+            if *v as usize >= n {
+                return Err(Error::setting(
+                    "centre.vertex",
+                    format!("vertex {v} does not exist (the mesh has {n})"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Applies a change; returns the new version. The solver thread picks it up.
+    pub fn change(&self, c: Change) -> Result<u64> {
+        let mut st = self.lock();
+        match c {
+            Change::Preview(e) => {
+                self.check_edit(&e)?;
+                st.preview = Some(e);
+            }
+            Change::Commit(e) => {
+                self.check_edit(&e)?;
+                let before = st.edits.clone();
+                st.undo.push(before);
+                if st.undo.len() > UNDO_DEPTH {
+                    st.undo.remove(0);
+                }
+                st.redo.clear();
+                st.edits.push(e);
+                st.preview = None;
+            }
+            Change::Cancel => {
+                st.preview = None;
+            }
+            Change::Undo => {
+                let Some(prev) = st.undo.pop() else {
+                    return Err(Error::setting("undo", "nothing to undo"));
+                };
+                let now = std::mem::replace(&mut st.edits, prev);
+                st.redo.push(now);
+                st.preview = None;
+            }
+            Change::Redo => {
+                let Some(next) = st.redo.pop() else {
+                    return Err(Error::setting("redo", "nothing to redo"));
+                };
+                let now = std::mem::replace(&mut st.edits, next);
+                st.undo.push(now);
+                st.preview = None;
+            }
+        }
+        st.version += 1;
+        let v = st.version;
+        drop(st);
+        self.changed.notify_all();
+        Ok(v)
+    }
+
+    /// The state for the page; waits up to `wait` for a solve (or a failure) newer than
+    /// `after` when one is asked for.
+    pub fn view(&self, after: Option<u64>, wait: Duration) -> StateView {
+        let deadline = Instant::now() + wait;
+        let mut st = self.lock();
+        if let Some(after) = after {
+            loop {
+                let newest = st
+                    .solved
+                    .as_ref()
+                    .map(|s| s.version)
+                    .max(st.error.as_ref().map(|e| e.0))
+                    .unwrap_or(0);
+                let now = Instant::now();
+                if newest > after || now >= deadline {
+                    break;
+                }
+                st = match self.changed.wait_timeout(st, deadline - now) {
+                    Ok((g, _)) => g,
+                    Err(e) => e.into_inner().0,
+                };
+            }
+        }
+        let s = st.solved.clone();
+        StateView {
+            version: st.version,
+            solved_version: s.as_ref().map(|s| s.version),
+            error: st.error.clone(),
+            edits: st.edits.clone(),
+            previewing: st.preview.is_some(),
+            undo: st.undo.len(),
+            redo: st.redo.len(),
+            dirty: st.edits != st.saved_edits,
+            dropped: st.dropped,
+            solving: st.solving.is_some(),
+            stop: s.as_ref().map(|s| s.stop.clone()),
+            key_light: s.as_ref().map(|s| s.key_light),
+            fidelity: s.as_ref().map(|s| s.fidelity.clone()).unwrap_or_default(),
+            seconds: s.as_ref().map(|s| s.seconds),
+        }
+    }
+
+    /// The newest solved field, if it is the one of `version` (any when `None`).
+    pub fn solved(&self, version: Option<u64>) -> Option<Arc<Solved>> {
+        let st = self.lock();
+        st.solved.clone().filter(|s| version.is_none_or(|v| v == s.version))
+    }
+
+    /// Writes the committed edits into the scene file (atomically, through
+    /// [`crate::output::write_atomic`]); returns the path written.
+    pub fn save(&self) -> Result<std::path::PathBuf> {
+        let edits = self.lock().edits.clone();
+        let text = self.scene_text(&edits)?;
+        // Saved only what reads back: the same check as every scene.
+        Scene::from_str(&text, &self.loaded.path)?;
+        crate::output::write_atomic(&self.loaded.path, text.as_bytes())?;
+        self.lock().saved_edits = edits;
+        self.changed.notify_all();
+        Ok(self.loaded.path.clone())
+    }
+
+    /// Solves `edits` exactly as `grainline run` would solve a scene file holding them: the
+    /// grain, the highlight curves and the critical points for the page; FIELD.json is made
+    /// from the same result when asked for ([`Session::field_json`]).
+    pub fn solve(&self, edits: &[Edit], version: u64) -> Result<Solved> {
+        let start = Instant::now();
+        let text = self.scene_text(edits)?;
+        let scene = Scene::from_str(&text, &self.loaded.path)?;
+        let s = LoadedScene { scene, ..self.loaded.clone() };
+        let p = &self.prepared;
+        let g = &p.field.geometry;
+        let symmetry: Symmetry = p.field_options.symmetry;
+        let (optimized, u, stop, key_light, fidelity, edited) = if s.scene.edits.is_empty() {
+            let l = p.field_options.lighting.light;
+            let u = g.directions_of(&p.field.phi);
+            (None, u, "none".to_string(), [l.x, l.y, l.z], Vec::new(), 0)
+        } else {
+            let mut stages = Stages::new(&Silent);
+            let o = optimize_stage(&s, p, &mut stages).map_err(|e| s.wrap(e))?;
+            let u = g.directions_of(&o.phi);
+            let r = &o.report;
+            let (stop, key, fid, edited) =
+                (r.solver.stop.to_string(), r.key_light, r.fidelity.clone(), r.edited_vertices);
+            (Some(o), u, stop, key, fid, edited)
+        };
+        if let Some(i) = u.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
+            return Err(Error::invalid_arg(
+                "solve",
+                format!("the grain at vertex {i} is not finite"),
+            ));
+        }
+        let h = optimized.as_ref().map_or(&p.field.h, |o| &o.h);
+        let segments = highlight_segments(&p.mesh, h, &u, symmetry)
+            .iter()
+            .map(|[a, b]| [a.x, a.y, a.z, b.x, b.y, b.z].map(|c| c as f32))
+            .collect();
+        let critical = optimized.as_ref().map_or(&p.field.critical, |o| &o.critical);
+        let critical =
+            critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
+        Ok(Solved {
+            version,
+            optimized,
+            field_json: OnceLock::new(),
+            u: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
+            segments,
+            critical,
+            key_light,
+            stop,
+            fidelity,
+            edited_vertices: edited,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// FIELD.json of a solved field, exactly as `grainline run` writes it (`field.output`) for
+    /// a scene file holding the same edits: [`optimized_field_file`] (or the initial field's
+    /// file without edits) through [`crate::output::json_compact`]. Made once per result.
+    pub fn field_json<'a>(&self, solved: &'a Solved) -> Result<&'a [u8]> {
+        let p = &self.prepared;
+        let made = solved.field_json.get_or_init(|| {
+            let file = match &solved.optimized {
+                Some(o) => optimized_field_file(p, o),
+                None => FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field),
+            };
+            file.and_then(|f| crate::output::json_compact(&f)).map_err(|e| e.to_string())
+        });
+        match made {
+            Ok(b) => Ok(b.as_slice()),
+            Err(e) => Err(Error::invalid_arg("field.json", e.clone())),
+        }
+    }
+
+    /// The solver thread's loop: solves the latest version, drops a result that is stale when
+    /// it is ready, never returns.
+    pub fn solver_loop(self: Arc<Self>) {
+        let mut done = 0u64;
+        loop {
+            let (version, edits) = {
+                let mut st = self.lock();
+                while st.version <= done {
+                    st = match self.changed.wait(st) {
+                        Ok(g) => g,
+                        Err(e) => e.into_inner(),
+                    };
+                }
+                let mut edits = st.edits.clone();
+                edits.extend(st.preview.clone());
+                st.solving = Some(st.version);
+                (st.version, edits)
+            };
+            // A panic in the solve must not end the editor: it is reported like an error.
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                self.solve(&edits, version)
+            }))
+            .unwrap_or_else(|_| Err(Error::invalid_arg("solve", "the solver failed (panic)")));
+            let mut st = self.lock();
+            st.solving = None;
+            done = version;
+            if st.version == version {
+                match result {
+                    Ok(s) => st.solved = Some(Arc::new(s)),
+                    Err(e) => st.error = Some((version, e.to_string())),
+                }
+            } else {
+                st.dropped += 1;
+            }
+            drop(st);
+            self.changed.notify_all();
+        }
+    }
+
+    /// The strength range of a warp tool ([`crate::edit::warp::strength_range`]).
+    pub fn strength_range(kind: WarpKind) -> (f64, f64) {
+        crate::edit::warp::strength_range(kind)
+    }
+}

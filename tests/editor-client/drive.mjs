@@ -1,0 +1,134 @@
+// node drive.mjs JOB.json
+// Drives grainline's editor page in headless Chromium (puppeteer-core, /usr/bin/chromium, WebGL
+// 2 on SwiftShader) the way a designer would, in one page load:
+//   1. opens the page, waits for the first solved field to be shown;
+//   2. screenshots the canvas without overlays (before.png) and with them (before-overlay.png);
+//   3. picks a visible point of the key highlight near the middle of the view, presses the
+//      mouse there with the bend tool (key B) and drags `drag_px` across the highlight (in
+//      steps, so live previews are sent), releases;
+//   4. waits until the committed edit is solved and shown; screenshots after.png and
+//      after-overlay.png; fetches the FIELD.json of the version the page shows (page-field.json);
+//   5. saves with Ctrl+S and waits for the page to report it.
+// JOB.json: { "url": "http://127.0.0.1:PORT/", "out_dir": DIR, "width": 1000, "height": 700,
+//             "drag_px": 40 }
+// Writes DIR/result.json: the press and release points in canvas pixels, the highlight's
+// screen direction there, the edit committed, the versions, the page's console errors.
+// Exit 0 on success, 1 on a failure in the page, 2 on a set-up problem.
+import { readFileSync, writeFileSync, existsSync } from 'node:fs';
+import { join } from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const job = JSON.parse(readFileSync(process.argv[2], 'utf8'));
+const chromium = process.env.GRAINLINE_CHROMIUM || '/usr/bin/chromium';
+if (!existsSync(chromium)) {
+  console.error(`drive.mjs: ${chromium} not found (run setup.sh)`);
+  process.exit(2);
+}
+const out = (name) => join(job.out_dir, name);
+// A bound on the whole drive: a page that never settles fails the test instead of hanging it.
+const watchdog = setTimeout(() => {
+  console.error('drive.mjs: no result after 300 s');
+  process.exit(1);
+}, 300000);
+watchdog.unref();
+const problems = [];
+let browser;
+try {
+  browser = await puppeteer.launch({
+    executablePath: chromium,
+    headless: true,
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+      '--ignore-gpu-blocklist', '--disable-dev-shm-usage'],
+  });
+} catch (e) {
+  console.error(`drive.mjs: cannot start ${chromium}: ${e.message}`);
+  process.exit(2);
+}
+try {
+  const page = await browser.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') problems.push(`console: ${m.text()}`); });
+  page.on('pageerror', (e) => problems.push(`pageerror: ${e.message}`));
+  await page.setViewport({ width: job.width, height: job.height, deviceScaleFactor: 1 });
+  await page.goto(job.url, { waitUntil: 'load' });
+  await page.waitForFunction(() => window.editor && window.editor.ready, { timeout: 120000 });
+  const first = await page.evaluate(() => window.editor.whenIdle());
+  if (first.error) throw new Error(`the scene's own edits failed: ${first.error}`);
+  const canvas = await page.$('#view');
+  const rect = await page.evaluate(() => {
+    const r = document.getElementById('view').getBoundingClientRect();
+    return { left: r.left, top: r.top, width: r.width, height: r.height };
+  });
+  const shot = async (name, overlays) => {
+    await page.evaluate((on) => { window.editor.setOverlays(on); }, overlays);
+    await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+    await canvas.screenshot({ path: out(name) });
+  };
+  await shot('before.png', false);
+  await shot('before-overlay.png', true);
+
+  // A visible highlight point near the middle of the canvas, and the highlight's direction there.
+  const pts = await page.evaluate(() => window.editor.highlightPoints().filter((p) => p.visible));
+  if (pts.length < 10) throw new Error(`only ${pts.length} visible highlight points`);
+  const cx = rect.left + rect.width / 2, cy = rect.top + rect.height / 2;
+  const d2 = (p, x, y) => (p.x - x) ** 2 + (p.y - y) ** 2;
+  pts.sort((a, b) => d2(a, cx, cy) - d2(b, cx, cy));
+  const press = pts[0];
+  const near = pts.filter((p) => d2(p, press.x, press.y) < 30 * 30);
+  // Principal direction of the nearby points: the highlight's screen tangent.
+  let sxx = 0, sxy = 0, syy = 0;
+  for (const p of near) {
+    const dx = p.x - press.x, dy = p.y - press.y;
+    sxx += dx * dx; sxy += dx * dy; syy += dy * dy;
+  }
+  const theta = 0.5 * Math.atan2(2 * sxy, sxx - syy);
+  const tangent = [Math.cos(theta), Math.sin(theta)];
+  // Across the highlight, rightwards on the screen.
+  let across = [-tangent[1], tangent[0]];
+  if (across[0] < 0) across = across.map((c) => -c);
+  const release = { x: press.x + job.drag_px * across[0], y: press.y + job.drag_px * across[1] };
+
+  await page.keyboard.press('b');
+  await page.mouse.move(press.x, press.y);
+  await page.mouse.down();
+  const steps = 8;
+  for (let k = 1; k <= steps; k++) {
+    const t = k / steps;
+    await page.mouse.move(press.x + t * (release.x - press.x), press.y + t * (release.y - press.y));
+    await new Promise((r) => setTimeout(r, 60));
+  }
+  await page.mouse.up();
+  const after = await page.evaluate(() => window.editor.whenIdle());
+  if (after.error) throw new Error(`the bend failed: ${after.error}`);
+  const state = await page.evaluate(() => ({
+    edits: window.editor.state.edits, last: window.editor.lastEdit,
+    displayed: window.editor.displayedVersion, version: window.editor.version,
+    dropped: window.editor.state.dropped, fidelity: window.editor.state.fidelity,
+  }));
+  await shot('after.png', false);
+  await shot('after-overlay.png', true);
+  const field = await page.evaluate(async (v) => {
+    const r = await fetch(`/api/field.json?version=${v}`);
+    if (!r.ok) throw new Error(`field.json: HTTP ${r.status}`);
+    return r.text();
+  }, state.displayed);
+  writeFileSync(out('page-field.json'), field);
+
+  await page.keyboard.down('Control');
+  await page.keyboard.press('s');
+  await page.keyboard.up('Control');
+  await page.waitForFunction(() => window.editor.saved === 1 && !window.editor.state.dirty, { timeout: 30000 });
+
+  const px = (p) => ({ x: p.x - rect.left, y: p.y - rect.top });
+  const result = {
+    canvas: rect, press: px(press), release: px(release), press_world: press.world,
+    tangent, across, drag_px: job.drag_px, ...state, problems,
+  };
+  writeFileSync(out('result.json'), JSON.stringify(result, null, 1));
+  console.log(JSON.stringify({ press: result.press, release: result.release, edits: state.edits.length, displayed: state.displayed, dropped: state.dropped, problems }));
+  await browser.close();
+  process.exit(problems.length ? 1 : 0);
+} catch (e) {
+  console.error(`drive.mjs: ${e.stack || e.message}\n${problems.join('\n')}`);
+  await browser.close();
+  process.exit(1);
+}
