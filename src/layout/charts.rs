@@ -12,8 +12,8 @@
 //!      exceeds `crease_angle_deg` — into the pieces they enclose (creases that enclose
 //!      nothing are left uncut);
 //!   2. by **region growing on normal cones**: from the lowest-numbered face left, faces join
-//!      across edges while their smoothed normal ([`smoothed_normals`]) is within
-//!      `cone_angle_deg` of the seed's; the borders are smoothed ([`smooth_labels`]), pieces
+//!      across edges while their smoothed normal (`smoothed_normals`) is within
+//!      `cone_angle_deg` of the seed's; the borders are smoothed (`smooth_labels`), pieces
 //!      split into edge-connected parts, and parts of fewer than [`MIN_PIECE`] faces are
 //!      merged into the neighbour they share most edges with;
 //!   3. by **bisection**: two faces far apart (a double breadth-first sweep) grow at the same
@@ -34,10 +34,10 @@ use crate::mesh::Mesh;
 /// neighbour.
 pub const MIN_PIECE: usize = 8;
 
-/// Rounds of normal smoothing before the cone test ([`smoothed_normals`]).
+/// Rounds of normal smoothing before the cone test (`smoothed_normals`).
 pub const NORMAL_SMOOTHING: usize = 3;
 
-/// Rounds of border smoothing after the cone growing ([`smooth_labels`]).
+/// Rounds of border smoothing after the cone growing (`smooth_labels`).
 pub const BORDER_SMOOTHING: usize = 3;
 
 /// A chart as its own small mesh.
@@ -247,7 +247,7 @@ pub(crate) fn pieces(
 }
 
 /// Region growing on normal cones (see the module documentation) on smoothed normals
-/// ([`smoothed_normals`]): grown pieces, their borders smoothed ([`smooth_labels`]), split
+/// (`smoothed_normals`): grown pieces, their borders smoothed (`smooth_labels`), split
 /// into edge-connected parts, and parts of fewer than [`MIN_PIECE`] faces merged into a
 /// neighbour.
 pub(crate) fn cone_pieces(
