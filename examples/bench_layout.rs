@@ -5,7 +5,8 @@
 //! cargo run --release --example bench_layout [-- RUNS]
 //! ```
 //!
-//! `GRAINLINE_SHARED` overrides where ../shared is. Each mesh is loaded with the default options (blub's quads split, teapot welded at 1e-6 so
+//! `GRAINLINE_SHARED` overrides where ../shared is; `BENCH_MESH=NAME` runs only the meshes
+//! whose file name contains NAME. Each mesh is loaded with the default options (blub's quads split, teapot welded at 1e-6 so
 //! its patches join, its one non-manifold vertex accepted). Times are the median of RUNS runs (default 3).
 
 #[global_allocator]
@@ -27,9 +28,10 @@ fn main() {
         return;
     }
     println!(
-        "| mesh | faces | method | time s | charts | seam edges | area dist. mean / p95 | angle dist. mean / p95 | angle error ° mean | edge-length error mean / max | ARAP fallbacks |"
+        "| mesh | faces | method | time s | charts | seam edges | area dist. mean / p95 | angle dist. mean / p95 | angle error ° mean | edge-length error mean / max | ARAP fallbacks | largest chart | cuts (creases / cones / bisections / merges) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let only = std::env::var("BENCH_MESH").ok();
     for name in [
         "paper-crumpled2.obj",
         "spot_triangulated.obj",
@@ -40,6 +42,9 @@ fn main() {
         "oloid4096_tri.obj",
         "stanford-bunny.obj",
     ] {
+        if only.as_deref().is_some_and(|o| !name.contains(o)) {
+            continue;
+        }
         let mut options = LoadOptions::default();
         if name == "teapot.obj" {
             options = LoadOptions { weld: Some(1e-6), allow_nonmanifold: true, ..options };
@@ -57,7 +62,7 @@ fn main() {
             times.sort_by(f64::total_cmp);
             let r = last.expect("one run");
             println!(
-                "| {name} | {} | {} | {:.3} | {} | {} | {:.3} / {:.3} | {:.3} / {:.3} | {:.2} | {:.2e} / {:.2e} | {} |",
+                "| {name} | {} | {} | {:.3} | {} | {} | {:.3} / {:.3} | {:.3} / {:.3} | {:.2} | {:.2e} / {:.2e} | {} | {} | {} / {} / {} / {} |",
                 mesh.num_faces(),
                 method.as_str(),
                 times[times.len() / 2],
@@ -71,6 +76,11 @@ fn main() {
                 r.edge_length_error.mean,
                 r.edge_length_error.max,
                 r.arap_fallbacks,
+                r.largest_chart_faces,
+                r.cuts.creases,
+                r.cuts.cones,
+                r.cuts.bisections,
+                r.cuts.merges,
             );
         }
     }

@@ -79,3 +79,82 @@ fn text_output_names_units() {
     let s = String::from_utf8_lossy(&out.stdout);
     assert!(s.contains(" mm") && s.contains("1 loop(s)"), "{s}");
 }
+
+/// An OBJ of unit squares, square `i` at x = 2i in 3D (so each is its own chart), two
+/// triangles each, with UV square `[lo, lo + 1]²`; a mirrored square has its u reversed
+/// (both triangles flipped).
+fn squares_obj(name: &str, squares: &[([f64; 2], bool)]) -> PathBuf {
+    use std::fmt::Write;
+    let mut s = String::new();
+    for (i, &([u0, v0], mirrored)) in squares.iter().enumerate() {
+        let x = 2.0 * i as f64;
+        for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            let _ = writeln!(s, "v {} {dy} 0", x + dx);
+            let du = if mirrored { 1.0 - dx } else { dx };
+            let _ = writeln!(s, "vt {} {}", u0 + du, v0 + dy);
+        }
+        let b = 4 * i + 1;
+        let _ = writeln!(s, "f {b}/{b} {}/{} {}/{}", b + 1, b + 1, b + 2, b + 2);
+        let _ = writeln!(s, "f {b}/{b} {}/{} {}/{}", b + 2, b + 2, b + 3, b + 3);
+    }
+    let path =
+        std::env::temp_dir().join(format!("grainline-inspect-{}-{name}.obj", std::process::id()));
+    std::fs::write(&path, s).unwrap();
+    path
+}
+
+fn inspect_json(path: &std::path::Path) -> serde_json::Value {
+    let out = inspect(&[path.to_str().unwrap(), "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn overlapping_and_mirrored_charts_are_reported() {
+    // A mirrored square over the middle of another: they share the UV square [0.5, 1]².
+    let p = squares_obj("mirrored_overlap", &[([0.0, 0.0], false), ([0.5, 0.5], true)]);
+    let v = inspect_json(&p);
+    assert_eq!(v["uv"]["charts"], 2);
+    assert_eq!(v["uv"]["overlapping_charts"], serde_json::json!([[0, 1]]));
+    assert_eq!(v["uv"]["overlapping_chart_pairs"], 1);
+    assert_eq!(v["uv"]["flipped_faces"], 2);
+    assert_eq!(v["uv"]["mirrored_chart_count"], 1);
+    assert_eq!(v["uv"]["charts_with_flipped_faces"], 1);
+    assert_eq!(v["uv"]["mirrored_charts"][0]["chart"], 1);
+    let out = inspect(&[p.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("overlapping charts: 1 pair(s) — #0 and #1"), "{text}");
+    assert!(text.contains("mirrored charts: 1 — #1 (2 faces)"), "{text}");
+    let _ = std::fs::remove_file(&p);
+
+    // Squares 0 and 1 share only the corner [0.9, 1]², where no triangle's centroid lies in
+    // the other chart; square 2 is far away.
+    let p = squares_obj(
+        "corner_overlap",
+        &[([0.0, 0.0], false), ([0.9, 0.9], false), ([5.0, 5.0], false)],
+    );
+    let v = inspect_json(&p);
+    assert_eq!(v["uv"]["charts"], 3);
+    assert_eq!(v["uv"]["overlapping_charts"], serde_json::json!([[0, 1]]));
+    assert_eq!(v["uv"]["mirrored_chart_count"], 0);
+    assert_eq!(v["uv"]["charts_with_flipped_faces"], 0);
+    let _ = std::fs::remove_file(&p);
+}
+
+#[test]
+fn charts_packed_edge_to_edge_do_not_overlap() {
+    // Square 1 touches square 0 along u = 1, square 2 (mirrored) along v = 1; they share
+    // edges in UV but no interior point.
+    let p = squares_obj("packed", &[([0.0, 0.0], false), ([1.0, 0.0], false), ([0.0, 1.0], true)]);
+    let v = inspect_json(&p);
+    assert_eq!(v["uv"]["charts"], 3);
+    assert_eq!(v["uv"]["overlapping_charts"], serde_json::json!([]));
+    assert_eq!(v["uv"]["overlapping_chart_pairs"], 0);
+    assert_eq!(v["uv"]["mirrored_chart_count"], 1);
+    let out = inspect(&[p.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("overlapping charts: none"));
+    let _ = std::fs::remove_file(&p);
+    // The cube atlas of tests/data packs its charts edge to edge as well.
+    let v = inspect_json(&data("cube_uv_mirrored.obj"));
+    assert_eq!(v["uv"]["overlapping_chart_pairs"], 0);
+}

@@ -327,6 +327,57 @@ fn every_corpus_mesh_gets_a_valid_layout() {
     }
 }
 
+/// The area-weighted `q`-quantile of `values` (weights `w`).
+fn weighted_quantile(values: &[f64], w: &[f64], q: f64) -> f64 {
+    let mut v: Vec<(f64, f64)> = values.iter().copied().zip(w.iter().copied()).collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = w.iter().sum();
+    let mut acc = 0.0;
+    for (x, wi) in &v {
+        acc += wi;
+        if acc >= q * total {
+            return *x;
+        }
+    }
+    v.last().map_or(0.0, |x| x.0)
+}
+
+#[test]
+fn the_bunny_gets_a_handful_of_charts_with_bounded_distortion() {
+    // A closed scan (five small holes in its base): cut into a handful of charts, not the
+    // 189 of the first layout. Distortion from the part's own edges (`face_factors`): per
+    // face the area factor a = σ₁σ₂ (layout scaled to the part's area) and the conformal
+    // ratio σ₁/σ₂.
+    let Some(shared) = shared() else { return };
+    let mesh = load_corpus(&shared, "stanford-bunny.obj");
+    let layout = flatten(&mesh, &LayoutOptions::default()).unwrap();
+    let charts = num_charts(&layout);
+    assert!(charts <= 20, "{charts} charts");
+    let mut m = mesh.clone();
+    m.uv = Some(layout.uv.clone());
+    assert_valid("bunny", &m, m.uv.as_ref().unwrap());
+    let f = face_factors(&mesh, &layout);
+    let w: Vec<f64> = (0..mesh.num_faces())
+        .filter(|&g| {
+            let [a, b, c] = mesh.faces[g];
+            a != b && b != c
+        })
+        .map(|g| {
+            let p = mesh.face_positions(g);
+            0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm()
+        })
+        .collect();
+    let area: Vec<f64> = f.iter().map(|x| x.0.max(1.0 / x.0)).collect();
+    let ratio: Vec<f64> = f.iter().map(|x| x.1).collect();
+    let total: f64 = w.iter().sum();
+    let mean = |v: &[f64]| v.iter().zip(&w).map(|(x, wi)| x * wi).sum::<f64>() / total;
+    let (am, ap) = (mean(&area), weighted_quantile(&area, &w, 0.95));
+    let (rm, rp) = (mean(&ratio), weighted_quantile(&ratio, &w, 0.95));
+    eprintln!("bunny: {charts} charts; area {am:.3} / {ap:.3}, conformal {rm:.3} / {rp:.3}");
+    assert!(am < 1.2 && ap < 1.5, "area distortion mean {am}, p95 {ap}");
+    assert!(rm < 1.2 && rp < 1.5, "conformal distortion mean {rm}, p95 {rp}");
+}
+
 /// `../shared/tools/check-gcode` accepts the program.
 fn check_gcode(shared: &std::path::Path, name: &str, ngc: &std::path::Path) {
     let tool = shared.join("tools/check-gcode");

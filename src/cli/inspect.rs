@@ -94,8 +94,30 @@ fn text(r: &InspectReport) -> String {
             );
             let _ = writeln!(
                 s,
-                "  mirrored charts: {}",
-                if mirrored.is_empty() { "none".to_string() } else { mirrored.join(", ") }
+                "  mirrored charts: {}{}; {} chart(s) with flipped triangles",
+                if mirrored.is_empty() {
+                    "none".to_string()
+                } else {
+                    format!("{} — ", uv.mirrored_chart_count)
+                },
+                mirrored.join(", "),
+                uv.charts_with_flipped_faces
+            );
+            let pairs: Vec<String> =
+                uv.overlapping_charts.iter().map(|[a, b]| format!("#{a} and #{b}")).collect();
+            let more = if uv.overlapping_chart_pairs > pairs.len() { ", ..." } else { "" };
+            let _ = writeln!(
+                s,
+                "  overlapping charts: {}",
+                if pairs.is_empty() {
+                    "none".to_string()
+                } else {
+                    format!(
+                        "{} pair(s) — {}{more} (toolpaths trace each as its own sheet)",
+                        uv.overlapping_chart_pairs,
+                        pairs.join(", ")
+                    )
+                }
             );
         }
     }

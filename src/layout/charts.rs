@@ -5,14 +5,17 @@
 //!   the chart's own edges form one chart vertex (a union of corners, so a chart that touches
 //!   itself at a vertex gets one chart vertex per fan). A chart is a **disk** when it is
 //!   edge-connected, has a boundary and its Euler characteristic V − E + F is 1 (then its genus
-//!   is 0 and it has one boundary loop), which is what a flattening needs.
+//!   is 0 and it has one boundary loop). It is **planar** (a disk with holes) when its genus
+//!   is 0: V − E + F = 2 − b for its b ≥ 1 boundary loops; such a chart flattens as it is.
 //! * **Cutting** a region that cannot be flattened as it is, in order:
 //!   1. along its **sharp creases** — edges whose dihedral angle (between the face normals)
 //!      exceeds `crease_angle_deg` — into the pieces they enclose (creases that enclose
 //!      nothing are left uncut);
 //!   2. by **region growing on normal cones**: from the lowest-numbered face left, faces join
-//!      across edges while their normal is within `cone_angle_deg` of the seed's; pieces of
-//!      fewer than [`MIN_PIECE`] faces are merged into the neighbour they share most edges with;
+//!      across edges while their smoothed normal (`smoothed_normals`) is within
+//!      `cone_angle_deg` of the seed's; the borders are smoothed (`smooth_labels`), pieces
+//!      split into edge-connected parts, and parts of fewer than [`MIN_PIECE`] faces are
+//!      merged into the neighbour they share most edges with;
 //!   3. by **bisection**: two faces far apart (a double breadth-first sweep) grow at the same
 //!      pace until they meet, so both halves are edge-connected.
 //!
@@ -31,6 +34,12 @@ use crate::mesh::Mesh;
 /// neighbour.
 pub const MIN_PIECE: usize = 8;
 
+/// Rounds of normal smoothing before the cone test (`smoothed_normals`).
+pub const NORMAL_SMOOTHING: usize = 3;
+
+/// Rounds of border smoothing after the cone growing (`smooth_labels`).
+pub const BORDER_SMOOTHING: usize = 3;
+
 /// A chart as its own small mesh.
 pub(crate) struct ChartMesh {
     /// Mesh faces of the chart, in the region's order.
@@ -43,6 +52,8 @@ pub(crate) struct ChartMesh {
     pub boundary: Vec<[u32; 2]>,
     /// V − E + F.
     pub euler: i64,
+    /// Boundary loops (connected pieces of the boundary edges).
+    pub boundary_loops: usize,
 }
 
 impl ChartMesh {
@@ -90,7 +101,18 @@ impl ChartMesh {
             .collect();
         let edges = (3 * nf + boundary.len()) / 2;
         let euler = nv as i64 - edges as i64 + nf as i64;
-        ChartMesh { faces: faces.to_vec(), tris, vertex, boundary, euler }
+        let mut loops_uf = UnionFind::new(nv);
+        for e in &boundary {
+            loops_uf.union(e[0], e[1]);
+        }
+        let mut on_boundary = vec![false; nv];
+        for e in &boundary {
+            on_boundary[e[0] as usize] = true;
+        }
+        let loop_roots: std::collections::BTreeSet<u32> =
+            (0..nv as u32).filter(|&v| on_boundary[v as usize]).map(|v| loops_uf.find(v)).collect();
+        let boundary_loops = loop_roots.len();
+        ChartMesh { faces: faces.to_vec(), tris, vertex, boundary, euler, boundary_loops }
     }
 
     /// Number of chart vertices.
@@ -101,6 +123,14 @@ impl ChartMesh {
     /// Edge-connected (by construction), with a boundary and V − E + F = 1.
     pub(crate) fn is_disk(&self) -> bool {
         self.euler == 1 && !self.boundary.is_empty()
+    }
+
+    /// Planar: edge-connected, with a boundary and genus 0 — a disk, or a disk with holes
+    /// (V − E + F = 2 − b for b boundary loops). A planar chart flattens as it is: LSCM's
+    /// area term sums the signed area over every boundary loop, ARAP pins one vertex, and
+    /// the validity test (no flipped triangle, no crossing boundary edges) covers the holes.
+    pub(crate) fn is_planar(&self) -> bool {
+        self.boundary_loops > 0 && self.euler == 2 - self.boundary_loops as i64
     }
 
     /// The chart's vertex positions.
@@ -118,6 +148,62 @@ pub(crate) fn face_normals(mesh: &Mesh) -> Vec<Vector3<f64>> {
             let l = n.norm();
             if l > 0.0 && l.is_finite() {
                 n / l
+            } else {
+                Vector3::zeros()
+            }
+        })
+        .collect()
+}
+
+/// Face normals smoothed for the cone test: `iterations` rounds of replacing each face's
+/// area-weighted normal by the sum over itself and its edge neighbours across edges that are
+/// not sharp creases (raw normals' cosine at least `crease_cos`), normalized: a scan's noise
+/// no longer splits a smooth patch, and a crease keeps both sides' normals apart.
+pub(crate) fn smoothed_normals(
+    mesh: &Mesh,
+    he: &HalfEdges,
+    iterations: usize,
+    crease_cos: f64,
+) -> Vec<Vector3<f64>> {
+    let raw = face_normals(mesh);
+    let mut n: Vec<Vector3<f64>> = (0..mesh.num_faces())
+        .map(|f| {
+            let [a, b, c] = mesh.face_positions(f);
+            let w = (b - a).cross(&(c - a));
+            if w.iter().all(|x| x.is_finite()) {
+                w
+            } else {
+                Vector3::zeros()
+            }
+        })
+        .collect();
+    let area: Vec<f64> = n.iter().map(|w| w.norm()).collect();
+    for _ in 0..iterations {
+        let unit: Vec<Vector3<f64>> = n
+            .iter()
+            .zip(&area)
+            .map(|(w, &a)| if w.norm() > 0.0 { w * (a / w.norm()) } else { *w })
+            .collect();
+        n = (0..mesh.num_faces() as u32)
+            .map(|f| {
+                let mut s = unit[f as usize];
+                for c in 0..3 {
+                    if let Some(t) = he.twin(3 * f + c) {
+                        let g = (t / 3) as usize;
+                        if raw[f as usize].dot(&raw[g]) >= crease_cos {
+                            s += unit[g];
+                        }
+                    }
+                }
+                s
+            })
+            .collect();
+    }
+    n.into_iter()
+        .map(|w| {
+            let l = w.norm();
+            if l > 0.0 && l.is_finite() {
+                w / l
             } else {
                 Vector3::zeros()
             }
@@ -160,7 +246,10 @@ pub(crate) fn pieces(
     out
 }
 
-/// Region growing on normal cones (see the module documentation), small pieces merged.
+/// Region growing on normal cones (see the module documentation) on smoothed normals
+/// (`smoothed_normals`): grown pieces, their borders smoothed (`smooth_labels`), split
+/// into edge-connected parts, and parts of fewer than [`MIN_PIECE`] faces merged into a
+/// neighbour.
 pub(crate) fn cone_pieces(
     region: &[u32],
     he: &HalfEdges,
@@ -169,39 +258,67 @@ pub(crate) fn cone_pieces(
     id: u32,
     cone_cos: f64,
 ) -> Vec<Vec<u32>> {
-    // piece[f] for faces of the region (index into `out`), via a map over the region.
-    let mut piece_of: std::collections::HashMap<u32, usize> =
-        std::collections::HashMap::with_capacity(region.len());
-    let mut out: Vec<Vec<u32>> = Vec::new();
+    // Index of each region face in `region`.
+    let local: std::collections::HashMap<u32, usize> =
+        region.iter().enumerate().map(|(i, &f)| (f, i)).collect();
+    // Edge neighbours of each region face inside the region (region indices).
+    let nbrs: Vec<Vec<usize>> = region
+        .iter()
+        .map(|&f| {
+            (0..3)
+                .filter_map(|c| he.twin(3 * f + c).map(|t| t / 3))
+                .filter(|&g| tag[g as usize] == id)
+                .filter_map(|g| local.get(&g).copied())
+                .collect()
+        })
+        .collect();
+    let mut label = vec![usize::MAX; region.len()];
     let mut queue = VecDeque::new();
-    for &f0 in region {
-        if piece_of.contains_key(&f0) {
+    let mut k = 0;
+    for i0 in 0..region.len() {
+        if label[i0] != usize::MAX {
             continue;
         }
-        let k = out.len();
-        let seed = normals[f0 as usize];
-        piece_of.insert(f0, k);
-        let mut piece = vec![f0];
-        queue.push_back(f0);
-        while let Some(f) = queue.pop_front() {
-            for c in 0..3 {
-                let Some(t) = he.twin(3 * f + c) else { continue };
-                let g = t / 3;
-                if tag[g as usize] == id
-                    && !piece_of.contains_key(&g)
-                    && normals[g as usize].dot(&seed) >= cone_cos
-                {
-                    piece_of.insert(g, k);
-                    piece.push(g);
-                    queue.push_back(g);
+        let seed = normals[region[i0] as usize];
+        label[i0] = k;
+        queue.push_back(i0);
+        while let Some(i) = queue.pop_front() {
+            for &j in &nbrs[i] {
+                if label[j] == usize::MAX && normals[region[j] as usize].dot(&seed) >= cone_cos {
+                    label[j] = k;
+                    queue.push_back(j);
                 }
             }
         }
-        out.push(piece);
+        k += 1;
     }
-    // Merge small pieces into the neighbour sharing most edges (in piece order; a piece that
-    // grew past MIN_PIECE by merges stays).
-    let n = out.len();
+    smooth_labels(&mut label, &nbrs, BORDER_SMOOTHING);
+    // Edge-connected parts of each label, numbered by first face.
+    let mut part = vec![usize::MAX; region.len()];
+    let mut parts: Vec<Vec<usize>> = Vec::new();
+    for i0 in 0..region.len() {
+        if part[i0] != usize::MAX {
+            continue;
+        }
+        let p = parts.len();
+        part[i0] = p;
+        let mut members = vec![i0];
+        queue.push_back(i0);
+        while let Some(i) = queue.pop_front() {
+            for &j in &nbrs[i] {
+                if part[j] == usize::MAX && label[j] == label[i0] {
+                    part[j] = p;
+                    members.push(j);
+                    queue.push_back(j);
+                }
+            }
+        }
+        parts.push(members);
+    }
+    // Merge small parts into the neighbour sharing most edges (in part order; a part that
+    // grew past the threshold by merges stays).
+    let min_piece = MIN_PIECE;
+    let n = parts.len();
     let mut target: Vec<usize> = (0..n).collect();
     let find = |target: &Vec<usize>, mut k: usize| {
         while target[k] != k {
@@ -209,36 +326,66 @@ pub(crate) fn cone_pieces(
         }
         k
     };
-    let mut size: Vec<usize> = out.iter().map(Vec::len).collect();
+    let mut size: Vec<usize> = parts.iter().map(Vec::len).collect();
     for k in 0..n {
-        if size[k] >= MIN_PIECE || find(&target, k) != k {
+        if size[k] >= min_piece || find(&target, k) != k {
             continue;
         }
         let mut counts: std::collections::BTreeMap<usize, usize> = Default::default();
-        for &f in &out[k] {
-            for c in 0..3 {
-                let Some(t) = he.twin(3 * f + c) else { continue };
-                let g = t / 3;
-                if tag[g as usize] != id {
-                    continue;
-                }
-                let p = find(&target, piece_of[&g]);
+        for &i in &parts[k] {
+            for &j in &nbrs[i] {
+                let p = find(&target, part[j]);
                 if p != k {
                     *counts.entry(p).or_default() += 1;
                 }
             }
         }
-        // Most shared edges; ties to the lower piece.
+        // Most shared edges; ties to the lower part.
         if let Some((&p, _)) = counts.iter().max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0))) {
             target[k] = p;
             size[p] += size[k];
         }
     }
     let mut merged: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for (k, piece) in out.into_iter().enumerate() {
-        merged[find(&target, k)].extend(piece);
+    for (k, members) in parts.into_iter().enumerate() {
+        merged[find(&target, k)].extend(members.into_iter().map(|i| region[i]));
     }
     merged.into_iter().filter(|p| !p.is_empty()).collect()
+}
+
+/// Smooths the borders between labelled pieces: `rounds` times, every face whose edge
+/// neighbours are in majority (two of three) in another piece moves to it (all faces decided
+/// from the previous round's labels, so the result does not depend on the order). Removes
+/// the one-face teeth and peninsulas that a noisy scan's normals leave on grown borders,
+/// which otherwise make flattened boundaries cross.
+pub(crate) fn smooth_labels(label: &mut [usize], nbrs: &[Vec<usize>], rounds: usize) {
+    for _ in 0..rounds {
+        let old = label.to_vec();
+        let mut changed = false;
+        for (i, ns) in nbrs.iter().enumerate() {
+            if ns.len() < 2 {
+                continue;
+            }
+            let (a, b) = (old[ns[0]], old[ns[1]]);
+            let c = ns.get(2).map(|&j| old[j]);
+            let major = if a == b || Some(a) == c {
+                Some(a)
+            } else if Some(b) == c {
+                Some(b)
+            } else {
+                None
+            };
+            if let Some(m) = major {
+                if m != old[i] {
+                    label[i] = m;
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
 }
 
 /// Breadth-first hop distance from `seeds` over the region; returns, for each face of the

@@ -168,6 +168,11 @@ pub(crate) fn invalid(chart: &ChartMesh, uv: &[Vector2<f64>]) -> Option<&'static
     if (0..n).any(|v| !on_boundary[v] && (angle_sum[v] - two_pi).abs() > 1e-6 * two_pi) {
         return Some("the UV angles around an interior vertex do not add up to 2π");
     }
+    // A boundary vertex whose fan turns through 2π or more wraps over itself (the boundary
+    // edges there share the vertex, so the crossing test below does not see it).
+    if (0..n).any(|v| on_boundary[v] && angle_sum[v] >= two_pi * (1.0 - 1e-9)) {
+        return Some("the UV angles at a boundary vertex reach 2π");
+    }
     if boundary_crosses(chart, uv) {
         return Some("the UV boundary crosses itself");
     }

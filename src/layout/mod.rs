@@ -2,8 +2,9 @@
 //!
 //! [`flatten`] cuts a mesh into charts and flattens each one (math.md, "Flattening"):
 //!
-//! 1. Every edge-connected piece of the mesh is tried as one chart. A chart must be a disk
-//!    ([`charts`]); it is flattened by LSCM ([`lscm`], conformal) and, with
+//! 1. Every edge-connected piece of the mesh is tried as one chart. A chart must be a disk,
+//!    or planar (a disk with holes) with its normals within about a hemisphere ([`charts`]);
+//!    it is flattened by LSCM ([`lscm`], conformal) and, with
 //!    [`Method::Arap`], refined by ARAP ([`arap`], local/global, started from LSCM). It is
 //!    kept when the flattening is valid (no flipped triangle, no boundary crossing,
 //!    [`distortion`]) and the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most
@@ -12,7 +13,10 @@
 //! 2. A piece that is not kept is cut: along its sharp creases first, then by region growing
 //!    on normal cones, then by bisection ([`charts`]); each piece is tried again. Single
 //!    triangles flatten exactly, so every mesh gets a layout.
-//! 3. The charts are scaled to their surface area, packed into [0, 1]² at one common scale
+//! 3. Small charts (at most [`MERGE_FRACTION`] of the faces) are merged into neighbours
+//!    while the union still flattens within the same bounds, smallest first, so a closed
+//!    scan ends up with a handful of charts.
+//! 4. The charts are scaled to their surface area, packed into [0, 1]² at one common scale
 //!    ([`pack`]) and reported: charts, seams, area and angle distortion, edge-length error.
 //!
 //! The result is deterministic: no step depends on the thread count.
@@ -162,6 +166,8 @@ pub struct Cuts {
     pub cones: usize,
     /// Regions bisected.
     pub bisections: usize,
+    /// Charts merged into a neighbour afterwards (their union flattened within the bounds).
+    pub merges: usize,
 }
 
 /// What [`flatten`] made, and its distortion.
@@ -216,7 +222,7 @@ struct Region {
     next_cut: u8,
 }
 
-/// Flattens one disk chart; `None` when the result is not valid or too stretched.
+/// Flattens one disk (or planar) chart; `None` when the result is not valid or too stretched.
 fn flatten_chart(
     chart: &ChartMesh,
     pos: &[Vector3<f64>],
@@ -251,6 +257,135 @@ fn flatten_chart(
     (stretch.p95 <= options.max_stretch).then_some(uv)
 }
 
+/// Area-weighted mean of the face normals, as a length in [0, 1]: 1 for a flat chart, about
+/// 0.5 for a hemisphere, near 0 for a closed surface.
+fn normal_spread(faces: &[u32], mesh: &Mesh) -> f64 {
+    let (mut sum, mut area) = (Vector3::zeros(), 0.0);
+    for &f in faces {
+        let [a, b, c] = mesh.face_positions(f as usize);
+        let w = (b - a).cross(&(c - a));
+        if w.iter().all(|x| x.is_finite()) {
+            sum += w;
+            area += w.norm();
+        }
+    }
+    if area > 0.0 {
+        sum.norm() / area
+    } else {
+        0.0
+    }
+}
+
+/// Whether a chart is worth flattening as it is: a disk, a single triangle, or a planar
+/// chart with holes whose normals stay within about a hemisphere (a closed part with a few
+/// holes is not tried: it cannot flatten within the stretch bound).
+fn worth_flattening(chart: &ChartMesh, mesh: &Mesh) -> bool {
+    chart.is_disk()
+        || chart.tris.len() == 1
+        || (chart.is_planar() && normal_spread(&chart.faces, mesh) >= PLANAR_MIN_SPREAD)
+}
+
+/// [`normal_spread`] a chart with holes needs before it is flattened as it is.
+const PLANAR_MIN_SPREAD: f64 = 0.5;
+
+/// Merges charts into neighbours while the union still flattens (valid, within the stretch
+/// bound): smallest charts first (those of at most `cap` faces), each tried against its
+/// neighbours in order of shared edges, passes repeated until none merges.
+#[allow(clippy::too_many_arguments)]
+fn merge_charts(
+    accepted: &mut Vec<(ChartMesh, Vec<Vector2<f64>>)>,
+    mesh: &Mesh,
+    he: &HalfEdges,
+    ctx: &mut MergeContext<'_>,
+    options: &LayoutOptions,
+    fallbacks: &mut usize,
+    iterations: &mut usize,
+    cap: usize,
+) -> usize {
+    let mut merges = 0;
+    let nf = mesh.num_faces();
+    let mut owner = vec![usize::MAX; nf];
+    for (k, (c, _)) in accepted.iter().enumerate() {
+        for &f in &c.faces {
+            owner[f as usize] = k;
+        }
+    }
+    let mut alive = vec![true; accepted.len()];
+    let mut tried: std::collections::HashSet<(usize, usize, usize, usize)> = Default::default();
+    for _pass in 0..8 {
+        let mut merged_any = false;
+        let mut order: Vec<usize> = (0..accepted.len()).filter(|&k| alive[k]).collect();
+        order.sort_by_key(|&k| (accepted[k].0.faces.len(), k));
+        for a in order {
+            if !alive[a] || accepted[a].0.faces.len() > cap {
+                continue;
+            }
+            let mut shared: std::collections::BTreeMap<usize, usize> = Default::default();
+            for &f in &accepted[a].0.faces {
+                for c in 0..3 {
+                    if let Some(t) = he.twin(3 * f + c) {
+                        let b = owner[(t / 3) as usize];
+                        if b != a && b != usize::MAX {
+                            *shared.entry(b).or_default() += 1;
+                        }
+                    }
+                }
+            }
+            let mut nb: Vec<(usize, usize)> = shared.into_iter().collect();
+            nb.sort_by(|x, y| y.1.cmp(&x.1).then(x.0.cmp(&y.0)));
+            for &(b, _) in nb.iter().take(3) {
+                let key = (a, accepted[a].0.faces.len(), b, accepted[b].0.faces.len());
+                if !tried.insert(key) {
+                    continue;
+                }
+                let mut faces = accepted[b].0.faces.clone();
+                faces.extend_from_slice(&accepted[a].0.faces);
+                let id = *ctx.next_id;
+                *ctx.next_id += 1;
+                for (i, &f) in faces.iter().enumerate() {
+                    ctx.tag[f as usize] = id;
+                    ctx.pos_in[f as usize] = i as u32;
+                }
+                let chart = ChartMesh::new(&faces, he, mesh, ctx.tag, ctx.pos_in, id);
+                if !worth_flattening(&chart, mesh) {
+                    continue;
+                }
+                let pos = chart.positions(mesh);
+                if let Some(uv) = flatten_chart(&chart, &pos, options, fallbacks, iterations) {
+                    for &f in &accepted[a].0.faces {
+                        owner[f as usize] = b;
+                    }
+                    accepted[b] = (chart, uv);
+                    alive[a] = false;
+                    merged_any = true;
+                    merges += 1;
+                    break;
+                }
+            }
+        }
+        if !merged_any {
+            break;
+        }
+    }
+    let mut k = 0;
+    accepted.retain(|_| {
+        k += 1;
+        alive[k - 1]
+    });
+    merges
+}
+
+/// The region bookkeeping of [`flatten`] that [`merge_charts`] shares.
+struct MergeContext<'a> {
+    tag: &'a mut Vec<u32>,
+    pos_in: &'a mut Vec<u32>,
+    next_id: &'a mut u32,
+}
+
+/// Charts of at most this fraction of the mesh's faces are merged into neighbours (the
+/// larger ones only receive).
+pub const MERGE_FRACTION: f64 = 0.05;
+
 /// Makes a UV layout for `mesh` (see the module documentation).
 ///
 /// ```
@@ -278,6 +413,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     let he = HalfEdges::new(mesh.num_vertices(), &mesh.faces)?;
     let normals = charts::face_normals(mesh);
     let crease_cos = options.crease_angle_deg.to_radians().cos();
+    let smooth = charts::smoothed_normals(mesh, &he, charts::NORMAL_SMOOTHING, crease_cos);
     let cone_cos = options.cone_angle_deg.to_radians().cos();
     let mut tag = vec![u32::MAX; nf];
     let mut pos_in = vec![0u32; nf];
@@ -302,7 +438,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
             pos_in[f as usize] = i as u32;
         }
         let chart = ChartMesh::new(&region.faces, &he, mesh, &tag, &pos_in, id);
-        if chart.is_disk() || chart.tris.len() == 1 {
+        if worth_flattening(&chart, mesh) {
             let pos = chart.positions(mesh);
             if let Some(uv) = flatten_chart(&chart, &pos, options, &mut fallbacks, &mut iterations)
             {
@@ -330,7 +466,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
             }
         }
         if pieces.len() <= 1 && cut == 1 {
-            pieces = charts::cone_pieces(&region.faces, &he, &normals, &tag, id, cone_cos);
+            pieces = charts::cone_pieces(&region.faces, &he, &smooth, &tag, id, cone_cos);
             cut = 2;
             if pieces.len() > 1 {
                 cuts.cones += 1;
@@ -344,6 +480,19 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
         queue.extend(pieces.into_iter().map(|faces| Region { faces, next_cut: cut }));
     }
 
+    // Merge small charts into their neighbours while the unions flatten.
+    let cap = (MERGE_FRACTION * nf as f64) as usize;
+    let mut ctx = MergeContext { tag: &mut tag, pos_in: &mut pos_in, next_id: &mut next_id };
+    cuts.merges = merge_charts(
+        &mut accepted,
+        mesh,
+        &he,
+        &mut ctx,
+        options,
+        &mut fallbacks,
+        &mut iterations,
+        cap,
+    );
     // Pack at one scale, then measure.
     let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
     let factor = pack::pack(&mut uvs, options.gap);

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use nalgebra::Vector2;
 use serde::Serialize;
 
 use super::load::LoadedMesh;
@@ -51,6 +52,122 @@ pub struct UvReport {
     pub faces_against_chart: usize,
     /// Charts whose majority of faces is flipped.
     pub mirrored_charts: Vec<MirroredChart>,
+    /// Number of mirrored charts (= `mirrored_charts.len()`; added after 0.2.0).
+    pub mirrored_chart_count: usize,
+    /// Charts with at least one flipped face (mirrored or not; added after 0.2.0).
+    pub charts_with_flipped_faces: usize,
+    /// Pairs of charts `[a, b]`, `a < b`, whose UV triangles share interior points, ascending
+    /// (at most [`MAX_LISTED_OVERLAPS`] listed; added after 0.2.0).
+    pub overlapping_charts: Vec<[usize; 2]>,
+    /// Number of overlapping chart pairs (all of them, also beyond the listed ones).
+    pub overlapping_chart_pairs: usize,
+}
+
+/// At most this many overlapping chart pairs are listed in [`UvReport::overlapping_charts`].
+pub const MAX_LISTED_OVERLAPS: usize = 100;
+
+/// Do the open UV triangles `a` and `b` share points? The separating-axis test on the six edge
+/// normals: disjoint iff some axis separates the projections; projections that only touch
+/// (overlap ≤ `eps`) count as separated, so charts packed edge to edge do not overlap.
+fn triangles_overlap(a: &[Vector2<f64>; 3], b: &[Vector2<f64>; 3], eps: f64) -> bool {
+    for (t, o) in [(a, b), (b, a)] {
+        for i in 0..3 {
+            let e = t[(i + 1) % 3] - t[i];
+            let n = Vector2::new(-e.y, e.x);
+            let len = n.norm();
+            if len == 0.0 {
+                continue;
+            }
+            let n = n / len;
+            let (mut lo1, mut hi1, mut lo2, mut hi2) =
+                (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+            for k in 0..3 {
+                let p = n.dot(&t[k]);
+                let q = n.dot(&o[k]);
+                (lo1, hi1, lo2, hi2) = (lo1.min(p), hi1.max(p), lo2.min(q), hi2.max(q));
+            }
+            if hi1.min(hi2) - lo1.max(lo2) <= eps {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Chart pairs whose UV triangles overlap (share interior points), ascending, found through a
+/// uniform grid over the UV bounding box (about one face per cell). Zero-area and non-finite
+/// UV faces are skipped.
+pub fn overlapping_chart_pairs(
+    uv: &super::CornerAttribute<Vector2<f64>>,
+    charts: &UvCharts,
+) -> Vec<[usize; 2]> {
+    use std::collections::BTreeSet;
+    let nf = uv.corners.len();
+    if charts.charts().len() < 2 || nf == 0 {
+        return Vec::new();
+    }
+    let faces: Vec<usize> = (0..nf)
+        .filter(|&f| {
+            let t = uv.face(f);
+            t.iter().all(|p| p.x.is_finite() && p.y.is_finite())
+                && charts.signed_area(super::FaceId(f as u32)) != 0.0
+        })
+        .collect();
+    let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
+    for &f in &faces {
+        for p in uv.face(f) {
+            lo = lo.inf(&p);
+            hi = hi.sup(&p);
+        }
+    }
+    if faces.is_empty() {
+        return Vec::new();
+    }
+    let size = hi - lo;
+    let eps = 1e-9 * size.norm();
+    // About one face per cell, at most 2048 cells a side.
+    let n = ((faces.len() as f64).sqrt().ceil() as usize).clamp(1, 2048);
+    let cell = |x: f64, lo: f64, w: f64| -> usize {
+        if w <= 0.0 {
+            0
+        } else {
+            (((x - lo) / w * n as f64) as usize).min(n - 1)
+        }
+    };
+    let range = |t: &[Vector2<f64>; 3]| {
+        let (a, b) = (t[0].inf(&t[1]).inf(&t[2]), t[0].sup(&t[1]).sup(&t[2]));
+        (
+            cell(a.x, lo.x, size.x)..=cell(b.x, lo.x, size.x),
+            cell(a.y, lo.y, size.y)..=cell(b.y, lo.y, size.y),
+        )
+    };
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); n * n];
+    for &f in &faces {
+        let (xs, ys) = range(&uv.face(f));
+        for y in ys {
+            for x in xs.clone() {
+                bins[y * n + x].push(f as u32);
+            }
+        }
+    }
+    let mut pairs = BTreeSet::new();
+    for bin in &bins {
+        for (i, &f) in bin.iter().enumerate() {
+            let cf = charts.chart_of(super::FaceId(f));
+            let tf = uv.face(f as usize);
+            for &g in &bin[i + 1..] {
+                let cg = charts.chart_of(super::FaceId(g));
+                let key = [cf.min(cg), cf.max(cg)];
+                if cf == cg || pairs.contains(&key) {
+                    continue;
+                }
+                if triangles_overlap(&tf, &uv.face(g as usize), eps) {
+                    pairs.insert(key);
+                }
+            }
+        }
+    }
+    pairs.into_iter().collect()
 }
 
 /// A mirrored chart.
@@ -213,7 +330,15 @@ impl InspectReport {
                 BoundaryLoop { edges: vs.len(), length, first_vertex }
             })
             .collect();
+        let overlaps = match (uv, mesh.uv.as_ref()) {
+            (Some(c), Some(corners)) => overlapping_chart_pairs(corners, c),
+            _ => Vec::new(),
+        };
         let uv = uv.map(|c| UvReport {
+            mirrored_chart_count: c.charts().iter().filter(|ch| ch.mirrored).count(),
+            charts_with_flipped_faces: c.charts().iter().filter(|ch| ch.flipped > 0).count(),
+            overlapping_chart_pairs: overlaps.len(),
+            overlapping_charts: overlaps.iter().take(MAX_LISTED_OVERLAPS).copied().collect(),
             charts: c.charts().len(),
             seam_edges: c.num_seam_edges(),
             flipped_faces: c.num_flipped_faces(),

@@ -278,7 +278,8 @@ fn bench_annulus() {
 /// with `c = 2/3` (stretched 3:1 towards one corner, sheared), so spacing is measured on
 /// the lift. Tracing + spacing (gap filling included; `BENCH_NO_FILL=1` leaves it out) is
 /// timed `BENCH_RUNS` times (default 3), then compared with the isometric layout of the same
-/// lift; `BENCH_COVERAGE=1` also measures coverage.
+/// lift; `BENCH_COVERAGE=1` also measures coverage, `BENCH_WARPED_ONLY=1` skips the
+/// isometric layout. Each run's strokes are hashed (bit for bit) and the hash printed.
 fn bench_warped() {
     let n = 707;
     let cells = 40.0;
@@ -291,7 +292,9 @@ fn bench_warped() {
     let nf = tris.len();
     let pos: Vec<Vec3> = xy.iter().map(|p| [p[0], p[1], 0.0]).collect();
     let nrm = vec![[0.0, 0.0, 1.0]; pos.len()];
-    for warped in [true, false] {
+    let layouts: &[bool] =
+        if std::env::var_os("BENCH_WARPED_ONLY").is_some() { &[true] } else { &[true, false] };
+    for &warped in layouts {
         let (uv, dirs): (Vec<Vec2>, Vec<Vec2>) = xy
             .iter()
             .map(|p| {
@@ -316,12 +319,15 @@ fn bench_warped() {
         let fill_gaps = std::env::var_os("BENCH_NO_FILL").is_none();
         let opts = PlacementOptions { fill_gaps, ..PlacementOptions::new(d_sep, 0.0) };
         let (mut wall, mut cpus) = (Vec::new(), Vec::new());
-        let mut last = None;
+        let mut last: Option<Placement> = None;
         for _ in 0..runs.max(1) {
             let (t, c) = (Instant::now(), cpu());
             let pl = place_strokes(&dom, &opts).unwrap();
             wall.push(secs(t));
             cpus.push(cpu() - c);
+            if let Some(prev) = &last {
+                assert_eq!(strokes_hash(prev), strokes_hash(&pl), "placement is not deterministic");
+            }
             last = Some(pl);
         }
         let pl = last.unwrap();
@@ -331,11 +337,12 @@ fn bench_warped() {
         println!(
             "{label}: {nf} triangles (lift, spacing on the part), Domain::new {t_dom:.3} s; tracing + \
              spacing x{runs}: wall min/median/max {w0:.3}/{w1:.3}/{w2:.3} s, CPU {c0:.2}/{c1:.2}/{c2:.2} s \
-             -> {} strokes ({} fill, {} dropped short), {:.0} mm",
+             -> {} strokes ({} fill, {} dropped short), {:.0} mm, hash {:016x}",
             pl.strokes.len(),
             pl.fill_strokes,
             pl.dropped_short,
             pl.strokes.iter().map(|s| s.length).sum::<f64>(),
+            strokes_hash(&pl),
         );
         if std::env::var_os("BENCH_COVERAGE").is_some() {
             let cov = coverage(
@@ -351,6 +358,26 @@ fn bench_warped() {
             );
         }
     }
+}
+
+/// FNV-1a over the bits of every stroke point and length, in order: equal hashes mean
+/// bit-identical placements (to compare builds before and after a speed-up).
+fn strokes_hash(pl: &Placement) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |x: u64| {
+        for b in x.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x100_0000_01b3);
+        }
+    };
+    for s in &pl.strokes {
+        eat(s.uv.len() as u64);
+        for p in &s.uv {
+            eat(p[0].to_bits());
+            eat(p[1].to_bits());
+        }
+        eat(s.length.to_bits());
+    }
+    h
 }
 
 fn main() {

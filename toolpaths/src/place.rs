@@ -247,6 +247,11 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         for j in 0..ny {
             for i in 0..nx {
                 let p = [b[0][0] + (i as f64 + 0.5) * pitch, b[0][1] + (j as f64 + 0.5) * pitch];
+                // No face's box meets the grid cell of `p`: outside the domain. (Skips the
+                // walk, which from a hint far along the row would cross the chart first.)
+                if dom.grid.faces_near(p).is_empty() {
+                    continue;
+                }
                 let located = match hint {
                     Some(h) => match walk(dom, h, dom_centroid(dom, h), p) {
                         Walk::Inside { face, .. } => Some(face),

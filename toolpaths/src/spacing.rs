@@ -247,14 +247,16 @@ impl StrokeIndex {
     fn sample_distance(&self, q: &Probe, i: usize, r: f64) -> f64 {
         if self.lift {
             let y = self.pos[i];
+            let c = norm3(sub3(y, q.x));
+            // A far sample is far either way (its chord, or infinity on another sheet, are
+            // both ≥ r): the normal test below is needed only for near ones.
+            if c >= r + self.max_seg {
+                return c;
+            }
             let ny = self.nrm[i];
             // (Zero normals — a degenerate corner or given zero vectors — filter nothing.)
             if dot3(ny, q.n) < NORMAL_MIN && dot3(ny, ny) > 0.5 && dot3(q.n, q.n) > 0.5 {
                 return f64::INFINITY;
-            }
-            let c = norm3(sub3(y, q.x));
-            if c >= r + self.max_seg {
-                return c;
             }
             let mut best = y;
             let mut bc = c;
