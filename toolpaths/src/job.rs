@@ -55,6 +55,8 @@ pub struct JobOutput {
     /// Each stroke lifted onto the part (3D points, one per UV point), when the field mesh
     /// has a lift; empty otherwise. Seam jumps are not marked.
     pub strokes_3d: Vec<Vec<crate::geom::Vec3>>,
+    /// The validated domain the strokes were traced on (for [`crate::check_strokes`]).
+    pub domain: std::sync::Arc<Domain>,
 }
 
 fn timed<T>(t: &mut Vec<PhaseTime>, phase: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
@@ -148,5 +150,6 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
         strokes_json: json,
         report,
         strokes_3d,
+        domain: std::sync::Arc::new(dom),
     })
 }
