@@ -29,6 +29,27 @@ pub struct Splay {
     pub weight: f64,
 }
 
+/// The turning-radius hinge inside the triangles (`solve::face_hinge`, issue 17): bounds the
+/// curvature of the streamlines of the field as the stroke tracer interpolates it, at four
+/// quadrature points per triangle, by R/(1 − margin). Needs `turning_radius`; the vertex hinge
+/// stays.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleTurning {
+    /// Fraction in [0, 0.5) by which the triangles are held tighter than the turning radius
+    /// (default 0.05: the interpolated field is bounded by R/0.95, so that strokes traced from
+    /// it keep above R with the tracer's and the sampling's errors).
+    #[serde(default = "default_margin")]
+    pub margin: f64,
+    /// Hinge weight (> 0, dimensionless; default: the turning radius's weight).
+    #[serde(default)]
+    pub weight: Option<f64>,
+}
+
+fn default_margin() -> f64 {
+    0.05
+}
+
 fn default_constraint_weight() -> f64 {
     10.0
 }
@@ -39,6 +60,9 @@ fn default_constraint_weight() -> f64 {
 pub struct Constraints {
     /// Minimum tool turning radius (default: none).
     pub turning_radius: Option<TurningRadius>,
+    /// The turning radius also inside the triangles, as the tracer interpolates the field
+    /// (default: none, vertices only). Only with `turning_radius`.
+    pub turning_in_triangles: Option<TriangleTurning>,
     /// Bounded splay (default: none).
     pub splay: Option<Splay>,
     /// Locked directions (default: none).
@@ -52,6 +76,7 @@ impl Default for Constraints {
     fn default() -> Self {
         Constraints {
             turning_radius: None,
+            turning_in_triangles: None,
             splay: None,
             locks: Vec::new(),
             conflict_tolerance: 0.01,
@@ -176,6 +201,21 @@ impl SolverSettings {
         if let Some(t) = &c.turning_radius {
             check("constraints.turning_radius.radius", t.radius, t.radius > 0.0, "> 0")?;
             check("constraints.turning_radius.weight", t.weight, t.weight > 0.0, "> 0")?;
+        }
+        if let Some(t) = &c.turning_in_triangles {
+            let key = "constraints.turning_in_triangles";
+            if c.turning_radius.is_none() {
+                return Err(Error::setting(key, "needs constraints.turning_radius"));
+            }
+            check(
+                &format!("{key}.margin"),
+                t.margin,
+                (0.0..0.5).contains(&t.margin),
+                "in [0, 0.5)",
+            )?;
+            if let Some(w) = t.weight {
+                check(&format!("{key}.weight"), w, w > 0.0, "> 0")?;
+            }
         }
         if let Some(s) = &c.splay {
             check("constraints.splay.max", s.max, s.max > 0.0, "> 0")?;

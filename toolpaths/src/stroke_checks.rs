@@ -29,7 +29,7 @@
 //! **Spread rate.** At each sample the nearest point of every *other* stroke on the left and
 //! on the right (in the tangent plane, `w = n × t`) within `neighbour_radius` is found (a
 //! segment's foot; a foot at a neighbour's end, or an offset more than 45° off `w`, does not
-//! count). Where two consecutive samples see the same neighbour on one side at distances
+//! count, nor does one within `trim` of the neighbour's open ends). Where two consecutive samples see the same neighbour on one side at distances
 //! `δ₀`, `δ₁`, arc lengths `s₀`, `s₁` apart,
 //!
 //! ```text
@@ -42,8 +42,8 @@
 //! **Locks.** A [`LockProbe`] lists field-mesh vertices with the lock's direction at each. A
 //! sample lies in the locked region when all three corners of its face are locked by the
 //! probe; its target is the barycentric blend of the corners' directions (sign-aligned), and
-//! its deviation is the angle, modulo 180°, between the stroke's tangent `P(c − a)` and the
-//! target projected into the tangent plane.
+//! its deviation is the angle, modulo 180°, between the stroke's tangent (the chord between the
+//! vertices next to `b`, projected) and the target projected into the tangent plane.
 
 use std::collections::HashMap;
 
@@ -509,6 +509,7 @@ impl SegmentGrid {
 /// The nearest neighbour of one side: (stroke, distance).
 type Side = Option<(u32, f64)>;
 
+#[allow(clippy::too_many_arguments)]
 fn neighbours(
     grid: &SegmentGrid,
     strokes: &[Lifted],
@@ -517,6 +518,7 @@ fn neighbours(
     n: Vec3,
     t: Vec3,
     radius: f64,
+    trim: f64,
 ) -> [Side; 2] {
     let w = cross3(n, t);
     let k = grid.key(p);
@@ -552,8 +554,10 @@ fn neighbours(
                     if side_dot.abs() < std::f64::consts::FRAC_1_SQRT_2 * d {
                         continue;
                     }
-                    let at_end = (tt <= 0.0 && i == 0)
-                        || (tt >= 1.0 && i as usize + 2 == l.x.len() && !l.closed);
+                    // A foot within `trim` of the neighbour's open ends does not count (the
+                    // ends are left out of the neighbour's own figures too).
+                    let s_foot = l.s[i as usize] + tt * l2.sqrt();
+                    let at_end = !l.closed && (s_foot <= trim || s_foot >= l.len() - trim);
                     let side = usize::from(side_dot < 0.0);
                     let cand = (d, si, i, at_end);
                     let better = match best[side] {
@@ -682,7 +686,7 @@ pub fn check_strokes(
                 let l = &strokes[c.stroke];
                 let n = l.n[c.b];
                 match unit(proj(n, sub3(l.x[c.c], l.x[c.a]))) {
-                    Some(t) => neighbours(&grid, &strokes, c.stroke, l.x[c.b], n, t, radius),
+                    Some(t) => neighbours(&grid, &strokes, c.stroke, l.x[c.b], n, t, radius, trim),
                     None => [None, None],
                 }
             })
@@ -755,7 +759,15 @@ pub fn check_strokes(
                 continue;
             };
             let n = l.n[c.b];
-            let Some(tan) = unit(proj(n, sub3(l.x[c.c], l.x[c.a]))) else { continue };
+            // The local tangent: the chord between the sample's adjacent vertices (the step's
+            // chord would reach outside the region).
+            let last = l.x.len() - 1;
+            let (prev, next) = if l.closed {
+                (if c.b == 0 { last - 1 } else { c.b - 1 }, c.b + 1)
+            } else {
+                (c.b.saturating_sub(1), (c.b + 1).min(last))
+            };
+            let Some(tan) = unit(proj(n, sub3(l.x[next], l.x[prev]))) else { continue };
             let mut target = [0.0; 3];
             for (i, d) in ds.iter().enumerate() {
                 let mut d = if dom.has_lift() { *d } else { [d[0], d[1], 0.0] };

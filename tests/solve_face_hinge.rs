@@ -1,0 +1,133 @@
+//! The turning hinge inside the triangles (`solve::face_hinge`, issue 17): its curvature (F1)
+//! against the known streamline curvature of circles, and its Jacobian (F3) against central
+//! differences; and a solve with it on a bent start.
+
+use grainline::generate::{self, Grid, GridPattern};
+use grainline::geometry::{Geometry, GeometryOptions};
+use grainline::highlight::Symmetry;
+use grainline::solve::face_hinge::{FaceTurningHinge, QUADRATURE};
+use nalgebra::Vector3;
+
+/// Angles in each vertex's frame of the tangent field `u(p)` (projected).
+fn angles(
+    g: &Geometry,
+    pos: &[Vector3<f64>],
+    u: impl Fn(&Vector3<f64>) -> Vector3<f64>,
+) -> Vec<f64> {
+    g.frames
+        .iter()
+        .zip(pos)
+        .map(|(f, p)| {
+            let d = u(p);
+            f.b.dot(&d).atan2(f.t.dot(&d))
+        })
+        .collect()
+}
+
+/// Barycentric coordinates of `x` in the triangle `p` (in the xy plane).
+fn bary(p: [Vector3<f64>; 3], x: Vector3<f64>) -> [f64; 3] {
+    let cr = |a: Vector3<f64>, b: Vector3<f64>| a.x * b.y - a.y * b.x;
+    let area = cr(p[1] - p[0], p[2] - p[0]);
+    let l0 = cr(p[1] - x, p[2] - x) / area;
+    let l1 = cr(p[2] - x, p[0] - x) / area;
+    [l0, l1, 1.0 - l0 - l1]
+}
+
+/// Circles about c on a flat square. (a) F1 against this file's own finite differences of
+/// the tracer's field — the blend of the corners' unit directions, normalized — along itself:
+/// κ = u × (u(x + εu) − u(x − εu))/2ε. (b) The known streamline curvature 1/ρ: the blend's
+/// gradient is first-order accurate, so κρ − 1 is O(h/ρ) (here within 1.2 h/ρ for ρ ≥ 4).
+#[test]
+fn curvature_of_circles_is_one_over_the_radius() {
+    let mesh = generate::plane(20.0, Grid::new(80, 80));
+    let h = 0.5;
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let c = Vector3::new(0.31, -0.17, 0.0);
+    let circle = |p: &Vector3<f64>| Vector3::new(-(p.y - c.y), p.x - c.x, 0.0);
+    let phi = angles(&g, &mesh.positions, circle);
+    let u: Vec<Vector3<f64>> = g.frames.iter().zip(&phi).map(|(f, &a)| f.direction(a)).collect();
+    for sym in [Symmetry::Oriented, Symmetry::Line] {
+        let hinge = FaceTurningHinge {
+            geometry: &g,
+            symmetry: sym,
+            faces: FaceTurningHinge::frames(&mesh),
+            radius: 1.0,
+            weight: 1.0,
+        };
+        let mut n = 0;
+        for (f, frame) in hinge.faces.iter().enumerate() {
+            let p = frame.corners.map(|v| mesh.positions[v as usize]);
+            let uc = frame.corners.map(|v| u[v as usize]);
+            let field = |x: Vector3<f64>| {
+                let l = bary(p, x);
+                (uc[0] * l[0] + uc[1] * l[1] + uc[2] * l[2]).normalize()
+            };
+            for (q, l) in QUADRATURE.iter().enumerate() {
+                let x = p[0] * l[0] + p[1] * l[1] + p[2] * l[2];
+                let rho = (x - c).norm();
+                if rho < 4.0 {
+                    continue;
+                }
+                let k = hinge.curvature(&phi, f, q).expect("no cancelling blend");
+                let t = field(x);
+                let eps = 1e-5;
+                let dt = (field(x + t * eps) - field(x - t * eps)) / (2.0 * eps);
+                let k_fd = t.x * dt.y - t.y * dt.x;
+                assert!((k.abs() - k_fd.abs()).abs() < 1e-6 * k_fd.abs(), "{k} vs {k_fd}");
+                let e = (k.abs() * rho - 1.0).abs();
+                assert!(e < 1.2 * h / rho, "{sym:?}: κρ = {} at ρ {rho}", k.abs() * rho);
+                n += 1;
+            }
+        }
+        assert!(n > 10_000);
+    }
+}
+
+#[test]
+fn jacobian_matches_central_differences() {
+    let mesh = generate::quadric_patch(
+        [0.9, 0.3, -0.6],
+        1.0,
+        Grid { pattern: GridPattern::Jittered { amount: 0.2, seed: 4 }, ..Grid::new(9, 9) },
+    );
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let phi: Vec<f64> = mesh
+        .positions
+        .iter()
+        .map(|p| 0.9 * p.x - 0.6 * p.y + 0.5 * (2.0 * p.x * p.y).sin())
+        .collect();
+    for sym in [Symmetry::Oriented, Symmetry::Line] {
+        let hinge = FaceTurningHinge {
+            geometry: &g,
+            symmetry: sym,
+            faces: FaceTurningHinge::frames(&mesh),
+            radius: 2.0,
+            weight: 3.0,
+        };
+        let mut active = 0;
+        let mut entries = Vec::new();
+        for row in 0..hinge.rows() {
+            let r = hinge.jacobian(&phi, row, &mut entries);
+            assert_eq!(r, hinge.residual(&phi, row));
+            assert_eq!(entries.len(), 3);
+            if r > 0.0 {
+                active += 1;
+            }
+            let row_max = entries.iter().fold(0.0f64, |a, e| a.max(e.1.abs()));
+            for &(j, d) in &entries {
+                let step = 1e-6;
+                let (mut p1, mut p2) = (phi.clone(), phi.clone());
+                p1[j as usize] += step;
+                p2[j as usize] -= step;
+                let (r1, r2) = (hinge.residual(&p1, row), hinge.residual(&p2, row));
+                if (r1 > 0.0) != (r2 > 0.0) || (r1 > 0.0) != (r > 0.0) {
+                    continue; // at the hinge's kink
+                }
+                let fd = (r1 - r2) / (2.0 * step);
+                let err = (fd - d).abs() / row_max.max(1e-9);
+                assert!(err < 1e-5, "{sym:?} row {row} col {j}: analytic {d} vs fd {fd}");
+            }
+        }
+        assert!(active > hinge.rows() / 10, "{active} of {} rows active", hinge.rows());
+    }
+}
