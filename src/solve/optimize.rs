@@ -218,12 +218,13 @@ pub fn optimize(
             .as_ref()
             .map(|t| HingeOptions { bound: 1.0 / t.radius, weight: t.weight }),
         splay: c.splay.as_ref().map(|s| HingeOptions { bound: s.max, weight: s.weight }),
-        turning_faces: c.turning_radius.as_ref().zip(c.turning_in_triangles.as_ref()).map(
-            |(t, f)| HingeOptions {
+        turning_faces: c.turning_radius.as_ref().and_then(|t| {
+            let f = c.turning_in_triangles.clone().unwrap_or_default();
+            f.enabled.then(|| HingeOptions {
                 bound: (1.0 - f.margin) / t.radius,
                 weight: f.weight.unwrap_or(t.weight),
-            },
-        ),
+            })
+        }),
         soft_locks: locks.soft.clone(),
         interleaved_smoothing: settings.smoothing_pass(),
         linear_solver: LinearSolver::Auto,

@@ -32,10 +32,14 @@ pub struct Splay {
 /// The turning-radius hinge inside the triangles (`solve::face_hinge`, issue 17): bounds the
 /// curvature of the streamlines of the field as the stroke tracer interpolates it, at four
 /// quadrature points per triangle, by R/(1 − margin). Needs `turning_radius`; the vertex hinge
-/// stays.
+/// stays. On by default with a turning radius.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TriangleTurning {
+    /// Whether the triangle term runs (default true; `false` keeps the vertex hinge alone, as
+    /// before issue 17).
+    #[serde(default = "default_true")]
+    pub enabled: bool,
     /// Fraction in [0, 0.5) by which the triangles are held tighter than the turning radius
     /// (default 0.05: the interpolated field is bounded by R/0.95, so that strokes traced from
     /// it keep above R with the tracer's and the sampling's errors).
@@ -50,6 +54,16 @@ fn default_margin() -> f64 {
     0.05
 }
 
+fn default_true() -> bool {
+    true
+}
+
+impl Default for TriangleTurning {
+    fn default() -> Self {
+        TriangleTurning { enabled: true, margin: default_margin(), weight: None }
+    }
+}
+
 fn default_constraint_weight() -> f64 {
     10.0
 }
@@ -61,7 +75,8 @@ pub struct Constraints {
     /// Minimum tool turning radius (default: none).
     pub turning_radius: Option<TurningRadius>,
     /// The turning radius also inside the triangles, as the tracer interpolates the field
-    /// (default: none, vertices only). Only with `turning_radius`.
+    /// (default: on with margin 0.05 whenever `turning_radius` is given; `{"enabled": false}`
+    /// keeps the vertex hinge alone). Only with `turning_radius`.
     pub turning_in_triangles: Option<TriangleTurning>,
     /// Bounded splay (default: none).
     pub splay: Option<Splay>,
