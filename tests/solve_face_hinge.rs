@@ -6,6 +6,7 @@ use grainline::generate::{self, Grid, GridPattern};
 use grainline::geometry::{Geometry, GeometryOptions};
 use grainline::highlight::Symmetry;
 use grainline::solve::face_hinge::{FaceTurningHinge, QUADRATURE};
+use grainline::solve::HingeKind;
 use nalgebra::Vector3;
 
 /// Angles in each vertex's frame of the tangent field `u(p)` (projected).
@@ -51,6 +52,7 @@ fn curvature_of_circles_is_one_over_the_radius() {
             geometry: &g,
             symmetry: sym,
             faces: FaceTurningHinge::frames(&mesh),
+            kind: HingeKind::Turning,
             radius: 1.0,
             weight: 1.0,
         };
@@ -83,6 +85,51 @@ fn curvature_of_circles_is_one_over_the_radius() {
     }
 }
 
+/// Rays from c on a flat square: div(u) = 1/ρ. F4 against this file's own central
+/// differences of the normalized blend (∂uₓ/∂x + ∂u_y/∂y), and against 1/ρ to O(h/ρ).
+#[test]
+fn divergence_of_rays_is_one_over_the_radius() {
+    let mesh = generate::plane(20.0, Grid::new(80, 80));
+    let h = 0.5;
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let c = Vector3::new(0.31, -0.17, 0.0);
+    let phi = angles(&g, &mesh.positions, |p| p - c);
+    let u: Vec<Vector3<f64>> = g.frames.iter().zip(&phi).map(|(f, &a)| f.direction(a)).collect();
+    let hinge = FaceTurningHinge {
+        geometry: &g,
+        symmetry: Symmetry::Line,
+        faces: FaceTurningHinge::frames(&mesh),
+        kind: HingeKind::Splay,
+        radius: 1.0,
+        weight: 1.0,
+    };
+    let mut n = 0;
+    for (f, frame) in hinge.faces.iter().enumerate() {
+        let p = frame.corners.map(|v| mesh.positions[v as usize]);
+        let uc = frame.corners.map(|v| u[v as usize]);
+        let field = |x: Vector3<f64>| {
+            let l = bary(p, x);
+            (uc[0] * l[0] + uc[1] * l[1] + uc[2] * l[2]).normalize()
+        };
+        for (q, l) in QUADRATURE.iter().enumerate() {
+            let x = p[0] * l[0] + p[1] * l[1] + p[2] * l[2];
+            let rho = (x - c).norm();
+            if rho < 4.0 {
+                continue;
+            }
+            let sigma = hinge.curvature(&phi, f, q).expect("no cancelling blend");
+            let eps = 1e-5;
+            let (ex, ey) = (Vector3::new(eps, 0.0, 0.0), Vector3::new(0.0, eps, 0.0));
+            let div = (field(x + ex).x - field(x - ex).x + field(x + ey).y - field(x - ey).y)
+                / (2.0 * eps);
+            assert!((sigma.abs() - div.abs()).abs() < 1e-6 * div.abs(), "{sigma} vs {div}");
+            assert!((sigma.abs() * rho - 1.0).abs() < 1.2 * h / rho, "σρ = {}", sigma * rho);
+            n += 1;
+        }
+    }
+    assert!(n > 10_000);
+}
+
 #[test]
 fn jacobian_matches_central_differences() {
     let mesh = generate::quadric_patch(
@@ -96,11 +143,17 @@ fn jacobian_matches_central_differences() {
         .iter()
         .map(|p| 0.9 * p.x - 0.6 * p.y + 0.5 * (2.0 * p.x * p.y).sin())
         .collect();
-    for sym in [Symmetry::Oriented, Symmetry::Line] {
+    for (sym, kind) in [
+        (Symmetry::Oriented, HingeKind::Turning),
+        (Symmetry::Line, HingeKind::Turning),
+        (Symmetry::Oriented, HingeKind::Splay),
+        (Symmetry::Line, HingeKind::Splay),
+    ] {
         let hinge = FaceTurningHinge {
             geometry: &g,
             symmetry: sym,
             faces: FaceTurningHinge::frames(&mesh),
+            kind,
             radius: 2.0,
             weight: 3.0,
         };
@@ -125,10 +178,10 @@ fn jacobian_matches_central_differences() {
                 }
                 let fd = (r1 - r2) / (2.0 * step);
                 let err = (fd - d).abs() / row_max.max(1e-9);
-                assert!(err < 1e-5, "{sym:?} row {row} col {j}: analytic {d} vs fd {fd}");
+                assert!(err < 1e-5, "{sym:?} {kind:?} row {row} col {j}: analytic {d} vs fd {fd}");
             }
         }
-        assert!(active > hinge.rows() / 10, "{active} of {} rows active", hinge.rows());
+        assert!(active > hinge.rows() / 10, "{kind:?}: {active} of {} rows active", hinge.rows());
     }
 }
 
@@ -173,7 +226,7 @@ fn blend_max_ratio(mesh: &grainline::mesh::Mesh, g: &Geometry, phi: &[f64], radi
 fn the_triangle_term_bounds_the_field_the_tracer_sees() {
     use grainline::geometry::GradientForm;
     use grainline::solve::{optimize, Constraints, HighlightTerm, SolverSettings};
-    use grainline::solve::{TriangleTurning, TurningRadius};
+    use grainline::solve::{TriangleTerm, TurningRadius};
     let mesh = generate::plane(1.0, Grid::new(24, 24));
     let g = Geometry::compute(&mesh, &GeometryOptions::default());
     let phi: Vec<f64> = mesh
@@ -185,7 +238,7 @@ fn the_triangle_term_bounds_the_field_the_tracer_sees() {
     let h = vec![Vector3::new(0.3, 0.4, 1.0).normalize(); phi.len()];
     let radius = 1.0;
     assert!(blend_max_ratio(&mesh, &g, &phi, radius) > 2.5);
-    let solve = |tri: Option<TriangleTurning>| {
+    let solve = |tri: Option<TriangleTerm>| {
         let term = HighlightTerm::own_targets(&g, &h, Symmetry::Line, GradientForm::Angle, &phi);
         let settings = SolverSettings {
             whole_mesh: true,
@@ -199,7 +252,7 @@ fn the_triangle_term_bounds_the_field_the_tracer_sees() {
         };
         optimize(&mesh, &term, &phi, &vec![false; phi.len()], &settings).unwrap()
     };
-    let off = solve(Some(TriangleTurning { enabled: false, ..Default::default() }));
+    let off = solve(Some(TriangleTerm { enabled: false, ..Default::default() }));
     let on = solve(None);
     let (r_off, r_on) =
         (blend_max_ratio(&mesh, &g, &off.phi, radius), blend_max_ratio(&mesh, &g, &on.phi, radius));

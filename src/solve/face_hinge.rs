@@ -33,12 +33,22 @@
 //! ∂r/∂φᵢ = √(λA_f/Q) R′ sign(κ) ∂κ/∂φᵢ   where the hinge is active.
 //! ```
 //!
+//! The splay twin bounds the divergence of the same unit field, d ln δ/ds for neighbouring
+//! strokes (math.md §7), by s_max·(1 − margin):
+//!
+//! ```text
+//! σ = div(w/|w|) = tr G / |w| − wᵀG w / |w|³                                  (F4)
+//! ∂σ/∂φᵢ = dᵢᵀ∇λᵢ/|w| − tr G (wᵀ∂w)/|w|³ − ∂M/|w|³ + 3M (wᵀ∂w)/|w|⁵,
+//!          M = wᵀg, ∂M = ∂wᵀg + wᵀ∂g.
+//! ```
+//!
 //! Where the blend nearly cancels (|w| < ¼ Σλᵢ|ŵᵢ|: corners more than ~150° apart, a singular
 //! triangle) the row is inactive: the tracer stops there too. Rows keep their (zero) entries so
 //! the Jacobian's pattern does not depend on φ.
 
 use nalgebra::{Vector2, Vector3};
 
+use super::fabrication::HingeKind;
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
@@ -92,7 +102,7 @@ impl FaceFrame {
     }
 }
 
-/// The per-triangle turning hinge (F1–F3).
+/// The per-triangle turning hinge (F1–F3), or its splay twin (F4).
 #[derive(Clone, Debug)]
 pub struct FaceTurningHinge<'a> {
     /// The surface (vertex frames).
@@ -101,7 +111,10 @@ pub struct FaceTurningHinge<'a> {
     pub symmetry: Symmetry,
     /// The triangles' frames.
     pub faces: Vec<FaceFrame>,
-    /// R′ = R / (1 − margin).
+    /// Turning (κ, F1) or splay (σ, F4).
+    pub kind: HingeKind,
+    /// The inverse bound: R′ = R/(1 − margin) for turning, 1/(s_max·(1 − margin)) for splay;
+    /// the hinge is max(0, radius·|x| − 1).
     pub radius: f64,
     /// The weight λ.
     pub weight: f64,
@@ -151,7 +164,8 @@ impl FaceTurningHinge<'_> {
         self.faces.len() * QUADRATURE.len()
     }
 
-    /// κ (F1) at quadrature point `q` of face `face`, or `None` where the blend cancels.
+    /// κ (F1) or σ (F4) at quadrature point `q` of face `face`, or `None` where the blend
+    /// cancels.
     pub fn curvature(&self, phi: &[f64], face: usize, q: usize) -> Option<f64> {
         self.eval(phi, face, q, None)
     }
@@ -168,20 +182,45 @@ impl FaceTurningHinge<'_> {
         }
         let gl: [f64; 3] = [0, 1, 2].map(|i| f.grad_bary[i].dot(&wq));
         let g = w[0] * gl[0] + w[1] * gl[1] + w[2] * gl[2];
-        let n = cross(&wq, &g);
-        let l3 = len * len * len;
-        let kappa = n / l3;
-        if let Some(out) = jac {
-            for i in 0..3 {
-                let dw = d[i] * l[i];
-                // G dᵢ... G x = Σⱼ ŵⱼ (∇λⱼᵀ x)
-                let gd: Vector2<f64> = (0..3).map(|j| w[j] * f.grad_bary[j].dot(&d[i])).sum();
-                let dg = d[i] * gl[i] + gd * l[i];
-                let dn = cross(&dw, &g) + cross(&wq, &dg);
-                out[i] = dn / l3 - 3.0 * kappa * wq.dot(&dw) / (len * len);
+        let l2 = len * len;
+        let l3 = l2 * len;
+        match self.kind {
+            HingeKind::Turning => {
+                let n = cross(&wq, &g);
+                let kappa = n / l3;
+                if let Some(out) = jac {
+                    for i in 0..3 {
+                        let dw = d[i] * l[i];
+                        // G x = Σⱼ ŵⱼ (∇λⱼᵀ x)
+                        let gd: Vector2<f64> =
+                            (0..3).map(|j| w[j] * f.grad_bary[j].dot(&d[i])).sum();
+                        let dg = d[i] * gl[i] + gd * l[i];
+                        let dn = cross(&dw, &g) + cross(&wq, &dg);
+                        out[i] = dn / l3 - 3.0 * kappa * wq.dot(&dw) / l2;
+                    }
+                }
+                Some(kappa)
+            }
+            HingeKind::Splay => {
+                // σ = tr G / |w| − wᵀGw / |w|³ (F4).
+                let tr: f64 = (0..3).map(|i| w[i].dot(&f.grad_bary[i])).sum();
+                let m = wq.dot(&g);
+                let sigma = tr / len - m / l3;
+                if let Some(out) = jac {
+                    for i in 0..3 {
+                        let dw = d[i] * l[i];
+                        let gd: Vector2<f64> =
+                            (0..3).map(|j| w[j] * f.grad_bary[j].dot(&d[i])).sum();
+                        let dg = d[i] * gl[i] + gd * l[i];
+                        let dtr = d[i].dot(&f.grad_bary[i]);
+                        let dm = dw.dot(&g) + wq.dot(&dg);
+                        let wdw = wq.dot(&dw);
+                        out[i] = dtr / len - tr * wdw / l3 - dm / l3 + 3.0 * m * wdw / (l3 * l2);
+                    }
+                }
+                Some(sigma)
             }
         }
-        Some(kappa)
     }
 
     fn scale(&self, face: usize) -> f64 {

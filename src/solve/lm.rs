@@ -67,6 +67,9 @@ pub struct LmOptions {
     /// Turning-radius hinge inside the triangles (`super::face_hinge`): `bound` is 1/R′ with
     /// R′ = R/(1 − margin). Its energy is added to the turning term.
     pub turning_faces: Option<HingeOptions>,
+    /// Splay hinge inside the triangles (`super::face_hinge`, F4): `bound` is s_max·(1 −
+    /// margin). Its energy is added to the splay term.
+    pub splay_faces: Option<HingeOptions>,
     /// Soft locks: (vertex, angle in its frame, weight λ_L); the residual is scaled by √(λ_L Aᵢ).
     pub soft_locks: Vec<(u32, f64, f64)>,
     /// Run the interleaved Laplacian smoothing pass after each accepted step.
@@ -103,6 +106,7 @@ impl Default for LmOptions {
             turning: None,
             splay: None,
             turning_faces: None,
+            splay_faces: None,
             soft_locks: Vec::new(),
             interleaved_smoothing: false,
             linear_solver: LinearSolver::Auto,
@@ -494,7 +498,10 @@ struct FaceHingeBlock<'a> {
 
 impl Block for FaceHingeBlock<'_> {
     fn term(&self) -> Term {
-        Term::Turning
+        match self.hinge.kind {
+            HingeKind::Turning => Term::Turning,
+            HingeKind::Splay => Term::Splay,
+        }
     }
     fn energy(&self, phi: &[f64]) -> f64 {
         chunked_sum(&self.rows, |&i| {
@@ -688,21 +695,26 @@ pub fn solve_cached(
             }
         }
     }
-    if let Some(h) = options.turning_faces {
-        if h.weight > 0.0 && h.bound > 0.0 && h.bound.is_finite() {
-            let faces: Vec<_> = FaceTurningHinge::frames(mesh)
-                .into_iter()
-                .filter(|f| f.corners.iter().any(|&v| col_of[v as usize].is_some()))
-                .collect();
-            let hinge = FaceTurningHinge {
-                geometry: g,
-                symmetry: term.symmetry,
-                faces,
-                radius: 1.0 / h.bound,
-                weight: h.weight,
-            };
-            let rows = (0..hinge.rows() as u32).collect();
-            blocks.push(Box::new(FaceHingeBlock { hinge, rows }));
+    for (opt, kind) in
+        [(options.turning_faces, HingeKind::Turning), (options.splay_faces, HingeKind::Splay)]
+    {
+        if let Some(h) = opt {
+            if h.weight > 0.0 && h.bound > 0.0 && h.bound.is_finite() {
+                let faces: Vec<_> = FaceTurningHinge::frames(mesh)
+                    .into_iter()
+                    .filter(|f| f.corners.iter().any(|&v| col_of[v as usize].is_some()))
+                    .collect();
+                let hinge = FaceTurningHinge {
+                    geometry: g,
+                    symmetry: term.symmetry,
+                    faces,
+                    kind,
+                    radius: 1.0 / h.bound,
+                    weight: h.weight,
+                };
+                let rows = (0..hinge.rows() as u32).collect();
+                blocks.push(Box::new(FaceHingeBlock { hinge, rows }));
+            }
         }
     }
     let locks: Vec<(u32, f64, f64)> = options

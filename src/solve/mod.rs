@@ -27,6 +27,6 @@ pub use lm::{
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
 pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};
 pub use settings::{
-    Constraints, HighlightEnergy, SolverSettings, Splay, TriangleTurning, TurningRadius,
+    Constraints, HighlightEnergy, SolverSettings, Splay, TriangleTerm, TurningRadius,
 };
 pub use singularities::{singularities, Singularity};
