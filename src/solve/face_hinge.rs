@@ -251,9 +251,7 @@ impl FaceTurningHinge<'_> {
             }
             _ => (0.0, 0.0),
         };
-        for i in 0..3 {
-            entries.push((f.corners[i], factor * dk[i]));
-        }
+        entries.extend(f.corners.iter().zip(dk).map(|(&v, d)| (v, factor * d)));
         r
     }
 }

@@ -67,7 +67,7 @@ pub struct LockProbe {
 }
 
 /// What to measure, and the measuring step.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StrokeCheckOptions {
     /// Arc step between the three points of a turning-radius sample, mm on the part (> 0;
     /// default: half the brush width). Samples are `step / 2` apart.
@@ -85,20 +85,6 @@ pub struct StrokeCheckOptions {
     pub neighbour_radius: Option<f64>,
     /// Keep every sample in [`StrokeChecks::samples`] (for tests and plots; default false).
     pub keep_samples: bool,
-}
-
-impl Default for StrokeCheckOptions {
-    fn default() -> Self {
-        StrokeCheckOptions {
-            step: None,
-            trim: None,
-            turning_radius: None,
-            splay: None,
-            locks: Vec::new(),
-            neighbour_radius: None,
-            keep_samples: false,
-        }
-    }
 }
 
 impl StrokeCheckOptions {
@@ -409,7 +395,7 @@ fn turning_radius(n: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<f64> {
     let y = proj(n, sub3(c, b));
     let area2 = norm3(cross3(x, y));
     let prod = norm3(x) * norm3(y) * norm3(sub3(x, y));
-    if !(prod > 0.0) {
+    if prod.is_nan() || prod <= 0.0 {
         return None;
     }
     if area2 <= 1e-14 * prod / (norm3(x) + norm3(y)) {
@@ -436,7 +422,7 @@ fn centres(l: &Lifted, stroke: usize, step: f64, trim: f64, out: &mut Vec<Centre
     let len = l.len();
     let h = 0.5 * step;
     let (from, to) = if l.closed { (0.0, len - 0.5 * h) } else { (trim, len - trim) };
-    if !(to >= from) {
+    if to.is_nan() || from.is_nan() || to < from {
         return;
     }
     let count = ((to - from) / h).floor() as usize + 1;
@@ -700,12 +686,11 @@ pub fn check_strokes(
             }
             let l = &strokes[cs[j].stroke];
             let ds = l.arc_between(p.b, q.b);
-            if !(ds > 0.0) || ds > 3.0 * step {
+            if ds.is_nan() || ds <= 0.0 || ds > 3.0 * step {
                 continue;
             }
-            for side in 0..2 {
-                let (Some((s0, d0)), Some((s1, d1))) = (sides[j - 1][side], sides[j + 1][side])
-                else {
+            for (side, (before, after)) in sides[j - 1].iter().zip(&sides[j + 1]).enumerate() {
+                let (Some((s0, d0)), Some((s1, d1))) = (*before, *after) else {
                     continue;
                 };
                 if s0 != s1 {
