@@ -335,6 +335,12 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             c.keep_map = true;
             section.coverage = Some(c);
         }
+        // The tool's turning radius also cuts back stroke ends that turn tighter near a
+        // boundary or a singularity (issue 17, item 4), unless the section sets its own.
+        if section.plan.min_turning_radius.is_none() {
+            section.plan.min_turning_radius =
+                scene.solver.constraints.turning_radius.as_ref().map(|t| t.radius);
+        }
         let units = prepared.mesh.units;
         section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
         // Errors found while tracing name their key from the scene's top (`toolpaths.…`).

@@ -89,7 +89,12 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
     o.validate()?;
     let mut t = Vec::new();
     let dom = timed(&mut t, "domain", || Domain::new(mesh))?;
-    let placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;
+    let mut placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;
+    let cuts = o
+        .plan
+        .min_turning_radius
+        .map(|r| crate::stroke_checks::cut_tight_ends(&dom, &mut placement, r))
+        .unwrap_or_default();
     let cov = match &o.coverage {
         Some(c) => Some(timed(&mut t, "coverage", || coverage(&dom, &placement, c))?),
         None => None,
@@ -110,6 +115,8 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
     };
     let mut report = Report::new(&placement, &plan, cov.as_ref(), t);
     report.charts = dom.chart_count();
+    report.tight_end_cuts = cuts.cuts;
+    report.tight_end_dropped = cuts.dropped;
     let mut with = vec![false; dom.chart_count()];
     for s in &placement.strokes {
         for &f in &s.faces {

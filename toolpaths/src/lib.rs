@@ -74,8 +74,8 @@ pub use report::{PhaseTime, Report};
 pub use simplify::{fit_moves, rdp_indices, Segment};
 pub use spacing::Spacing;
 pub use stroke_checks::{
-    check_strokes, CheckSample, LockFigures, LockProbe, Share, SplayFigures, StrokeCheckOptions,
-    StrokeChecks, StrokePlace, TurningFigures,
+    check_strokes, cut_tight_ends, CheckSample, LockFigures, LockProbe, Share, SplayFigures,
+    StrokeCheckOptions, StrokeChecks, StrokePlace, TightEndCuts, TurningFigures,
 };
 pub use svg_out::{write_svg, SvgOptions};
 pub use trace::{trace_streamline, StopReason, Stroke, TraceOptions};

@@ -796,3 +796,100 @@ pub fn check_strokes(
         samples,
     })
 }
+
+/// What [`cut_tight_ends`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TightEndCuts {
+    /// Stroke ends cut back (a stroke cut at both ends counts twice).
+    pub cuts: usize,
+    /// Strokes dropped because less than one brush width was left.
+    pub dropped: usize,
+}
+
+/// Planning that respects the tool (issue 17, item 4): every open stroke end that stopped at a
+/// boundary (a chart edge or an uncrossed seam) or at a singularity's exclusion zone is cut
+/// back, within two brush widths of that end, to just past its tightest-turning sample whose
+/// turning radius (S1, step = half the brush width, on the part) is below `radius`, so the
+/// stroke ends where the tool can still follow it. A stroke left shorter than one brush width is
+/// dropped. Interior turns, closed loops and ends that stopped near another stroke are left as
+/// they are (the run report's `stroke_constraints` measures them).
+pub fn cut_tight_ends(dom: &Domain, placement: &mut Placement, radius: f64) -> TightEndCuts {
+    use crate::trace::StopReason;
+    let mut out = TightEndCuts::default();
+    if !(radius.is_finite() && radius > 0.0) {
+        return out;
+    }
+    let width = placement.width;
+    let step = 0.5 * width;
+    let zone = 2.0 * width;
+    let cuttable = |r: StopReason| matches!(r, StopReason::Boundary | StopReason::Singularity);
+    let mut kept = Vec::with_capacity(placement.strokes.len());
+    for mut s in std::mem::take(&mut placement.strokes) {
+        if s.is_closed() || s.uv.len() < 3 || !(cuttable(s.start) || cuttable(s.end)) {
+            kept.push(s);
+            continue;
+        }
+        let l = lift_stroke(dom, &s.uv, &s.faces, false);
+        if l.x.len() != s.uv.len() {
+            kept.push(s); // a point without a normal: leave the stroke alone
+            continue;
+        }
+        let n = l.x.len();
+        let len = l.len();
+        let rho = |i: usize| -> Option<f64> {
+            let mut a = l.nearest(l.s[i] - step);
+            let mut c = l.nearest(l.s[i] + step);
+            if a == i {
+                a = i.checked_sub(1)?;
+            }
+            if c == i {
+                c = i + 1;
+                if c >= n {
+                    return None;
+                }
+            }
+            turning_radius(l.n[i], l.x[a], l.x[i], l.x[c])
+        };
+        let (mut first, mut last) = (0usize, n - 1);
+        if cuttable(s.start) {
+            if let Some(i) = (1..n - 1)
+                .filter(|&i| l.s[i] <= zone)
+                .filter(|&i| rho(i).is_some_and(|r| r < radius))
+                .last()
+            {
+                first = i;
+            }
+        }
+        if cuttable(s.end) {
+            if let Some(i) = (1..n - 1)
+                .filter(|&i| len - l.s[i] <= zone)
+                .find(|&i| rho(i).is_some_and(|r| r < radius))
+            {
+                last = i;
+            }
+        }
+        if first == 0 && last == n - 1 {
+            kept.push(s);
+            continue;
+        }
+        out.cuts += usize::from(first > 0) + usize::from(last < n - 1);
+        if last <= first || l.s[last] - l.s[first] < width {
+            out.dropped += 1;
+            continue;
+        }
+        // The kept piece, its seam breaks and its length on the part (seam jumps excluded, as
+        // the tracer measures).
+        let breaks: Vec<usize> =
+            s.breaks.iter().filter(|&&b| b > first && b <= last).map(|&b| b - first).collect();
+        s.uv = s.uv[first..=last].to_vec();
+        s.faces = s.faces[first..=last].to_vec();
+        s.length = (1..s.uv.len())
+            .filter(|j| !breaks.contains(j))
+            .map(|j| dom.metric[s.faces[j] as usize].length(crate::geom::sub(s.uv[j], s.uv[j - 1])))
+            .sum();
+        s.breaks = breaks;
+        kept.push(s);
+    }
+    placement.strokes = kept;
+    out
+}

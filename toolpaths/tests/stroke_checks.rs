@@ -294,3 +294,71 @@ fn bad_options_are_named() {
     let e = check_strokes(&out.domain, &out.placement, &o).unwrap_err().to_string();
     assert!(e.contains("checks.turning_radius"), "{e}");
 }
+
+/// Arcs of circles about c = (0, −5) across a 20 × 10 mm sheet, ending on its edges: with a
+/// tool radius R = 8, every arc tighter than R has both ends cut back by two brush widths (to
+/// within one step), or is dropped when less than a width would be left; looser arcs are kept
+/// whole, and the cuts are counted.
+#[test]
+fn tight_ends_at_the_boundary_are_cut_back() {
+    let c = [0.0, -5.0];
+    let m = field_mesh(rect_mesh(20.0, 10.0, 80, 40), Symmetry::Line, |p| {
+        let p = [p[0] - 10.0, p[1]];
+        [-(p[1] - c[1]), p[0] - c[0]]
+    });
+    let dom = Domain::new(m).unwrap();
+    let width = 0.5;
+    let pl = place_strokes(&dom, &PlacementOptions::new(width, 0.0)).unwrap();
+    let mut cut = pl.clone();
+    let r_lim = 8.0;
+    let counts = cut_tight_ends(&dom, &mut cut, r_lim);
+    let radius = |s: &Stroke| {
+        s.uv.iter().map(|p| (p[0] - 10.0 - c[0]).hypot(p[1] - c[1])).sum::<f64>()
+            / s.uv.len() as f64
+    };
+    let (mut k, mut tight, mut dropped) = (0, 0, 0);
+    for s in &pl.strokes {
+        let rho = radius(s);
+        let same = cut.strokes.get(k).is_some_and(|t| s.uv.iter().any(|p| *p == t.uv[0]));
+        let both_ends_on_edge = s.start == StopReason::Boundary && s.end == StopReason::Boundary;
+        if rho < 0.95 * r_lim && both_ends_on_edge {
+            tight += 1;
+            if !same {
+                dropped += 1;
+                assert!(s.length < 4.0 * width + 2.0 * width, "dropped a {} mm arc", s.length);
+                continue;
+            }
+            let t = &cut.strokes[k];
+            let removed = s.length - t.length;
+            assert!(
+                (removed - 4.0 * width).abs() <= 1.0 * width,
+                "ρ {rho}: {} → {} mm",
+                s.length,
+                t.length
+            );
+        } else if rho > 1.05 * r_lim {
+            assert!(same && cut.strokes[k].uv == s.uv, "a loose arc (ρ {rho}) was cut");
+        }
+        if same {
+            k += 1;
+        }
+    }
+    assert!(tight >= 3, "{tight} tight arcs");
+    assert_eq!(counts.dropped, dropped);
+    assert!(counts.cuts >= 2 * tight, "{counts:?} for {tight} tight arcs");
+    assert_eq!(cut.strokes.len() + counts.dropped, pl.strokes.len());
+    // Through the job: the report counts the same.
+    let m = field_mesh(rect_mesh(20.0, 10.0, 80, 40), Symmetry::Line, |p| {
+        let p = [p[0] - 10.0, p[1]];
+        [-(p[1] - c[1]), p[0] - c[0]]
+    });
+    let opts = JobOptions {
+        placement: PlacementOptions::new(width, 0.0),
+        plan: PlanOptions { min_turning_radius: Some(r_lim), ..Default::default() },
+        ..Default::default()
+    };
+    let out = generate(m, &opts).unwrap();
+    assert_eq!(out.report.tight_end_cuts, counts.cuts);
+    assert_eq!(out.report.tight_end_dropped, counts.dropped);
+    assert_eq!(out.placement.strokes.len(), cut.strokes.len());
+}
