@@ -853,9 +853,9 @@ pub fn cut_tight_ends(dom: &Domain, placement: &mut Placement, radius: f64) -> T
         let (mut first, mut last) = (0usize, n - 1);
         if cuttable(s.start) {
             if let Some(i) = (1..n - 1)
+                .rev()
                 .filter(|&i| l.s[i] <= zone)
-                .filter(|&i| rho(i).is_some_and(|r| r < radius))
-                .last()
+                .find(|&i| rho(i).is_some_and(|r| r < radius))
             {
                 first = i;
             }
