@@ -21,10 +21,15 @@ fn dir(name: &str) -> PathBuf {
 
 /// A 60 × 60 mm square on a 0.5 mm grid (UV = its own coordinates) with circles about `C` as the grain.
 fn write_part(d: &Path, constraints: &str) -> PathBuf {
+    write_part_about(d, constraints, C)
+}
+
+/// [`write_part`] with the circles about `c`.
+fn write_part_about(d: &Path, constraints: &str, c: [f64; 2]) -> PathBuf {
     let mesh = plane(30.0, Grid::new(120, 120));
     std::fs::write(d.join("plane.obj"), obj_string(&mesh, "plane")).unwrap();
     let u: Vec<[f64; 3]> =
-        mesh.positions.iter().map(|p| [-(p.y - C[1]), p.x - C[0], 0.0]).collect();
+        mesh.positions.iter().map(|p| [-(p.y - c[1]), p.x - c[0], 0.0]).collect();
     std::fs::write(d.join("dirs.json"), serde_json::json!({ "u": u }).to_string()).unwrap();
     let s = format!(
         r#"{{
@@ -139,4 +144,37 @@ fn a_lock_along_the_circles_is_followed_and_one_across_them_is_not() {
     assert_eq!(locks[0]["samples"], locks[1]["samples"]);
     assert!((mean0 + mean1 - 90.0).abs() < 1e-6, "{mean0} + {mean1}");
     assert!(stderr.contains("strokes through the lock solver.constraints.locks[1]"), "{stderr}");
+}
+
+/// Circles about a point 3 mm below the square's lower edge: the arcs that cross the square end
+/// on that edge, and those tighter than R = 12 get both ends cut back (the solver's turning
+/// radius becomes `toolpaths.plan.min_turning_radius`); arcs looser than R are not.
+#[test]
+fn tight_arcs_ending_on_the_edge_are_cut_back() {
+    let d = dir("cuts");
+    let c = [0.0, -33.0];
+    let scene = write_part_about(&d, r#"{"turning_radius": {"radius": 12}}"#, c);
+    let report = d.join("report.json");
+    let out = grainline(&["run", scene.to_str().unwrap(), "--report", report.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r = json(&report);
+    let cuts = r["toolpaths"]["job"]["tight_end_cuts"].as_u64().unwrap_or(0);
+    let strokes = json(&d.join("o/s.json"));
+    let mut tight = 0;
+    for s in strokes["strokes"].as_array().unwrap() {
+        let pts: Vec<[f64; 2]> = s["xyz"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|piece| piece.as_array().unwrap().iter())
+            .map(|p| [p[0].as_f64().unwrap(), p[1].as_f64().unwrap()])
+            .collect();
+        let rho =
+            pts.iter().map(|p| (p[0] - c[0]).hypot(p[1] - c[1])).sum::<f64>() / pts.len() as f64;
+        if rho < 0.95 * 12.0 && s["start"] == "boundary" && s["end"] == "boundary" {
+            tight += 1;
+        }
+    }
+    assert!(tight >= 2, "{tight} tight arcs");
+    assert!(cuts >= 2 * tight, "{cuts} cuts for {tight} tight arcs");
 }
