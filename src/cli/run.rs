@@ -53,6 +53,12 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
         eprintln!("warning: {w}");
     }
+    // Stroke-level constraint figures that break a constraint (issue 17).
+    for w in report.toolpaths.iter().filter_map(|t| t.stroke_constraints.as_ref()) {
+        for line in w.warnings() {
+            eprintln!("grainline: warning: {line}");
+        }
+    }
     if !quiet {
         for o in &report.outputs {
             eprintln!("wrote {o}");

@@ -8,6 +8,7 @@
 
 pub mod optimize;
 pub mod run;
+pub mod stroke_constraints;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

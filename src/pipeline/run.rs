@@ -84,6 +84,11 @@ pub struct ToolpathFigures {
     pub seam_pairs: usize,
     /// Scale from the mesh's UV layout to the flat SVG / G-code coordinates (scene units).
     pub uv_scale: f64,
+    /// The scene's fabrication constraints (`solver.constraints`) measured on the traced
+    /// strokes: turning radius, spread between neighbours, deviation through each lock
+    /// (`grainline_toolpaths::check_strokes`; issue 17). Absent when the scene has none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stroke_constraints: Option<grainline_toolpaths::StrokeChecks>,
 }
 
 /// The as-brushed fidelity: the grain rebuilt from the strokes against the designed grain.
@@ -350,6 +355,12 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             c.keep_map = true;
             section.coverage = Some(c);
         }
+        // The tool's turning radius also cuts back stroke ends that turn tighter near a
+        // boundary or a singularity (issue 17, item 4), unless the section sets its own.
+        if section.plan.min_turning_radius.is_none() {
+            section.plan.min_turning_radius =
+                scene.solver.constraints.turning_radius.as_ref().map(|t| t.radius);
+        }
         let units = prepared.mesh.units;
         section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
         // Errors found while tracing name their key from the scene's top (`toolpaths.…`).
@@ -395,6 +406,19 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             let ab = as_brushed(&prepared.mesh, g, phi, symmetry, &fm, &uvr, &job.placement)?;
             brushed = Some(ab);
         }
+        let stroke_constraints = match super::stroke_constraints::check_options(
+            &prepared.mesh,
+            g,
+            &scene.solver.constraints,
+            &uvr.uv_to_vertex,
+            symmetry.k(),
+        )? {
+            Some(o) => Some(
+                grainline_toolpaths::check_strokes(&job.domain, &job.placement, &o)
+                    .map_err(|e| in_section(toolpath_error(e)))?,
+            ),
+            None => None,
+        };
         toolpaths = Some(ToolpathFigures {
             job: job.report.clone(),
             uv_vertices: uvr.uv_vertices,
@@ -403,6 +427,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
             flipped_faces: uvr.flipped_faces,
             seam_pairs: uvr.seam_pairs,
             uv_scale: uvr.uv_scale,
+            stroke_constraints,
         });
     }
     let mut render_report = None;

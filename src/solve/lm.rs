@@ -27,6 +27,7 @@ use rayon::prelude::*;
 use super::cg::{conjugate_gradient, JacobianRows, NormalMatrix};
 pub use super::cg::{CG_FORCING, CG_MAX_ITERATIONS, CG_THRESHOLD};
 use super::fabrication::{lock_residual, GradientHinge, HingeKind};
+use super::face_hinge::FaceTurningHinge;
 use super::highlight_term::HighlightTerm;
 use super::pattern::DirectSystem;
 pub use super::pattern::SolveCache;
@@ -63,6 +64,12 @@ pub struct LmOptions {
     pub turning: Option<HingeOptions>,
     /// Splay hinge on v̄ᵀ∇φ.
     pub splay: Option<HingeOptions>,
+    /// Turning-radius hinge inside the triangles (`super::face_hinge`): `bound` is 1/R′ with
+    /// R′ = R/(1 − margin). Its energy is added to the turning term.
+    pub turning_faces: Option<HingeOptions>,
+    /// Splay hinge inside the triangles (`super::face_hinge`, F4): `bound` is s_max·(1 −
+    /// margin). Its energy is added to the splay term.
+    pub splay_faces: Option<HingeOptions>,
     /// Soft locks: (vertex, angle in its frame, weight λ_L); the residual is scaled by √(λ_L Aᵢ).
     pub soft_locks: Vec<(u32, f64, f64)>,
     /// Run the interleaved Laplacian smoothing pass after each accepted step.
@@ -98,6 +105,8 @@ impl Default for LmOptions {
             initial_damping: 1e-4,
             turning: None,
             splay: None,
+            turning_faces: None,
+            splay_faces: None,
             soft_locks: Vec::new(),
             interleaved_smoothing: false,
             linear_solver: LinearSolver::Auto,
@@ -482,6 +491,34 @@ impl Block for HingeBlock<'_> {
     }
 }
 
+struct FaceHingeBlock<'a> {
+    hinge: FaceTurningHinge<'a>,
+    rows: Vec<u32>,
+}
+
+impl Block for FaceHingeBlock<'_> {
+    fn term(&self) -> Term {
+        match self.hinge.kind {
+            HingeKind::Turning => Term::Turning,
+            HingeKind::Splay => Term::Splay,
+        }
+    }
+    fn energy(&self, phi: &[f64]) -> f64 {
+        chunked_sum(&self.rows, |&i| {
+            let r = self.hinge.residual(phi, i as usize);
+            r * r
+        })
+    }
+    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
+        acc.rows(&self.rows, |&i, local, col_of| {
+            let mut entries = std::mem::take(&mut local.entries1);
+            let r = self.hinge.jacobian(phi, i as usize, &mut entries);
+            local.push(col_of, entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
+            local.entries1 = entries;
+        })
+    }
+}
+
 struct LockBlock {
     locks: Vec<(u32, f64, f64)>, // (vertex, angle, √(λ A))
     k: u32,
@@ -655,6 +692,28 @@ pub fn solve_cached(
                     weight: h.weight,
                 };
                 blocks.push(Box::new(HingeBlock { hinge, rows: touched.clone() }));
+            }
+        }
+    }
+    for (opt, kind) in
+        [(options.turning_faces, HingeKind::Turning), (options.splay_faces, HingeKind::Splay)]
+    {
+        if let Some(h) = opt {
+            if h.weight > 0.0 && h.bound > 0.0 && h.bound.is_finite() {
+                let faces: Vec<_> = FaceTurningHinge::frames(mesh)
+                    .into_iter()
+                    .filter(|f| f.corners.iter().any(|&v| col_of[v as usize].is_some()))
+                    .collect();
+                let hinge = FaceTurningHinge {
+                    geometry: g,
+                    symmetry: term.symmetry,
+                    faces,
+                    kind,
+                    radius: 1.0 / h.bound,
+                    weight: h.weight,
+                };
+                let rows = (0..hinge.rows() as u32).collect();
+                blocks.push(Box::new(FaceHingeBlock { hinge, rows }));
             }
         }
     }

@@ -5,6 +5,7 @@
 pub mod branch;
 mod cg;
 pub mod fabrication;
+pub mod face_hinge;
 pub(crate) mod factor;
 pub mod fill;
 pub mod highlight_term;
@@ -25,5 +26,7 @@ pub use lm::{
 };
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
 pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};
-pub use settings::{Constraints, HighlightEnergy, SolverSettings, Splay, TurningRadius};
+pub use settings::{
+    Constraints, HighlightEnergy, SolverSettings, Splay, TriangleTerm, TurningRadius,
+};
 pub use singularities::{singularities, Singularity};

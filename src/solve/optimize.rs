@@ -16,6 +16,7 @@ use serde::Serialize;
 
 use super::branch::coherent_start;
 use super::fabrication::{GradientHinge, HingeKind};
+use super::face_hinge::{FaceTurningHinge, QUADRATURE};
 use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
 use super::lm::{
@@ -48,6 +49,22 @@ pub struct ConstraintViolations {
     /// Largest deviation of a locked vertex from its lock angle (rad, modulo 2π/k; 0 without
     /// locks).
     pub max_lock_error: f64,
+    /// Fraction of the surface area (a quarter of a triangle per quadrature point) where the
+    /// streamlines of the field *as the tracer interpolates it* (`solve::face_hinge`, F1) turn
+    /// tighter than R by more than 1 % (null without a turning-radius constraint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub turning_triangle_area_fraction: Option<f64>,
+    /// max R·|κ| at the triangles' quadrature points (F1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub turning_triangle_max_ratio: Option<f64>,
+    /// Fraction of the surface area where the divergence of the field as the tracer
+    /// interpolates it (`solve::face_hinge`, F4) exceeds s_max by more than 1 % (null without
+    /// a splay constraint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub splay_triangle_area_fraction: Option<f64>,
+    /// max |σ|/s_max at the triangles' quadrature points (F4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub splay_triangle_max_ratio: Option<f64>,
 }
 
 /// A run from one start whose final energy is at most this fraction of its initial energy
@@ -209,6 +226,20 @@ pub fn optimize(
             .as_ref()
             .map(|t| HingeOptions { bound: 1.0 / t.radius, weight: t.weight }),
         splay: c.splay.as_ref().map(|s| HingeOptions { bound: s.max, weight: s.weight }),
+        turning_faces: c.turning_radius.as_ref().and_then(|t| {
+            let f = c.turning_in_triangles.clone().unwrap_or_default();
+            f.enabled.then(|| HingeOptions {
+                bound: (1.0 - f.margin) / t.radius,
+                weight: f.weight.unwrap_or(t.weight),
+            })
+        }),
+        splay_faces: c.splay.as_ref().and_then(|sp| {
+            let f = c.splay_in_triangles.clone().unwrap_or_default();
+            f.enabled.then(|| HingeOptions {
+                bound: sp.max * (1.0 - f.margin),
+                weight: f.weight.unwrap_or(sp.weight),
+            })
+        }),
         soft_locks: locks.soft.clone(),
         interleaved_smoothing: settings.smoothing_pass(),
         linear_solver: LinearSolver::Auto,
@@ -326,6 +357,43 @@ pub fn optimize(
         let (f, m) = violation(HingeKind::Turning, 1.0 / t.radius);
         violations.turning_area_fraction = Some(f);
         violations.turning_max_ratio = Some(m);
+    }
+    // The same figures inside the triangles, on the field as the tracer interpolates it.
+    let frames = FaceTurningHinge::frames(mesh);
+    let triangle_violation = |kind: HingeKind, bound: f64| {
+        let hinge = FaceTurningHinge {
+            geometry: g,
+            symmetry: term.symmetry,
+            faces: frames.clone(),
+            kind,
+            radius: 1.0 / bound,
+            weight: 0.0,
+        };
+        let (mut bad, mut total, mut worst) = (0.0, 0.0, 0.0f64);
+        for (f, frame) in hinge.faces.iter().enumerate() {
+            for q in 0..QUADRATURE.len() {
+                let a = frame.area / QUADRATURE.len() as f64;
+                total += a;
+                if let Some(x) = hinge.curvature(&out, f, q) {
+                    let ratio = x.abs() / bound;
+                    if ratio > 1.0 + VIOLATION_TOLERANCE {
+                        bad += a;
+                    }
+                    worst = worst.max(ratio);
+                }
+            }
+        }
+        (if total > 0.0 { bad / total } else { 0.0 }, worst)
+    };
+    if let Some(t) = &c.turning_radius {
+        let (f, m) = triangle_violation(HingeKind::Turning, 1.0 / t.radius);
+        violations.turning_triangle_area_fraction = Some(f);
+        violations.turning_triangle_max_ratio = Some(m);
+    }
+    if let Some(sp) = &c.splay {
+        let (f, m) = triangle_violation(HingeKind::Splay, sp.max);
+        violations.splay_triangle_area_fraction = Some(f);
+        violations.splay_triangle_max_ratio = Some(m);
     }
     if let Some(s) = &c.splay {
         let (f, m) = violation(HingeKind::Splay, s.max);

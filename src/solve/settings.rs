@@ -29,6 +29,42 @@ pub struct Splay {
     pub weight: f64,
 }
 
+/// A hinge inside the triangles (`solve::face_hinge`, issue 17), for `turning_in_triangles`
+/// and `splay_in_triangles`: bounds the curvature (or the divergence) of the streamlines of
+/// the field as the stroke tracer interpolates it, at four quadrature points per triangle, by
+/// R/(1 − margin) (or s_max·(1 − margin)). Needs `turning_radius` (or `splay`); the vertex
+/// hinge stays. On by default with its constraint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleTerm {
+    /// Whether the triangle term runs (default true; `false` keeps the vertex hinge alone, as
+    /// before issue 17).
+    #[serde(default = "default_true")]
+    pub enabled: bool,
+    /// Fraction in [0, 0.5) by which the triangles are held tighter than the constraint
+    /// (default 0.05: the interpolated field is bounded by R/0.95 or 0.95 s_max, so that strokes
+    /// traced from it keep within the constraint with the tracer's and the sampling's errors).
+    #[serde(default = "default_margin")]
+    pub margin: f64,
+    /// Hinge weight (> 0, dimensionless; default: the constraint's own weight).
+    #[serde(default)]
+    pub weight: Option<f64>,
+}
+
+fn default_margin() -> f64 {
+    0.05
+}
+
+fn default_true() -> bool {
+    true
+}
+
+impl Default for TriangleTerm {
+    fn default() -> Self {
+        TriangleTerm { enabled: true, margin: default_margin(), weight: None }
+    }
+}
+
 fn default_constraint_weight() -> f64 {
     10.0
 }
@@ -39,8 +75,16 @@ fn default_constraint_weight() -> f64 {
 pub struct Constraints {
     /// Minimum tool turning radius (default: none).
     pub turning_radius: Option<TurningRadius>,
+    /// The turning radius also inside the triangles, as the tracer interpolates the field
+    /// (default: on with margin 0.05 whenever `turning_radius` is given; `{"enabled": false}`
+    /// keeps the vertex hinge alone). Only with `turning_radius`.
+    pub turning_in_triangles: Option<TriangleTerm>,
     /// Bounded splay (default: none).
     pub splay: Option<Splay>,
+    /// The splay bound also inside the triangles, on the divergence of the field as the tracer
+    /// interpolates it (default: on with margin 0.05 whenever `splay` is given;
+    /// `{"enabled": false}` keeps the vertex hinge alone). Only with `splay`.
+    pub splay_in_triangles: Option<TriangleTerm>,
     /// Locked directions (default: none).
     pub locks: Vec<LockSpec>,
     /// Two locks on one vertex conflict when they differ by more than this (radians, modulo
@@ -52,7 +96,9 @@ impl Default for Constraints {
     fn default() -> Self {
         Constraints {
             turning_radius: None,
+            turning_in_triangles: None,
             splay: None,
+            splay_in_triangles: None,
             locks: Vec::new(),
             conflict_tolerance: 0.01,
         }
@@ -176,6 +222,36 @@ impl SolverSettings {
         if let Some(t) = &c.turning_radius {
             check("constraints.turning_radius.radius", t.radius, t.radius > 0.0, "> 0")?;
             check("constraints.turning_radius.weight", t.weight, t.weight > 0.0, "> 0")?;
+        }
+        if let Some(t) = &c.turning_in_triangles {
+            let key = "constraints.turning_in_triangles";
+            if c.turning_radius.is_none() {
+                return Err(Error::setting(key, "needs constraints.turning_radius"));
+            }
+            check(
+                &format!("{key}.margin"),
+                t.margin,
+                (0.0..0.5).contains(&t.margin),
+                "in [0, 0.5)",
+            )?;
+            if let Some(w) = t.weight {
+                check(&format!("{key}.weight"), w, w > 0.0, "> 0")?;
+            }
+        }
+        if let Some(t) = &c.splay_in_triangles {
+            let key = "constraints.splay_in_triangles";
+            if c.splay.is_none() {
+                return Err(Error::setting(key, "needs constraints.splay"));
+            }
+            check(
+                &format!("{key}.margin"),
+                t.margin,
+                (0.0..0.5).contains(&t.margin),
+                "in [0, 0.5)",
+            )?;
+            if let Some(w) = t.weight {
+                check(&format!("{key}.weight"), w, w > 0.0, "> 0")?;
+            }
         }
         if let Some(s) = &c.splay {
             check("constraints.splay.max", s.max, s.max > 0.0, "> 0")?;

@@ -55,6 +55,8 @@ pub struct JobOutput {
     /// Each stroke lifted onto the part (3D points, one per UV point), when the field mesh
     /// has a lift; empty otherwise. Seam jumps are not marked.
     pub strokes_3d: Vec<Vec<crate::geom::Vec3>>,
+    /// The validated domain the strokes were traced on (for [`crate::check_strokes`]).
+    pub domain: std::sync::Arc<Domain>,
 }
 
 fn timed<T>(t: &mut Vec<PhaseTime>, phase: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
@@ -87,7 +89,12 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
     o.validate()?;
     let mut t = Vec::new();
     let dom = timed(&mut t, "domain", || Domain::new(mesh))?;
-    let placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;
+    let mut placement = timed(&mut t, "placement", || place_strokes(&dom, &o.placement))?;
+    let cuts = o
+        .plan
+        .min_turning_radius
+        .map(|r| crate::stroke_checks::cut_tight_ends(&dom, &mut placement, r))
+        .unwrap_or_default();
     let cov = match &o.coverage {
         Some(c) => Some(timed(&mut t, "coverage", || coverage(&dom, &placement, c))?),
         None => None,
@@ -108,6 +115,8 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
     };
     let mut report = Report::new(&placement, &plan, cov.as_ref(), t);
     report.charts = dom.chart_count();
+    report.tight_end_cuts = cuts.cuts;
+    report.tight_end_dropped = cuts.dropped;
     let mut with = vec![false; dom.chart_count()];
     for s in &placement.strokes {
         for &f in &s.faces {
@@ -148,5 +157,6 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
         strokes_json: json,
         report,
         strokes_3d,
+        domain: std::sync::Arc::new(dom),
     })
 }

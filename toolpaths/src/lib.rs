@@ -50,6 +50,7 @@ mod report;
 mod simplify;
 mod spacing;
 mod stroke;
+mod stroke_checks;
 mod svg_out;
 mod topology;
 mod trace;
@@ -72,5 +73,9 @@ pub use plan::{
 pub use report::{PhaseTime, Report};
 pub use simplify::{fit_moves, rdp_indices, Segment};
 pub use spacing::Spacing;
+pub use stroke_checks::{
+    check_strokes, cut_tight_ends, CheckSample, LockFigures, LockProbe, Share, SplayFigures,
+    StrokeCheckOptions, StrokeChecks, StrokePlace, TightEndCuts, TurningFigures,
+};
 pub use svg_out::{write_svg, SvgOptions};
 pub use trace::{trace_streamline, StopReason, Stroke, TraceOptions};

@@ -86,6 +86,12 @@ pub struct PlanOptions {
     pub overtravel: f64,
     /// Ordering options.
     pub order: OrderOptions,
+    /// The tool's minimum turning radius, mm (> 0; default none): stroke ends at a boundary or
+    /// a singularity's exclusion zone that turn tighter within two brush widths of the end are
+    /// cut back before coverage and planning ([`crate::cut_tight_ends`]; the report counts
+    /// the cuts). grainline sets it from `solver.constraints.turning_radius`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_turning_radius: Option<f64>,
 }
 
 impl Default for PlanOptions {
@@ -102,6 +108,7 @@ impl Default for PlanOptions {
             ramp_height: 0.0,
             overtravel: 0.0,
             order: OrderOptions::default(),
+            min_turning_radius: None,
         }
     }
 }
@@ -119,6 +126,9 @@ impl PlanOptions {
             });
         }
         positive("plan.tolerance", self.tolerance)?;
+        if let Some(r) = self.min_turning_radius {
+            positive("plan.min_turning_radius", r)?;
+        }
         non_negative("plan.contact_depth", self.contact_depth)?;
         non_negative("plan.lead_in", self.lead_in)?;
         non_negative("plan.lead_out", self.lead_out)?;

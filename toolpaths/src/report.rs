@@ -61,6 +61,14 @@ pub struct Report {
     /// Charts with at least one stroke.
     #[serde(default)]
     pub charts_with_strokes: usize,
+    /// Stroke ends cut back because they turned tighter than `plan.min_turning_radius` near
+    /// a boundary or a singularity ([`crate::cut_tight_ends`]); written when non-zero.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub tight_end_cuts: usize,
+    /// Strokes dropped after such a cut (less than one brush width left); written when
+    /// non-zero.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub tight_end_dropped: usize,
     /// Strokes skipped for tilt (stroke index, tilt in degrees).
     pub skipped_tilt: Vec<(usize, f64)>,
     /// Field evaluations during tracing.
@@ -71,6 +79,10 @@ pub struct Report {
     /// empty G-code program written because `gcode.allow_empty` is set).
     #[serde(default)]
     pub warnings: Vec<String>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 fn seg_len(from: [f64; 3], s: &Segment) -> f64 {
@@ -130,6 +142,8 @@ impl Report {
             fill_strokes: placement.fill_strokes,
             charts: 0,
             charts_with_strokes: 0,
+            tight_end_cuts: 0,
+            tight_end_dropped: 0,
             skipped_tilt: plan.skipped_tilt.clone(),
             field_evaluations: placement.field_evaluations,
             timings,
