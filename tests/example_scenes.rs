@@ -4,6 +4,8 @@
 //! rs274 on first use): accepted, no rapid below the travel height, travel above every
 //! cutting point, every feed > 0.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -39,6 +41,7 @@ fn check_gcode_tool() -> Option<PathBuf> {
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
     let p = shared.join("tools/check-gcode");
     if p.exists() {
+        common::ensure_rs274(&p);
         Some(p)
     } else {
         eprintln!("skipping the rs274 check: {} not found (../shared is absent)", p.display());

@@ -5,6 +5,8 @@
 //! taken from the layout's own report. Tests needing ../shared (or `$GRAINLINE_SHARED`) skip
 //! with a message when it is absent.
 
+mod common;
+
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::process::Command;
@@ -385,6 +387,7 @@ fn check_gcode(shared: &std::path::Path, name: &str, ngc: &std::path::Path) {
         eprintln!("skipping the rs274 check: {} not found", tool.display());
         return;
     }
+    common::ensure_rs274(&tool);
     let o = Command::new("bash").arg(&tool).arg(ngc).output().unwrap();
     assert!(
         o.status.success(),
