@@ -181,10 +181,11 @@ fn bend_on_a_cylinder_follows_the_hand_formula() {
     let mut e = warp(Centre::Vertex(centre as u32), radius, strength, [0.0, 1.0, 0.0]);
     e.metric = Metric::Euclidean;
     let r = s.apply(&[Edit::Bend(e)]);
-    // Brush plane: normal x, y axis = world y, x axis = y × n = −z. A point at angle α and
-    // height z has planar coordinates (−z, sin α)/r. ℓ_q ∥ z has planar components (−1, 0), so
-    // J_W ℓ_q = (−1, −s ∂d/∂x); lifted to the tangent plane spanned by z (planar (−1, 0)) and
-    // t_α = (−sin α, cos α, 0) (planar (0, cos α)): ℓ* ∥ z − (s ∂d/∂x / cos α) t_α.
+    // Brush plane: normal x, y axis = world y, x axis = y × n = −z. The brush chart unrolls
+    // the cylinder (it is developable: geodesic polar coordinates are an isometry onto the
+    // plane): a point at angle α and height z has chart coordinates (−z, α)/r, and the chart
+    // axes are −z and t_α = (−sin α, cos α, 0) at every point. ℓ_q ∥ z has chart components
+    // (−1, 0), so J_W ℓ_q = (−1, −s ∂d/∂x) and ℓ* ∥ z − s ∂d/∂x t_α.
     let mut worst: f64 = 0.0;
     let mut count = 0;
     for (i, p) in s.mesh.positions.iter().enumerate() {
@@ -192,11 +193,11 @@ fn bend_on_a_cylinder_follows_the_hand_formula() {
             continue;
         }
         let alpha = p.y.atan2(p.x);
-        let (px, py) = (-p.z / radius, alpha.sin() / radius);
+        let (px, py) = (-p.z / radius, alpha / radius);
         let (qx, qy) = hand_inverse(false, strength, px, py);
         let dx = hand_d(false, qx, qy).1;
         let t_alpha = Vector3::new(-alpha.sin(), alpha.cos(), 0.0);
-        let expected = Vector3::z() - t_alpha * (strength * dx / alpha.cos());
+        let expected = Vector3::z() - t_alpha * (strength * dx);
         worst = worst.max(line_angle(&r.target_ell[i].unwrap(), &expected));
         count += 1;
     }

@@ -105,6 +105,7 @@ fn warp(kind: WarpKind, strength: f64, support: Vec<u32>) -> EditShape {
         ex: Vector3::x(),
         ey: Vector3::y(),
         support,
+        chart: Vec::new(),
     }
 }
 
@@ -280,6 +281,7 @@ fn an_index_one_singularity_inside_the_support_is_counted() {
         ex: Vector3::x(),
         ey: Vector3::y(),
         support,
+        chart: Vec::new(),
     };
     for symmetry in [Symmetry::Oriented, Symmetry::Line] {
         let inside = radial(Vector2::new(0.0131, 0.0072));
@@ -415,12 +417,20 @@ fn the_tools_record_their_shape() {
     ];
     let r = apply_edits(&input, &edits, &EditOptions::default()).unwrap();
     match &r.reports[0].shape {
-        Some(EditShape::Warp { kind, strength, radius, origin, ex, ey, support }) => {
+        Some(EditShape::Warp { kind, strength, radius, origin, ex, ey, support, chart }) => {
             assert_eq!((*kind, *strength, *radius), (WarpKind::Bend, 0.7, 0.51));
             assert!(origin.norm() < 1e-9 && (ey - Vector3::y()).norm() < 1e-9, "{ey:?}");
             assert!((ex.cross(ey) - Vector3::z()).norm() < 1e-9, "{ex:?}");
             let expected: Vec<u32> = pl.within(0.51, Vector2::zeros());
             assert_eq!(support, &expected);
+            // On the plane the brush chart is the plane's coordinates over r, and it holds
+            // every support vertex and the ring of corners around it.
+            assert!(chart.len() > support.len(), "{} ≤ {}", chart.len(), support.len());
+            for (v, c) in chart {
+                let p = pl.mesh.positions[*v as usize];
+                let want = [ex.dot(&p) / 0.51, ey.dot(&p) / 0.51];
+                assert!((c[0] - want[0]).hypot(c[1] - want[1]) < 1e-9, "{v}: {c:?} vs {want:?}");
+            }
         }
         other => panic!("{other:?}"),
     }

@@ -22,6 +22,7 @@
 // `!(x > 0.0)` is how the tools reject NaN along with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod chart;
 pub mod curve;
 pub mod light;
 pub mod resolution;

@@ -14,12 +14,15 @@
 //!   hole in a flat region the shortcut crosses the hole.
 //! - **Plane**: a weighted PCA of the support's positions (weights Aᵢ(1 − dᵢ²/r²)), its normal
 //!   the axis of least variance, oriented like the vertex normals (the mean normal when the
-//!   support is too small or too round for PCA). The origin is the centre projected onto the
-//!   plane; (x, y) = [eₓ e_y]ᵀ(p − o)/r, so every support vertex lies in the unit disk
-//!   (projection never lengthens a distance); on a plane the support is exactly the disk.
+//!   support is too small or too round for PCA). Its origin is the centre point, its axes eₓ,
+//!   e_y the brush's.
+//! - **Chart**: the support unrolled onto that plane in geodesic polar coordinates (the
+//!   discrete exponential map, [`super::chart`]), in units of r: on a plane it is the plane's
+//!   own coordinates and the support is exactly the unit disk; on a curved part it does not
+//!   fold where the orthogonal projection would (a fin, a rim).
 //! - **Fall-off** w(x, y) = (1 − x² − y²)² (paper §5).
-//! - **Point location** (the warps' ℓ_q): the faces with a corner in the support, projected to
-//!   the plane and bucketed in a grid; a value at a planar point q is the barycentric
+//! - **Point location** (the warps' ℓ_q): the faces with a corner in the support, in the chart
+//!   and bucketed in a grid; a value at a planar point q is the barycentric
 //!   interpolation of the corner values in the triangle containing q (the one nearest the query's
 //!   vertex in space when the projection overlaps itself), or, for q beyond a boundary, at the
 //!   closest point of the closest triangle.
@@ -30,6 +33,7 @@ use std::collections::BinaryHeap;
 use nalgebra::{Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::chart::{Base, Chart};
 use super::Context;
 use crate::geometry::Frame;
 use crate::{Error, Result};
@@ -298,13 +302,14 @@ pub struct Support {
     pub vertices: Vec<usize>,
     /// Distance of each support vertex to the centre.
     pub distance: Vec<f64>,
-    /// Planar coordinates of each support vertex (inside the unit disk).
+    /// Chart coordinates of each support vertex (units of r; about the geodesic distance from
+    /// the centre, so inside the unit disk up to the chart's error).
     pub xy: Vec<Vector2<f64>>,
     /// The brush radius r.
     pub radius: f64,
     /// The centre on the surface.
     pub centre: SurfacePoint,
-    /// Origin of the plane (the centre projected onto it).
+    /// Origin of the plane and the chart (the centre point).
     pub origin: Vector3<f64>,
     /// Plane x axis.
     pub ex: Vector3<f64>,
@@ -312,6 +317,9 @@ pub struct Support {
     pub ey: Vector3<f64>,
     /// Plane normal, ex × ey.
     pub normal: Vector3<f64>,
+    /// The geodesic polar chart of the support and the faces around it ([`super::chart`]);
+    /// [`Support::xy`] are its coordinates.
+    pub chart: Chart,
 }
 
 /// The paper's fall-off w(x, y) = (1 − x² − y²)², 0 outside the unit disk.
@@ -382,46 +390,69 @@ impl Support {
                 (ex, normal.cross(&ex))
             }
         };
+        let chart = brush_chart(ctx, &src, radius, (origin, ex, ey, normal), &vertices, &distance);
+        // Every support vertex is in the chart (it is placed from an earlier neighbour or the
+        // centre); the fallback to the plane only guards against a non-finite estimate.
         let xy = vertices
             .iter()
             .map(|&v| {
-                let w = ctx.mesh.positions[v] - origin;
-                Vector2::new(ex.dot(&w), ey.dot(&w)) / radius
+                chart.coords(v).unwrap_or_else(|| {
+                    let w = ctx.mesh.positions[v] - origin;
+                    Vector2::new(ex.dot(&w), ey.dot(&w)) / radius
+                })
             })
             .collect();
-        Ok(Support { vertices, distance, xy, radius, centre: src, origin, ex, ey, normal })
+        Ok(Support { vertices, distance, xy, radius, centre: src, origin, ex, ey, normal, chart })
     }
 
-    /// Planar coordinates of a world point.
-    pub fn to_plane(&self, p: &Vector3<f64>) -> Vector2<f64> {
-        let w = p - self.origin;
-        Vector2::new(self.ex.dot(&w), self.ey.dot(&w)) / self.radius
+    /// Chart components of the tangent vector `w` at vertex `v` ([`Chart::vector_to_chart`]).
+    pub(crate) fn vector_to_chart(
+        &self,
+        ctx: &Context,
+        v: usize,
+        w: &Vector3<f64>,
+    ) -> Vector2<f64> {
+        self.chart.vector_to_chart(v, &ctx.geom.frames[v], w)
     }
 
-    /// Planar components of a world tangent vector (unscaled: [eₓ e_y]ᵀ v).
-    pub fn vector_to_plane(&self, v: &Vector3<f64>) -> Vector2<f64> {
-        Vector2::new(self.ex.dot(v), self.ey.dot(v))
+    /// The tangent vector at vertex `v` whose chart components are `c`.
+    pub(crate) fn vector_from_chart(
+        &self,
+        ctx: &Context,
+        v: usize,
+        c: &Vector2<f64>,
+    ) -> Vector3<f64> {
+        self.chart.vector_from_chart(v, &ctx.geom.frames[v], c)
     }
+}
 
-    /// The tangent vector at a vertex of normal n, with frame [t b n], whose planar components
-    /// are `v`: t·a + b·c with [eₓ e_y]ᵀ[t b](a, c) = v. Where the tangent plane is nearly
-    /// perpendicular to the brush plane (|n·n_plane| < 0.1) the lift is ill-conditioned and the
-    /// plane vector is projected onto the tangent plane instead.
-    pub fn vector_from_plane(&self, frame: &Frame, v: &Vector2<f64>) -> Vector3<f64> {
-        let m = nalgebra::Matrix2::new(
-            self.ex.dot(&frame.t),
-            self.ex.dot(&frame.b),
-            self.ey.dot(&frame.t),
-            self.ey.dot(&frame.b),
-        );
-        if m.determinant().abs() > 0.1 {
-            if let Some(inv) = m.try_inverse() {
-                return frame.to_world(&(inv * v));
-            }
-        }
-        let w = self.ex * v.x + self.ey * v.y;
-        w - frame.n * frame.n.dot(&w)
-    }
+/// The chart of a support ([`super::chart`]): its vertices nearest first, then the other
+/// corners of the faces that touch it (the point location's triangles need every corner).
+fn brush_chart(
+    ctx: &Context,
+    src: &SurfacePoint,
+    radius: f64,
+    (origin, ex, ey, normal): (Vector3<f64>, Vector3<f64>, Vector3<f64>, Vector3<f64>),
+    vertices: &[usize],
+    distance: &[f64],
+) -> Chart {
+    let mut order: Vec<(f64, usize)> =
+        vertices.iter().zip(distance).map(|(&v, &d)| (d, v)).collect();
+    order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut ring: Vec<(f64, usize)> = vertices
+        .iter()
+        .flat_map(|&v| ctx.vf.of(v).iter().map(|&(f, _)| f as usize))
+        .flat_map(|f| ctx.mesh.faces[f].map(|c| c as usize))
+        .filter(|c| vertices.binary_search(c).is_err())
+        .map(|c| ((ctx.mesh.positions[c] - origin).norm(), c))
+        .collect();
+    ring.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    ring.dedup_by_key(|x| x.1);
+    let order: Vec<usize> = order.iter().chain(&ring).map(|x| x.1).collect();
+    let base = Base { origin, ex, ey, normal, seeds: &src.seeds, radius };
+    let neighbours =
+        |v: usize| ctx.geom.adjacency.neighbors(v).iter().map(|&u| u as usize).collect();
+    Chart::new(&ctx.mesh.positions, &ctx.geom.frames, neighbours, &base, &order)
 }
 
 /// The plane normal of a weighted PCA of the support, oriented like the vertex normals.
@@ -501,7 +532,10 @@ impl PlaneLocator {
         faces.dedup();
         let tris: Vec<(usize, [Vector2<f64>; 3])> = faces
             .iter()
-            .map(|&f| (f, ctx.mesh.face_positions(f).map(|p| support.to_plane(&p))))
+            .filter_map(|&f| {
+                let [a, b, c] = ctx.mesh.faces[f].map(|v| support.chart.coords(v as usize));
+                Some((f, [a?, b?, c?]))
+            })
             .collect();
         let mut lo = Vector2::repeat(f64::INFINITY);
         let mut hi = Vector2::repeat(f64::NEG_INFINITY);
@@ -581,23 +615,27 @@ impl PlaneLocator {
         (best.map_or((0, [1.0, 0.0, 0.0]), |(_, f, b)| (f, b)), false)
     }
 
-    /// Interpolates the vertex vectors `values` at `q`. For line fields (`align`), the corner
-    /// values are first given the sign of the longest one (ℓ of a line field has no sign).
+    /// Interpolates the vertex vectors `values` at `q`, in chart components (each corner's
+    /// vector taken into the chart through its own frame, [`Support::vector_to_chart`]). For
+    /// line fields (`align`), the corner values are first given the sign of the longest one
+    /// (ℓ of a line field has no sign).
     pub fn interpolate(
         &self,
         ctx: &Context,
+        support: &Support,
         q: &Vector2<f64>,
         near: &Vector3<f64>,
         values: &[Vector3<f64>],
         align: bool,
-    ) -> Vector3<f64> {
+    ) -> Vector2<f64> {
         let (f, b) = self.locate(ctx, q, near);
-        let corners = ctx.mesh.faces[f].map(|v| values[v as usize]);
+        let corners = ctx.mesh.faces[f]
+            .map(|v| support.vector_to_chart(ctx, v as usize, &values[v as usize]));
         let reference = *corners
             .iter()
             .max_by(|a, b| a.norm_squared().total_cmp(&b.norm_squared()))
             .unwrap_or(&corners[0]);
-        let mut out = Vector3::zeros();
+        let mut out = Vector2::zeros();
         for k in 0..3 {
             let c =
                 if align && corners[k].dot(&reference) < 0.0 { -corners[k] } else { corners[k] };

@@ -1,6 +1,7 @@
 //! The warp tools of the paper's §5 (Fig. 7–9): bend and expand.
 //!
-//! A warp W moves points of the brush plane along y: W(x, y) = (x, y + s·d(x, y)), with
+//! A warp W moves points of the brush chart (geodesic polar coordinates around the centre,
+//! [`super::chart`]; on a plane, the plane itself) along y: W(x, y) = (x, y + s·d(x, y)), with
 //!
 //! ```text
 //! bend:    d(x, y) = w(x, y)/2
@@ -14,12 +15,12 @@
 //! W is the identity on and outside the unit circle, keeps x, and is a bijection of the disk as
 //! long as ∂y′/∂y = 1 + s ∂d/∂y > 0, i.e. for s within [`strength_range`].
 //!
-//! The targets (paper §5): ℓ*ᵢ = J_W(q) ℓ_q with q = W⁻¹(pᵢ), pᵢ the planar coordinates of vertex
+//! The targets (paper §5): ℓ*ᵢ = J_W(q) ℓ_q with q = W⁻¹(pᵢ), pᵢ the chart coordinates of vertex
 //! i and J_W = [[1, 0], [s ∂d/∂x, 1 + s ∂d/∂y]]. W⁻¹ is solved along the vertical line x = xᵢ by
 //! Newton's method safeguarded by bisection (W maps the chord of the disk at x onto itself,
-//! monotonically). ℓ_q is interpolated from the current targets (see
-//! [`super::support`], "point location"), mapped to the plane by [eₓ e_y]ᵀ, warped by J_W, and lifted
-//! back to the tangent plane of vertex i ([`super::support::Support::vector_from_plane`]).
+//! monotonically). ℓ_q is interpolated from the current targets in chart components (see
+//! [`super::support`], "point location"), warped by J_W, and taken back to the tangent plane of
+//! vertex i through its frame's chart angle ([`super::support::Support::vector_from_chart`]).
 
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
@@ -194,9 +195,9 @@ pub(crate) fn apply(
             ),
         })?;
         let pos = ctx.mesh.positions[v];
-        let ell_q = locator.interpolate(ctx, &q, &pos, &st.target, align);
-        let planar = jacobian(kind, e.strength, &q) * support.vector_to_plane(&ell_q);
-        let new = support.vector_from_plane(&ctx.geom.frames[v], &planar);
+        let ell_q = locator.interpolate(ctx, &support, &q, &pos, &st.target, align);
+        let planar = jacobian(kind, e.strength, &q) * ell_q;
+        let new = support.vector_from_chart(ctx, v, &planar);
         max_turn = max_turn.max(line_angle_deg(&new, &st.target[v]));
         // The position target (math.md §9): g*(p) = g(W⁻¹(p)), the corners' ĝ stated in the
         // orientation of vertex v's grain for line fields.

@@ -61,8 +61,8 @@ pub const MAX_DISTANCE: f64 = 2.0;
 /// What an edit asked for, recorded by the edit tools (src/edit) in `EditReport::shape`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EditShape {
-    /// bend / expand: the brush plane of src/edit/support.rs (origin o, unit axes ex, ey;
-    /// planar coordinates (x, y) = [ex ey]ᵀ(p − o)/radius lie in the unit disk) and the warp.
+    /// bend / expand: the brush plane of src/edit/support.rs (origin o, unit axes ex, ey), the
+    /// brush chart (geodesic polar coordinates in units of r, about the unit disk) and the warp.
     Warp {
         /// Bend or expand.
         kind: WarpKind,
@@ -78,6 +78,10 @@ pub enum EditShape {
         ey: Vector3<f64>,
         /// The support's vertices, ascending.
         support: Vec<u32>,
+        /// Chart coordinates (units of r) of the vertices of the faces around the support,
+        /// sorted by vertex: the brush chart of src/edit/chart.rs, in which the warp acts. Empty:
+        /// the plane's coordinates [ex ey]ᵀ(p − o)/radius (a flat brush given by hand).
+        chart: Vec<(u32, [f64; 2])>,
     },
     /// curve: the drawn curves as 3D polylines on the surface (UV curves lifted through the
     /// mesh's UV map), the brush radius, and the support (vertices that got a target).
@@ -117,6 +121,7 @@ pub fn warp_shape(kind: WarpKind, strength: f64, support: &Support) -> EditShape
         ex: support.ex,
         ey: support.ey,
         support: support.vertices.iter().map(|&v| v as u32).collect(),
+        chart: support.chart.points(),
     }
 }
 
@@ -262,6 +267,81 @@ fn segments_on(
             }
             let g = corner_g(face, h, u, symmetry)?;
             zero_segment(&mesh.face_positions(f), &g)
+        })
+        .collect()
+}
+
+/// [`segments_on`], each with the index in `faces` of its face.
+fn indexed_segments(
+    mesh: &Mesh,
+    h: &[Vector3<f64>],
+    u: &[Vector3<f64>],
+    symmetry: Symmetry,
+    faces: &[usize],
+) -> Vec<(usize, [Vector3<f64>; 2])> {
+    let n = mesh.num_vertices();
+    faces
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &f)| {
+            let face = mesh.faces.get(f)?;
+            if face.iter().any(|&v| v as usize >= n) {
+                return None;
+            }
+            let g = corner_g(face, h, u, symmetry)?;
+            Some((k, zero_segment(&mesh.face_positions(f), &g)?))
+        })
+        .collect()
+}
+
+/// A face of a brush in its chart: the 3D corners and their chart coordinates.
+struct ChartFace {
+    positions: [Vector3<f64>; 3],
+    corners: [Vector2<f64>; 3],
+}
+
+impl ChartFace {
+    /// The chart point of a point of the face (barycentric in its 3D triangle).
+    fn at(&self, p: &Vector3<f64>) -> Vector2<f64> {
+        let [a, b, c] = self.positions;
+        let (_, w) = crate::edit::support::closest_point_on_triangle(p, &a, &b, &c);
+        self.corners[0] * w[0] + self.corners[1] * w[1] + self.corners[2] * w[2]
+    }
+}
+
+/// The faces of `any` with their chart corners: from `chart` (vertex, coordinates) when it is
+/// given, else those facing the plane (origin, ex, ey), projected to it and scaled by 1/radius.
+fn brush_faces(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    any: &[usize],
+    chart: &[(u32, [f64; 2])],
+    (origin, ex, ey): (&Vector3<f64>, &Vector3<f64>, &Vector3<f64>),
+    radius: f64,
+) -> Vec<(usize, ChartFace)> {
+    let coords = |v: u32| {
+        let i = chart.binary_search_by_key(&v, |c| c.0).ok()?;
+        Some(Vector2::new(chart[i].1[0], chart[i].1[1]))
+    };
+    let plane_n = ex.cross(ey);
+    any.iter()
+        .filter_map(|&f| {
+            let face = mesh.faces.get(f)?;
+            let positions = mesh.face_positions(f);
+            let corners = if chart.is_empty() {
+                let s: Vector3<f64> = face.iter().map(|&v| geometry.frames[v as usize].n).sum();
+                if s.dot(&plane_n) <= 0.0 {
+                    return None;
+                }
+                positions.map(|p| {
+                    let w = p - origin;
+                    Vector2::new(ex.dot(&w), ey.dot(&w)) / radius
+                })
+            } else {
+                let [a, b, c] = face.map(coords);
+                [a?, b?, c?]
+            };
+            Some((f, ChartFace { positions, corners }))
         })
         .collect()
 }
@@ -584,42 +664,30 @@ pub fn edit_fidelity(
 
     // Distances of the target samples, in units of r.
     let (distances, empty_target, empty_c1) = match shape {
-        EditShape::Warp { kind, strength, origin, ex, ey, .. } => {
-            let plane_n = ex.cross(ey);
-            let faces: Vec<usize> = any
-                .iter()
-                .copied()
-                .filter(|&f| {
-                    let s: Vector3<f64> =
-                        mesh.faces[f].iter().map(|&v| geometry.frames[v as usize].n).sum();
-                    s.dot(&plane_n) > 0.0
-                })
-                .collect();
-            let to_plane = |p: &Vector3<f64>| {
-                let w = p - origin;
-                Vector2::new(ex.dot(&w), ey.dot(&w)) / radius
+        EditShape::Warp { kind, strength, origin, ex, ey, chart, .. } => {
+            // The support's faces in the brush chart (or, without one, those facing the
+            // plane, projected to it); C0 and C1 are cut from them there.
+            let chart_faces = brush_faces(mesh, geometry, &any, chart, (origin, ex, ey), radius);
+            let faces: Vec<usize> = chart_faces.iter().map(|x| x.0).collect();
+            let in_chart = |segs: Vec<(usize, [Vector3<f64>; 2])>| -> Vec<[Vector2<f64>; 2]> {
+                segs.iter().map(|&(k, s)| s.map(|p| chart_faces[k].1.at(&p))).collect()
             };
-            let c0: Vec<[Vector2<f64>; 2]> = segments_on(mesh, h, u_before, symmetry, &faces)
-                .iter()
-                .map(|s| s.map(|p| to_plane(&p)))
-                .collect();
+            let c0 = in_chart(indexed_segments(mesh, h, u_before, symmetry, &faces));
             let all_samples =
                 warp_samples(&c0, *kind, *strength, options.sample_spacing, options.compare_radius);
-            // Samples of W(C0) on none of the support's faces (seen in the brush plane) lie
-            // beyond the part, or where the surface turns away from the plane out of the
-            // brush's reach: no grain the edit may change puts a highlight there. They are
-            // counted and left out.
-            let tris: Vec<[Vector2<f64>; 3]> =
-                faces.iter().map(|&f| mesh.face_positions(f).map(|p| to_plane(&p))).collect();
+            // Samples of W(C0) on none of the support's faces (in the brush chart) lie beyond
+            // the part's boundary: no grain the edit may change puts a highlight there. They
+            // are counted and left out.
+            let tris: Vec<[Vector2<f64>; 3]> = chart_faces.iter().map(|x| x.1.corners).collect();
             let samples: Vec<Vector2<f64>> =
                 all_samples.iter().copied().filter(|p| on_faces(&tris, p)).collect();
             fid.off_part = all_samples.len() - samples.len();
-            let c1: Vec<[Vector3<f64>; 2]> = segments_on(mesh, h, u_after, symmetry, &faces)
-                .iter()
-                .map(|s| s.map(|p| to_plane(&p)))
-                .filter(|s| s[0].norm() <= 1.0 || s[1].norm() <= 1.0)
-                .map(|s| s.map(|p| Vector3::new(p.x, p.y, 0.0)))
-                .collect();
+            let c1: Vec<[Vector3<f64>; 2]> =
+                in_chart(indexed_segments(mesh, h, u_after, symmetry, &faces))
+                    .into_iter()
+                    .filter(|s| s[0].norm() <= 1.0 || s[1].norm() <= 1.0)
+                    .map(|s| s.map(|p| Vector3::new(p.x, p.y, 0.0)))
+                    .collect();
             let empty_c1 = c1.is_empty();
             let grid = SegmentGrid::new(c1, MAX_DISTANCE);
             let d: Vec<f64> = samples
@@ -646,7 +714,7 @@ pub fn edit_fidelity(
         let all = fid.off_part + distances.len();
         format!(
             "{} of {all} samples of the warped highlight ({:.0} %) lie beyond the part or out of \
-             the brush's reach (on none of its faces seen in the brush plane) and are left out: no \
+             the brush's reach (on none of its faces in the brush chart) and are left out: no \
              grain can put a highlight there",
             fid.off_part,
             100.0 * fid.off_part as f64 / all as f64

@@ -318,9 +318,15 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         }
         None => None,
     };
-    let (phi, h, h_gradient, ell, critical, lighting) = match &optimized {
-        Some(o) => (&o.phi, &o.h, &o.h_gradient, &o.highlight.ell, &o.critical, o.lighting),
-        None => (
+    // The solved angles as FIELD.json states them (u = direction(φ), read back by atan2), so
+    // that tracing a written FIELD.json (`--field`) gives these outputs bit for bit: the solver's
+    // own φ may differ from them by whole turns, and cos/sin of φ + 2π by an ulp.
+    let solved_phi = optimized.as_ref().map(|o| g.angles_of(&g.directions_of(&o.phi)));
+    let (phi, h, h_gradient, ell, critical, lighting) = match (&optimized, &solved_phi) {
+        (Some(o), Some(phi)) => {
+            (phi, &o.h, &o.h_gradient, &o.highlight.ell, &o.critical, o.lighting)
+        }
+        _ => (
             given_phi.as_ref().unwrap_or(&prepared.field.phi),
             &prepared.field.h,
             &prepared.field.h_gradient,
