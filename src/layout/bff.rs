@@ -103,7 +103,9 @@ pub(crate) fn close_lengths(
         return None;
     }
     let lambda = m.try_inverse()? * gap;
-    Some(target.iter().zip(mass).zip(tangents).map(|((&l, &w), t)| l - w * t.dot(&lambda)).collect())
+    Some(
+        target.iter().zip(mass).zip(tangents).map(|((&l, &w), t)| l - w * t.dot(&lambda)).collect(),
+    )
 }
 
 /// The polygon with edge lengths `lengths` turning by `turning[m]` at its vertex `m` (B4, B6):
@@ -189,7 +191,15 @@ impl Blocks {
     /// The values of a function given on the interior and the boundary, per chart vertex.
     fn gather(&self, interior: &[f64], boundary: &[f64]) -> Vec<f64> {
         (0..self.slot.len())
-            .map(|v| if self.on_boundary[v] { boundary[self.slot[v]] } else { interior[self.slot[v]] })
+            .map(
+                |v| {
+                    if self.on_boundary[v] {
+                        boundary[self.slot[v]]
+                    } else {
+                        interior[self.slot[v]]
+                    }
+                },
+            )
             .collect()
     }
 }
@@ -329,6 +339,58 @@ mod tests {
         for (l, w) in closed.iter().zip(want) {
             assert!((l - w).abs() < 1e-12, "{closed:?}");
         }
+    }
+
+    /// The cap of an icosphere of radius 10 whose face centroids have z > 5 (about 60°), as a
+    /// chart, with its positions.
+    fn cap_chart() -> (ChartMesh, Vec<Vector3<f64>>) {
+        let s = crate::generate::icosphere(10.0, 3);
+        let faces: Vec<[u32; 3]> = s
+            .faces
+            .iter()
+            .copied()
+            .filter(|f| f.iter().map(|&v| s.positions[v as usize].z).sum::<f64>() > 15.0)
+            .collect();
+        let mesh = crate::mesh::Mesh::from_triangles(s.positions, faces);
+        let he = crate::mesh::halfedge::HalfEdges::new(mesh.num_vertices(), &mesh.faces).unwrap();
+        let ids: Vec<u32> = (0..mesh.num_faces() as u32).collect();
+        let tag = vec![0u32; ids.len()];
+        let chart = ChartMesh::new(&ids, &he, &mesh, &tag, &ids, 0);
+        let pos = chart.positions(&mesh);
+        (chart, pos)
+    }
+
+    /// Area-weighted mean σ₁/σ₂ of a flattening.
+    fn mean_angle_distortion(chart: &ChartMesh, pos: &[Vector3<f64>], uv: &[Vector2<f64>]) -> f64 {
+        let m = super::super::distortion::FaceMeasures::new(chart, pos, uv, 1.0);
+        let total: f64 = m.area.iter().sum();
+        m.sigma.iter().zip(&m.area).map(|(s, a)| s.0 / s.1 * a).sum::<f64>() / total
+    }
+
+    #[test]
+    fn both_extensions_of_a_cap_are_valid_and_the_harmonic_one_keeps_the_polygon() {
+        let (chart, pos) = cap_chart();
+        assert!(chart.is_disk());
+        let order = boundary_loop(&chart).unwrap();
+        let conformal = bff(&chart, &pos, Extension::Conformal).unwrap();
+        let harmonic = bff(&chart, &pos, Extension::Harmonic).unwrap();
+        for uv in [&conformal, &harmonic] {
+            assert_eq!(super::super::distortion::invalid(&chart, uv), None);
+        }
+        // u = 0 on the boundary and the closing changes lengths by the discretization only:
+        // the harmonic image's rim is the 3D rim's length within 1 %.
+        let rim = |p: &dyn Fn(usize) -> f64| (0..order.len()).map(p).sum::<f64>();
+        let m = order.len();
+        let at = |k: usize| order[k % m] as usize;
+        let rim_3d = rim(&|k| (pos[at(k + 1)] - pos[at(k)]).norm());
+        let rim_uv = rim(&|k| (harmonic[at(k + 1)] - harmonic[at(k)]).norm());
+        assert!((rim_uv / rim_3d - 1.0).abs() < 0.01, "rim {rim_uv} vs {rim_3d}");
+        let (c, h) = (
+            mean_angle_distortion(&chart, &pos, &conformal),
+            mean_angle_distortion(&chart, &pos, &harmonic),
+        );
+        eprintln!("cap 60°: mean σ₁/σ₂ conformal {c:.5}, harmonic {h:.5}");
+        assert!(c < 1.05 && h < 1.05, "conformal {c}, harmonic {h}");
     }
 
     #[test]

@@ -5,7 +5,9 @@
 //! 1. Every edge-connected piece of the mesh is tried as one chart. A chart must be a disk,
 //!    or planar (a disk with holes) with its normals within about a hemisphere ([`charts`]);
 //!    it is flattened by LSCM ([`lscm`], conformal) and, with
-//!    [`Method::Arap`], refined by ARAP ([`arap`], local/global, started from LSCM). It is
+//!    [`Method::Arap`], refined by ARAP ([`arap`], local/global, started from LSCM); with
+//!    [`Method::Bff`] a disk chart is flattened by boundary first flattening instead ([`bff`],
+//!    conformal, boundary lengths kept), other charts and invalid BFF maps by LSCM. It is
 //!    kept when the flattening is valid (no flipped triangle, no boundary crossing,
 //!    [`distortion`]) and the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most
 //!    [`LayoutOptions::max_stretch`]. A developable or nearly developable sheet therefore stays
@@ -533,15 +535,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     // Merge small charts into their neighbours while the unions flatten.
     let cap = (MERGE_FRACTION * nf as f64) as usize;
     let mut ctx = MergeContext { tag: &mut tag, pos_in: &mut pos_in, next_id: &mut next_id };
-    cuts.merges = merge_charts(
-        &mut accepted,
-        mesh,
-        &he,
-        &mut ctx,
-        options,
-        &mut counters,
-        cap,
-    );
+    cuts.merges = merge_charts(&mut accepted, mesh, &he, &mut ctx, options, &mut counters, cap);
     // Pack at one scale, then measure.
     let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
     let factor = pack::pack(&mut uvs, options.gap);
