@@ -99,7 +99,8 @@ pub(crate) fn close_lengths(
         gap += l * t;
     }
     let scale = m.trace();
-    if !(scale > 0.0) || m.determinant() <= 1e-12 * scale * scale {
+    let spans = scale.is_finite() && scale > 0.0 && m.determinant() > 1e-12 * scale * scale;
+    if !spans {
         return None;
     }
     let lambda = m.try_inverse()? * gap;
