@@ -208,6 +208,8 @@ pub struct LayoutReport {
     pub bff_fallbacks: usize,
     /// Of `bff_fallbacks`, the charts that were not disks (planar charts with holes).
     pub bff_not_disk: usize,
+    /// Charts (tried) whose conformal BFF map was not valid and got the harmonic one.
+    pub bff_harmonic: usize,
     /// ARAP local/global iterations over all charts.
     pub arap_iterations: usize,
     /// Cuts made.
@@ -242,6 +244,7 @@ struct Counters {
     arap_iterations: usize,
     bff_fallbacks: usize,
     bff_not_disk: usize,
+    bff_harmonic: usize,
 }
 
 /// The chart's BFF map (math.md §11.6), or `None` (counted) when the chart is not a disk or the
@@ -261,6 +264,7 @@ fn flatten_bff(
     for extension in [bff::Extension::Conformal, bff::Extension::Harmonic] {
         if let Ok(uv) = bff::bff(chart, pos, extension) {
             if invalid(chart, &uv).is_none() {
+                counters.bff_harmonic += (extension == bff::Extension::Harmonic) as usize;
                 return Some(uv);
             }
         }
@@ -607,6 +611,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
         arap_fallbacks: counters.arap_fallbacks,
         bff_fallbacks: counters.bff_fallbacks,
         bff_not_disk: counters.bff_not_disk,
+        bff_harmonic: counters.bff_harmonic,
         arap_iterations: counters.arap_iterations,
         cuts,
         uv_scale,
