@@ -1,7 +1,9 @@
 //! Boundary first flattening (Sawhney & Crane 2017, "Boundary First Flattening", ACM TOG
 //! 37(1)), with the boundary condition of minimal area distortion (scale factors u = 0 on
 //! the boundary), for one disk chart. math.md §11.6 gives the derivation (Eq. B1–B6) and the
-//! sign conventions.
+//! sign conventions. B1–B6 are this project's numbers, cited to the paper's steps (the
+//! Cherrier formula and the Dirichlet-to-Neumann map, the best-fit closed curve, the
+//! extension); the paper's own equation numbers were not at hand to check.
 //!
 //! With L the cotangent Laplacian (positive semi-definite, as in LSCM's Eq. L1), Θ_v the sum of
 //! the 3D corner angles at vertex v, K = 2π − Θ the angle defect of an interior vertex and
@@ -18,8 +20,8 @@
 //!      conjugate (L y = g, g_b = ½ (x_prev − x_next) on the boundary, the Hilbert transform)
 //! ```
 //!
-//! (B1) and (B5) use one factorization of L_II each for the scale factors and the harmonic
-//! extension; the conformal extension factors L once more (one vertex pinned). The boundary loop
+//! One factorization of L_II serves the scale factors (B1) and the harmonic extensions (B6);
+//! the conformal extension factors L once more (one vertex pinned). The boundary loop
 //! runs counter-clockwise (the direction of the chart's faces), so Σ κ̃ = 2π and γ is
 //! counter-clockwise.
 
