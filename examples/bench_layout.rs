@@ -28,9 +28,9 @@ fn main() {
         return;
     }
     println!(
-        "| mesh | faces | method | time s | charts | seam edges | area dist. mean / p95 | angle dist. mean / p95 | angle error ° mean | edge-length error mean / max | ARAP fallbacks | largest chart | cuts (creases / cones / bisections / merges) |"
+        "| mesh | faces | method | time s | charts | seam edges | area dist. mean / p95 | angle dist. mean / p95 | angle error ° mean | edge-length error mean / max | fallbacks (ARAP / BFF, not disk) | BFF harmonic | largest chart | cuts (creases / cones / bisections / merges) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let only = std::env::var("BENCH_MESH").ok();
     for name in [
         "paper-crumpled2.obj",
@@ -50,7 +50,7 @@ fn main() {
             options = LoadOptions { weld: Some(1e-6), allow_nonmanifold: true, ..options };
         }
         let mesh = load_obj(&dir.join(name), &options).expect(name).mesh;
-        for method in [Method::Lscm, Method::Arap] {
+        for method in [Method::Lscm, Method::Arap, Method::Bff] {
             let opts = LayoutOptions { method, ..LayoutOptions::default() };
             let mut times = Vec::new();
             let mut last = None;
@@ -62,7 +62,7 @@ fn main() {
             times.sort_by(f64::total_cmp);
             let r = last.expect("one run");
             println!(
-                "| {name} | {} | {} | {:.3} | {} | {} | {:.3} / {:.3} | {:.3} / {:.3} | {:.2} | {:.2e} / {:.2e} | {} | {} | {} / {} / {} / {} |",
+                "| {name} | {} | {} | {:.3} | {} | {} | {:.3} / {:.3} | {:.3} / {:.3} | {:.2} | {:.2e} / {:.2e} | {} / {} ({}) | {} | {} | {} / {} / {} / {} |",
                 mesh.num_faces(),
                 method.as_str(),
                 times[times.len() / 2],
@@ -76,6 +76,9 @@ fn main() {
                 r.edge_length_error.mean,
                 r.edge_length_error.max,
                 r.arap_fallbacks,
+                r.bff_fallbacks,
+                r.bff_not_disk,
+                r.bff_harmonic,
                 r.largest_chart_faces,
                 r.cuts.creases,
                 r.cuts.cones,

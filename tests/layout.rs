@@ -283,7 +283,7 @@ fn closed_box(n: usize) -> Mesh {
 fn closed_box_is_cut_along_its_creases_into_exact_charts() {
     let mesh = closed_box(4);
     assert_eq!((mesh.num_vertices(), mesh.num_faces()), (6 * 16 + 2, 6 * 32));
-    for method in [Method::Lscm, Method::Arap] {
+    for method in [Method::Lscm, Method::Arap, Method::Bff] {
         let layout = flatten(&mesh, &options(method)).unwrap();
         assert!(num_charts(&layout) <= 6, "{method:?}: {} charts", num_charts(&layout));
         assert_eq!(num_charts(&layout), 6, "{method:?}: one chart per side");
@@ -322,10 +322,12 @@ fn every_corpus_mesh_gets_a_valid_layout() {
     let Some(shared) = shared() else { return };
     for name in CORPUS {
         let mesh = load_corpus(&shared, name);
-        let layout = flatten(&mesh, &LayoutOptions::default()).unwrap();
-        let mut m = mesh.clone();
-        m.uv = Some(layout.uv);
-        assert_valid(name, &m, m.uv.as_ref().unwrap());
+        for method in [Method::Arap, Method::Bff] {
+            let layout = flatten(&mesh, &options(method)).unwrap();
+            let mut m = mesh.clone();
+            m.uv = Some(layout.uv);
+            assert_valid(&format!("{name} ({method:?})"), &m, m.uv.as_ref().unwrap());
+        }
     }
 }
 

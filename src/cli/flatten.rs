@@ -16,7 +16,7 @@ pub struct FlattenArgs {
     /// Output OBJ: the part's positions and faces with the new UVs (`vt`), written atomically.
     #[arg(long, value_name = "OUT.obj")]
     out: PathBuf,
-    /// How each chart is flattened: arap (default) or lscm.
+    /// How each chart is flattened: arap (default), lscm or bff (boundary first flattening).
     #[arg(long, default_value = "arap")]
     method: Method,
     /// Edges whose dihedral angle exceeds this are the first seams tried, degrees.

@@ -5,7 +5,9 @@
 //! 1. Every edge-connected piece of the mesh is tried as one chart. A chart must be a disk,
 //!    or planar (a disk with holes) with its normals within about a hemisphere ([`charts`]);
 //!    it is flattened by LSCM ([`lscm`], conformal) and, with
-//!    [`Method::Arap`], refined by ARAP ([`arap`], local/global, started from LSCM). It is
+//!    [`Method::Arap`], refined by ARAP ([`arap`], local/global, started from LSCM); with
+//!    [`Method::Bff`] a disk chart is flattened by boundary first flattening instead ([`bff`],
+//!    conformal, boundary lengths kept), other charts and invalid BFF maps by LSCM. It is
 //!    kept when the flattening is valid (no flipped triangle, no boundary crossing,
 //!    [`distortion`]) and the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most
 //!    [`LayoutOptions::max_stretch`]. A developable or nearly developable sheet therefore stays
@@ -22,6 +24,7 @@
 //! The result is deterministic: no step depends on the thread count.
 
 pub mod arap;
+pub mod bff;
 pub mod charts;
 pub mod distortion;
 mod linsys;
@@ -52,6 +55,9 @@ pub enum Method {
     /// As-rigid-as-possible, started from LSCM (lengths kept as well as the surface allows).
     #[default]
     Arap,
+    /// Boundary first flattening with minimal area distortion (conformal; boundary lengths
+    /// kept). Charts that are not disks, or whose BFF map is not valid, get LSCM's.
+    Bff,
 }
 
 impl Method {
@@ -60,6 +66,7 @@ impl Method {
         match self {
             Method::Lscm => "lscm",
             Method::Arap => "arap",
+            Method::Bff => "bff",
         }
     }
 }
@@ -70,9 +77,10 @@ impl std::str::FromStr for Method {
         match s {
             "lscm" => Ok(Method::Lscm),
             "arap" => Ok(Method::Arap),
+            "bff" => Ok(Method::Bff),
             _ => Err(Error::invalid_arg(
                 "method",
-                format!("unknown method {s:?}; expected lscm or arap"),
+                format!("unknown method {s:?}; expected lscm, arap or bff"),
             )),
         }
     }
@@ -100,7 +108,7 @@ pub enum LayoutMode {
 pub struct LayoutOptions {
     /// When the pipeline makes a layout (`auto`, `always`, `never`). Default `auto`.
     pub mode: LayoutMode,
-    /// `arap` (default) or `lscm`.
+    /// `arap` (default), `lscm` or `bff`.
     pub method: Method,
     /// Edges whose dihedral angle exceeds this (degrees) are the first seams tried. In
     /// (0, 180]. Default 40.
@@ -195,6 +203,13 @@ pub struct LayoutReport {
     pub flipped_faces: usize,
     /// Charts whose ARAP result was not valid, so their LSCM flattening was kept.
     pub arap_fallbacks: usize,
+    /// Charts (tried, merges included) that BFF could not flatten, so LSCM's map was used:
+    /// not a disk, or BFF's map not valid (added after 0.2.0).
+    pub bff_fallbacks: usize,
+    /// Of `bff_fallbacks`, the charts that were not disks (planar charts with holes).
+    pub bff_not_disk: usize,
+    /// Charts (tried) whose conformal BFF map was not valid and got the harmonic one.
+    pub bff_harmonic: usize,
     /// ARAP local/global iterations over all charts.
     pub arap_iterations: usize,
     /// Cuts made.
@@ -222,34 +237,77 @@ struct Region {
     next_cut: u8,
 }
 
+/// What the per-chart flattenings did, over every chart tried (merges included).
+#[derive(Default)]
+struct Counters {
+    arap_fallbacks: usize,
+    arap_iterations: usize,
+    bff_fallbacks: usize,
+    bff_not_disk: usize,
+    bff_harmonic: usize,
+}
+
+/// The chart's BFF map (math.md §11.6), or `None` (counted) when the chart is not a disk or the
+/// map is not valid.
+fn flatten_bff(
+    chart: &ChartMesh,
+    pos: &[Vector3<f64>],
+    counters: &mut Counters,
+) -> Option<Vec<Vector2<f64>>> {
+    if !chart.is_disk() {
+        counters.bff_fallbacks += 1;
+        counters.bff_not_disk += 1;
+        return None;
+    }
+    // The conformal extension first; the harmonic one (boundary exactly the closed polygon)
+    // when the conformal map is not valid.
+    for extension in [bff::Extension::Conformal, bff::Extension::Harmonic] {
+        if let Ok(uv) = bff::bff(chart, pos, extension) {
+            if invalid(chart, &uv).is_none() {
+                counters.bff_harmonic += (extension == bff::Extension::Harmonic) as usize;
+                return Some(uv);
+            }
+        }
+    }
+    counters.bff_fallbacks += 1;
+    None
+}
+
 /// Flattens one disk (or planar) chart; `None` when the result is not valid or too stretched.
 fn flatten_chart(
     chart: &ChartMesh,
     pos: &[Vector3<f64>],
     options: &LayoutOptions,
-    fallbacks: &mut usize,
-    iterations: &mut usize,
+    counters: &mut Counters,
 ) -> Option<Vec<Vector2<f64>>> {
-    let mut uv = lscm::lscm(chart, pos).ok()?;
-    let s = area_scale(chart, pos, &uv);
-    uv.iter_mut().for_each(|p| *p *= s);
     let single = chart.tris.len() == 1;
-    if single {
-        return Some(uv);
-    }
-    let uv = match options.method {
-        Method::Lscm => invalid(chart, &uv).is_none().then_some(uv)?,
-        Method::Arap => match arap::arap(chart, pos, &uv, options.arap_iterations) {
-            Ok(run) if invalid(chart, &run.uv).is_none() => {
-                *iterations += run.iterations;
-                run.uv
+    let bff_uv = (options.method == Method::Bff && !single)
+        .then(|| flatten_bff(chart, pos, counters))
+        .flatten();
+    let uv = match bff_uv {
+        Some(uv) => uv,
+        None => {
+            let mut uv = lscm::lscm(chart, pos).ok()?;
+            let s = area_scale(chart, pos, &uv);
+            uv.iter_mut().for_each(|p| *p *= s);
+            if single {
+                return Some(uv);
             }
-            _ => {
-                invalid(chart, &uv).is_none().then_some(())?;
-                *fallbacks += 1;
-                uv
+            match options.method {
+                Method::Lscm | Method::Bff => invalid(chart, &uv).is_none().then_some(uv)?,
+                Method::Arap => match arap::arap(chart, pos, &uv, options.arap_iterations) {
+                    Ok(run) if invalid(chart, &run.uv).is_none() => {
+                        counters.arap_iterations += run.iterations;
+                        run.uv
+                    }
+                    _ => {
+                        invalid(chart, &uv).is_none().then_some(())?;
+                        counters.arap_fallbacks += 1;
+                        uv
+                    }
+                },
             }
-        },
+        }
     };
     let s = area_scale(chart, pos, &uv);
     let m = FaceMeasures::new(chart, pos, &uv, s);
@@ -298,8 +356,7 @@ fn merge_charts(
     he: &HalfEdges,
     ctx: &mut MergeContext<'_>,
     options: &LayoutOptions,
-    fallbacks: &mut usize,
-    iterations: &mut usize,
+    counters: &mut Counters,
     cap: usize,
 ) -> usize {
     let mut merges = 0;
@@ -351,7 +408,7 @@ fn merge_charts(
                     continue;
                 }
                 let pos = chart.positions(mesh);
-                if let Some(uv) = flatten_chart(&chart, &pos, options, fallbacks, iterations) {
+                if let Some(uv) = flatten_chart(&chart, &pos, options, counters) {
                     for &f in &accepted[a].0.faces {
                         owner[f as usize] = b;
                     }
@@ -419,7 +476,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     let mut pos_in = vec![0u32; nf];
     let mut next_id = 0u32;
     let mut cuts = Cuts::default();
-    let (mut fallbacks, mut iterations) = (0usize, 0usize);
+    let mut counters = Counters::default();
 
     // The mesh's edge-connected pieces.
     let all: Vec<u32> = (0..nf as u32).collect();
@@ -440,8 +497,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
         let chart = ChartMesh::new(&region.faces, &he, mesh, &tag, &pos_in, id);
         if worth_flattening(&chart, mesh) {
             let pos = chart.positions(mesh);
-            if let Some(uv) = flatten_chart(&chart, &pos, options, &mut fallbacks, &mut iterations)
-            {
+            if let Some(uv) = flatten_chart(&chart, &pos, options, &mut counters) {
                 accepted.push((chart, uv));
                 continue;
             }
@@ -483,16 +539,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     // Merge small charts into their neighbours while the unions flatten.
     let cap = (MERGE_FRACTION * nf as f64) as usize;
     let mut ctx = MergeContext { tag: &mut tag, pos_in: &mut pos_in, next_id: &mut next_id };
-    cuts.merges = merge_charts(
-        &mut accepted,
-        mesh,
-        &he,
-        &mut ctx,
-        options,
-        &mut fallbacks,
-        &mut iterations,
-        cap,
-    );
+    cuts.merges = merge_charts(&mut accepted, mesh, &he, &mut ctx, options, &mut counters, cap);
     // Pack at one scale, then measure.
     let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
     let factor = pack::pack(&mut uvs, options.gap);
@@ -561,8 +608,11 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
         angle_error_deg: Stat::of(&angle_e, &weights, 180.0),
         edge_length_error: Stat::of(&edge_e, &edge_w, cap),
         flipped_faces: flipped,
-        arap_fallbacks: fallbacks,
-        arap_iterations: iterations,
+        arap_fallbacks: counters.arap_fallbacks,
+        bff_fallbacks: counters.bff_fallbacks,
+        bff_not_disk: counters.bff_not_disk,
+        bff_harmonic: counters.bff_harmonic,
+        arap_iterations: counters.arap_iterations,
         cuts,
         uv_scale,
         seconds: start.elapsed().as_secs_f64(),
