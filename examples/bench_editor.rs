@@ -58,7 +58,7 @@ fn main() {
     let mut last = None;
     for k in 0..steps {
         let t = Instant::now();
-        let solved = session.solve(&[edit(k)], k as u64 + 1).unwrap();
+        let solved = session.solve_drag(&[], &edit(k), k as u64 + 1).unwrap();
         let bytes = grain_bytes(&solved);
         times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);
