@@ -487,7 +487,7 @@ impl State {
     /// the "keep current" targets of the vertices no edit has set (unless pinned).
     pub fn refresh(&mut self, ctx: &Context, lighting_changed: bool) {
         if lighting_changed {
-            self.h = half_vectors(&self.lighting, &ctx.mesh.positions, &ctx.normals);
+            self.h = half_vectors(&self.lighting, &ctx.mesh.positions, ctx.normals);
             self.h_gradient = h_gradients(&self.lighting, &ctx.mesh.positions, &ctx.geom.frames);
             self.critical =
                 critical_points(&self.h, ctx.normals.iter().copied(), DEFAULT_CRITICAL_THRESHOLD);

@@ -94,6 +94,9 @@ pub struct Solved {
     pub seconds: f64,
 }
 
+/// The drag steps' reusable state: the part's id, the committed edits it was made for.
+type KeptDrag = (u32, Vec<Edit>, Arc<DragBase>);
+
 /// A field on a part: what the page is sent of it.
 struct FieldOf<'a> {
     phi: &'a [f64],
@@ -183,8 +186,8 @@ pub struct Session {
     /// The part prepared without edits (nothing refined).
     coarse: Arc<Part>,
     parts: Mutex<Parts>,
-    /// The drag steps' reusable state: its part, the committed edits it was made for.
-    drag: Mutex<Option<(u32, Vec<Edit>, Arc<DragBase>)>>,
+    /// The drag steps' reusable state.
+    drag: Mutex<Option<KeptDrag>>,
     state: Mutex<State>,
     changed: Condvar,
 }

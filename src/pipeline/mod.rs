@@ -197,8 +197,8 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
 }
 
 /// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
-/// (`mesh.refine`, [`refine_for_edits`]) and computes the geometry, the initial field and its
-/// highlights on the result.
+/// (`mesh.refine`, [`refine_request`], [`crate::mesh::refine`]) and computes the geometry, the
+/// initial field and its highlights on the result.
 pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
     let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout } = part;
