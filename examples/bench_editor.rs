@@ -1,9 +1,11 @@
 //! One drag step of `grainline edit` on a ~50k-vertex part with a 1–2k-vertex brush (issue 16:
 //! ≤ 30 ms median): the edit's targets, the solve, the new grain and the key light's highlight
 //! curves for the page — what the editor's solver thread does for each preview
-//! ([`grainline::editor::Session::solve`]) — plus encoding the grain for the page
-//! ([`grainline::editor::grain_bytes`]). FIELD.json is not part of a step (it is made when the
-//! page or a test asks for it); its cost is printed apart.
+//! ([`grainline::editor::Session::solve_drag`], incremental) — plus encoding the grain for the
+//! page ([`grainline::editor::grain_bytes`]). Then the whole stage for each step's edit
+//! ([`grainline::editor::Session::solve`], what a commit does), which must give the same grain.
+//! FIELD.json is not part of a step (it is made when the page or a test asks for it); its cost
+//! is printed apart.
 //!
 //! `cargo run --release --example bench_editor` (GRAINLINE_BENCH_STEPS to change the 30 steps;
 //! GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler).

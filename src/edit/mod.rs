@@ -243,10 +243,17 @@ pub fn apply_edits(input: &EditInput, edits: &[Edit], options: &EditOptions) -> 
 /// drag step ([`EditBase::then`]); the result is bit for bit the one [`apply_edits`] gives for
 /// the whole list, since it runs the same steps on the same state.
 pub struct EditBase {
-    vf: VertexFaces,
-    normals: Vec<Vector3<f64>>,
+    tables: Tables,
     state: State,
     reports: Vec<EditReport>,
+}
+
+/// What the tools look up on the mesh, made once per [`EditBase`].
+struct Tables {
+    vf: VertexFaces,
+    normals: Vec<Vector3<f64>>,
+    /// Brush centres found on the surface (a dragged brush keeps its centre).
+    centres: support::CentreMemo,
 }
 
 impl EditBase {
@@ -267,12 +274,15 @@ impl EditBase {
                 ),
             ));
         }
-        let vf = VertexFaces::new(input.mesh);
-        let normals: Vec<Vector3<f64>> = input.geometry.frames.iter().map(|f| f.n).collect();
-        let ctx = Context::new(input, &vf, &normals);
+        let tables = Tables {
+            vf: VertexFaces::new(input.mesh),
+            normals: input.geometry.frames.iter().map(|f| f.n).collect(),
+            centres: Default::default(),
+        };
+        let ctx = Context::new(input, &tables);
         let mut state = State::new(&ctx, input);
         let reports = apply_in_order(&ctx, &mut state, edits, 0)?;
-        Ok(EditBase { vf, normals, state, reports })
+        Ok(EditBase { tables, state, reports })
     }
 
     /// The targets of the kept edits followed by `more`, for the same `input` as
@@ -296,7 +306,7 @@ impl EditBase {
         more: &[Edit],
         options: &EditOptions,
     ) -> Result<EditResult> {
-        let ctx = Context::new(input, &self.vf, &self.normals);
+        let ctx = Context::new(input, &self.tables);
         let mut state = self.state.clone();
         let mut reports = self.reports.clone();
         reports.extend(apply_in_order(&ctx, &mut state, more, self.reports.len())?);
@@ -392,17 +402,19 @@ pub(crate) struct Context<'a> {
     pub form: GradientForm,
     pub vf: &'a VertexFaces,
     pub normals: &'a [Vector3<f64>],
+    pub centres: &'a support::CentreMemo,
 }
 
 impl<'a> Context<'a> {
-    fn new(input: &EditInput<'a>, vf: &'a VertexFaces, normals: &'a [Vector3<f64>]) -> Self {
+    fn new(input: &EditInput<'a>, tables: &'a Tables) -> Self {
         Context {
             mesh: input.mesh,
             geom: input.geometry,
             symmetry: input.symmetry,
             form: input.gradient_form,
-            vf,
-            normals,
+            vf: &tables.vf,
+            normals: &tables.normals,
+            centres: &tables.centres,
         }
     }
 
