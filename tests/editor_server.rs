@@ -537,6 +537,18 @@ fn a_bend_on_a_coarse_part_is_refined_when_committed_and_the_run_reproduces_it()
     assert_ne!(part, 0);
     assert!(same, "the run's FIELD.json differs from the one shown");
     assert_eq!(get(srv.port, "/api/mesh?part=99").0, Some(404));
+    // Undo: back on the part as loaded; redo: the same brushes, so the refinement kept for
+    // them is shown again (not made anew, which would number a new part).
+    let p = srv.port;
+    let part_now = || {
+        let (s, g) = get_bytes(p, &format!("/api/grain?version={}", solved(p)));
+        assert_eq!(s, Some(200));
+        (u32_at(&g, 0), u32_at(&g, 12))
+    };
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    assert_eq!(part_now(), (coarse, 0));
+    assert_eq!(post(p, "/api/redo", &own(p), "{}").0, Some(200));
+    assert_eq!(part_now(), (committed, part));
 }
 
 /// `mesh.refine.mode: "none"`: nothing is refined, and the run still reproduces the field.
