@@ -1,11 +1,14 @@
 //! One drag step of `grainline edit` on a ~50k-vertex part with a 1–2k-vertex brush (issue 16:
 //! ≤ 30 ms median): the edit's targets, the solve, the new grain and the key light's highlight
 //! curves for the page — what the editor's solver thread does for each preview
-//! ([`grainline::editor::Session::solve`]) — plus encoding the grain for the page
-//! ([`grainline::editor::grain_bytes`]). FIELD.json is not part of a step (it is made when the
-//! page or a test asks for it); its cost is printed apart.
+//! ([`grainline::editor::Session::solve_drag`], incremental) — plus encoding the grain for the
+//! page ([`grainline::editor::grain_bytes`]). Then the whole stage for each step's edit
+//! ([`grainline::editor::Session::solve`], what a commit does), which must give the same grain.
+//! FIELD.json is not part of a step (it is made when the page or a test asks for it); its cost
+//! is printed apart.
 //!
-//! `cargo run --release --example bench_editor` (GRAINLINE_BENCH_STEPS to change the 30 steps).
+//! `cargo run --release --example bench_editor` (GRAINLINE_BENCH_STEPS to change the 30 steps;
+//! GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler).
 
 use std::time::Instant;
 
@@ -53,17 +56,40 @@ fn main() {
             weight: 1.0,
         })
     };
+    // The drag: its steps back to back (Session::solve_drag, what the editor's solver thread
+    // does for each preview). Then the whole stage for each step's edit (Session::solve: what a
+    // commit does, and what every drag step did before the incremental path), which must give
+    // the same grain.
+    let drag_only = std::env::var_os("GRAINLINE_BENCH_DRAG_ONLY").is_some();
     let mut times = Vec::with_capacity(steps);
+    let mut full_times = Vec::with_capacity(steps);
     let mut support = 0;
-    let mut last = None;
+    let mut grains = Vec::with_capacity(steps);
     for k in 0..steps {
         let t = Instant::now();
-        let solved = session.solve(&[edit(k)], k as u64 + 1).unwrap();
+        let solved = session.solve_drag(&[], &edit(k), k as u64 + 1).unwrap();
         let bytes = grain_bytes(&solved);
         times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);
         support = solved.edited_vertices;
-        last = Some(solved);
+        if !drag_only {
+            grains.push(solved.u.clone());
+        }
+    }
+    if drag_only {
+        times.sort_by(f64::total_cmp);
+        println!("drag steps only: median {:.1} ms, min {:.1} ms", times[steps / 2], times[0]);
+        return;
+    }
+    let mut last = None;
+    for (k, u) in grains.iter().enumerate() {
+        let t = Instant::now();
+        let full = session.solve(&[edit(k)], k as u64 + 1).unwrap();
+        let bytes = grain_bytes(&full);
+        full_times.push(t.elapsed().as_secs_f64() * 1e3);
+        std::hint::black_box(bytes);
+        assert!(full.u == *u, "step {k}: the drag step's grain is not the whole stage's");
+        last = Some(full);
     }
     let last = last.unwrap();
     // Where a step's time goes: the stages of optimize_stage ("edits": targets, "solve": the
@@ -98,6 +124,28 @@ fn main() {
         std::hint::black_box(segs);
         parts.entry("3 highlight curves".into()).or_default().push(t.elapsed().as_secs_f64());
     }
+    // The incremental step alone: the dragged edit's targets and the solve without the
+    // whole-mesh report, on a base made once.
+    let bare = grainline::scene::LoadedScene {
+        scene: grainline::scene::Scene::from_str(&session.scene_text(&[]).unwrap(), &loaded.path)
+            .unwrap(),
+        ..loaded.clone()
+    };
+    let t = Instant::now();
+    let base = grainline::pipeline::optimize::DragBase::new(&bare, session.prepared()).unwrap();
+    parts.entry("4 drag base (once per drag)".into()).or_default().push(t.elapsed().as_secs_f64());
+    for k in 0..steps.min(10) {
+        let text = session.scene_text(&[edit(k)]).unwrap();
+        let scene = grainline::scene::Scene::from_str(&text, &loaded.path).unwrap();
+        let s = grainline::scene::LoadedScene { scene, ..loaded.clone() };
+        let t = Instant::now();
+        let step = base.step(&s, session.prepared(), 1).unwrap();
+        parts
+            .entry("5 drag step: targets + solve".into())
+            .or_default()
+            .push(t.elapsed().as_secs_f64());
+        std::hint::black_box(step);
+    }
     for (name, mut v) in parts {
         v.sort_by(f64::total_cmp);
         println!("  {name}: median {:.1} ms", v[v.len() / 2] * 1e3);
@@ -106,7 +154,9 @@ fn main() {
     let json_len = session.field_json(&last).unwrap().len();
     let json_ms = t.elapsed().as_secs_f64() * 1e3;
     times.sort_by(f64::total_cmp);
+    full_times.sort_by(f64::total_cmp);
     let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
+    let qf = |p: f64| full_times[((full_times.len() - 1) as f64 * p).round() as usize];
     println!(
         "bench_editor: {n} vertices, brush radius {radius} mm with {support} vertices in its \
          support, {steps} drag steps (bend, strength 0.05 → 0.95)"
@@ -118,6 +168,13 @@ fn main() {
         q(0.9),
         times[0],
         times[times.len() - 1]
+    );
+    println!(
+        "  the whole stage for the same edit (a commit; a drag step before the incremental \
+         path): median {:.1} ms, p90 {:.1} ms, min {:.1} ms",
+        qf(0.5),
+        qf(0.9),
+        full_times[0]
     );
     println!("  session open (load, geometry, initial field): {:.0} ms", open_s * 1e3);
     println!("  FIELD.json when asked for: {json_ms:.0} ms ({:.1} MB)", json_len as f64 / 1e6);

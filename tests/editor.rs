@@ -4,11 +4,14 @@
 //! never skips):
 //!
 //! 1. `grainline edit` on examples/kettle (its mesh, material, lights, view and bend edit; the
-//!    toolpaths and the preview left out, `field.output` added so a run writes FIELD.json);
+//!    toolpaths and the preview left out, `field.output` added so a run writes FIELD.json;
+//!    `mesh.refine.edge` 0.1, so the kettle's 5 mm triangles are refined inside the 45 mm
+//!    brushes and the page has to load the refined mesh when the drag ends);
 //! 2. the page presses on the key highlight near the middle of the view with the bend tool and
 //!    drags 40 px across it; once the edit is solved and shown, the FIELD.json of the version
 //!    the page shows is fetched; Ctrl+S saves;
-//! 3. `grainline run` on the saved scene writes FIELD.json: byte for byte the page's;
+//! 3. `grainline run` on the saved scene writes FIELD.json: byte for byte the page's, on the
+//!    mesh the page shows (its vertex count);
 //! 4. the screenshots before and after (kept under target/editor-acceptance/) show the
 //!    highlight's ridge moved by at least 10 px where the brush was, in the drag's direction:
 //!    measured on their pixels, along the drag, at several points along the highlight.
@@ -98,7 +101,10 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
         &std::fs::read_to_string(root().join("examples/kettle/scene.json")).unwrap(),
     )
     .unwrap();
-    scene["mesh"] = Value::String(root().join("examples/data/kettle.obj").display().to_string());
+    scene["mesh"] = serde_json::json!({
+        "path": root().join("examples/data/kettle.obj").display().to_string(),
+        "refine": { "edge": 0.1 },
+    });
     let obj = scene.as_object_mut().unwrap();
     obj.remove("toolpaths");
     obj.remove("render");
@@ -158,6 +164,11 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
     let ran = std::fs::read(dir.join("field.json")).unwrap();
     let shown = std::fs::read(dir.join("page-field.json")).unwrap();
     assert!(ran.len() > 1000, "{}", ran.len());
+    // Refined inside the brushes, and shown on that mesh.
+    let field: Value = serde_json::from_slice(&ran).unwrap();
+    let n = field["u"].as_array().unwrap().len();
+    assert!(n > 4704, "the kettle (4,704 vertices) was not refined: {n}");
+    assert_eq!(result["vertices"].as_u64(), Some(n as u64), "the page shows another mesh");
     assert!(
         ran == shown,
         "FIELD.json of the run ({} bytes) differs from the page's ({} bytes)",

@@ -39,26 +39,29 @@ impl Drop for Server {
     }
 }
 
-/// A small scene (a cylinder brushed around, no edits) in its own directory.
-fn scene_dir(name: &str) -> PathBuf {
+/// The small scene of the tests: a cylinder brushed around, no edits.
+const SCENE: &str = r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
+            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+            "field": {"init": "uv", "symmetry": "line", "output": "field.json"}}"#;
+
+/// The cylinder (32 × 8 quads) and the scene `text` in their own directory.
+fn scene_dir_with(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("grainline-editor-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let cylinder = grainline::generate::cylinder(30.0, 80.0, 32, 8);
     std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&cylinder, "t"))
         .unwrap();
-    std::fs::write(
-        dir.join("scene.json"),
-        r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
-            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-            "field": {"init": "uv", "symmetry": "line", "output": "field.json"}}"#,
-    )
-    .unwrap();
+    std::fs::write(dir.join("scene.json"), text).unwrap();
     dir
 }
 
 fn start(name: &str) -> Server {
-    let dir = scene_dir(name);
+    start_with(name, SCENE)
+}
+
+fn start_with(name: &str, text: &str) -> Server {
+    let dir = scene_dir_with(name, text);
     let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
         .args(["--quiet", "edit", "--port", "0"])
         .arg(dir.join("scene.json"))
@@ -80,30 +83,41 @@ fn start(name: &str) -> Server {
 
 /// Sends `request` as is; the status code (None: the connection closed without one) and body.
 fn raw(port: u16, request: &[u8]) -> (Option<u16>, String) {
+    let (status, body) = raw_bytes(port, request);
+    (status, String::from_utf8_lossy(&body).to_string())
+}
+
+/// [`raw`] with the body as bytes.
+fn raw_bytes(port: u16, request: &[u8]) -> (Option<u16>, Vec<u8>) {
     let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
     s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
     let _ = s.write_all(request);
     let mut buf = Vec::new();
     let _ = s.read_to_end(&mut buf);
-    let text = String::from_utf8_lossy(&buf).to_string();
-    let status = text.split_whitespace().nth(1).and_then(|c| c.parse().ok());
-    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    let split = buf.windows(4).position(|w| w == b"\r\n\r\n");
+    let (head, body) = match split {
+        Some(i) => (String::from_utf8_lossy(&buf[..i]).to_string(), buf[i + 4..].to_vec()),
+        None => (String::from_utf8_lossy(&buf).to_string(), Vec::new()),
+    };
+    let status = head.split_whitespace().nth(1).and_then(|c| c.parse().ok());
     let chunked = head
         .lines()
         .any(|l| l.to_ascii_lowercase().starts_with("transfer-encoding:") && l.contains("chunked"));
-    let body = if chunked { dechunk(body) } else { body.to_string() };
+    let body = if chunked { dechunk(&body) } else { body };
     (status, body)
 }
 
 /// The body of a `Transfer-Encoding: chunked` response (RFC 9112 §7.1).
-fn dechunk(mut rest: &str) -> String {
-    let mut out = String::new();
-    while let Some((size, after)) = rest.split_once("\r\n") {
+fn dechunk(mut rest: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    while let Some(i) = rest.windows(2).position(|w| w == b"\r\n") {
+        let size = String::from_utf8_lossy(&rest[..i]).to_string();
         let n = usize::from_str_radix(size.split(';').next().unwrap().trim(), 16).unwrap();
         if n == 0 {
             break;
         }
-        out.push_str(&after[..n]);
+        let after = &rest[i + 2..];
+        out.extend_from_slice(&after[..n]);
         rest = &after[n + 2..];
     }
     out
@@ -446,4 +460,106 @@ fn saved_scene_reproduces_the_shown_field_byte_for_byte() {
     let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
     assert!(ran.contains("phi_before"), "not an optimized field");
     assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
+}
+
+fn get_bytes(port: u16, path: &str) -> (Option<u16>, Vec<u8>) {
+    let host = format!("127.0.0.1:{port}");
+    raw_bytes(
+        port,
+        format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").as_bytes(),
+    )
+}
+
+/// The little-endian `u32` at byte `k` of `b`.
+fn u32_at(b: &[u8], k: usize) -> u32 {
+    u32::from_le_bytes(b[k..k + 4].try_into().unwrap())
+}
+
+/// Drags a bend (two previews), commits it, saves; returns the vertex counts of the grain
+/// during the drag and after the commit, the committed grain's part id, and whether `grainline
+/// run` on the saved scene wrote the FIELD.json the server showed byte for byte.
+fn drag_commit_save_run(srv: &Server) -> (u32, u32, u32, bool) {
+    let p = srv.port;
+    let bend = |s: f64| {
+        format!(
+            r#"{{"tool": "bend", "centre": {{"point": [0, -30, 5]}}, "radius": 25, "strength": {s}, "direction": [1, 0, 0.2]}}"#
+        )
+    };
+    let send = |action: &str, edit: &str| {
+        let body = format!(r#"{{"action": "{action}", "edit": {edit}}}"#);
+        let (s, b) = post(p, "/api/edit", &own(p), &body);
+        assert_eq!(s, Some(200), "{body}: {b}");
+    };
+    let grain = |v: u64| {
+        let (s, g) = get_bytes(p, &format!("/api/grain?version={v}"));
+        assert_eq!(s, Some(200));
+        (u32_at(&g, 0), u32_at(&g, 12))
+    };
+    send("preview", &bend(0.3));
+    send("preview", &bend(0.6));
+    let (dragged, _) = grain(solved(p));
+    send("commit", &bend(0.7));
+    let v = solved(p);
+    let (committed, part) = grain(v);
+    // The page loads the committed grain's mesh: its vertex count is the grain's.
+    let (s, mesh) = get_bytes(p, &format!("/api/mesh?part={part}"));
+    assert_eq!(s, Some(200));
+    assert_eq!(u32_at(&mesh, 0), committed);
+    let (s, shown) = get_bytes(p, &format!("/api/field.json?version={v}"));
+    assert_eq!(s, Some(200));
+    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
+    let scene = srv.dir.join("scene.json");
+    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let ran = std::fs::read(srv.dir.join("field.json")).unwrap();
+    let field: Value = serde_json::from_slice(&ran).unwrap();
+    assert_eq!(field["u"].as_array().unwrap().len(), committed as usize);
+    (dragged, committed, part, ran == shown)
+}
+
+/// Issue 16 with refinement (issue 13): on a part coarse enough for the brush to be refined,
+/// the drag is solved on the part as loaded and the committed bend on the part refined inside
+/// its brush, as `grainline run` refines it; the saved scene reproduces the shown FIELD.json.
+#[test]
+fn a_bend_on_a_coarse_part_is_refined_when_committed_and_the_run_reproduces_it() {
+    let srv = start("refine");
+    let coarse = 32 * 9; // the cylinder's vertices: 32 around, 9 rings
+    let (s, mesh) = get_bytes(srv.port, "/api/mesh");
+    assert_eq!(s, Some(200));
+    assert_eq!(u32_at(&mesh, 0), coarse);
+    let (dragged, committed, part, same) = drag_commit_save_run(&srv);
+    assert_eq!(dragged, coarse, "a drag step is solved on the part as loaded");
+    assert!(committed > coarse, "the committed bend was not refined: {committed} vertices");
+    assert_ne!(part, 0);
+    assert!(same, "the run's FIELD.json differs from the one shown");
+    assert_eq!(get(srv.port, "/api/mesh?part=99").0, Some(404));
+    // Undo: back on the part as loaded; redo: the same brushes, so the refinement kept for
+    // them is shown again (not made anew, which would number a new part).
+    let p = srv.port;
+    let part_now = || {
+        let (s, g) = get_bytes(p, &format!("/api/grain?version={}", solved(p)));
+        assert_eq!(s, Some(200));
+        (u32_at(&g, 0), u32_at(&g, 12))
+    };
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    assert_eq!(part_now(), (coarse, 0));
+    assert_eq!(post(p, "/api/redo", &own(p), "{}").0, Some(200));
+    assert_eq!(part_now(), (committed, part));
+}
+
+/// `mesh.refine.mode: "none"`: nothing is refined, and the run still reproduces the field.
+#[test]
+fn with_refinement_off_the_committed_bend_stays_on_the_part_as_loaded() {
+    let scene = SCENE.replace(
+        r#""mesh": "part.obj""#,
+        r#""mesh": {"path": "part.obj", "refine": {"mode": "none"}}"#,
+    );
+    let srv = start_with("norefine", &scene);
+    let (dragged, committed, part, same) = drag_commit_save_run(&srv);
+    assert_eq!((dragged, committed, part), (32 * 9, 32 * 9, 0));
+    assert!(same, "the run's FIELD.json differs from the one shown");
 }

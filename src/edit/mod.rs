@@ -236,38 +236,108 @@ impl EditReport {
 /// Errors: an invalid edit (`[k].key`), an edit whose support holds no vertex, a warp that cannot
 /// be inverted, a light tool with no admissible light, a curve tool without UVs.
 pub fn apply_edits(input: &EditInput, edits: &[Edit], options: &EditOptions) -> Result<EditResult> {
-    options.validate()?;
-    validate_edits(edits)?;
-    let n = input.mesh.num_vertices();
-    if input.geometry.num_vertices() != n || input.phi.len() != n || input.h.len() != n {
-        return Err(Error::invalid_arg(
-            "edit input",
-            format!(
-                "{} vertices, but geometry {}, phi {}, h {}",
-                n,
-                input.geometry.num_vertices(),
-                input.phi.len(),
-                input.h.len()
-            ),
-        ));
+    EditBase::new(input, edits, options)?.finish_with(input, &[], options)
+}
+
+/// Edits applied and kept, ready for more: the state [`apply_edits`] reaches after a prefix of
+/// its list. The editor keeps one for the committed edits and applies only the dragged one per
+/// drag step ([`EditBase::then`]); the result is bit for bit the one [`apply_edits`] gives for
+/// the whole list, since it runs the same steps on the same state.
+pub struct EditBase {
+    tables: Tables,
+    state: State,
+    reports: Vec<EditReport>,
+}
+
+/// What the tools look up on the mesh, made once per [`EditBase`].
+struct Tables {
+    vf: VertexFaces,
+    normals: Vec<Vector3<f64>>,
+    /// Brush centres found on the surface (a dragged brush keeps its centre).
+    centres: support::CentreMemo,
+}
+
+impl EditBase {
+    /// Applies `edits` to `input` (the errors of [`apply_edits`]).
+    pub fn new(input: &EditInput, edits: &[Edit], options: &EditOptions) -> Result<EditBase> {
+        options.validate()?;
+        validate_edits(edits)?;
+        let n = input.mesh.num_vertices();
+        if input.geometry.num_vertices() != n || input.phi.len() != n || input.h.len() != n {
+            return Err(Error::invalid_arg(
+                "edit input",
+                format!(
+                    "{} vertices, but geometry {}, phi {}, h {}",
+                    n,
+                    input.geometry.num_vertices(),
+                    input.phi.len(),
+                    input.h.len()
+                ),
+            ));
+        }
+        let tables = Tables {
+            vf: VertexFaces::new(input.mesh),
+            normals: input.geometry.frames.iter().map(|f| f.n).collect(),
+            centres: Default::default(),
+        };
+        let ctx = Context::new(input, &tables);
+        let mut state = State::new(&ctx, input);
+        let reports = apply_in_order(&ctx, &mut state, edits, 0)?;
+        Ok(EditBase { tables, state, reports })
     }
-    let ctx = Context::new(input);
-    let mut st = State::new(&ctx, input);
+
+    /// The targets of the kept edits followed by `more`, for the same `input` as
+    /// [`EditBase::new`]'s (the state is copied; the kept one is left as it was).
+    pub fn then(
+        &self,
+        input: &EditInput,
+        more: &[Edit],
+        options: &EditOptions,
+    ) -> Result<EditResult> {
+        let first = self.reports.len();
+        for (j, e) in more.iter().enumerate() {
+            e.validate().map_err(|err| at_edit(first + j, e.tool(), err))?;
+        }
+        self.finish_with(input, more, options)
+    }
+
+    fn finish_with(
+        &self,
+        input: &EditInput,
+        more: &[Edit],
+        options: &EditOptions,
+    ) -> Result<EditResult> {
+        let ctx = Context::new(input, &self.tables);
+        let mut state = self.state.clone();
+        let mut reports = self.reports.clone();
+        reports.extend(apply_in_order(&ctx, &mut state, more, self.reports.len())?);
+        state.finish(options, reports)
+    }
+}
+
+/// Applies `edits` (indices from `first` in the whole list) to `st`, in order.
+fn apply_in_order(
+    ctx: &Context,
+    st: &mut State,
+    edits: &[Edit],
+    first: usize,
+) -> Result<Vec<EditReport>> {
     let mut reports = Vec::with_capacity(edits.len());
-    for (k, e) in edits.iter().enumerate() {
+    for (j, e) in edits.iter().enumerate() {
+        let k = first + j;
         let mut report = EditReport::new(k, e.tool());
         let r = match e {
-            Edit::Bend(w) => warp::apply(&ctx, &mut st, w, WarpKind::Bend, &mut report),
-            Edit::Expand(w) => warp::apply(&ctx, &mut st, w, WarpKind::Expand, &mut report),
-            Edit::Stencil(s) => stencil::apply(&ctx, &mut st, s, &mut report),
-            Edit::Light(l) => light::apply(&ctx, &mut st, l, &mut report),
-            Edit::MoveLight(l) => light::apply_move(&ctx, &mut st, l, &mut report),
-            Edit::Curve(c) => curve::apply(&ctx, &mut st, c, &mut report),
+            Edit::Bend(w) => warp::apply(ctx, st, w, WarpKind::Bend, &mut report),
+            Edit::Expand(w) => warp::apply(ctx, st, w, WarpKind::Expand, &mut report),
+            Edit::Stencil(s) => stencil::apply(ctx, st, s, &mut report),
+            Edit::Light(l) => light::apply(ctx, st, l, &mut report),
+            Edit::MoveLight(l) => light::apply_move(ctx, st, l, &mut report),
+            Edit::Curve(c) => curve::apply(ctx, st, c, &mut report),
         };
         r.map_err(|err| at_edit(k, e.tool(), err))?;
         reports.push(report);
     }
-    st.finish(options, reports)
+    Ok(reports)
 }
 
 impl EditResult {
@@ -331,19 +401,21 @@ pub(crate) struct Context<'a> {
     pub geom: &'a Geometry,
     pub symmetry: Symmetry,
     pub form: GradientForm,
-    pub vf: VertexFaces,
-    pub normals: Vec<Vector3<f64>>,
+    pub vf: &'a VertexFaces,
+    pub normals: &'a [Vector3<f64>],
+    pub centres: &'a support::CentreMemo,
 }
 
 impl<'a> Context<'a> {
-    fn new(input: &EditInput<'a>) -> Self {
+    fn new(input: &EditInput<'a>, tables: &'a Tables) -> Self {
         Context {
             mesh: input.mesh,
             geom: input.geometry,
             symmetry: input.symmetry,
             form: input.gradient_form,
-            vf: VertexFaces::new(input.mesh),
-            normals: input.geometry.frames.iter().map(|f| f.n).collect(),
+            vf: &tables.vf,
+            normals: &tables.normals,
+            centres: &tables.centres,
         }
     }
 
@@ -370,6 +442,7 @@ impl<'a> Context<'a> {
 }
 
 /// The state the edits transform, in order.
+#[derive(Clone)]
 pub(crate) struct State {
     pub phi: Vec<f64>,
     pub lighting: Lighting,
@@ -427,7 +500,7 @@ impl State {
     /// the "keep current" targets of the vertices no edit has set (unless pinned).
     pub fn refresh(&mut self, ctx: &Context, lighting_changed: bool) {
         if lighting_changed {
-            self.h = half_vectors(&self.lighting, &ctx.mesh.positions, &ctx.normals);
+            self.h = half_vectors(&self.lighting, &ctx.mesh.positions, ctx.normals);
             self.h_gradient = h_gradients(&self.lighting, &ctx.mesh.positions, &ctx.geom.frames);
             self.critical =
                 critical_points(&self.h, ctx.normals.iter().copied(), DEFAULT_CRITICAL_THRESHOLD);

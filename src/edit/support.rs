@@ -106,42 +106,77 @@ pub(crate) fn resolve_centre(ctx: &Context, centre: &Centre) -> Result<SurfacePo
             })
         }
         Centre::Point(p) => {
-            let p = Vector3::new(p[0], p[1], p[2]);
-            let mut best: Option<(f64, usize, Vector3<f64>, [f64; 3])> = None;
-            for f in 0..mesh.num_faces() {
-                let [a, b, c] = mesh.face_positions(f);
-                let (x, bary) = closest_point_on_triangle(&p, &a, &b, &c);
-                let d2 = (x - p).norm_squared();
-                if best.as_ref().is_none_or(|b| d2 < b.0) {
-                    best = Some((d2, f, x, bary));
-                }
+            let key = p.map(f64::to_bits);
+            // The same bits give the same point: the search is a function of them.
+            if let Some(hit) = ctx.centres.find(&key) {
+                return Ok(hit);
             }
-            let Some((_, f, x, bary)) = best else {
-                return Err(Error::setting("centre.point", "the mesh has no faces"));
-            };
-            let tri = mesh.faces[f].map(|v| v as usize);
-            let mut normal = Vector3::zeros();
-            for k in 0..3 {
-                normal += ctx.normals[tri[k]] * bary[k];
-            }
-            let [a, b, c] = mesh.face_positions(f);
-            let face_n = (b - a).cross(&(c - a));
-            let normal = if normal.norm() > 1e-9 {
-                normal.normalize()
-            } else if face_n.norm() > 0.0 {
-                face_n.normalize()
-            } else {
-                ctx.normals[tri[0]]
-            };
-            let seeds: Vec<(usize, f64)> =
-                tri.iter().map(|&v| (v, (mesh.positions[v] - x).norm())).collect();
-            let nearest_vertex = seeds
-                .iter()
-                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-                .map_or(tri[0], |s| s.0);
-            Ok(SurfacePoint { position: x, normal, seeds, nearest_vertex })
+            let point = closest_surface_point(ctx, p)?;
+            ctx.centres.keep(key, &point);
+            Ok(point)
         }
     }
+}
+
+/// The centres resolved so far, by the bits of their points: a drag keeps its brush centre
+/// from step to step, and finding the closest point visits every face.
+#[derive(Default)]
+pub(crate) struct CentreMemo(std::sync::Mutex<Vec<([u64; 3], SurfacePoint)>>);
+
+/// Centres kept by a [`CentreMemo`].
+const CENTRES_KEPT: usize = 8;
+
+impl CentreMemo {
+    fn find(&self, key: &[u64; 3]) -> Option<SurfacePoint> {
+        let kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        kept.iter().find(|(k, _)| k == key).map(|(_, p)| p.clone())
+    }
+
+    fn keep(&self, key: [u64; 3], point: &SurfacePoint) {
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        kept.push((key, point.clone()));
+        if kept.len() > CENTRES_KEPT {
+            kept.remove(0);
+        }
+    }
+}
+
+/// The point of the surface closest to `p` (the first such face in face order), its
+/// interpolated normal and the face's corners as seeds.
+fn closest_surface_point(ctx: &Context, p: &[f64; 3]) -> Result<SurfacePoint> {
+    let mesh = ctx.mesh;
+    let p = Vector3::new(p[0], p[1], p[2]);
+    let mut best: Option<(f64, usize, Vector3<f64>, [f64; 3])> = None;
+    for f in 0..mesh.num_faces() {
+        let [a, b, c] = mesh.face_positions(f);
+        let (x, bary) = closest_point_on_triangle(&p, &a, &b, &c);
+        let d2 = (x - p).norm_squared();
+        if best.as_ref().is_none_or(|b| d2 < b.0) {
+            best = Some((d2, f, x, bary));
+        }
+    }
+    let Some((_, f, x, bary)) = best else {
+        return Err(Error::setting("centre.point", "the mesh has no faces"));
+    };
+    let tri = mesh.faces[f].map(|v| v as usize);
+    let mut normal = Vector3::zeros();
+    for k in 0..3 {
+        normal += ctx.normals[tri[k]] * bary[k];
+    }
+    let [a, b, c] = mesh.face_positions(f);
+    let face_n = (b - a).cross(&(c - a));
+    let normal = if normal.norm() > 1e-9 {
+        normal.normalize()
+    } else if face_n.norm() > 0.0 {
+        face_n.normalize()
+    } else {
+        ctx.normals[tri[0]]
+    };
+    let seeds: Vec<(usize, f64)> =
+        tri.iter().map(|&v| (v, (mesh.positions[v] - x).norm())).collect();
+    let nearest_vertex =
+        seeds.iter().min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0))).map_or(tri[0], |s| s.0);
+    Ok(SurfacePoint { position: x, normal, seeds, nearest_vertex })
 }
 
 /// The closest point of triangle abc to p, with its barycentric coordinates (Ericson,

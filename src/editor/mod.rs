@@ -25,7 +25,7 @@ use serde_json::json;
 
 use crate::edit::WarpKind;
 use crate::{Error, Result};
-pub use session::{Change, Session, Solved, StateView};
+pub use session::{Change, Part, Session, Solved, StateView};
 
 /// Options of [`Editor::bind`].
 #[derive(Clone, Debug, Default)]
@@ -170,10 +170,9 @@ pub fn info_json(session: &Session) -> serde_json::Value {
     })
 }
 
-/// The mesh for the page, little-endian: `u32` vertex count n, `u32` face count f, `f32`
-/// positions (3n), `f32` unit normals (3n), `u32` corner indices (3f).
-pub fn mesh_bytes(session: &Session) -> Vec<u8> {
-    let p = session.prepared();
+/// The mesh of a prepared part for the page, little-endian: `u32` vertex count n, `u32` face
+/// count f, `f32` positions (3n), `f32` unit normals (3n), `u32` corner indices (3f).
+pub fn mesh_bytes(p: &crate::pipeline::Prepared) -> Vec<u8> {
     let (n, f) = (p.mesh.num_vertices(), p.mesh.num_faces());
     let mut out = Vec::with_capacity(8 + 24 * n + 12 * f);
     out.extend((n as u32).to_le_bytes());
@@ -197,11 +196,13 @@ pub fn mesh_bytes(session: &Session) -> Vec<u8> {
 }
 
 /// A solved field for the page, little-endian: `u32` n, `u32` segment count s, `u32` critical
-/// count c, `u32` 0, `f32` grain (3n), `f32` segments (6s: two world points each), `u32`
-/// critical vertices (c).
+/// count c, `u32` the id of the part it was solved on ([`Part::id`]: the page loads that
+/// part's mesh, `GET /api/mesh?part=ID`, when it shows another), `f32` grain (3n), `f32`
+/// segments (6s: two world points each), `u32` critical vertices (c).
 pub fn grain_bytes(s: &Solved) -> Vec<u8> {
     let mut out = Vec::with_capacity(16 + 12 * s.u.len() + 24 * s.segments.len());
-    for k in [s.u.len(), s.segments.len(), s.critical.len(), 0] {
+    let id = s.part.id as usize;
+    for k in [s.u.len(), s.segments.len(), s.critical.len(), id] {
         out.extend((k as u32).to_le_bytes());
     }
     for v in &s.u {

@@ -14,11 +14,14 @@
 //!
 //! Routes:
 //! - `GET /` and `/assets/…`: the page ([`super::assets`]);
-//! - `GET /api/info`: [`super::info_json`]; `GET /api/mesh`: [`super::mesh_bytes`];
+//! - `GET /api/info`: [`super::info_json`]; `GET /api/mesh[?part=ID]`: [`super::mesh_bytes`]
+//!   of the part numbered ID (0, the part as loaded, by default; 404 when the session no
+//!   longer holds it);
 //! - `GET /api/state[?after=V]`: [`super::StateView`], waiting up to 10 s for a solve newer
 //!   than V;
-//! - `GET /api/grain?version=V`: [`super::grain_bytes`] of version V (409 when it is not the
-//!   newest solved one); `GET /api/field.json?version=V`: its FIELD.json;
+//! - `GET /api/grain?version=V`: [`super::grain_bytes`] of version V (409 when it is not one of
+//!   the last solved ones, [`super::session::RECENT_KEPT`]); `GET /api/field.json?version=V`:
+//!   its FIELD.json;
 //! - `GET /files/scene.json`: the scene file as it is on disk;
 //! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
 //!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state.
@@ -207,7 +210,18 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
     let s = &ctx.session;
     match path {
         "/api/info" => Reply::json(&super::info_json(s)),
-        "/api/mesh" => Reply::ok("application/octet-stream", super::mesh_bytes(s)),
+        "/api/mesh" => {
+            let id = match query_u64(query, "part") {
+                Ok(id) => id.unwrap_or(0),
+                Err(r) => return r,
+            };
+            match u32::try_from(id).ok().and_then(|id| s.part_by_id(id)) {
+                Some(part) => {
+                    Reply::ok("application/octet-stream", super::mesh_bytes(&part.prepared))
+                }
+                None => Reply::error(404, "no such part"),
+            }
+        }
         "/api/state" => {
             let after = match query_u64(query, "after") {
                 Ok(a) => a,
@@ -229,7 +243,7 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
                     Ok(b) => Reply::ok("application/json", b.to_vec()),
                     Err(e) => Reply::error(500, e.to_string()),
                 },
-                None => Reply::error(409, "that version is not the newest solved one"),
+                None => Reply::error(409, "that version is not one of the last solved ones"),
             }
         }
         // No icon: an empty answer instead of a 404 in the page's console.

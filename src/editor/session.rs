@@ -1,12 +1,22 @@
-//! The editor's state: the scene as read, the part prepared once, the list of edits with its
-//! undo and redo stacks, the edit being dragged, and the solver thread that turns the latest
-//! list into a field (latest request wins; a result that is stale when it is ready is dropped).
+//! The editor's state: the scene as read, the part as loaded and its preparations, the list of
+//! edits with its undo and redo stacks, the edit being dragged, and the solver thread that
+//! turns the latest list into a field (latest request wins; a result that is stale when it is
+//! ready is dropped).
 //!
 //! Every field the page is shown is computed from the scene **text** that saving would write
 //! ([`Session::scene_text`]), read back by [`Scene::from_str`] and run through the same stages
-//! as `grainline run` ([`crate::pipeline::prepare_with`], [`optimize_stage`],
-//! [`optimized_field_file`], [`crate::output::json_compact`]): so the FIELD.json of a run on the
-//! saved scene is byte for byte the one the page showed.
+//! as `grainline run` ([`crate::pipeline::load_stage`], [`crate::pipeline::prepare_part`],
+//! [`optimize_stage`], [`optimized_field_file`], [`crate::output::json_compact`]).
+//!
+//! Refinement (`mesh.refine`, docs/math.md §12): `grainline run` refines the part inside the
+//! brushes of the scene's edits before it computes the field. The session does the same for
+//! the **committed** edits ([`Session::solve`], [`Session::part_for`]): the part as loaded is
+//! prepared again for them, once per refinement request ([`crate::pipeline::refine_request`]:
+//! an unchanged set of brushes is not refined again), so the FIELD.json of a run on the saved
+//! scene is byte for byte the one the page showed. A drag step ([`Session::solve_drag`]) is
+//! solved on the part prepared for the edits committed before it: the dragged brush's own
+//! refinement is made when the drag ends (the change is committed), and the page then loads
+//! the new mesh ([`Solved::part`]).
 
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
@@ -17,21 +27,52 @@ use serde::Serialize;
 use crate::edit::{Edit, WarpKind};
 use crate::fidelity::{highlight_segments, EditFidelity};
 use crate::field::FieldFile;
-use crate::highlight::Symmetry;
-use crate::pipeline::optimize::{optimize_stage, optimized_field_file, Optimized};
+use crate::pipeline::optimize::{optimize_stage, optimized_field_file, DragBase, Optimized};
 use crate::pipeline::run::StagePlan;
-use crate::pipeline::{prepare_with, Prepared, Silent, Stages};
+use crate::pipeline::{
+    load_stage, prepare_part, refine_request, LoadedPart, Prepared, Silent, Stages,
+};
 use crate::scene::{LoadedScene, Scene};
 use crate::{Error, Result};
 
 /// Undo steps kept (older ones are forgotten).
 pub const UNDO_DEPTH: usize = 200;
 
+/// Solved fields kept for the page after a newer one is ready.
+pub const RECENT_KEPT: usize = 4;
+
+/// Refined preparations of the part kept (the oldest is forgotten past this).
+pub const PARTS_KEPT: usize = 4;
+
+/// One preparation of the part that fields are solved on.
+pub struct Part {
+    /// 0 for the part as loaded (nothing refined); a new number for each refinement made.
+    pub id: u32,
+    /// The mesh, its geometry and the initial field, as `grainline run` prepares them.
+    pub prepared: Prepared,
+}
+
+/// The session's preparations of the part.
+#[derive(Default)]
+struct Parts {
+    /// The next refined part's id.
+    next_id: u32,
+    /// Refined preparations, oldest first, keyed by their refinement request.
+    refined: Vec<(Vec<f64>, Arc<Part>)>,
+    /// The edit list asked for last and its part.
+    last: Option<(Vec<Edit>, Arc<Part>)>,
+}
+
 /// One solved field, ready for the page.
 pub struct Solved {
     /// The state version it was computed for.
     pub version: u64,
-    /// The edits' and the solver's result (`None` without edits: the initial field).
+    /// The part it was solved on (its mesh is the one the page must show it on).
+    pub part: Arc<Part>,
+    /// The edits solved.
+    edits: Vec<Edit>,
+    /// The edits' and the solver's result (`None` without edits, the initial field, and for a
+    /// drag step, whose FIELD.json is made from `edits` when asked for).
     optimized: Option<Optimized>,
     /// FIELD.json, made when first asked for ([`Session::field_json`]).
     field_json: OnceLock<std::result::Result<Vec<u8>, String>>,
@@ -53,6 +94,16 @@ pub struct Solved {
     pub seconds: f64,
 }
 
+/// The drag steps' reusable state: the part's id, the committed edits it was made for.
+type KeptDrag = (u32, Vec<Edit>, Arc<DragBase>);
+
+/// A field on a part: what the page is sent of it.
+struct FieldOf<'a> {
+    phi: &'a [f64],
+    h: &'a [nalgebra::Vector3<f64>],
+    critical: &'a [bool],
+}
+
 /// What the page asked for and what the solver has done.
 #[derive(Default)]
 struct State {
@@ -66,6 +117,9 @@ struct State {
     version: u64,
     /// The newest field computed for the version that was current when it was ready.
     solved: Option<Arc<Solved>>,
+    /// The last [`RECENT_KEPT`] such fields, oldest first (the page may ask for one that was
+    /// superseded between its state request and its grain request).
+    recent: Vec<Arc<Solved>>,
     /// The newest solve that failed: its version and message.
     error: Option<(u64, String)>,
     /// The version whose committed edits were last saved (or read from the file).
@@ -127,23 +181,105 @@ pub enum Change {
 /// The editor's session: shared by the request threads and the solver thread.
 pub struct Session {
     loaded: LoadedScene,
-    prepared: Prepared,
+    /// The part as loaded, before any refinement.
+    part: LoadedPart,
+    /// The part prepared without edits (nothing refined).
+    coarse: Arc<Part>,
+    parts: Mutex<Parts>,
+    /// The drag steps' reusable state.
+    drag: Mutex<Option<KeptDrag>>,
     state: Mutex<State>,
     changed: Condvar,
 }
 
 impl Session {
-    /// Reads the scene and prepares the part (load, geometry, initial field) as `grainline run`
-    /// would (a UV layout is made when the scene's toolpaths need one and the part has none).
+    /// Reads the scene, loads the part and prepares it without edits (geometry, initial
+    /// field) as `grainline run` would (a UV layout is made when the scene's toolpaths need one
+    /// and the part has none). The scene's own edits are prepared for at the first solve.
     pub fn open(path: &Path) -> Result<Session> {
         let loaded = LoadedScene::read(path)?;
         let plan = StagePlan::of(&loaded.scene);
         let mut stages = Stages::new(&Silent);
+        let part = load_stage(&loaded, &mut stages, plan.trace).map_err(|e| loaded.wrap(e))?;
+        let mut bare = loaded.clone();
+        bare.scene.edits.clear();
         let prepared =
-            prepare_with(&loaded, &mut stages, plan.trace).map_err(|e| loaded.wrap(e))?;
+            prepare_part(&bare, part.clone(), &mut stages).map_err(|e| loaded.wrap(e))?;
+        let coarse = Arc::new(Part { id: 0, prepared });
         let edits = loaded.scene.edits.clone();
         let state = State { saved_edits: edits.clone(), edits, version: 1, ..State::default() };
-        Ok(Session { loaded, prepared, state: Mutex::new(state), changed: Condvar::new() })
+        let parts = Mutex::new(Parts { next_id: 1, ..Parts::default() });
+        Ok(Session {
+            loaded,
+            part,
+            coarse,
+            parts,
+            drag: Mutex::new(None),
+            state: Mutex::new(state),
+            changed: Condvar::new(),
+        })
+    }
+
+    fn parts(&self) -> MutexGuard<'_, Parts> {
+        self.parts.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The scene as `grainline run` would read it from a file holding `edits`.
+    fn with_edits(&self, edits: &[Edit]) -> Result<LoadedScene> {
+        let text = self.scene_text(edits)?;
+        let scene = Scene::from_str(&text, &self.loaded.path)?;
+        Ok(LoadedScene { scene, ..self.loaded.clone() })
+    }
+
+    /// The part as `grainline run` prepares it for a scene holding `edits`: the part as
+    /// loaded, refined inside their brushes as `mesh.refine` says
+    /// ([`crate::pipeline::prepare_part`]). A refinement is made once per request
+    /// ([`refine_request`]) and kept ([`PARTS_KEPT`]); without one it is the coarse part.
+    pub fn part_for(&self, edits: &[Edit]) -> Result<Arc<Part>> {
+        if let Some((e, p)) = &self.parts().last {
+            if e == edits {
+                return Ok(Arc::clone(p));
+            }
+        }
+        let s = self.with_edits(edits)?;
+        let part = match refine_request(&s, &self.part.mesh).map_err(|e| s.wrap(e))? {
+            None => Arc::clone(&self.coarse),
+            Some(request) => self.refined_part(&s, request)?,
+        };
+        self.parts().last = Some((edits.to_vec(), Arc::clone(&part)));
+        Ok(part)
+    }
+
+    /// The part refined for `request` (made from the part as loaded when not kept).
+    fn refined_part(&self, s: &LoadedScene, request: Vec<f64>) -> Result<Arc<Part>> {
+        let kept = self.parts().refined.iter().find(|(k, _)| *k == request).map(|(_, p)| p.clone());
+        if let Some(p) = kept {
+            return Ok(p);
+        }
+        let mut stages = Stages::new(&Silent);
+        let prepared = prepare_part(s, self.part.clone(), &mut stages).map_err(|e| s.wrap(e))?;
+        let mut parts = self.parts();
+        let part = if prepared.refinement.is_none() {
+            Arc::clone(&self.coarse)
+        } else {
+            let id = parts.next_id;
+            parts.next_id += 1;
+            Arc::new(Part { id, prepared })
+        };
+        parts.refined.push((request, Arc::clone(&part)));
+        if parts.refined.len() > PARTS_KEPT {
+            parts.refined.remove(0);
+        }
+        Ok(part)
+    }
+
+    /// The part numbered `id`, if the session still holds it (the coarse part is 0).
+    pub fn part_by_id(&self, id: u32) -> Option<Arc<Part>> {
+        if id == 0 {
+            return Some(Arc::clone(&self.coarse));
+        }
+        let kept = self.parts().refined.iter().find(|(_, p)| p.id == id).map(|(_, p)| p.clone());
+        kept.or_else(|| self.lock().recent.iter().map(|s| s.part.clone()).find(|p| p.id == id))
     }
 
     fn lock(&self) -> MutexGuard<'_, State> {
@@ -160,9 +296,10 @@ impl Session {
         &self.loaded.scene
     }
 
-    /// The prepared part.
+    /// The part prepared without edits (nothing refined): its vertices keep their indices in
+    /// every refined part, which appends its new vertices after them.
     pub fn prepared(&self) -> &Prepared {
-        &self.prepared
+        &self.coarse.prepared
     }
 
     /// The scene file's text with `edits` as its edits: pretty JSON ending in a newline, every
@@ -192,7 +329,7 @@ impl Session {
             }
         }
         e.validate()?;
-        let n = self.prepared.mesh.num_vertices();
+        let n = self.prepared().mesh.num_vertices();
         let centre = match e {
             Edit::Bend(w) | Edit::Expand(w) => Some(&w.centre),
             Edit::Stencil(s) => Some(&s.centre),
@@ -297,10 +434,14 @@ impl Session {
         }
     }
 
-    /// The newest solved field, if it is the one of `version` (any when `None`).
+    /// The newest solved field (`None`), or the one of `version` if it is among the last
+    /// [`RECENT_KEPT`].
     pub fn solved(&self, version: Option<u64>) -> Option<Arc<Solved>> {
         let st = self.lock();
-        st.solved.clone().filter(|s| version.is_none_or(|v| v == s.version))
+        match version {
+            None => st.solved.clone(),
+            Some(v) => st.recent.iter().rev().find(|s| s.version == v).cloned(),
+        }
     }
 
     /// Writes the committed edits into the scene file (atomically, through
@@ -316,56 +457,124 @@ impl Session {
         Ok(self.loaded.path.clone())
     }
 
-    /// Solves `edits` exactly as `grainline run` would solve a scene file holding them: the
-    /// grain, the highlight curves and the critical points for the page; FIELD.json is made
-    /// from the same result when asked for ([`Session::field_json`]).
+    /// Solves the committed `edits` exactly as `grainline run` would solve a scene file holding
+    /// them, on the part prepared for them ([`Session::part_for`]: refined inside their
+    /// brushes): the grain, the highlight curves and the critical points for the page;
+    /// FIELD.json is made from the same result when asked for ([`Session::field_json`]).
     pub fn solve(&self, edits: &[Edit], version: u64) -> Result<Solved> {
         let start = Instant::now();
-        let text = self.scene_text(edits)?;
-        let scene = Scene::from_str(&text, &self.loaded.path)?;
-        let s = LoadedScene { scene, ..self.loaded.clone() };
-        let p = &self.prepared;
-        let g = &p.field.geometry;
-        let symmetry: Symmetry = p.field_options.symmetry;
-        let (optimized, u, stop, key_light, fidelity, edited) = if s.scene.edits.is_empty() {
+        let part = self.part_for(edits)?;
+        self.solve_on(part, edits, version, start)
+    }
+
+    /// One drag step: the `committed` edits and the `dragged` one, solved on the part prepared
+    /// for the committed edits alone (the dragged brush is refined when the drag ends and the
+    /// edit is committed, [`Session::solve`]). Incremental ([`DragBase`]): the committed edits
+    /// are applied once per drag and only the dragged one per step; the solve is the one
+    /// `grainline run` makes for the same edits on the same part (the same φ, bit for bit),
+    /// without its whole-mesh report (constraint violations, singularities, fidelity), which
+    /// the commit's solve makes.
+    pub fn solve_drag(&self, committed: &[Edit], dragged: &Edit, version: u64) -> Result<Solved> {
+        let start = Instant::now();
+        let part = self.part_for(committed)?;
+        let base = self.drag_base(&part, committed)?;
+        let mut edits = committed.to_vec();
+        edits.push(dragged.clone());
+        let s = self.with_edits(&edits)?;
+        let step = base.step(&s, &part.prepared, 1).map_err(|e| s.wrap(e))?;
+        let field = FieldOf { phi: &step.phi, h: &step.h, critical: &step.critical };
+        let mut solved = self.solved_field(&part, &field, version)?;
+        solved.stop = step.stop.to_string();
+        solved.key_light = step.key_light;
+        solved.edited_vertices = step.edited_vertices;
+        solved.edits = edits;
+        solved.seconds = start.elapsed().as_secs_f64();
+        solved.part = part;
+        Ok(solved)
+    }
+
+    /// The drag steps' reusable state for `committed` on `part` (made once per drag).
+    fn drag_base(&self, part: &Arc<Part>, committed: &[Edit]) -> Result<Arc<DragBase>> {
+        if let Some((id, e, b)) = &*self.drag.lock().unwrap_or_else(|e| e.into_inner()) {
+            if *id == part.id && e == committed {
+                return Ok(Arc::clone(b));
+            }
+        }
+        let s = self.with_edits(committed)?;
+        let base = Arc::new(DragBase::new(&s, &part.prepared).map_err(|e| s.wrap(e))?);
+        *self.drag.lock().unwrap_or_else(|e| e.into_inner()) =
+            Some((part.id, committed.to_vec(), Arc::clone(&base)));
+        Ok(base)
+    }
+
+    /// The stages of `grainline run` after the preparation, on `part`.
+    fn solve_on(
+        &self,
+        part: Arc<Part>,
+        edits: &[Edit],
+        version: u64,
+        start: Instant,
+    ) -> Result<Solved> {
+        let s = self.with_edits(edits)?;
+        let p = &part.prepared;
+        let (optimized, stop, key_light, fidelity, edited) = if s.scene.edits.is_empty() {
             let l = p.field_options.lighting.light;
-            let u = g.directions_of(&p.field.phi);
-            (None, u, "none".to_string(), [l.x, l.y, l.z], Vec::new(), 0)
+            (None, "none".to_string(), [l.x, l.y, l.z], Vec::new(), 0)
         } else {
             let mut stages = Stages::new(&Silent);
             let o = optimize_stage(&s, p, &mut stages).map_err(|e| s.wrap(e))?;
-            let u = g.directions_of(&o.phi);
             let r = &o.report;
             let (stop, key, fid, edited) =
                 (r.solver.stop.to_string(), r.key_light, r.fidelity.clone(), r.edited_vertices);
-            (Some(o), u, stop, key, fid, edited)
+            (Some(o), stop, key, fid, edited)
         };
+        let field = match &optimized {
+            Some(o) => FieldOf { phi: &o.phi, h: &o.h, critical: &o.critical },
+            None => FieldOf { phi: &p.field.phi, h: &p.field.h, critical: &p.field.critical },
+        };
+        let mut solved = self.solved_field(&part, &field, version)?;
+        solved.optimized = optimized;
+        solved.stop = stop;
+        solved.key_light = key_light;
+        solved.fidelity = fidelity;
+        solved.edited_vertices = edited;
+        solved.edits = edits.to_vec();
+        solved.seconds = start.elapsed().as_secs_f64();
+        solved.part = part;
+        Ok(solved)
+    }
+
+    /// The page's view of a field on `part`: the grain, the key light's highlight curves, the
+    /// critical vertices (the rest of [`Solved`] is the caller's to fill).
+    fn solved_field(&self, part: &Arc<Part>, f: &FieldOf, version: u64) -> Result<Solved> {
+        let p = &part.prepared;
+        let u = p.field.geometry.directions_of(f.phi);
         if let Some(i) = u.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
             return Err(Error::invalid_arg(
                 "solve",
                 format!("the grain at vertex {i} is not finite"),
             ));
         }
-        let h = optimized.as_ref().map_or(&p.field.h, |o| &o.h);
-        let segments = highlight_segments(&p.mesh, h, &u, symmetry)
+        let segments = highlight_segments(&p.mesh, f.h, &u, p.field_options.symmetry)
             .iter()
             .map(|[a, b]| [a.x, a.y, a.z, b.x, b.y, b.z].map(|c| c as f32))
             .collect();
-        let critical = optimized.as_ref().map_or(&p.field.critical, |o| &o.critical);
         let critical =
-            critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
+            f.critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
         Ok(Solved {
             version,
-            optimized,
+            part: Arc::clone(part),
+            edits: Vec::new(),
+            optimized: None,
             field_json: OnceLock::new(),
             u: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
             segments,
             critical,
-            key_light,
-            stop,
-            fidelity,
-            edited_vertices: edited,
-            seconds: start.elapsed().as_secs_f64(),
+            key_light: [0.0; 3],
+            stop: String::new(),
+            fidelity: Vec::new(),
+            edited_vertices: 0,
+            seconds: 0.0,
         })
     }
 
@@ -373,11 +582,16 @@ impl Session {
     /// a scene file holding the same edits: [`optimized_field_file`] (or the initial field's
     /// file without edits) through [`crate::output::json_compact`]. Made once per result.
     pub fn field_json<'a>(&self, solved: &'a Solved) -> Result<&'a [u8]> {
-        let p = &self.prepared;
+        let p = &solved.part.prepared;
         let made = solved.field_json.get_or_init(|| {
-            let file = match &solved.optimized {
-                Some(o) => optimized_field_file(p, o),
-                None => FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field),
+            let file = match (&solved.optimized, solved.edits.is_empty()) {
+                (Some(o), _) => optimized_field_file(p, o),
+                (None, true) => FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field),
+                // A drag step: the whole stage, as `grainline run` makes it, when asked for.
+                (None, false) => self.with_edits(&solved.edits).and_then(|s| {
+                    let o = optimize_stage(&s, p, &mut Stages::new(&Silent))?;
+                    optimized_field_file(p, &o)
+                }),
             };
             file.and_then(|f| crate::output::json_compact(&f)).map_err(|e| e.to_string())
         });
@@ -392,7 +606,7 @@ impl Session {
     pub fn solver_loop(self: Arc<Self>) {
         let mut done = 0u64;
         loop {
-            let (version, edits) = {
+            let (version, committed, dragged) = {
                 let mut st = self.lock();
                 while st.version <= done {
                     st = match self.changed.wait(st) {
@@ -400,22 +614,29 @@ impl Session {
                         Err(e) => e.into_inner(),
                     };
                 }
-                let mut edits = st.edits.clone();
-                edits.extend(st.preview.clone());
                 st.solving = Some(st.version);
-                (st.version, edits)
+                (st.version, st.edits.clone(), st.preview.clone())
             };
             // A panic in the solve must not end the editor: it is reported like an error.
-            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                self.solve(&edits, version)
-            }))
-            .unwrap_or_else(|_| Err(Error::invalid_arg("solve", "the solver failed (panic)")));
+            let result =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &dragged {
+                    Some(d) => self.solve_drag(&committed, d, version),
+                    None => self.solve(&committed, version),
+                }))
+                .unwrap_or_else(|_| Err(Error::invalid_arg("solve", "the solver failed (panic)")));
             let mut st = self.lock();
             st.solving = None;
             done = version;
             if st.version == version {
                 match result {
-                    Ok(s) => st.solved = Some(Arc::new(s)),
+                    Ok(s) => {
+                        let s = Arc::new(s);
+                        st.recent.push(Arc::clone(&s));
+                        if st.recent.len() > RECENT_KEPT {
+                            st.recent.remove(0);
+                        }
+                        st.solved = Some(s);
+                    }
                     Err(e) => st.error = Some((version, e.to_string())),
                 }
             } else {

@@ -141,6 +141,30 @@ pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
 /// [`prepare`], and when `layout` is true (the toolpaths need UVs) the part's UV layout is
 /// checked, or made, right after loading and before any long stage ([`ensure_layout`]).
 pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<Prepared> {
+    let part = load_stage(s, stages, layout)?;
+    prepare_part(s, part, stages)
+}
+
+/// The part as loaded, before any refinement for the edits: what [`prepare_part`] starts
+/// from. The editor keeps one and prepares it again for each set of edits it commits.
+#[derive(Clone)]
+pub struct LoadedPart {
+    /// The mesh as loaded (with the UV layout made for the toolpaths, if one was).
+    pub mesh: Mesh,
+    /// The mesh's source as written in the scene.
+    pub mesh_name: String,
+    /// The key light and the view for this mesh.
+    pub lighting: Lighting,
+    /// Directions read per vertex (`field.init: "directions"`).
+    pub directions: Option<Vec<Vector3<f64>>>,
+    /// The UV layout made for the part, if one was.
+    pub layout: Option<crate::layout::LayoutReport>,
+}
+
+/// The first half of [`prepare_with`]: loads the part (or meshes its outline), checks the
+/// work the scene asks for, makes the UV layout when `layout` is true and reads the per-vertex
+/// directions. Nothing here depends on the scene's edits.
+pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<LoadedPart> {
     let scene = &s.scene;
     let key = key_light(scene).map_err(|e| s.wrap(e))?;
     if let KeyLight::Directional(d) = key {
@@ -165,10 +189,19 @@ pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Resul
     } else {
         None
     };
-    let mut directions = match (&scene.field.init, &scene.field.directions) {
+    let directions = match (&scene.field.init, &scene.field.directions) {
         (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),
         _ => None,
     };
+    Ok(LoadedPart { mesh, mesh_name, lighting, directions, layout: layout_report })
+}
+
+/// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
+/// (`mesh.refine`, [`refine_request`], [`crate::mesh::refine`]) and computes the geometry, the
+/// initial field and its highlights on the result.
+pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
+    let scene = &s.scene;
+    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout } = part;
     let refinement = refine_for_edits(s, &mut mesh, stages)?;
     if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
         // A line or vector field read per vertex: each new vertex gets the mean of its edge's
@@ -187,7 +220,7 @@ pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Resul
     field_options.critical_threshold = scene.field.critical_threshold;
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
-    Ok(Prepared { mesh, mesh_name, field_options, field, layout: layout_report, refinement })
+    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement })
 }
 
 /// What [`refine_for_edits`] did.
@@ -211,14 +244,11 @@ pub struct RefinementReport {
     pub finest_edge: f64,
 }
 
-/// Refines the part inside the edits' brushes where its triangles are coarser than
-/// `mesh.refine.edge` × the brush radius ([`crate::edit::resolution`],
-/// [`crate::mesh::refine`]). `None` when nothing was split (or `mesh.refine.mode: "none"`).
-fn refine_for_edits(
-    s: &LoadedScene,
-    mesh: &mut Mesh,
-    stages: &mut Stages,
-) -> Result<Option<Refinement>> {
+/// The edge length each face of `mesh` needs for the scene's edits
+/// ([`crate::edit::resolution::edit_resolution`] with `mesh.refine.edge`): the refinement's
+/// request. `None` when nothing would be refined (`mesh.refine.mode: "none"`, no edits, or no
+/// face asks for an edge). Two scenes whose requests are equal refine the part the same way.
+pub fn refine_request(s: &LoadedScene, mesh: &Mesh) -> Result<Option<Vec<f64>>> {
     let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
     if settings.mode == crate::scene::RefineMode::None || s.scene.edits.is_empty() {
         return Ok(None);
@@ -228,9 +258,22 @@ fn refine_for_edits(
     let target =
         crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
     let finest = target.iter().copied().fold(f64::INFINITY, f64::min);
-    if !finest.is_finite() {
+    Ok(finest.is_finite().then_some(target))
+}
+
+/// Refines the part inside the edits' brushes where its triangles are coarser than
+/// `mesh.refine.edge` × the brush radius ([`refine_request`], [`crate::mesh::refine`]).
+/// `None` when nothing was split (or `mesh.refine.mode: "none"`).
+fn refine_for_edits(
+    s: &LoadedScene,
+    mesh: &mut Mesh,
+    stages: &mut Stages,
+) -> Result<Option<Refinement>> {
+    let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
+    let Some(target) = refine_request(s, mesh)? else {
         return Ok(None);
-    }
+    };
+    let finest = target.iter().copied().fold(f64::INFINITY, f64::min);
     stages.start("refine");
     let options = crate::mesh::refine::RefineOptions {
         max_new_vertices: settings.max_vertices,

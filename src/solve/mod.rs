@@ -25,7 +25,10 @@ pub use lm::{
     SolveCache, StopReason,
 };
 pub use locks::{BoundaryRelation, LockConflict, LockRegion, LockSpec, ResolvedLocks};
-pub use optimize::{optimize, ConstraintViolations, OptimizeReport, OptimizeResult, StartChoice};
+pub use optimize::{
+    optimize, optimize_with, ConstraintViolations, OptimizeReport, OptimizeResult, OptimizeReuse,
+    StartChoice,
+};
 pub use settings::{
     Constraints, HighlightEnergy, SolverSettings, Splay, TriangleTerm, TurningRadius,
 };

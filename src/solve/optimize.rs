@@ -173,6 +173,23 @@ pub fn dilate(term: &HighlightTerm, support: &[bool], rings: u32) -> Vec<bool> {
     inside
 }
 
+/// What a caller that solves many times on one mesh lends [`optimize_with`] (the editor's drag
+/// steps, issue 16). None of it changes the field the solve finds.
+#[derive(Clone, Debug)]
+pub struct OptimizeReuse {
+    /// The mesh's cotangent weights ([`cotan_weights`]), computed once.
+    pub cotan_weights: Option<std::sync::Arc<Vec<f64>>>,
+    /// Whether the whole-mesh figures of the report are measured: the constraint violations
+    /// and the singularities (false: left empty, for a report made later on the same field).
+    pub whole_mesh_report: bool,
+}
+
+impl Default for OptimizeReuse {
+    fn default() -> Self {
+        OptimizeReuse { cotan_weights: None, whole_mesh_report: true }
+    }
+}
+
 /// Optimizes the field `phi` (angles in `term.geometry`'s frames) against `term`, freeing the
 /// edit `support` (one flag per vertex) dilated by the settings' margin.
 pub fn optimize(
@@ -181,6 +198,19 @@ pub fn optimize(
     phi: &[f64],
     support: &[bool],
     settings: &SolverSettings,
+) -> Result<OptimizeResult> {
+    optimize_with(mesh, term, phi, support, settings, &OptimizeReuse::default())
+}
+
+/// [`optimize`] with what `reuse` lends: the same field, bit for bit, and the same report but
+/// for the whole-mesh figures when `reuse.whole_mesh_report` is false.
+pub fn optimize_with(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    support: &[bool],
+    settings: &SolverSettings,
+    reuse: &OptimizeReuse,
 ) -> Result<OptimizeResult> {
     settings.validate()?;
     let g = term.geometry;
@@ -243,7 +273,10 @@ pub fn optimize(
         soft_locks: locks.soft.clone(),
         interleaved_smoothing: settings.smoothing_pass(),
         linear_solver: LinearSolver::Auto,
-        cotan_weights: Some(std::sync::Arc::new(cotan_weights(mesh, &g.adjacency))),
+        cotan_weights: Some(match &reuse.cotan_weights {
+            Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
+            _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
+        }),
     };
     let stages: Vec<f64> = if settings.continuation && settings.smoothness > 0.0 {
         vec![1000.0, 100.0, 10.0, 1.0]
@@ -331,6 +364,48 @@ pub fn optimize(
     for p in out.iter_mut() {
         *p = wrap_angle(*p);
     }
+    let violations = if reuse.whole_mesh_report {
+        violations(mesh, term, settings, &locks, &out)
+    } else {
+        ConstraintViolations::default()
+    };
+    let report = OptimizeReport {
+        iterations,
+        initial_energy,
+        stop,
+        edited: support.iter().filter(|&&s| s).count(),
+        unknowns: free_list.len(),
+        hard_locked: locks.hard.len(),
+        soft_locked: locks.soft.len(),
+        smoothness_weight: options.smoothness,
+        interleaved_smoothing: options.interleaved_smoothing,
+        start: start_choice,
+        given_energy,
+        starts_tried,
+        violations,
+        conflicting_locks: locks.conflicts,
+        degenerate_lock_vertices: locks.degenerate,
+        singularities: if reuse.whole_mesh_report {
+            singularities(mesh, g, &out, k)
+        } else {
+            Vec::new()
+        },
+    };
+    Ok(OptimizeResult { phi: out, report })
+}
+
+/// The constraint violations of the field `out` over the whole mesh.
+fn violations(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    settings: &SolverSettings,
+    locks: &super::locks::ResolvedLocks,
+    out: &[f64],
+) -> ConstraintViolations {
+    let g = term.geometry;
+    let nv = g.num_vertices();
+    let k = term.symmetry.k();
+    let c = &settings.constraints;
     let violation = |kind: HingeKind, bound: f64| {
         let hinge = GradientHinge {
             geometry: g,
@@ -342,7 +417,7 @@ pub fn optimize(
         };
         let (mut bad, mut total, mut worst) = (0.0, 0.0, 0.0f64);
         for i in 0..nv {
-            let ratio = hinge.value(&out, i).abs() / bound;
+            let ratio = hinge.value(out, i).abs() / bound;
             let a = g.areas[i].max(0.0);
             total += a;
             if ratio > 1.0 + VIOLATION_TOLERANCE {
@@ -374,7 +449,7 @@ pub fn optimize(
             for q in 0..QUADRATURE.len() {
                 let a = frame.area / QUADRATURE.len() as f64;
                 total += a;
-                if let Some(x) = hinge.curvature(&out, f, q) {
+                if let Some(x) = hinge.curvature(out, f, q) {
                     let ratio = x.abs() / bound;
                     if ratio > 1.0 + VIOLATION_TOLERANCE {
                         bad += a;
@@ -407,23 +482,5 @@ pub fn optimize(
         .chain(locks.soft.iter().map(|&(v, a, _)| (v, a)))
         .map(|(v, a)| angle_difference(out[v as usize], a, k).abs())
         .fold(0.0, f64::max);
-    let report = OptimizeReport {
-        iterations,
-        initial_energy,
-        stop,
-        edited: support.iter().filter(|&&s| s).count(),
-        unknowns: free_list.len(),
-        hard_locked: locks.hard.len(),
-        soft_locked: locks.soft.len(),
-        smoothness_weight: options.smoothness,
-        interleaved_smoothing: options.interleaved_smoothing,
-        start: start_choice,
-        given_energy,
-        starts_tried,
-        violations,
-        conflicting_locks: locks.conflicts,
-        degenerate_lock_vertices: locks.degenerate,
-        singularities: singularities(mesh, g, &out, k),
-    };
-    Ok(OptimizeResult { phi: out, report })
+    violations
 }

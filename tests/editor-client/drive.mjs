@@ -8,6 +8,7 @@
 //      steps, so live previews are sent), releases;
 //   4. waits until the committed edit is solved and shown; screenshots after.png and
 //      after-overlay.png; fetches the FIELD.json of the version the page shows (page-field.json);
+//      notes the vertex count and part id of the mesh the page shows (refined when the drag ends);
 //   5. saves with Ctrl+S and waits for the page to report it.
 // JOB.json: { "url": "http://127.0.0.1:PORT/", "out_dir": DIR, "width": 1000, "height": 700,
 //             "drag_px": 40 }
@@ -103,6 +104,7 @@ try {
     edits: window.editor.state.edits, last: window.editor.lastEdit,
     displayed: window.editor.displayedVersion, version: window.editor.version,
     dropped: window.editor.state.dropped, fidelity: window.editor.state.fidelity,
+    vertices: window.editor.vertices, part: window.editor.partId,
   }));
   await shot('after.png', false);
   await shot('after-overlay.png', true);

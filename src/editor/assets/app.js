@@ -37,28 +37,52 @@ editor.info = info;
 $('scene-name').textContent = `${info.scene} · ${info.vertices} vertices`;
 
 // ---- the mesh: non-indexed, so that a line field's corners can be aligned per triangle ----
-const meshBuf = await (await fetch('/api/mesh')).arrayBuffer();
-const head = new Uint32Array(meshBuf, 0, 2);
-const nv = head[0], nf = head[1];
-const vpos = new Float32Array(meshBuf, 8, 3 * nv);
-const vnor = new Float32Array(meshBuf, 8 + 12 * nv, 3 * nv);
-const faces = new Uint32Array(meshBuf, 8 + 24 * nv, 3 * nf);
-const cpos = new Float32Array(9 * nf), cnor = new Float32Array(9 * nf), cgrain = new Float32Array(9 * nf);
-for (let k = 0; k < 3 * nf; k++) {
-  const v = faces[k];
-  for (let c = 0; c < 3; c++) {
-    cpos[3 * k + c] = vpos[3 * v + c];
-    cnor[3 * k + c] = vnor[3 * v + c];
+// The server solves a drag on the part as prepared for the committed edits and refines the
+// part inside a brush when the drag ends: a solved grain names its part (`partId`), and the
+// page loads that part's mesh (more vertices) when it is not the one shown.
+let partId = 0, nv = 0, nf = 0, vpos = null, faces = null, cgrain = null, grainAttr = null;
+let geometry = new THREE.BufferGeometry();
+function setMesh(buf, id) {
+  const head = new Uint32Array(buf, 0, 2);
+  nv = head[0]; nf = head[1];
+  vpos = new Float32Array(buf, 8, 3 * nv);
+  const vnor = new Float32Array(buf, 8 + 12 * nv, 3 * nv);
+  faces = new Uint32Array(buf, 8 + 24 * nv, 3 * nf);
+  const cpos = new Float32Array(9 * nf), cnor = new Float32Array(9 * nf);
+  cgrain = new Float32Array(9 * nf);
+  for (let k = 0; k < 3 * nf; k++) {
+    const v = faces[k];
+    for (let c = 0; c < 3; c++) {
+      cpos[3 * k + c] = vpos[3 * v + c];
+      cnor[3 * k + c] = vnor[3 * v + c];
+    }
   }
+  geometry.setAttribute('position', new THREE.BufferAttribute(cpos, 3));
+  geometry.setAttribute('normal', new THREE.BufferAttribute(cnor, 3));
+  grainAttr = new THREE.BufferAttribute(cgrain, 3);
+  grainAttr.setUsage(THREE.DynamicDrawUsage);
+  geometry.setAttribute('grain', grainAttr);
+  geometry.computeBoundingSphere();
+  geometry.computeBoundingBox();
+  partId = id;
+  editor.partId = id;
+  editor.vertices = nv;
+  $('scene-name').textContent = `${info.scene} · ${nv} vertices`;
 }
-const geometry = new THREE.BufferGeometry();
-geometry.setAttribute('position', new THREE.BufferAttribute(cpos, 3));
-geometry.setAttribute('normal', new THREE.BufferAttribute(cnor, 3));
-const grainAttr = new THREE.BufferAttribute(cgrain, 3);
-grainAttr.setUsage(THREE.DynamicDrawUsage);
-geometry.setAttribute('grain', grainAttr);
-geometry.computeBoundingSphere();
-geometry.computeBoundingBox();
+async function loadMesh(id) {
+  const r = await fetch(`/api/mesh?part=${id}`);
+  if (!r.ok) return false;
+  const buf = await r.arrayBuffer();
+  if (nv === 0) { setMesh(buf, id); return true; }
+  // Another mesh: a new geometry on the part, the old one's GPU buffers freed.
+  const old = geometry;
+  geometry = new THREE.BufferGeometry();
+  setMesh(buf, id);
+  part.geometry = geometry;
+  old.dispose();
+  return true;
+}
+await loadMesh(0);
 
 // ---- the material: the scene's BRDF, lights and tone map ----
 // Both sides are drawn, as in the preview: a back face keeps its outward normal, so it is black
@@ -211,6 +235,8 @@ async function loadGrain(version) {
   const buf = await r.arrayBuffer();
   const h = new Uint32Array(buf, 0, 4);
   const n = h[0], s = h[1], c = h[2];
+  if (h[3] !== partId && !(await loadMesh(h[3]))) return false;
+  if (n !== nv) return false;
   const u = new Float32Array(buf, 16, 3 * n);
   const seg = new Float32Array(buf, 16 + 12 * n, 6 * s);
   const crit = new Uint32Array(buf, 16 + 12 * n + 24 * s, c);
