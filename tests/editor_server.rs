@@ -61,7 +61,11 @@ fn start(name: &str) -> Server {
 }
 
 fn start_with(name: &str, text: &str) -> Server {
-    let dir = scene_dir_with(name, text);
+    start_in(scene_dir_with(name, text))
+}
+
+/// The editor on `dir/scene.json`.
+fn start_in(dir: PathBuf) -> Server {
     let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
         .args(["--quiet", "edit", "--port", "0"])
         .arg(dir.join("scene.json"))
@@ -562,4 +566,75 @@ fn with_refinement_off_the_committed_bend_stays_on_the_part_as_loaded() {
     let (dragged, committed, part, same) = drag_commit_save_run(&srv);
     assert_eq!((dragged, committed, part), (32 * 9, 32 * 9, 0));
     assert!(same, "the run's FIELD.json differs from the one shown");
+}
+
+/// Issue 16, export: after a committed bend, `POST /api/export` writes the SVG and the G-code
+/// the scene names, byte for byte the files `grainline run` writes for the saved scene, and a
+/// glTF binary beside the scene file (the scene names none): magic `glTF`, version 2, the
+/// header's length the file's. A scene without UVs or a `toolpaths` section is told the key.
+#[test]
+fn export_writes_what_the_run_of_the_saved_scene_writes() {
+    let scene = SCENE.replace(
+        r#""field": {"#,
+        r#""toolpaths": {"svg": "strokes.svg", "gcode": "strokes.ngc"}, "field": {"#,
+    );
+    let srv = start_with("export", &scene);
+    let p = srv.port;
+    let bend = r#"{"tool": "bend", "centre": {"point": [0, -30, 5]}, "radius": 25, "strength": 0.7, "direction": [1, 0, 0.2]}"#;
+    let (s, b) = post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bend}}}"#));
+    assert_eq!(s, Some(200), "{b}");
+    let export = |what: &str| {
+        let (s, b) = post(p, "/api/export", &own(p), &format!(r#"{{"what": "{what}"}}"#));
+        assert_eq!(s, Some(200), "{what}: {b}");
+        let v: Value = serde_json::from_str(&b).unwrap();
+        let path = PathBuf::from(v["written"].as_str().unwrap());
+        (path.clone(), std::fs::read(&path).unwrap())
+    };
+    let (svg_path, svg) = export("svg");
+    let (gcode_path, gcode) = export("gcode");
+    assert_eq!(svg_path, srv.dir.join("strokes.svg"));
+    assert_eq!(gcode_path, srv.dir.join("strokes.ngc"));
+    assert!(svg.starts_with(b"<?xml") || svg.starts_with(b"<svg"), "not an SVG");
+    let (glb_path, glb) = export("glb");
+    assert_eq!(glb_path, srv.dir.join("scene.glb"));
+    assert_eq!(&glb[0..4], b"glTF");
+    assert_eq!(u32_at(&glb, 4), 2);
+    assert_eq!(u32_at(&glb, 8) as usize, glb.len());
+    // A cross-origin export is refused like every write; an unknown kind is a 400.
+    let (s, _) = post(p, "/api/export", &[own(p)[1].clone()], r#"{"what": "svg"}"#);
+    assert_eq!(s, Some(403));
+    assert_eq!(post(p, "/api/export", &own(p), r#"{"what": "obj"}"#).0, Some(400));
+    // The saved scene's run writes the same bytes.
+    std::fs::remove_file(&svg_path).unwrap();
+    std::fs::remove_file(&gcode_path).unwrap();
+    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
+    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(srv.dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(std::fs::read(&svg_path).unwrap() == svg, "the run's SVG differs from the export");
+    assert!(std::fs::read(&gcode_path).unwrap() == gcode, "the run's G-code differs");
+}
+
+/// A part without UVs and a scene without `toolpaths`: the export says which key to add and
+/// writes nothing; the glTF binary, which needs no layout, is written.
+#[test]
+fn export_without_a_layout_names_the_key_to_add() {
+    let scene = SCENE.replace(r#""init": "uv""#, r#""init": "smooth""#);
+    let dir = scene_dir_with("export-nouv", &scene);
+    let mut cylinder = grainline::generate::cylinder(30.0, 80.0, 32, 8);
+    cylinder.uv = None;
+    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&cylinder, "t"))
+        .unwrap();
+    let srv = start_in(dir);
+    let p = srv.port;
+    let (s, b) = post(p, "/api/export", &own(p), r#"{"what": "gcode"}"#);
+    assert_eq!(s, Some(400), "{b}");
+    assert!(b.contains("toolpaths") && b.contains("UV"), "{b}");
+    assert!(!srv.dir.join("scene.ngc").exists());
+    let (s, b) = post(p, "/api/export", &own(p), r#"{"what": "glb"}"#);
+    assert_eq!(s, Some(200), "{b}");
+    assert!(srv.dir.join("scene.glb").exists());
 }

@@ -25,7 +25,7 @@ use serde_json::json;
 
 use crate::edit::WarpKind;
 use crate::{Error, Result};
-pub use session::{Change, Part, Session, Solved, StateView};
+pub use session::{Change, ExportKind, Part, Session, Solved, StateView};
 
 /// Options of [`Editor::bind`].
 #[derive(Clone, Debug, Default)]

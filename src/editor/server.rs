@@ -24,7 +24,10 @@
 //!   its FIELD.json;
 //! - `GET /files/scene.json`: the scene file as it is on disk;
 //! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
-//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state.
+//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state;
+//! - `POST /api/export {"what": "svg" | "gcode" | "glb"}`: [`Session::export`] writes that
+//!   file for the committed edits (the path the scene names, else beside the scene file);
+//!   `{"written": PATH}`.
 
 use std::io::Read;
 use std::sync::Arc;
@@ -34,7 +37,7 @@ use serde::Deserialize;
 use serde_json::json;
 use tiny_http::{Header, Method, Request, Response};
 
-use super::session::{Change, Session};
+use super::session::{Change, ExportKind, Session};
 
 /// The largest request body read (bytes).
 pub const MAX_BODY: usize = 1 << 20;
@@ -258,6 +261,26 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct ExportRequest {
+    what: ExportKind,
+}
+
+/// `POST /api/export {"what": "svg" | "gcode" | "glb"}`: [`Session::export`]; a scene that
+/// cannot make the file gets a 400 naming the key to add or fix, a failed write a 500.
+fn export(s: &Session, body: &[u8]) -> Reply {
+    let rq: ExportRequest = match serde_json::from_slice(body) {
+        Ok(r) => r,
+        Err(e) => return Reply::error(400, format!("the request: {e} (what: svg, gcode or glb)")),
+    };
+    match s.export(rq.what) {
+        Ok(p) => Reply::json(&json!({ "written": p.display().to_string() })),
+        Err(e @ crate::Error::Io { .. }) => Reply::error(500, format!("exporting: {e}")),
+        Err(e) => Reply::error(400, e.to_string()),
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct EditRequest {
     action: String,
     #[serde(default)]
@@ -289,6 +312,7 @@ fn post(ctx: &Context, path: &str, body: &[u8]) -> Reply {
                 }
             }
         }
+        "/api/export" => return export(s, body),
         "/api/undo" => Change::Undo,
         "/api/redo" => Change::Redo,
         "/api/save" => {

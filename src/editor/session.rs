@@ -178,6 +178,18 @@ pub enum Change {
     Redo,
 }
 
+/// A file the editor writes for the committed edits (`POST /api/export`, [`Session::export`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExportKind {
+    /// The toolpaths' SVG (`toolpaths.svg`).
+    Svg,
+    /// The toolpaths' G-code (`toolpaths.gcode`).
+    Gcode,
+    /// The glTF binary (`export.glb`).
+    Glb,
+}
+
 /// The editor's session: shared by the request threads and the solver thread.
 pub struct Session {
     loaded: LoadedScene,
@@ -455,6 +467,60 @@ impl Session {
         self.lock().saved_edits = edits;
         self.changed.notify_all();
         Ok(self.loaded.path.clone())
+    }
+
+    /// Writes one of the scene's fabrication or viewer files for the committed edits through
+    /// `grainline run` itself ([`crate::pipeline::run::run`]) on the scene the editor would
+    /// save ([`Session::scene_text`]), with every other output left out: the same refined part,
+    /// the same solve and the same bytes as a run on the saved scene, renamed into place
+    /// atomically by the run's staging ([`crate::output::Staged`]). The path is the scene's own
+    /// (`toolpaths.svg`, `toolpaths.gcode`, `export.glb`), or `<scene stem>.svg / .ngc / .glb`
+    /// beside the scene file when it names none. Returns the path written.
+    pub fn export(&self, what: ExportKind) -> Result<std::path::PathBuf> {
+        let edits = self.lock().edits.clone();
+        let mut s = self.with_edits(&edits)?;
+        let beside = |ext: &str| self.loaded.path.with_extension(ext).display().to_string();
+        let scene = &mut s.scene;
+        scene.field.output = None;
+        scene.render = None;
+        match what {
+            ExportKind::Svg | ExportKind::Gcode => {
+                if scene.toolpaths.is_none() && self.part.mesh.uv.is_none() {
+                    return Err(Error::setting(
+                        "toolpaths",
+                        format!(
+                            "{} has no UV layout and the scene has no `toolpaths` section: add                              `\"toolpaths\": {{\"svg\": \"strokes.svg\"}}` (its `layout`                              makes a UV layout)",
+                            self.prepared().mesh_name
+                        ),
+                    ));
+                }
+                let mut t = scene.toolpaths.take().unwrap_or_default();
+                let (svg, gcode) = match what {
+                    ExportKind::Svg => (Some(t.svg.clone().unwrap_or_else(|| beside("svg"))), None),
+                    _ => (None, Some(t.gcode.clone().unwrap_or_else(|| beside("ngc")))),
+                };
+                (t.svg, t.gcode, t.strokes_json) = (svg, gcode, None);
+                scene.toolpaths = Some(t);
+                scene.export = None;
+            }
+            ExportKind::Glb => {
+                let mut e = scene.export.take().unwrap_or_default();
+                e.glb = Some(e.glb.clone().unwrap_or_else(|| beside("glb")));
+                if let Some(t) = scene.toolpaths.as_mut() {
+                    (t.svg, t.gcode, t.strokes_json) = (None, None, None);
+                }
+                scene.export = Some(e);
+            }
+        }
+        let options = crate::pipeline::run::RunOptions::default();
+        let report = crate::pipeline::run::run(&s, &options, &Silent)?;
+        match report.outputs.as_slice() {
+            [one] => Ok(std::path::PathBuf::from(one)),
+            other => Err(Error::invalid_arg(
+                "export",
+                format!("the run wrote {} files, not one", other.len()),
+            )),
+        }
     }
 
     /// Solves the committed `edits` exactly as `grainline run` would solve a scene file holding

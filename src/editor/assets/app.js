@@ -226,6 +226,7 @@ $('reset-view').addEventListener('click', resetView);
 $('undo').addEventListener('click', () => change('/api/undo'));
 $('redo').addEventListener('click', () => change('/api/redo'));
 $('save').addEventListener('click', save);
+for (const what of ['svg', 'gcode', 'glb']) $(`export-${what}`).addEventListener('click', () => exportFile(what));
 
 // ---- the grain from the server ----
 const symmetryLine = info.symmetry === 'line';
@@ -351,6 +352,19 @@ async function save() {
     status(`saved ${r.saved}`);
   } catch (err) { status(err.message, true); }
 }
+
+/** Writes the SVG, G-code or glTF of the committed edits (the server runs `grainline run`'s
+ * stages for them); the path written is shown. */
+async function exportFile(what) {
+  await settle();
+  status(`exporting ${what}…`);
+  try {
+    const r = await api('/api/export', { what });
+    editor.exported = r.written;
+    status(`wrote ${r.written}`);
+  } catch (err) { editor.exported = null; status(err.message, true); }
+}
+editor.exportFile = exportFile;
 
 // ---- picking and the tools ----
 const raycaster = new THREE.Raycaster();
