@@ -616,6 +616,37 @@ fn export_writes_what_the_run_of_the_saved_scene_writes() {
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     assert!(std::fs::read(&svg_path).unwrap() == svg, "the run's SVG differs from the export");
     assert!(std::fs::read(&gcode_path).unwrap() == gcode, "the run's G-code differs");
+    // The strokes shown are the run's: as many, on the part (radius 30), and the as-brushed
+    // grain a unit vector (or zero) per vertex of the committed part.
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(srv.dir.join("run-report.json")).unwrap()).unwrap();
+    let run_strokes = report["toolpaths"]["job"]["stroke_count"].as_u64().unwrap();
+    let v = solved(p);
+    let (s, b) = get_bytes(p, &format!("/api/strokes?version={v}"));
+    assert_eq!(s, Some(200));
+    let (n_strokes, n_points, n_vertices) = (u32_at(&b, 0), u32_at(&b, 4), u32_at(&b, 8));
+    assert!(n_strokes > 0);
+    assert_eq!(u64::from(n_strokes), run_strokes);
+    assert_eq!(u64::from(n_vertices), report["vertices"].as_u64().unwrap());
+    let f32_at = |k: usize| f32::from_le_bytes(b[k..k + 4].try_into().unwrap());
+    let points = 16 + 4 * n_strokes as usize;
+    let lengths: u32 = (0..n_strokes as usize).map(|i| u32_at(&b, 16 + 4 * i)).sum();
+    assert_eq!(lengths, n_points);
+    assert_eq!(b.len(), points + 12 * (n_points + n_vertices) as usize);
+    for i in 0..n_points as usize {
+        let q = [0, 1, 2].map(|c| f64::from(f32_at(points + 12 * i + 4 * c)));
+        let r = q[0].hypot(q[1]);
+        assert!((r - 30.0).abs() < 0.5, "stroke point {i} at radius {r}");
+    }
+    let brushed = points + 12 * n_points as usize;
+    let mut units = 0;
+    for i in 0..n_vertices as usize {
+        let u = [0, 1, 2].map(|c| f64::from(f32_at(brushed + 12 * i + 4 * c)));
+        let norm = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+        assert!(norm < 1e-6 || (norm - 1.0).abs() < 1e-4, "as-brushed u at {i}: {norm}");
+        units += usize::from(norm > 0.5);
+    }
+    assert!(units > n_vertices as usize / 2, "{units} of {n_vertices} vertices brushed");
 }
 
 /// A part without UVs and a scene without `toolpaths`: the export says which key to add and
@@ -634,6 +665,10 @@ fn export_without_a_layout_names_the_key_to_add() {
     assert_eq!(s, Some(400), "{b}");
     assert!(b.contains("toolpaths") && b.contains("UV"), "{b}");
     assert!(!srv.dir.join("scene.ngc").exists());
+    let v = solved(p);
+    let (s, b) = get(p, &format!("/api/strokes?version={v}"));
+    assert_eq!(s, Some(400), "{b}");
+    assert!(b.contains("toolpaths"), "{b}");
     let (s, b) = post(p, "/api/export", &own(p), r#"{"what": "glb"}"#);
     assert_eq!(s, Some(200), "{b}");
     assert!(srv.dir.join("scene.glb").exists());

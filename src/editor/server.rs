@@ -21,7 +21,9 @@
 //!   than V;
 //! - `GET /api/grain?version=V`: [`super::grain_bytes`] of version V (409 when it is not one of
 //!   the last solved ones, [`super::session::RECENT_KEPT`]); `GET /api/field.json?version=V`:
-//!   its FIELD.json;
+//!   its FIELD.json; `GET /api/strokes?version=V`: [`super::strokes_bytes`], the strokes
+//!   `grainline run` traces for it and the as-brushed grain (400 naming the key to add when
+//!   the part has no UV layout);
 //! - `GET /files/scene.json`: the scene file as it is on disk;
 //! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
 //!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state;
@@ -232,6 +234,22 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
             };
             let view = s.view(after, LONG_POLL);
             Reply::json(&serde_json::to_value(view).unwrap_or_default())
+        }
+        "/api/strokes" => {
+            let version = match query_u64(query, "version") {
+                Ok(v) => v,
+                Err(r) => return r,
+            };
+            let Some(solved) = s.solved(version) else {
+                return Reply::error(409, "that version is not one of the last solved ones");
+            };
+            match s.traced(&solved) {
+                Ok(t) => Reply::ok(
+                    "application/octet-stream",
+                    super::strokes_bytes(t, solved.part.id),
+                ),
+                Err(e) => Reply::error(400, e.to_string()),
+            }
         }
         "/api/grain" | "/api/field.json" => {
             let version = match query_u64(query, "version") {

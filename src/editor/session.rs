@@ -33,6 +33,7 @@ use crate::pipeline::{
     load_stage, prepare_part, refine_request, LoadedPart, Prepared, Silent, Stages,
 };
 use crate::scene::{LoadedScene, Scene};
+use crate::uvfield::{as_brushed, field_mesh, toolpath_error};
 use crate::{Error, Result};
 
 /// Undo steps kept (older ones are forgotten).
@@ -76,6 +77,10 @@ pub struct Solved {
     optimized: Option<Optimized>,
     /// FIELD.json, made when first asked for ([`Session::field_json`]).
     field_json: OnceLock<std::result::Result<Vec<u8>, String>>,
+    /// The solved angles per vertex (the solver's own, before FIELD.json's round trip).
+    phi: Vec<f64>,
+    /// The strokes and the as-brushed grain, traced when first asked for ([`Session::traced`]).
+    traced: OnceLock<std::result::Result<Traced, String>>,
     /// The grain u per vertex (world space, unit), as FIELD.json's `u`.
     pub u: Vec<[f32; 3]>,
     /// The key light's highlight curves: segments of the zero set of g = hᵀu per triangle.
@@ -92,6 +97,15 @@ pub struct Solved {
     pub edited_vertices: usize,
     /// Seconds the solve took (targets, solve, grain, curves; FIELD.json is made later).
     pub seconds: f64,
+}
+
+/// The brush strokes traced on a solved field and the grain rebuilt from them
+/// ([`Session::traced`]).
+pub struct Traced {
+    /// Each stroke's points on the part (world space), in brushing order.
+    pub strokes: Vec<Vec<[f32; 3]>>,
+    /// The as-brushed grain per vertex (unit; the zero vector where no stroke passes).
+    pub brushed_u: Vec<[f32; 3]>,
 }
 
 /// The drag steps' reusable state: the part's id, the committed edits it was made for.
@@ -633,6 +647,8 @@ impl Session {
             edits: Vec::new(),
             optimized: None,
             field_json: OnceLock::new(),
+            phi: f.phi.to_vec(),
+            traced: OnceLock::new(),
             u: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
             segments,
             critical,
@@ -665,6 +681,51 @@ impl Session {
             Ok(b) => Ok(b.as_slice()),
             Err(e) => Err(Error::invalid_arg("field.json", e.clone())),
         }
+    }
+
+    /// The strokes `grainline run` traces for a solved field and the as-brushed grain rebuilt
+    /// from them, through the run's own code ([`crate::pipeline::run::toolpath_section`],
+    /// [`field_mesh`], [`grainline_toolpaths::generate`], [`as_brushed`]) on the angles the run
+    /// traces (FIELD.json's, after a solve). Made once per result; a part without a UV layout
+    /// is told the key to add.
+    pub fn traced<'a>(&self, solved: &'a Solved) -> Result<&'a Traced> {
+        let made = solved.traced.get_or_init(|| self.trace(solved).map_err(|e| e.to_string()));
+        match made {
+            Ok(t) => Ok(t),
+            Err(e) => Err(Error::setting("toolpaths", e.clone())),
+        }
+    }
+
+    fn trace(&self, solved: &Solved) -> Result<Traced> {
+        let p = &solved.part.prepared;
+        if p.mesh.uv.is_none() {
+            return Err(Error::setting(
+                "toolpaths",
+                format!(
+                    "{} has no UV layout: add a `toolpaths` section to the scene (its `layout` \
+                     makes one) to trace the strokes",
+                    p.mesh_name
+                ),
+            ));
+        }
+        let s = self.with_edits(&solved.edits)?;
+        let (g, symmetry, units) = (&p.field.geometry, p.field_options.symmetry, p.mesh.units);
+        // As `grainline run`: the solved angles as FIELD.json states them, the initial as is.
+        let phi = if solved.edits.is_empty() {
+            solved.phi.clone()
+        } else {
+            g.angles_of(&g.directions_of(&solved.phi))
+        };
+        let section = crate::pipeline::run::toolpath_section(&s.scene, units, false)?;
+        let (fm, uvr) = field_mesh(&p.mesh, g, &phi, symmetry, &section.uv_field)?;
+        let job = grainline_toolpaths::generate(fm.clone(), &section.job_options(units))
+            .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
+        let ab = as_brushed(&p.mesh, g, &phi, symmetry, &fm, &uvr, &job.placement)?;
+        let f32s = |v: &[f64; 3]| v.map(|c| c as f32);
+        Ok(Traced {
+            strokes: job.strokes_3d.iter().map(|s| s.iter().map(f32s).collect()).collect(),
+            brushed_u: ab.u.iter().map(f32s).collect(),
+        })
     }
 
     /// The solver thread's loop: solves the latest version, drops a result that is stale when
