@@ -581,7 +581,8 @@ fn export_writes_what_the_run_of_the_saved_scene_writes() {
     let srv = start_with("export", &scene);
     let p = srv.port;
     let bend = r#"{"tool": "bend", "centre": {"point": [0, -30, 5]}, "radius": 25, "strength": 0.7, "direction": [1, 0, 0.2]}"#;
-    let (s, b) = post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bend}}}"#));
+    let (s, b) =
+        post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bend}}}"#));
     assert_eq!(s, Some(200), "{b}");
     let export = |what: &str| {
         let (s, b) = post(p, "/api/export", &own(p), &format!(r#"{{"what": "{what}"}}"#));

@@ -244,10 +244,9 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
                 return Reply::error(409, "that version is not one of the last solved ones");
             };
             match s.traced(&solved) {
-                Ok(t) => Reply::ok(
-                    "application/octet-stream",
-                    super::strokes_bytes(t, solved.part.id),
-                ),
+                Ok(t) => {
+                    Reply::ok("application/octet-stream", super::strokes_bytes(t, solved.part.id))
+                }
                 Err(e) => Reply::error(400, e.to_string()),
             }
         }
