@@ -20,7 +20,7 @@
 //! Newton's method safeguarded by bisection (W maps the chord of the disk at x onto itself,
 //! monotonically). ℓ_q is interpolated from the current targets in chart components (see
 //! [`super::support`], "point location"), warped by J_W, and taken back to the tangent plane of
-//! vertex i through its frame's chart angle ([`super::support::Support::vector_from_chart`]).
+//! vertex i through its frame's chart angle (`Support::vector_from_chart`).
 
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
