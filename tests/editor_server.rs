@@ -674,3 +674,58 @@ fn export_without_a_layout_names_the_key_to_add() {
     assert_eq!(s, Some(200), "{b}");
     assert!(srv.dir.join("scene.glb").exists());
 }
+
+/// Issue 16, the light gizmo: `POST /api/light` turns the key light as a scene change; the
+/// field shown after a bend under the new light is byte for byte the one `grainline run`
+/// writes for the saved scene, whose `lights` hold the new direction; undo brings the light
+/// as read back; a zero direction is refused.
+#[test]
+fn a_key_light_set_on_the_page_is_saved_and_the_run_reproduces_the_field() {
+    let srv = start("light");
+    let p = srv.port;
+    let bend = r#"{"tool": "bend", "centre": {"point": [0, -30, 5]}, "radius": 25, "strength": 0.7, "direction": [1, 0, 0.2]}"#;
+    let (s, b) =
+        post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bend}}}"#));
+    assert_eq!(s, Some(200), "{b}");
+    let before = solved(p);
+    let (_, under_old) = get(p, &format!("/api/field.json?version={before}"));
+    assert_eq!(post(p, "/api/light", &own(p), r#"{"direction": [0, 0, 0]}"#).0, Some(400));
+    let (s, _) = post(p, "/api/light", &[own(p)[1].clone()], r#"{"direction": [0.6, -0.8, 0]}"#);
+    assert_eq!(s, Some(403));
+    let (s, b) = post(p, "/api/light", &own(p), r#"{"direction": [1.2, -1.6, 2]}"#);
+    assert_eq!(s, Some(200), "{b}");
+    let v = solved(p);
+    let st = state(p);
+    let l: Vec<f64> = st["light"].as_array().unwrap().iter().map(|c| c.as_f64().unwrap()).collect();
+    let n = (1.2f64 * 1.2 + 1.6 * 1.6 + 4.0).sqrt();
+    assert!((l[0] - 1.2 / n).abs() < 1e-12 && (l[2] - 2.0 / n).abs() < 1e-12, "{l:?}");
+    assert_eq!(st["dirty"], true);
+    let (s, shown) = get(p, &format!("/api/field.json?version={v}"));
+    assert_eq!(s, Some(200));
+    assert!(shown != under_old, "the field did not change with the light");
+    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
+    let scene = srv.dir.join("scene.json");
+    let saved: Value = serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    let d: Vec<f64> = saved["lights"][0]["direction"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect();
+    assert_eq!(d, l);
+    assert_eq!(saved["edits"].as_array().unwrap().len(), 1);
+    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
+    assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
+    // Undo: the light as read, the field as before it turned.
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    let v = solved(p);
+    assert!(state(p)["light"].is_null());
+    let (_, back) = get(p, &format!("/api/field.json?version={v}"));
+    assert!(back == under_old, "undo did not bring the old light's field back");
+}

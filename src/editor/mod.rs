@@ -25,7 +25,7 @@ use serde_json::json;
 
 use crate::edit::WarpKind;
 use crate::{Error, Result};
-pub use session::{Change, ExportKind, Part, Session, Solved, StateView, Traced};
+pub use session::{Base, Change, ExportKind, Part, Session, Solved, StateView, Traced};
 
 /// Options of [`Editor::bind`].
 #[derive(Clone, Debug, Default)]

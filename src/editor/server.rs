@@ -27,6 +27,8 @@
 //! - `GET /files/scene.json`: the scene file as it is on disk;
 //! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
 //!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state;
+//! - `POST /api/light {"direction": [x, y, z]}`: the key light (directional) points towards
+//!   it — a scene change, undone like an edit and saved into `lights`; the new state;
 //! - `POST /api/export {"what": "svg" | "gcode" | "glb"}`: [`Session::export`] writes that
 //!   file for the committed edits (the path the scene names, else beside the scene file);
 //!   `{"written": PATH}`.
@@ -278,6 +280,12 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct LightRequest {
+    direction: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ExportRequest {
     what: ExportKind,
 }
@@ -330,6 +338,10 @@ fn post(ctx: &Context, path: &str, body: &[u8]) -> Reply {
             }
         }
         "/api/export" => return export(s, body),
+        "/api/light" => match serde_json::from_slice::<LightRequest>(body) {
+            Ok(r) => Change::Light(r.direction),
+            Err(e) => return Reply::error(400, format!("the request: {e}")),
+        },
         "/api/undo" => Change::Undo,
         "/api/redo" => Change::Redo,
         "/api/save" => {
