@@ -14,7 +14,8 @@
 //!    mesh the page shows (its vertex count);
 //! 4. with grain lines, strokes and as-brushed shading turned on by their keys, the page has
 //!    the strokes of the committed field and shades the grain rebuilt from them, and the glTF
-//!    export button writes scene.glb beside the scene;
+//!    export button writes scene.glb beside the scene; a drag on the key light gizmo turns the
+//!    light the way it went (in the camera's frame);
 //! 5. the screenshots before and after (kept under target/editor-acceptance/) show the
 //!    highlight's ridge moved by at least 10 px where the brush was, in the drag's direction:
 //!    measured on their pixels, along the drag, at several points along the highlight.
@@ -172,6 +173,15 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
     assert_eq!(f["exported"].as_str().map(PathBuf::from), Some(dir.join("scene.glb")), "{f}");
     let glb = std::fs::read(dir.join("scene.glb")).unwrap();
     assert_eq!(&glb[..4], b"glTF");
+
+    // The gizmo's drag, up and right from its centre (0.48 of its radius each way): the light
+    // points that way in the camera's frame, x = y = 0.48 and z = √(1 − 2·0.48²).
+    let l = &f["light"];
+    let (r, u, b) =
+        (l["right"].as_f64().unwrap(), l["up"].as_f64().unwrap(), l["back"].as_f64().unwrap());
+    assert!((r - 0.48).abs() < 0.05 && (u - 0.48).abs() < 0.05, "{l}");
+    assert!((b - (1.0f64 - 2.0 * 0.48 * 0.48).sqrt()).abs() < 0.05, "{l}");
+    assert_eq!(l["dirty"], true, "{l}");
 
     // `grainline run` on the saved scene: FIELD.json byte for byte the page's.
     let run = Command::new(env!("CARGO_BIN_EXE_grainline"))

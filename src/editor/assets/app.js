@@ -390,7 +390,7 @@ function applyState(st) {
   editor.state = st;
   editor.version = st.version;
   editor.solvedVersion = st.solved_version;
-  if (st.key_light) setLights(st.key_light);
+  if (st.key_light && !gizmoDir) setLights(st.key_light);
   $('undo').disabled = st.undo === 0;
   $('redo').disabled = st.redo === 0;
   $('save').textContent = st.dirty ? 'Save *' : 'Save';
@@ -403,6 +403,7 @@ function applyState(st) {
     ...landed,
   ].join('\n');
   status(err ? `${line}\n${err}` : line, !!err);
+  drawGizmo();
   $('edits').textContent = st.edits.map((e, i) => `${i}: ${e.tool} r=${(e.radius ?? 0).toPrecision(3)}`).join('\n');
 }
 
@@ -595,6 +596,78 @@ window.addEventListener('keydown', (ev) => {
     change('/api/edit', { action: 'cancel' });
   }
 });
+
+// ---- the key light gizmo: a sphere seen from the camera; the point dragged on it is the
+// direction towards the light (x right, y up, z towards the viewer) ----
+const keyInfo = info.lights[info.key_light];
+const gizmo = $('light-gizmo');
+let gizmoDir = null; // the direction shown while dragging
+function keyDirection() {
+  return editor.state?.light ?? (keyInfo && keyInfo.direction);
+}
+function cameraBasis() {
+  const right = new THREE.Vector3(), up = new THREE.Vector3(), back = new THREE.Vector3();
+  camera.matrixWorld.extractBasis(right, up, back);
+  return { right, up, back };
+}
+function drawGizmo() {
+  const d = gizmoDir ?? keyDirection();
+  const g = gizmo.getContext('2d');
+  const w = gizmo.width, c = w / 2, r = w / 2 - 4;
+  g.clearRect(0, 0, w, w);
+  g.fillStyle = '#333'; g.strokeStyle = '#777';
+  g.beginPath(); g.arc(c, c, r, 0, 2 * Math.PI); g.fill(); g.stroke();
+  if (!d) return;
+  const { right, up, back } = cameraBasis();
+  const v = v3(d).normalize();
+  const x = v.dot(right), y = v.dot(up), z = v.dot(back);
+  g.beginPath();
+  g.arc(c + r * x, c - r * y, 5, 0, 2 * Math.PI);
+  // In front of the part (towards the viewer): filled; behind it: a ring.
+  if (z >= 0) { g.fillStyle = '#ffd84a'; g.fill(); } else { g.strokeStyle = '#ffd84a'; g.lineWidth = 2; g.stroke(); g.lineWidth = 1; }
+  $('light-value').textContent = `${v.x.toFixed(2)}, ${v.y.toFixed(2)}, ${v.z.toFixed(2)}`;
+}
+/** The world direction under a pointer event on the gizmo (the rim beyond the disc). */
+function gizmoDirection(ev) {
+  const rect = gizmo.getBoundingClientRect();
+  const r = rect.width / 2 - 4;
+  let x = (ev.clientX - rect.left - rect.width / 2) / r, y = -(ev.clientY - rect.top - rect.height / 2) / r;
+  const rr = x * x + y * y;
+  if (rr > 1) { x /= Math.sqrt(rr); y /= Math.sqrt(rr); }
+  const z = Math.sqrt(Math.max(0, 1 - x * x - y * y));
+  const { right, up, back } = cameraBasis();
+  const d = right.multiplyScalar(x).add(up.multiplyScalar(y)).add(back.multiplyScalar(z)).normalize();
+  return [d.x, d.y, d.z];
+}
+if (!keyInfo || keyInfo.type !== 'directional') {
+  $('light-box').style.display = 'none';
+} else {
+  gizmo.addEventListener('pointerdown', (ev) => {
+    gizmo.setPointerCapture(ev.pointerId);
+    gizmoDir = gizmoDirection(ev);
+    setLights(gizmoDir); drawGizmo(); requestRender();
+  });
+  gizmo.addEventListener('pointermove', (ev) => {
+    if (!gizmoDir) return;
+    gizmoDir = gizmoDirection(ev);
+    setLights(gizmoDir); drawGizmo(); requestRender();
+  });
+  const release = async () => {
+    if (!gizmoDir) return;
+    const direction = gizmoDir;
+    gizmoDir = null;
+    await change('/api/light', { direction });
+    drawGizmo();
+  };
+  gizmo.addEventListener('pointerup', release);
+  gizmo.addEventListener('pointercancel', release);
+  controls.addEventListener('change', drawGizmo);
+}
+editor.setKeyLight = (direction) => change('/api/light', { direction });
+editor.cameraBasis = () => {
+  const { right, up, back } = cameraBasis();
+  return { right: right.toArray(), up: up.toArray(), back: back.toArray() };
+};
 
 // ---- hooks for tests and scripts ----
 editor.setTool = setTool;
