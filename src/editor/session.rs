@@ -17,6 +17,11 @@
 //! solved on the part prepared for the edits committed before it: the dragged brush's own
 //! refinement is made when the drag ends (the change is committed), and the page then loads
 //! the new mesh ([`Solved::part`]).
+//!
+//! The key light (`POST /api/light`, [`Change::Light`]) is a scene change like an edit: the
+//! scene with the new direction is loaded and prepared again once ([`Base`], made by the solver
+//! thread when it first solves for that light; every cache is keyed by the base's generation),
+//! undo and redo restore it with the edits, and saving writes it into `lights`.
 
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
