@@ -36,7 +36,8 @@ fn main() {
     let open_s = t.elapsed().as_secs_f64();
     let n = session.prepared().mesh.num_vertices();
     // The key highlight of the initial field near the front: where a designer would press.
-    let first = session.solve(&[], 0).unwrap();
+    let base = session.base_for(None).unwrap();
+    let first = session.solve(&base, &[], 0).unwrap();
     let front = first
         .segments
         .iter()
@@ -67,7 +68,7 @@ fn main() {
     let mut grains = Vec::with_capacity(steps);
     for k in 0..steps {
         let t = Instant::now();
-        let solved = session.solve_drag(&[], &edit(k), k as u64 + 1).unwrap();
+        let solved = session.solve_drag(&base, &[], &edit(k), k as u64 + 1).unwrap();
         let bytes = grain_bytes(&solved);
         times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);
@@ -84,7 +85,7 @@ fn main() {
     let mut last = None;
     for (k, u) in grains.iter().enumerate() {
         let t = Instant::now();
-        let full = session.solve(&[edit(k)], k as u64 + 1).unwrap();
+        let full = session.solve(&base, &[edit(k)], k as u64 + 1).unwrap();
         let bytes = grain_bytes(&full);
         full_times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);

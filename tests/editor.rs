@@ -4,7 +4,7 @@
 //! never skips):
 //!
 //! 1. `grainline edit` on examples/kettle (its mesh, material, lights, view and bend edit; the
-//!    toolpaths and the preview left out, `field.output` added so a run writes FIELD.json;
+//!    toolpaths' files and the preview left out, `field.output` added so a run writes FIELD.json;
 //!    `mesh.refine.edge` 0.1, so the kettle's 5 mm triangles are refined inside the 45 mm
 //!    brushes and the page has to load the refined mesh when the drag ends);
 //! 2. the page presses on the key highlight near the middle of the view with the bend tool and
@@ -12,7 +12,11 @@
 //!    the page shows is fetched; Ctrl+S saves;
 //! 3. `grainline run` on the saved scene writes FIELD.json: byte for byte the page's, on the
 //!    mesh the page shows (its vertex count);
-//! 4. the screenshots before and after (kept under target/editor-acceptance/) show the
+//! 4. with grain lines, strokes and as-brushed shading turned on by their keys, the page has
+//!    the strokes of the committed field and shades the grain rebuilt from them, and the glTF
+//!    export button writes scene.glb beside the scene; a drag on the key light gizmo turns the
+//!    light the way it went (in the camera's frame);
+//! 5. the screenshots before and after (kept under target/editor-acceptance/) show the
 //!    highlight's ridge moved by at least 10 px where the brush was, in the drag's direction:
 //!    measured on their pixels, along the drag, at several points along the highlight.
 
@@ -106,7 +110,11 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
         "refine": { "edge": 0.1 },
     });
     let obj = scene.as_object_mut().unwrap();
-    obj.remove("toolpaths");
+    // The kettle's toolpaths section without its files: the page traces its strokes with it.
+    if let Some(t) = obj.get_mut("toolpaths").and_then(Value::as_object_mut) {
+        t.remove("svg");
+        t.remove("gcode");
+    }
     obj.remove("render");
     scene["field"]["output"] = Value::String("field.json".into());
     let scene_path = dir.join("scene.json");
@@ -153,6 +161,27 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
     assert_eq!(parsed.edits[own_edits], last);
     let grainline::edit::Edit::Bend(bend) = &last else { panic!("not a bend: {last:?}") };
     assert!(bend.strength > 0.0 && bend.direction.is_some(), "{bend:?}");
+
+    // The toggles: strokes traced for the committed field, grain lines drawn, the as-brushed
+    // grain shaded; the glTF export button wrote a GLB beside the scene file.
+    let f = &result["features"];
+    assert_eq!(f["toggles"], serde_json::json!([true, true, true]), "{f}");
+    assert!(f["strokes_error"].is_null(), "{f}");
+    assert!(f["strokes"].as_u64().unwrap() > 10, "{f}");
+    assert!(f["grain_segments"].as_u64().unwrap() > 1000, "{f}");
+    assert_eq!(f["shading"], "as-brushed", "{f}");
+    assert_eq!(f["exported"].as_str().map(PathBuf::from), Some(dir.join("scene.glb")), "{f}");
+    let glb = std::fs::read(dir.join("scene.glb")).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+
+    // The gizmo's drag, up and right from its centre (0.48 of its radius each way): the light
+    // points that way in the camera's frame, x = y = 0.48 and z = √(1 − 2·0.48²).
+    let l = &f["light"];
+    let (r, u, b) =
+        (l["right"].as_f64().unwrap(), l["up"].as_f64().unwrap(), l["back"].as_f64().unwrap());
+    assert!((r - 0.48).abs() < 0.05 && (u - 0.48).abs() < 0.05, "{l}");
+    assert!((b - (1.0f64 - 2.0 * 0.48 * 0.48).sqrt()).abs() < 0.05, "{l}");
+    assert_eq!(l["dirty"], true, "{l}");
 
     // `grainline run` on the saved scene: FIELD.json byte for byte the page's.
     let run = Command::new(env!("CARGO_BIN_EXE_grainline"))

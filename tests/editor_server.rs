@@ -61,7 +61,11 @@ fn start(name: &str) -> Server {
 }
 
 fn start_with(name: &str, text: &str) -> Server {
-    let dir = scene_dir_with(name, text);
+    start_in(scene_dir_with(name, text))
+}
+
+/// The editor on `dir/scene.json`.
+fn start_in(dir: PathBuf) -> Server {
     let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
         .args(["--quiet", "edit", "--port", "0"])
         .arg(dir.join("scene.json"))
@@ -562,4 +566,166 @@ fn with_refinement_off_the_committed_bend_stays_on_the_part_as_loaded() {
     let (dragged, committed, part, same) = drag_commit_save_run(&srv);
     assert_eq!((dragged, committed, part), (32 * 9, 32 * 9, 0));
     assert!(same, "the run's FIELD.json differs from the one shown");
+}
+
+/// Issue 16, export: after a committed bend, `POST /api/export` writes the SVG and the G-code
+/// the scene names, byte for byte the files `grainline run` writes for the saved scene, and a
+/// glTF binary beside the scene file (the scene names none): magic `glTF`, version 2, the
+/// header's length the file's. A scene without UVs or a `toolpaths` section is told the key.
+#[test]
+fn export_writes_what_the_run_of_the_saved_scene_writes() {
+    let scene = SCENE.replace(
+        r#""field": {"#,
+        r#""toolpaths": {"svg": "strokes.svg", "gcode": "strokes.ngc"}, "field": {"#,
+    );
+    let srv = start_with("export", &scene);
+    let p = srv.port;
+    let bend = r#"{"tool": "bend", "centre": {"point": [0, -30, 5]}, "radius": 25, "strength": 0.7, "direction": [1, 0, 0.2]}"#;
+    let (s, b) =
+        post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bend}}}"#));
+    assert_eq!(s, Some(200), "{b}");
+    let export = |what: &str| {
+        let (s, b) = post(p, "/api/export", &own(p), &format!(r#"{{"what": "{what}"}}"#));
+        assert_eq!(s, Some(200), "{what}: {b}");
+        let v: Value = serde_json::from_str(&b).unwrap();
+        let path = PathBuf::from(v["written"].as_str().unwrap());
+        (path.clone(), std::fs::read(&path).unwrap())
+    };
+    let (svg_path, svg) = export("svg");
+    let (gcode_path, gcode) = export("gcode");
+    assert_eq!(svg_path, srv.dir.join("strokes.svg"));
+    assert_eq!(gcode_path, srv.dir.join("strokes.ngc"));
+    assert!(svg.starts_with(b"<?xml") || svg.starts_with(b"<svg"), "not an SVG");
+    let (glb_path, glb) = export("glb");
+    assert_eq!(glb_path, srv.dir.join("scene.glb"));
+    assert_eq!(&glb[0..4], b"glTF");
+    assert_eq!(u32_at(&glb, 4), 2);
+    assert_eq!(u32_at(&glb, 8) as usize, glb.len());
+    // A cross-origin export is refused like every write; an unknown kind is a 400.
+    let (s, _) = post(p, "/api/export", &[own(p)[1].clone()], r#"{"what": "svg"}"#);
+    assert_eq!(s, Some(403));
+    assert_eq!(post(p, "/api/export", &own(p), r#"{"what": "obj"}"#).0, Some(400));
+    // The saved scene's run writes the same bytes.
+    std::fs::remove_file(&svg_path).unwrap();
+    std::fs::remove_file(&gcode_path).unwrap();
+    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
+    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(srv.dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(std::fs::read(&svg_path).unwrap() == svg, "the run's SVG differs from the export");
+    assert!(std::fs::read(&gcode_path).unwrap() == gcode, "the run's G-code differs");
+    // The strokes shown are the run's: as many, on the part (radius 30), and the as-brushed
+    // grain a unit vector (or zero) per vertex of the committed part.
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(srv.dir.join("run-report.json")).unwrap()).unwrap();
+    let run_strokes = report["toolpaths"]["job"]["stroke_count"].as_u64().unwrap();
+    let v = solved(p);
+    let (s, b) = get_bytes(p, &format!("/api/strokes?version={v}"));
+    assert_eq!(s, Some(200));
+    let (n_strokes, n_points, n_vertices) = (u32_at(&b, 0), u32_at(&b, 4), u32_at(&b, 8));
+    assert!(n_strokes > 0);
+    assert_eq!(u64::from(n_strokes), run_strokes);
+    assert_eq!(u64::from(n_vertices), report["vertices"].as_u64().unwrap());
+    let f32_at = |k: usize| f32::from_le_bytes(b[k..k + 4].try_into().unwrap());
+    let points = 16 + 4 * n_strokes as usize;
+    let lengths: u32 = (0..n_strokes as usize).map(|i| u32_at(&b, 16 + 4 * i)).sum();
+    assert_eq!(lengths, n_points);
+    assert_eq!(b.len(), points + 12 * (n_points + n_vertices) as usize);
+    for i in 0..n_points as usize {
+        let q = [0, 1, 2].map(|c| f64::from(f32_at(points + 12 * i + 4 * c)));
+        let r = q[0].hypot(q[1]);
+        assert!((r - 30.0).abs() < 0.5, "stroke point {i} at radius {r}");
+    }
+    let brushed = points + 12 * n_points as usize;
+    let mut units = 0;
+    for i in 0..n_vertices as usize {
+        let u = [0, 1, 2].map(|c| f64::from(f32_at(brushed + 12 * i + 4 * c)));
+        let norm = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+        assert!(norm < 1e-6 || (norm - 1.0).abs() < 1e-4, "as-brushed u at {i}: {norm}");
+        units += usize::from(norm > 0.5);
+    }
+    assert!(units > n_vertices as usize / 2, "{units} of {n_vertices} vertices brushed");
+}
+
+/// A part without UVs and a scene without `toolpaths`: the export says which key to add and
+/// writes nothing; the glTF binary, which needs no layout, is written.
+#[test]
+fn export_without_a_layout_names_the_key_to_add() {
+    let scene = SCENE.replace(r#""init": "uv""#, r#""init": "smooth""#);
+    let dir = scene_dir_with("export-nouv", &scene);
+    let mut cylinder = grainline::generate::cylinder(30.0, 80.0, 32, 8);
+    cylinder.uv = None;
+    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&cylinder, "t"))
+        .unwrap();
+    let srv = start_in(dir);
+    let p = srv.port;
+    let (s, b) = post(p, "/api/export", &own(p), r#"{"what": "gcode"}"#);
+    assert_eq!(s, Some(400), "{b}");
+    assert!(b.contains("toolpaths") && b.contains("UV"), "{b}");
+    assert!(!srv.dir.join("scene.ngc").exists());
+    let v = solved(p);
+    let (s, b) = get(p, &format!("/api/strokes?version={v}"));
+    assert_eq!(s, Some(400), "{b}");
+    assert!(b.contains("toolpaths"), "{b}");
+    let (s, b) = post(p, "/api/export", &own(p), r#"{"what": "glb"}"#);
+    assert_eq!(s, Some(200), "{b}");
+    assert!(srv.dir.join("scene.glb").exists());
+}
+
+/// Issue 16, the light gizmo: `POST /api/light` turns the key light as a scene change; the
+/// field shown after a bend under the new light is byte for byte the one `grainline run`
+/// writes for the saved scene, whose `lights` hold the new direction; undo brings the light
+/// as read back; a zero direction is refused.
+#[test]
+fn a_key_light_set_on_the_page_is_saved_and_the_run_reproduces_the_field() {
+    let srv = start("light");
+    let p = srv.port;
+    let bend = r#"{"tool": "bend", "centre": {"point": [0, -30, 5]}, "radius": 25, "strength": 0.7, "direction": [1, 0, 0.2]}"#;
+    let (s, b) =
+        post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bend}}}"#));
+    assert_eq!(s, Some(200), "{b}");
+    let before = solved(p);
+    let (_, under_old) = get(p, &format!("/api/field.json?version={before}"));
+    assert_eq!(post(p, "/api/light", &own(p), r#"{"direction": [0, 0, 0]}"#).0, Some(400));
+    let (s, _) = post(p, "/api/light", &[own(p)[1].clone()], r#"{"direction": [0.6, -0.8, 0]}"#);
+    assert_eq!(s, Some(403));
+    let (s, b) = post(p, "/api/light", &own(p), r#"{"direction": [1.2, -1.6, 2]}"#);
+    assert_eq!(s, Some(200), "{b}");
+    let v = solved(p);
+    let st = state(p);
+    let l: Vec<f64> = st["light"].as_array().unwrap().iter().map(|c| c.as_f64().unwrap()).collect();
+    let n = (1.2f64 * 1.2 + 1.6 * 1.6 + 4.0).sqrt();
+    assert!((l[0] - 1.2 / n).abs() < 1e-12 && (l[2] - 2.0 / n).abs() < 1e-12, "{l:?}");
+    assert_eq!(st["dirty"], true);
+    let (s, shown) = get(p, &format!("/api/field.json?version={v}"));
+    assert_eq!(s, Some(200));
+    assert!(shown != under_old, "the field did not change with the light");
+    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
+    let scene = srv.dir.join("scene.json");
+    let saved: Value = serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    let d: Vec<f64> = saved["lights"][0]["direction"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect();
+    assert_eq!(d, l);
+    assert_eq!(saved["edits"].as_array().unwrap().len(), 1);
+    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
+    assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
+    // Undo: the light as read, the field as before it turned.
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    let v = solved(p);
+    assert!(state(p)["light"].is_null());
+    let (_, back) = get(p, &format!("/api/field.json?version={v}"));
+    assert!(back == under_old, "undo did not bring the old light's field back");
 }

@@ -25,7 +25,7 @@ use serde_json::json;
 
 use crate::edit::WarpKind;
 use crate::{Error, Result};
-pub use session::{Change, Part, Session, Solved, StateView};
+pub use session::{Base, Change, ExportKind, Part, Session, Solved, StateView, Traced};
 
 /// Options of [`Editor::bind`].
 #[derive(Clone, Debug, Default)]
@@ -217,6 +217,26 @@ pub fn grain_bytes(s: &Solved) -> Vec<u8> {
     }
     for c in &s.critical {
         out.extend(c.to_le_bytes());
+    }
+    out
+}
+
+/// `GET /api/strokes`: the strokes and the as-brushed grain of a solved field ([`Traced`]),
+/// little-endian: `u32` strokes S, points P, vertices N, the part's id; S `u32` point counts;
+/// P × 3 `f32` points (world); N × 3 `f32` as-brushed directions (zero where unbrushed).
+pub fn strokes_bytes(t: &Traced, part: u32) -> Vec<u8> {
+    let points: usize = t.strokes.iter().map(Vec::len).sum();
+    let mut out = Vec::with_capacity(16 + 4 * t.strokes.len() + 12 * (points + t.brushed_u.len()));
+    for k in [t.strokes.len(), points, t.brushed_u.len(), part as usize] {
+        out.extend((k as u32).to_le_bytes());
+    }
+    for s in &t.strokes {
+        out.extend((s.len() as u32).to_le_bytes());
+    }
+    for v in t.strokes.iter().flatten().chain(&t.brushed_u) {
+        for c in v {
+            out.extend(c.to_le_bytes());
+        }
     }
     out
 }

@@ -21,10 +21,17 @@
 //!   than V;
 //! - `GET /api/grain?version=V`: [`super::grain_bytes`] of version V (409 when it is not one of
 //!   the last solved ones, [`super::session::RECENT_KEPT`]); `GET /api/field.json?version=V`:
-//!   its FIELD.json;
+//!   its FIELD.json; `GET /api/strokes?version=V`: [`super::strokes_bytes`], the strokes
+//!   `grainline run` traces for it and the as-brushed grain (400 naming the key to add when
+//!   the part has no UV layout);
 //! - `GET /files/scene.json`: the scene file as it is on disk;
 //! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
-//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state.
+//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state;
+//! - `POST /api/light {"direction": [x, y, z]}`: the key light (directional) points towards
+//!   it — a scene change, undone like an edit and saved into `lights`; the new state;
+//! - `POST /api/export {"what": "svg" | "gcode" | "glb"}`: [`Session::export`] writes that
+//!   file for the committed edits (the path the scene names, else beside the scene file);
+//!   `{"written": PATH}`.
 
 use std::io::Read;
 use std::sync::Arc;
@@ -34,7 +41,7 @@ use serde::Deserialize;
 use serde_json::json;
 use tiny_http::{Header, Method, Request, Response};
 
-use super::session::{Change, Session};
+use super::session::{Change, ExportKind, Session};
 
 /// The largest request body read (bytes).
 pub const MAX_BODY: usize = 1 << 20;
@@ -230,6 +237,21 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
             let view = s.view(after, LONG_POLL);
             Reply::json(&serde_json::to_value(view).unwrap_or_default())
         }
+        "/api/strokes" => {
+            let version = match query_u64(query, "version") {
+                Ok(v) => v,
+                Err(r) => return r,
+            };
+            let Some(solved) = s.solved(version) else {
+                return Reply::error(409, "that version is not one of the last solved ones");
+            };
+            match s.traced(&solved) {
+                Ok(t) => {
+                    Reply::ok("application/octet-stream", super::strokes_bytes(t, solved.part.id))
+                }
+                Err(e) => Reply::error(400, e.to_string()),
+            }
+        }
         "/api/grain" | "/api/field.json" => {
             let version = match query_u64(query, "version") {
                 Ok(v) => v,
@@ -253,6 +275,32 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
             Err(e) => Reply::error(404, format!("the scene file: {e}")),
         },
         _ => Reply::error(404, "not found"),
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightRequest {
+    direction: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExportRequest {
+    what: ExportKind,
+}
+
+/// `POST /api/export {"what": "svg" | "gcode" | "glb"}`: [`Session::export`]; a scene that
+/// cannot make the file gets a 400 naming the key to add or fix, a failed write a 500.
+fn export(s: &Session, body: &[u8]) -> Reply {
+    let rq: ExportRequest = match serde_json::from_slice(body) {
+        Ok(r) => r,
+        Err(e) => return Reply::error(400, format!("the request: {e} (what: svg, gcode or glb)")),
+    };
+    match s.export(rq.what) {
+        Ok(p) => Reply::json(&json!({ "written": p.display().to_string() })),
+        Err(e @ crate::Error::Io { .. }) => Reply::error(500, format!("exporting: {e}")),
+        Err(e) => Reply::error(400, e.to_string()),
     }
 }
 
@@ -289,6 +337,11 @@ fn post(ctx: &Context, path: &str, body: &[u8]) -> Reply {
                 }
             }
         }
+        "/api/export" => return export(s, body),
+        "/api/light" => match serde_json::from_slice::<LightRequest>(body) {
+            Ok(r) => Change::Light(r.direction),
+            Err(e) => return Reply::error(400, format!("the request: {e}")),
+        },
         "/api/undo" => Change::Undo,
         "/api/redo" => Change::Redo,
         "/api/save" => {

@@ -17,6 +17,11 @@
 //! solved on the part prepared for the edits committed before it: the dragged brush's own
 //! refinement is made when the drag ends (the change is committed), and the page then loads
 //! the new mesh ([`Solved::part`]).
+//!
+//! The key light (`POST /api/light`, [`Change::Light`]) is a scene change like an edit: the
+//! scene with the new direction is loaded and prepared again once ([`Base`], made by the solver
+//! thread when it first solves for that light; every cache is keyed by the base's generation),
+//! undo and redo restore it with the edits, and saving writes it into `lights`.
 
 use std::path::Path;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
@@ -33,6 +38,7 @@ use crate::pipeline::{
     load_stage, prepare_part, refine_request, LoadedPart, Prepared, Silent, Stages,
 };
 use crate::scene::{LoadedScene, Scene};
+use crate::uvfield::{as_brushed, field_mesh, toolpath_error};
 use crate::{Error, Result};
 
 /// Undo steps kept (older ones are forgotten).
@@ -57,16 +63,71 @@ pub struct Part {
 struct Parts {
     /// The next refined part's id.
     next_id: u32,
-    /// Refined preparations, oldest first, keyed by their refinement request.
-    refined: Vec<(Vec<f64>, Arc<Part>)>,
-    /// The edit list asked for last and its part.
-    last: Option<(Vec<Edit>, Arc<Part>)>,
+    /// Refined preparations, oldest first, keyed by their base's generation and their
+    /// refinement request.
+    refined: Vec<(u64, Vec<f64>, Arc<Part>)>,
+    /// The base's generation and edit list asked for last, and its part.
+    last: Option<(u64, Vec<Edit>, Arc<Part>)>,
+}
+
+/// What the fields are solved from: the scene with the key light the page set (or as read),
+/// the part loaded for it and prepared without edits. A new key light direction is a new base
+/// (a new generation), made by the solver thread when it first solves for it.
+pub struct Base {
+    /// 0 for the scene as read; a new number for each base made.
+    gen: u64,
+    /// The key light's direction set on the page (`None`: as read).
+    light: Option<[f64; 3]>,
+    loaded: LoadedScene,
+    /// The part as loaded, before any refinement.
+    part: LoadedPart,
+    /// The part prepared without edits (nothing refined).
+    coarse: Arc<Part>,
+}
+
+impl Base {
+    /// Loads and prepares the part of `loaded` (its own edits left out).
+    fn new(gen: u64, light: Option<[f64; 3]>, loaded: LoadedScene) -> Result<Base> {
+        let plan = StagePlan::of(&loaded.scene);
+        let mut stages = Stages::new(&Silent);
+        let part = load_stage(&loaded, &mut stages, plan.trace).map_err(|e| loaded.wrap(e))?;
+        let mut bare = loaded.clone();
+        bare.scene.edits.clear();
+        let prepared =
+            prepare_part(&bare, part.clone(), &mut stages).map_err(|e| loaded.wrap(e))?;
+        Ok(Base { gen, light, loaded, part, coarse: Arc::new(Part { id: 0, prepared }) })
+    }
+}
+
+/// The scene's key light set to point towards `d` (it must be a directional light).
+fn with_key_light(mut s: LoadedScene, d: [f64; 3]) -> Result<LoadedScene> {
+    let i = crate::render::key_light_index(&s.scene.lights);
+    match i.map(|i| &mut s.scene.lights[i]) {
+        Some(crate::render::LightSpec::Directional { direction, .. }) => *direction = d,
+        _ => {
+            return Err(Error::setting(
+                "lights",
+                "the key light is not a directional light: the editor turns only those",
+            ))
+        }
+    }
+    Ok(s)
+}
+
+/// The scene file's text of base `b` with `edits` as its edits ([`Session::scene_text`]).
+fn scene_text_of(b: &Base, edits: &[Edit]) -> Result<String> {
+    let mut scene = b.loaded.scene.clone();
+    scene.edits = edits.to_vec();
+    let bytes = crate::output::json_pretty(&scene)?;
+    String::from_utf8(bytes).map_err(|e| Error::invalid_arg("scene", e.to_string()))
 }
 
 /// One solved field, ready for the page.
 pub struct Solved {
     /// The state version it was computed for.
     pub version: u64,
+    /// The scene (and key light) it was solved from.
+    base: Arc<Base>,
     /// The part it was solved on (its mesh is the one the page must show it on).
     pub part: Arc<Part>,
     /// The edits solved.
@@ -76,6 +137,10 @@ pub struct Solved {
     optimized: Option<Optimized>,
     /// FIELD.json, made when first asked for ([`Session::field_json`]).
     field_json: OnceLock<std::result::Result<Vec<u8>, String>>,
+    /// The solved angles per vertex (the solver's own, before FIELD.json's round trip).
+    phi: Vec<f64>,
+    /// The strokes and the as-brushed grain, traced when first asked for ([`Session::traced`]).
+    traced: OnceLock<std::result::Result<Traced, String>>,
     /// The grain u per vertex (world space, unit), as FIELD.json's `u`.
     pub u: Vec<[f32; 3]>,
     /// The key light's highlight curves: segments of the zero set of g = hᵀu per triangle.
@@ -94,8 +159,21 @@ pub struct Solved {
     pub seconds: f64,
 }
 
-/// The drag steps' reusable state: the part's id, the committed edits it was made for.
-type KeptDrag = (u32, Vec<Edit>, Arc<DragBase>);
+/// The brush strokes traced on a solved field and the grain rebuilt from them
+/// ([`Session::traced`]).
+pub struct Traced {
+    /// Each stroke's points on the part (world space), in brushing order.
+    pub strokes: Vec<Vec<[f32; 3]>>,
+    /// The as-brushed grain per vertex (unit; the zero vector where no stroke passes).
+    pub brushed_u: Vec<[f32; 3]>,
+}
+
+/// The drag steps' reusable state: the base's generation, the part's id, the committed edits
+/// it was made for.
+type KeptDrag = (u64, u32, Vec<Edit>, Arc<DragBase>);
+
+/// An undo step: the committed edits and the key light set.
+type Snapshot = (Vec<Edit>, Option<[f64; 3]>);
 
 /// A field on a part: what the page is sent of it.
 struct FieldOf<'a> {
@@ -111,8 +189,10 @@ struct State {
     edits: Vec<Edit>,
     /// The edit being dragged (solved after the committed ones, not yet committed).
     preview: Option<Edit>,
-    undo: Vec<Vec<Edit>>,
-    redo: Vec<Vec<Edit>>,
+    /// The key light's direction set on the page (`None`: as read).
+    light: Option<[f64; 3]>,
+    undo: Vec<Snapshot>,
+    redo: Vec<Snapshot>,
     /// Bumped on every change of `edits` or `preview`.
     version: u64,
     /// The newest field computed for the version that was current when it was ready.
@@ -124,6 +204,8 @@ struct State {
     error: Option<(u64, String)>,
     /// The version whose committed edits were last saved (or read from the file).
     saved_edits: Vec<Edit>,
+    /// The key light last saved (`None`: as read).
+    saved_light: Option<[f64; 3]>,
     /// Results dropped because a newer request arrived while they were computed.
     dropped: u64,
     /// The solver thread is computing this version.
@@ -143,6 +225,8 @@ pub struct StateView {
     pub edits: Vec<Edit>,
     /// Whether an edit is being dragged.
     pub previewing: bool,
+    /// The key light's direction set on the page (`None`: the scene's as read).
+    pub light: Option<[f64; 3]>,
     /// Undo steps available.
     pub undo: usize,
     /// Redo steps available.
@@ -176,15 +260,29 @@ pub enum Change {
     Undo,
     /// Forward again.
     Redo,
+    /// Point the key light (a directional light) towards this direction: a scene change,
+    /// undone like an edit and saved into `lights`.
+    Light([f64; 3]),
+}
+
+/// A file the editor writes for the committed edits (`POST /api/export`, [`Session::export`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExportKind {
+    /// The toolpaths' SVG (`toolpaths.svg`).
+    Svg,
+    /// The toolpaths' G-code (`toolpaths.gcode`).
+    Gcode,
+    /// The glTF binary (`export.glb`).
+    Glb,
 }
 
 /// The editor's session: shared by the request threads and the solver thread.
 pub struct Session {
-    loaded: LoadedScene,
-    /// The part as loaded, before any refinement.
-    part: LoadedPart,
-    /// The part prepared without edits (nothing refined).
-    coarse: Arc<Part>,
+    /// The scene as read, its part loaded and prepared.
+    original: Arc<Base>,
+    /// The base of the key light set last (the original until one is set).
+    lit: Mutex<Arc<Base>>,
     parts: Mutex<Parts>,
     /// The drag steps' reusable state.
     drag: Mutex<Option<KeptDrag>>,
@@ -198,21 +296,13 @@ impl Session {
     /// and the part has none). The scene's own edits are prepared for at the first solve.
     pub fn open(path: &Path) -> Result<Session> {
         let loaded = LoadedScene::read(path)?;
-        let plan = StagePlan::of(&loaded.scene);
-        let mut stages = Stages::new(&Silent);
-        let part = load_stage(&loaded, &mut stages, plan.trace).map_err(|e| loaded.wrap(e))?;
-        let mut bare = loaded.clone();
-        bare.scene.edits.clear();
-        let prepared =
-            prepare_part(&bare, part.clone(), &mut stages).map_err(|e| loaded.wrap(e))?;
-        let coarse = Arc::new(Part { id: 0, prepared });
         let edits = loaded.scene.edits.clone();
+        let original = Arc::new(Base::new(0, None, loaded)?);
         let state = State { saved_edits: edits.clone(), edits, version: 1, ..State::default() };
         let parts = Mutex::new(Parts { next_id: 1, ..Parts::default() });
         Ok(Session {
-            loaded,
-            part,
-            coarse,
+            lit: Mutex::new(Arc::clone(&original)),
+            original,
             parts,
             drag: Mutex::new(None),
             state: Mutex::new(state),
@@ -220,53 +310,78 @@ impl Session {
         })
     }
 
+    /// The base for the key light `light` (`None`: as read): the one made last when it is
+    /// for the same light, else a new one (the part loaded and prepared again).
+    pub fn base_for(&self, light: Option<[f64; 3]>) -> Result<Arc<Base>> {
+        let Some(d) = light else { return Ok(Arc::clone(&self.original)) };
+        let last = Arc::clone(&self.lit.lock().unwrap_or_else(|e| e.into_inner()));
+        if last.light == light {
+            return Ok(last);
+        }
+        let loaded = with_key_light(self.original.loaded.clone(), d)?;
+        let base = Arc::new(Base::new(last.gen + 1, light, loaded)?);
+        *self.lit.lock().unwrap_or_else(|e| e.into_inner()) = Arc::clone(&base);
+        Ok(base)
+    }
+
+    /// The base of the key light set now.
+    fn current_base(&self) -> Result<Arc<Base>> {
+        let light = self.lock().light;
+        self.base_for(light)
+    }
+
     fn parts(&self) -> MutexGuard<'_, Parts> {
         self.parts.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// The scene as `grainline run` would read it from a file holding `edits`.
-    fn with_edits(&self, edits: &[Edit]) -> Result<LoadedScene> {
-        let text = self.scene_text(edits)?;
-        let scene = Scene::from_str(&text, &self.loaded.path)?;
-        Ok(LoadedScene { scene, ..self.loaded.clone() })
+    fn with_edits(&self, b: &Base, edits: &[Edit]) -> Result<LoadedScene> {
+        let text = scene_text_of(b, edits)?;
+        let scene = Scene::from_str(&text, &b.loaded.path)?;
+        Ok(LoadedScene { scene, ..b.loaded.clone() })
     }
 
     /// The part as `grainline run` prepares it for a scene holding `edits`: the part as
     /// loaded, refined inside their brushes as `mesh.refine` says
     /// ([`crate::pipeline::prepare_part`]). A refinement is made once per request
     /// ([`refine_request`]) and kept ([`PARTS_KEPT`]); without one it is the coarse part.
-    pub fn part_for(&self, edits: &[Edit]) -> Result<Arc<Part>> {
-        if let Some((e, p)) = &self.parts().last {
-            if e == edits {
+    pub fn part_for(&self, b: &Base, edits: &[Edit]) -> Result<Arc<Part>> {
+        if let Some((g, e, p)) = &self.parts().last {
+            if *g == b.gen && e == edits {
                 return Ok(Arc::clone(p));
             }
         }
-        let s = self.with_edits(edits)?;
-        let part = match refine_request(&s, &self.part.mesh).map_err(|e| s.wrap(e))? {
-            None => Arc::clone(&self.coarse),
-            Some(request) => self.refined_part(&s, request)?,
+        let s = self.with_edits(b, edits)?;
+        let part = match refine_request(&s, &b.part.mesh).map_err(|e| s.wrap(e))? {
+            None => Arc::clone(&b.coarse),
+            Some(request) => self.refined_part(b, &s, request)?,
         };
-        self.parts().last = Some((edits.to_vec(), Arc::clone(&part)));
+        self.parts().last = Some((b.gen, edits.to_vec(), Arc::clone(&part)));
         Ok(part)
     }
 
     /// The part refined for `request` (made from the part as loaded when not kept).
-    fn refined_part(&self, s: &LoadedScene, request: Vec<f64>) -> Result<Arc<Part>> {
-        let kept = self.parts().refined.iter().find(|(k, _)| *k == request).map(|(_, p)| p.clone());
+    fn refined_part(&self, b: &Base, s: &LoadedScene, request: Vec<f64>) -> Result<Arc<Part>> {
+        let kept = self
+            .parts()
+            .refined
+            .iter()
+            .find(|(g, k, _)| *g == b.gen && *k == request)
+            .map(|(_, _, p)| p.clone());
         if let Some(p) = kept {
             return Ok(p);
         }
         let mut stages = Stages::new(&Silent);
-        let prepared = prepare_part(s, self.part.clone(), &mut stages).map_err(|e| s.wrap(e))?;
+        let prepared = prepare_part(s, b.part.clone(), &mut stages).map_err(|e| s.wrap(e))?;
         let mut parts = self.parts();
         let part = if prepared.refinement.is_none() {
-            Arc::clone(&self.coarse)
+            Arc::clone(&b.coarse)
         } else {
             let id = parts.next_id;
             parts.next_id += 1;
             Arc::new(Part { id, prepared })
         };
-        parts.refined.push((request, Arc::clone(&part)));
+        parts.refined.push((b.gen, request, Arc::clone(&part)));
         if parts.refined.len() > PARTS_KEPT {
             parts.refined.remove(0);
         }
@@ -276,9 +391,11 @@ impl Session {
     /// The part numbered `id`, if the session still holds it (the coarse part is 0).
     pub fn part_by_id(&self, id: u32) -> Option<Arc<Part>> {
         if id == 0 {
-            return Some(Arc::clone(&self.coarse));
+            // The same mesh under every key light.
+            return Some(Arc::clone(&self.original.coarse));
         }
-        let kept = self.parts().refined.iter().find(|(_, p)| p.id == id).map(|(_, p)| p.clone());
+        let kept =
+            self.parts().refined.iter().find(|(_, _, p)| p.id == id).map(|(_, _, p)| p.clone());
         kept.or_else(|| self.lock().recent.iter().map(|s| s.part.clone()).find(|p| p.id == id))
     }
 
@@ -288,27 +405,25 @@ impl Session {
 
     /// The scene file.
     pub fn path(&self) -> &Path {
-        &self.loaded.path
+        &self.original.loaded.path
     }
 
     /// The scene as read.
     pub fn scene(&self) -> &Scene {
-        &self.loaded.scene
+        &self.original.loaded.scene
     }
 
     /// The part prepared without edits (nothing refined): its vertices keep their indices in
     /// every refined part, which appends its new vertices after them.
     pub fn prepared(&self) -> &Prepared {
-        &self.coarse.prepared
+        &self.original.coarse.prepared
     }
 
     /// The scene file's text with `edits` as its edits: pretty JSON ending in a newline, every
     /// other key as read (comments and key order of the user's file are not kept).
+    /// The key light is the one set on the page (or as read).
     pub fn scene_text(&self, edits: &[Edit]) -> Result<String> {
-        let mut scene = self.loaded.scene.clone();
-        scene.edits = edits.to_vec();
-        let bytes = crate::output::json_pretty(&scene)?;
-        String::from_utf8(bytes).map_err(|e| Error::invalid_arg("scene", e.to_string()))
+        scene_text_of(&*self.current_base()?, edits)
     }
 
     /// Checks an edit from the page: the tools the page drives (bend, expand, stencil, curve
@@ -356,7 +471,7 @@ impl Session {
             }
             Change::Commit(e) => {
                 self.check_edit(&e)?;
-                let before = st.edits.clone();
+                let before = (st.edits.clone(), st.light);
                 st.undo.push(before);
                 if st.undo.len() > UNDO_DEPTH {
                     st.undo.remove(0);
@@ -369,19 +484,37 @@ impl Session {
                 st.preview = None;
             }
             Change::Undo => {
-                let Some(prev) = st.undo.pop() else {
+                let Some((edits, light)) = st.undo.pop() else {
                     return Err(Error::setting("undo", "nothing to undo"));
                 };
-                let now = std::mem::replace(&mut st.edits, prev);
+                let now = (std::mem::replace(&mut st.edits, edits), st.light);
+                st.light = light;
                 st.redo.push(now);
                 st.preview = None;
             }
             Change::Redo => {
-                let Some(next) = st.redo.pop() else {
+                let Some((edits, light)) = st.redo.pop() else {
                     return Err(Error::setting("redo", "nothing to redo"));
                 };
-                let now = std::mem::replace(&mut st.edits, next);
+                let now = (std::mem::replace(&mut st.edits, edits), st.light);
+                st.light = light;
                 st.undo.push(now);
+                st.preview = None;
+            }
+            Change::Light(d) => {
+                let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if !(n.is_finite() && n > 1e-9) {
+                    return Err(Error::setting("direction", "a finite, non-zero direction"));
+                }
+                // Checked here, not when the solver first meets it.
+                with_key_light(self.original.loaded.clone(), d)?;
+                let before = (st.edits.clone(), st.light);
+                st.undo.push(before);
+                if st.undo.len() > UNDO_DEPTH {
+                    st.undo.remove(0);
+                }
+                st.redo.clear();
+                st.light = Some(d.map(|c| c / n));
                 st.preview = None;
             }
         }
@@ -422,9 +555,10 @@ impl Session {
             error: st.error.clone(),
             edits: st.edits.clone(),
             previewing: st.preview.is_some(),
+            light: st.light,
             undo: st.undo.len(),
             redo: st.redo.len(),
-            dirty: st.edits != st.saved_edits,
+            dirty: st.edits != st.saved_edits || st.light != st.saved_light,
             dropped: st.dropped,
             solving: st.solving.is_some(),
             stop: s.as_ref().map(|s| s.stop.clone()),
@@ -447,24 +581,88 @@ impl Session {
     /// Writes the committed edits into the scene file (atomically, through
     /// [`crate::output::write_atomic`]); returns the path written.
     pub fn save(&self) -> Result<std::path::PathBuf> {
-        let edits = self.lock().edits.clone();
-        let text = self.scene_text(&edits)?;
+        let (edits, light) = {
+            let st = self.lock();
+            (st.edits.clone(), st.light)
+        };
+        let text = scene_text_of(&*self.base_for(light)?, &edits)?;
+        let path = self.path().to_path_buf();
         // Saved only what reads back: the same check as every scene.
-        Scene::from_str(&text, &self.loaded.path)?;
-        crate::output::write_atomic(&self.loaded.path, text.as_bytes())?;
-        self.lock().saved_edits = edits;
+        Scene::from_str(&text, &path)?;
+        crate::output::write_atomic(&path, text.as_bytes())?;
+        let mut st = self.lock();
+        (st.saved_edits, st.saved_light) = (edits, light);
+        drop(st);
         self.changed.notify_all();
-        Ok(self.loaded.path.clone())
+        Ok(path)
+    }
+
+    /// Writes one of the scene's fabrication or viewer files for the committed edits through
+    /// `grainline run` itself ([`crate::pipeline::run::run`]) on the scene the editor would
+    /// save ([`Session::scene_text`]), with every other output left out: the same refined part,
+    /// the same solve and the same bytes as a run on the saved scene, renamed into place
+    /// atomically by the run's staging ([`crate::output::Staged`]). The path is the scene's own
+    /// (`toolpaths.svg`, `toolpaths.gcode`, `export.glb`), or `<scene stem>.svg / .ngc / .glb`
+    /// beside the scene file when it names none. Returns the path written.
+    pub fn export(&self, what: ExportKind) -> Result<std::path::PathBuf> {
+        let (edits, light) = {
+            let st = self.lock();
+            (st.edits.clone(), st.light)
+        };
+        let b = self.base_for(light)?;
+        let mut s = self.with_edits(&b, &edits)?;
+        let beside = |ext: &str| self.path().with_extension(ext).display().to_string();
+        let scene = &mut s.scene;
+        scene.field.output = None;
+        scene.render = None;
+        match what {
+            ExportKind::Svg | ExportKind::Gcode => {
+                if scene.toolpaths.is_none() && b.part.mesh.uv.is_none() {
+                    return Err(Error::setting(
+                        "toolpaths",
+                        format!(
+                            "{} has no UV layout and the scene has no `toolpaths` section: add                              `\"toolpaths\": {{\"svg\": \"strokes.svg\"}}` (its `layout`                              makes a UV layout)",
+                            self.prepared().mesh_name
+                        ),
+                    ));
+                }
+                let mut t = scene.toolpaths.take().unwrap_or_default();
+                let (svg, gcode) = match what {
+                    ExportKind::Svg => (Some(t.svg.clone().unwrap_or_else(|| beside("svg"))), None),
+                    _ => (None, Some(t.gcode.clone().unwrap_or_else(|| beside("ngc")))),
+                };
+                (t.svg, t.gcode, t.strokes_json) = (svg, gcode, None);
+                scene.toolpaths = Some(t);
+                scene.export = None;
+            }
+            ExportKind::Glb => {
+                let mut e = scene.export.take().unwrap_or_default();
+                e.glb = Some(e.glb.clone().unwrap_or_else(|| beside("glb")));
+                if let Some(t) = scene.toolpaths.as_mut() {
+                    (t.svg, t.gcode, t.strokes_json) = (None, None, None);
+                }
+                scene.export = Some(e);
+            }
+        }
+        let options = crate::pipeline::run::RunOptions::default();
+        let report = crate::pipeline::run::run(&s, &options, &Silent)?;
+        match report.outputs.as_slice() {
+            [one] => Ok(std::path::PathBuf::from(one)),
+            other => Err(Error::invalid_arg(
+                "export",
+                format!("the run wrote {} files, not one", other.len()),
+            )),
+        }
     }
 
     /// Solves the committed `edits` exactly as `grainline run` would solve a scene file holding
     /// them, on the part prepared for them ([`Session::part_for`]: refined inside their
     /// brushes): the grain, the highlight curves and the critical points for the page;
     /// FIELD.json is made from the same result when asked for ([`Session::field_json`]).
-    pub fn solve(&self, edits: &[Edit], version: u64) -> Result<Solved> {
+    pub fn solve(&self, b: &Arc<Base>, edits: &[Edit], version: u64) -> Result<Solved> {
         let start = Instant::now();
-        let part = self.part_for(edits)?;
-        self.solve_on(part, edits, version, start)
+        let part = self.part_for(b, edits)?;
+        self.solve_on(b, part, edits, version, start)
     }
 
     /// One drag step: the `committed` edits and the `dragged` one, solved on the part prepared
@@ -474,16 +672,22 @@ impl Session {
     /// `grainline run` makes for the same edits on the same part (the same φ, bit for bit),
     /// without its whole-mesh report (constraint violations, singularities, fidelity), which
     /// the commit's solve makes.
-    pub fn solve_drag(&self, committed: &[Edit], dragged: &Edit, version: u64) -> Result<Solved> {
+    pub fn solve_drag(
+        &self,
+        b: &Arc<Base>,
+        committed: &[Edit],
+        dragged: &Edit,
+        version: u64,
+    ) -> Result<Solved> {
         let start = Instant::now();
-        let part = self.part_for(committed)?;
-        let base = self.drag_base(&part, committed)?;
+        let part = self.part_for(b, committed)?;
+        let base = self.drag_base(b, &part, committed)?;
         let mut edits = committed.to_vec();
         edits.push(dragged.clone());
-        let s = self.with_edits(&edits)?;
+        let s = self.with_edits(b, &edits)?;
         let step = base.step(&s, &part.prepared, 1).map_err(|e| s.wrap(e))?;
         let field = FieldOf { phi: &step.phi, h: &step.h, critical: &step.critical };
-        let mut solved = self.solved_field(&part, &field, version)?;
+        let mut solved = self.solved_field(b, &part, &field, version)?;
         solved.stop = step.stop.to_string();
         solved.key_light = step.key_light;
         solved.edited_vertices = step.edited_vertices;
@@ -494,28 +698,29 @@ impl Session {
     }
 
     /// The drag steps' reusable state for `committed` on `part` (made once per drag).
-    fn drag_base(&self, part: &Arc<Part>, committed: &[Edit]) -> Result<Arc<DragBase>> {
-        if let Some((id, e, b)) = &*self.drag.lock().unwrap_or_else(|e| e.into_inner()) {
-            if *id == part.id && e == committed {
-                return Ok(Arc::clone(b));
+    fn drag_base(&self, b: &Base, part: &Arc<Part>, committed: &[Edit]) -> Result<Arc<DragBase>> {
+        if let Some((g, id, e, d)) = &*self.drag.lock().unwrap_or_else(|e| e.into_inner()) {
+            if *g == b.gen && *id == part.id && e == committed {
+                return Ok(Arc::clone(d));
             }
         }
-        let s = self.with_edits(committed)?;
+        let s = self.with_edits(b, committed)?;
         let base = Arc::new(DragBase::new(&s, &part.prepared).map_err(|e| s.wrap(e))?);
         *self.drag.lock().unwrap_or_else(|e| e.into_inner()) =
-            Some((part.id, committed.to_vec(), Arc::clone(&base)));
+            Some((b.gen, part.id, committed.to_vec(), Arc::clone(&base)));
         Ok(base)
     }
 
     /// The stages of `grainline run` after the preparation, on `part`.
     fn solve_on(
         &self,
+        b: &Arc<Base>,
         part: Arc<Part>,
         edits: &[Edit],
         version: u64,
         start: Instant,
     ) -> Result<Solved> {
-        let s = self.with_edits(edits)?;
+        let s = self.with_edits(b, edits)?;
         let p = &part.prepared;
         let (optimized, stop, key_light, fidelity, edited) = if s.scene.edits.is_empty() {
             let l = p.field_options.lighting.light;
@@ -532,7 +737,7 @@ impl Session {
             Some(o) => FieldOf { phi: &o.phi, h: &o.h, critical: &o.critical },
             None => FieldOf { phi: &p.field.phi, h: &p.field.h, critical: &p.field.critical },
         };
-        let mut solved = self.solved_field(&part, &field, version)?;
+        let mut solved = self.solved_field(b, &part, &field, version)?;
         solved.optimized = optimized;
         solved.stop = stop;
         solved.key_light = key_light;
@@ -546,7 +751,13 @@ impl Session {
 
     /// The page's view of a field on `part`: the grain, the key light's highlight curves, the
     /// critical vertices (the rest of [`Solved`] is the caller's to fill).
-    fn solved_field(&self, part: &Arc<Part>, f: &FieldOf, version: u64) -> Result<Solved> {
+    fn solved_field(
+        &self,
+        b: &Arc<Base>,
+        part: &Arc<Part>,
+        f: &FieldOf,
+        version: u64,
+    ) -> Result<Solved> {
         let p = &part.prepared;
         let u = p.field.geometry.directions_of(f.phi);
         if let Some(i) = u.iter().position(|v| !v.iter().all(|c| c.is_finite())) {
@@ -563,10 +774,13 @@ impl Session {
             f.critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
         Ok(Solved {
             version,
+            base: Arc::clone(b),
             part: Arc::clone(part),
             edits: Vec::new(),
             optimized: None,
             field_json: OnceLock::new(),
+            phi: f.phi.to_vec(),
+            traced: OnceLock::new(),
             u: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
             segments,
             critical,
@@ -588,7 +802,7 @@ impl Session {
                 (Some(o), _) => optimized_field_file(p, o),
                 (None, true) => FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field),
                 // A drag step: the whole stage, as `grainline run` makes it, when asked for.
-                (None, false) => self.with_edits(&solved.edits).and_then(|s| {
+                (None, false) => self.with_edits(&solved.base, &solved.edits).and_then(|s| {
                     let o = optimize_stage(&s, p, &mut Stages::new(&Silent))?;
                     optimized_field_file(p, &o)
                 }),
@@ -601,12 +815,57 @@ impl Session {
         }
     }
 
+    /// The strokes `grainline run` traces for a solved field and the as-brushed grain rebuilt
+    /// from them, through the run's own code ([`crate::pipeline::run::toolpath_section`],
+    /// [`field_mesh`], [`grainline_toolpaths::generate`], [`as_brushed`]) on the angles the run
+    /// traces (FIELD.json's, after a solve). Made once per result; a part without a UV layout
+    /// is told the key to add.
+    pub fn traced<'a>(&self, solved: &'a Solved) -> Result<&'a Traced> {
+        let made = solved.traced.get_or_init(|| self.trace(solved).map_err(|e| e.to_string()));
+        match made {
+            Ok(t) => Ok(t),
+            Err(e) => Err(Error::setting("toolpaths", e.clone())),
+        }
+    }
+
+    fn trace(&self, solved: &Solved) -> Result<Traced> {
+        let p = &solved.part.prepared;
+        if p.mesh.uv.is_none() {
+            return Err(Error::setting(
+                "toolpaths",
+                format!(
+                    "{} has no UV layout: add a `toolpaths` section to the scene (its `layout` \
+                     makes one) to trace the strokes",
+                    p.mesh_name
+                ),
+            ));
+        }
+        let s = self.with_edits(&solved.base, &solved.edits)?;
+        let (g, symmetry, units) = (&p.field.geometry, p.field_options.symmetry, p.mesh.units);
+        // As `grainline run`: the solved angles as FIELD.json states them, the initial as is.
+        let phi = if solved.edits.is_empty() {
+            solved.phi.clone()
+        } else {
+            g.angles_of(&g.directions_of(&solved.phi))
+        };
+        let section = crate::pipeline::run::toolpath_section(&s.scene, units, false)?;
+        let (fm, uvr) = field_mesh(&p.mesh, g, &phi, symmetry, &section.uv_field)?;
+        let job = grainline_toolpaths::generate(fm.clone(), &section.job_options(units))
+            .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
+        let ab = as_brushed(&p.mesh, g, &phi, symmetry, &fm, &uvr, &job.placement)?;
+        let f32s = |v: &[f64; 3]| v.map(|c| c as f32);
+        Ok(Traced {
+            strokes: job.strokes_3d.iter().map(|s| s.iter().map(f32s).collect()).collect(),
+            brushed_u: ab.u.iter().map(f32s).collect(),
+        })
+    }
+
     /// The solver thread's loop: solves the latest version, drops a result that is stale when
     /// it is ready, never returns.
     pub fn solver_loop(self: Arc<Self>) {
         let mut done = 0u64;
         loop {
-            let (version, committed, dragged) = {
+            let (version, committed, dragged, light) = {
                 let mut st = self.lock();
                 while st.version <= done {
                     st = match self.changed.wait(st) {
@@ -615,15 +874,17 @@ impl Session {
                     };
                 }
                 st.solving = Some(st.version);
-                (st.version, st.edits.clone(), st.preview.clone())
+                (st.version, st.edits.clone(), st.preview.clone(), st.light)
             };
             // A panic in the solve must not end the editor: it is reported like an error.
-            let result =
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &dragged {
-                    Some(d) => self.solve_drag(&committed, d, version),
-                    None => self.solve(&committed, version),
-                }))
-                .unwrap_or_else(|_| Err(Error::invalid_arg("solve", "the solver failed (panic)")));
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let b = self.base_for(light)?;
+                match &dragged {
+                    Some(d) => self.solve_drag(&b, &committed, d, version),
+                    None => self.solve(&b, &committed, version),
+                }
+            }))
+            .unwrap_or_else(|_| Err(Error::invalid_arg("solve", "the solver failed (panic)")));
             let mut st = self.lock();
             st.solving = None;
             done = version;

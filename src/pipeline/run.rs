@@ -218,6 +218,30 @@ pub fn scene_inputs(s: &LoadedScene, plan: &mut OutputPlan) {
     }
 }
 
+/// The toolpaths section a run traces with: the scene's (or the defaults), keeping the
+/// coverage map when `keep_map` (the gap effect), the tool's turning radius as the plan's
+/// (issue 17, item 4) unless the section sets its own, checked in the mesh's `units`.
+pub fn toolpath_section(
+    scene: &crate::scene::Scene,
+    units: crate::mesh::Units,
+    keep_map: bool,
+) -> Result<crate::uvfield::ToolpathSection> {
+    let mut section = scene.toolpaths.clone().unwrap_or_default();
+    if keep_map {
+        let mut c = section.coverage.clone().unwrap_or_default();
+        c.keep_map = true;
+        section.coverage = Some(c);
+    }
+    // The tool's turning radius also cuts back stroke ends that turn tighter near a
+    // boundary or a singularity, unless the section sets its own.
+    if section.plan.min_turning_radius.is_none() {
+        section.plan.min_turning_radius =
+            scene.solver.constraints.turning_radius.as_ref().map(|t| t.radius);
+    }
+    section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
+    Ok(section)
+}
+
 /// Runs the scene: the stages its outputs need, each timed. Before any work the output paths
 /// are checked ([`output_plan`]); every output is written into a temporary beside its target
 /// as it is computed, and all of them are renamed into place only once the last one is ready,
@@ -354,21 +378,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     let mut strokes_3d: Vec<Vec<Vector3<f64>>> = Vec::new();
     if plan.trace {
         stages.start("toolpaths");
-        let mut section = scene.toolpaths.clone().unwrap_or_default();
         let want_gap = scene.render.as_ref().is_some_and(|r| r.effects.gap.is_some());
-        if want_gap {
-            let mut c = section.coverage.clone().unwrap_or_default();
-            c.keep_map = true;
-            section.coverage = Some(c);
-        }
-        // The tool's turning radius also cuts back stroke ends that turn tighter near a
-        // boundary or a singularity (issue 17, item 4), unless the section sets its own.
-        if section.plan.min_turning_radius.is_none() {
-            section.plan.min_turning_radius =
-                scene.solver.constraints.turning_radius.as_ref().map(|t| t.radius);
-        }
         let units = prepared.mesh.units;
-        section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
+        let section = toolpath_section(scene, units, want_gap)?;
         // Errors found while tracing name their key from the scene's top (`toolpaths.…`).
         let in_section = |e| crate::scene::prefix("toolpaths", e);
         let (fm, uvr): (_, UvFieldReport) =

@@ -9,7 +9,11 @@
 //   4. waits until the committed edit is solved and shown; screenshots after.png and
 //      after-overlay.png; fetches the FIELD.json of the version the page shows (page-field.json);
 //      notes the vertex count and part id of the mesh the page shows (refined when the drag ends);
-//   5. saves with Ctrl+S and waits for the page to report it.
+//   5. saves with Ctrl+S and waits for the page to report it;
+//   6. turns on grain lines, strokes and as-brushed shading (keys G, T, A), screenshots the
+//      page (features.png), presses the glTF export button;
+//   7. drags on the key light gizmo (up and right from its centre), waits for the solve
+//      (light.png; the scene is not saved again).
 // JOB.json: { "url": "http://127.0.0.1:PORT/", "out_dir": DIR, "width": 1000, "height": 700,
 //             "drag_px": 40 }
 // Writes DIR/result.json: the press and release points in canvas pixels, the highlight's
@@ -120,10 +124,49 @@ try {
   await page.keyboard.up('Control');
   await page.waitForFunction(() => window.editor.saved === 1 && !window.editor.state.dirty, { timeout: 30000 });
 
+  // 6. The view toggles: grain lines (G), the strokes (T) and the as-brushed shading (A), keyed
+  //    as a designer would; the strokes are traced for the shown (committed) version. The whole
+  //    page with them on is features.png. Then the glTF export button.
+  for (const k of ['g', 't', 'a']) await page.keyboard.press(k);
+  await page.evaluate(() => window.editor.wantStrokes());
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const features = await page.evaluate(() => ({
+    strokes: window.editor.strokes ?? 0, strokes_error: window.editor.strokesError ?? null,
+    grain_segments: window.editor.grainSegments ?? 0, shading: window.editor.shading,
+    toggles: ['show-grain', 'show-strokes', 'show-brushed'].map((id) => document.getElementById(id).checked),
+  }));
+  await page.screenshot({ path: out('features.png') });
+  await page.click('#export-glb');
+  await page.waitForFunction(() => window.editor.exported !== undefined, { timeout: 120000 });
+  features.exported = await page.evaluate(() => window.editor.exported);
+
+  // 7. The key light gizmo: press at its centre (the light from the viewer) and drag up and
+  //    to the right; the light committed points that way in the camera's frame.
+  const g = await page.evaluate(() => {
+    const r = document.getElementById('light-gizmo').getBoundingClientRect();
+    return { x: r.left + r.width / 2, y: r.top + r.height / 2, r: r.width / 2 - 4 };
+  });
+  await page.mouse.move(g.x, g.y);
+  await page.mouse.down();
+  for (let k = 1; k <= 4; k++) {
+    await page.mouse.move(g.x + 0.12 * k * g.r, g.y - 0.12 * k * g.r);
+    await new Promise((r) => setTimeout(r, 30));
+  }
+  await page.mouse.up();
+  const lit = await page.evaluate(() => window.editor.whenIdle());
+  if (lit.error) throw new Error(`the light change failed: ${lit.error}`);
+  features.light = await page.evaluate(() => {
+    const l = window.editor.state.light;
+    const b = window.editor.cameraBasis();
+    const dot = (a, c) => a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
+    return l && { direction: l, right: dot(l, b.right), up: dot(l, b.up), back: dot(l, b.back), dirty: window.editor.state.dirty };
+  });
+  await page.screenshot({ path: out('light.png') });
+
   const px = (p) => ({ x: p.x - rect.left, y: p.y - rect.top });
   const result = {
     canvas: rect, press: px(press), release: px(release), press_world: press.world,
-    tangent, across, drag_px: job.drag_px, ...state, problems,
+    tangent, across, drag_px: job.drag_px, ...state, features, problems,
   };
   writeFileSync(out('result.json'), JSON.stringify(result, null, 1));
   console.log(JSON.stringify({ press: result.press, release: result.release, edits: state.edits.length, displayed: state.displayed, dropped: state.dropped, problems }));

@@ -141,6 +141,14 @@ const critical = new THREE.Points(critGeom, new THREE.PointsMaterial({ color: 0x
 const strokeGeom = new THREE.BufferGeometry();
 const stroke = new THREE.Line(strokeGeom, new THREE.LineBasicMaterial({ color: 0x40e0ff }));
 stroke.frustumCulled = false;
+const grainGeom = new THREE.BufferGeometry();
+const grainLinesObj = new THREE.LineSegments(grainGeom, new THREE.LineBasicMaterial({ color: 0xb0b0b0, transparent: true, opacity: 0.5 }));
+grainLinesObj.visible = false;
+grainLinesObj.frustumCulled = false;
+const strokeLineGeom = new THREE.BufferGeometry();
+const strokeLines = new THREE.LineSegments(strokeLineGeom, new THREE.LineBasicMaterial({ color: 0x30e070 }));
+strokeLines.visible = false;
+strokeLines.frustumCulled = false;
 curves.frustumCulled = false;
 critical.frustumCulled = false;
 
@@ -153,7 +161,7 @@ renderer.setPixelRatio(window.devicePixelRatio || 1);
 const bg = info.background;
 renderer.setClearColor(new THREE.Color(bg[0], bg[1], bg[2]), 1);
 const scene = new THREE.Scene();
-scene.add(part, curves, critical, stroke);
+scene.add(part, curves, critical, stroke, grainLinesObj, strokeLines);
 const view = info.view;
 const diag = info.diagonal;
 const camera = new THREE.PerspectiveCamera(view.fov_deg, 1, diag * 1e-3, diag * 100 + v3(view.eye).distanceTo(v3(view.target)) * 4);
@@ -222,10 +230,18 @@ $('strength').addEventListener('input', showStrength);
 showStrength();
 $('show-curves').addEventListener('change', () => { curves.visible = $('show-curves').checked; requestRender(); });
 $('show-critical').addEventListener('change', () => { critical.visible = $('show-critical').checked; requestRender(); });
+$('show-grain').addEventListener('change', () => {
+  grainLinesObj.visible = $('show-grain').checked;
+  if (grainLinesObj.visible) grainLines();
+  requestRender();
+});
+$('show-strokes').addEventListener('change', () => wantStrokes());
+$('show-brushed').addEventListener('change', () => wantStrokes());
 $('reset-view').addEventListener('click', resetView);
 $('undo').addEventListener('click', () => change('/api/undo'));
 $('redo').addEventListener('click', () => change('/api/redo'));
 $('save').addEventListener('click', save);
+for (const what of ['svg', 'gcode', 'glb']) $(`export-${what}`).addEventListener('click', () => exportFile(what));
 
 // ---- the grain from the server ----
 const symmetryLine = info.symmetry === 'line';
@@ -240,18 +256,10 @@ async function loadGrain(version) {
   const u = new Float32Array(buf, 16, 3 * n);
   const seg = new Float32Array(buf, 16 + 12 * n, 6 * s);
   const crit = new Uint32Array(buf, 16 + 12 * n + 24 * s, c);
-  for (let f = 0; f < nf; f++) {
-    const a = faces[3 * f];
-    const ua = [u[3 * a], u[3 * a + 1], u[3 * a + 2]];
-    for (let k = 0; k < 3; k++) {
-      const v = faces[3 * f + k];
-      let x = u[3 * v], y = u[3 * v + 1], z = u[3 * v + 2];
-      // A line field's directions are defined up to sign: align the corners to the first.
-      if (symmetryLine && x * ua[0] + y * ua[1] + z * ua[2] < 0) { x = -x; y = -y; z = -z; }
-      cgrain[9 * f + 3 * k] = x; cgrain[9 * f + 3 * k + 1] = y; cgrain[9 * f + 3 * k + 2] = z;
-    }
-  }
-  grainAttr.needsUpdate = true;
+  designedU = u;
+  brushedU = null;
+  strokeLines.visible = false; // the strokes shown were another version's
+  shadeGrain();
   curveGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
   const cp = new Float32Array(3 * c);
   for (let i = 0; i < c; i++) for (let k = 0; k < 3; k++) cp[3 * i + k] = vpos[3 * crit[i] + k];
@@ -262,11 +270,127 @@ async function loadGrain(version) {
   return true;
 }
 
+// ---- the grain shown: designed, or rebuilt from the strokes (as brushed) ----
+let designedU = null, brushedU = null;
+/** Fills the per-corner grain from `u` (per vertex); where `fallback` is given, a zero vector
+ * of `u` (no stroke passes the vertex) takes the fallback's direction. */
+function fillGrain(u, fallback) {
+  const at = (v) => {
+    const x = u[3 * v], y = u[3 * v + 1], z = u[3 * v + 2];
+    if (fallback && x * x + y * y + z * z < 0.25) return [fallback[3 * v], fallback[3 * v + 1], fallback[3 * v + 2]];
+    return [x, y, z];
+  };
+  for (let f = 0; f < nf; f++) {
+    const ua = at(faces[3 * f]);
+    for (let k = 0; k < 3; k++) {
+      let [x, y, z] = at(faces[3 * f + k]);
+      // A line field's directions are defined up to sign: align the corners to the first.
+      if (symmetryLine && x * ua[0] + y * ua[1] + z * ua[2] < 0) { x = -x; y = -y; z = -z; }
+      cgrain[9 * f + 3 * k] = x; cgrain[9 * f + 3 * k + 1] = y; cgrain[9 * f + 3 * k + 2] = z;
+    }
+  }
+  grainAttr.needsUpdate = true;
+}
+function shadeGrain() {
+  if (!designedU) return;
+  const brushed = $('show-brushed').checked && brushedU;
+  fillGrain(brushed ? brushedU : designedU, brushed ? designedU : null);
+  editor.shading = brushed ? 'as-brushed' : 'designed';
+  if ($('show-grain').checked) grainLines();
+  requestRender();
+}
+
+// ---- grain lines: a short streamline of the shown grain through each triangle's centroid ----
+// Euler steps of the grain interpolated across the face (barycentric), both ways from the
+// centroid, each step projected onto the face's plane; a line stops at the face's edge.
+function grainLines() {
+  const STEPS = 3, out = [];
+  const P = (v, c) => vpos[3 * v + c];
+  for (let f = 0; f < nf; f++) {
+    const [a, b, c] = [faces[3 * f], faces[3 * f + 1], faces[3 * f + 2]];
+    const e1 = [0, 1, 2].map((i) => P(b, i) - P(a, i)), e2 = [0, 1, 2].map((i) => P(c, i) - P(a, i));
+    const dot = (x, y) => x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    const g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2), det = g11 * g22 - g12 * g12;
+    if (!(det > 0)) continue;
+    // Step length: a third of the face's in-radius scale, √(2·area)/STEPS/2 per side.
+    const h = Math.sqrt(Math.sqrt(det)) / (2 * STEPS);
+    const corner = (k) => [cgrain[9 * f + 3 * k], cgrain[9 * f + 3 * k + 1], cgrain[9 * f + 3 * k + 2]];
+    const u0 = corner(0), u1 = corner(1), u2 = corner(2);
+    const point = (bb) => [0, 1, 2].map((i) => P(a, i) + bb[1] * e1[i] + bb[2] * e2[i]);
+    for (const sign of [1, -1]) {
+      let bb = [1 / 3, 1 / 3, 1 / 3];
+      for (let k = 0; k < STEPS; k++) {
+        const d = [0, 1, 2].map((i) => bb[0] * u0[i] + bb[1] * u1[i] + bb[2] * u2[i]);
+        // The step in the face's coordinates: the least-squares (β1, β2) with β1 e1 + β2 e2 ≈ d.
+        const r1 = dot(d, e1), r2 = dot(d, e2);
+        let b1 = (g22 * r1 - g12 * r2) / det, b2 = (g11 * r2 - g12 * r1) / det;
+        const len = Math.hypot(...[0, 1, 2].map((i) => b1 * e1[i] + b2 * e2[i]));
+        if (!(len > 0)) break;
+        b1 *= sign * h / len; b2 *= sign * h / len;
+        const next = [bb[0] - b1 - b2, bb[1] + b1, bb[2] + b2];
+        if (next.some((x) => x < 0)) break;
+        out.push(...point(bb), ...point(next));
+        bb = next;
+      }
+    }
+  }
+  grainGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(out), 3));
+  editor.grainSegments = out.length / 6;
+}
+
+// ---- the strokes of the committed field, and the as-brushed grain (GET /api/strokes) ----
+let strokesVersion = null, strokesLoading = null;
+/** Loads the strokes of `version` (one load at a time: a second call waits for the first). */
+async function loadStrokes(version) {
+  while (strokesLoading) await strokesLoading;
+  if (strokesVersion === version) return;
+  strokesLoading = fetchStrokes(version);
+  try { await strokesLoading; } finally { strokesLoading = null; }
+}
+async function fetchStrokes(version) {
+  {
+    const r = await fetch(`/api/strokes?version=${version}`);
+    if (!r.ok) {
+      const j = await r.json().catch(() => ({ error: `HTTP ${r.status}` }));
+      if (r.status !== 409) { editor.strokesError = j.error; status(j.error, true); strokesVersion = version; }
+      return;
+    }
+    const buf = await r.arrayBuffer();
+    const h = new Uint32Array(buf, 0, 4);
+    const [ns, np, n, id] = h;
+    if (id !== partId || n !== nv || version !== editor.displayedVersion) return;
+    const lens = new Uint32Array(buf, 16, ns);
+    const pts = new Float32Array(buf, 16 + 4 * ns, 3 * np);
+    const seg = [];
+    let o = 0;
+    for (let i = 0; i < ns; i++) {
+      for (let k = o; k + 1 < o + lens[i]; k++) seg.push(...pts.subarray(3 * k, 3 * k + 6));
+      o += lens[i];
+    }
+    strokeLineGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
+    brushedU = new Float32Array(buf, 16 + 4 * ns + 12 * np, 3 * n);
+    strokesVersion = version;
+    strokeLines.visible = $('show-strokes').checked;
+    editor.strokes = ns;
+    editor.strokesError = null;
+  }
+}
+/** Loads the strokes of the shown version when a toggle needs them and no drag is going on. */
+async function wantStrokes() {
+  const on = $('show-strokes').checked || $('show-brushed').checked;
+  strokeLines.visible = $('show-strokes').checked && strokesVersion === editor.displayedVersion;
+  if (on && editor.displayedVersion != null && !gesture && !(editor.state && editor.state.previewing)) {
+    await loadStrokes(editor.displayedVersion);
+  }
+  shadeGrain();
+}
+editor.wantStrokes = wantStrokes;
+
 function applyState(st) {
   editor.state = st;
   editor.version = st.version;
   editor.solvedVersion = st.solved_version;
-  if (st.key_light) setLights(st.key_light);
+  if (st.key_light && !gizmoDir) setLights(st.key_light);
   $('undo').disabled = st.undo === 0;
   $('redo').disabled = st.redo === 0;
   $('save').textContent = st.dirty ? 'Save *' : 'Save';
@@ -279,6 +403,7 @@ function applyState(st) {
     ...landed,
   ].join('\n');
   status(err ? `${line}\n${err}` : line, !!err);
+  drawGizmo();
   $('edits').textContent = st.edits.map((e, i) => `${i}: ${e.tool} r=${(e.radius ?? 0).toPrecision(3)}`).join('\n');
 }
 
@@ -291,6 +416,7 @@ async function poll() {
       if (st.solved_version != null && st.solved_version !== editor.displayedVersion) {
         await loadGrain(st.solved_version);
       }
+      if (editor.displayedVersion === st.solved_version && !st.previewing) wantStrokes();
       after = Math.max(st.solved_version ?? 0, st.error ? st.error[0] : 0);
       editor.ready = editor.displayedVersion != null;
     } catch (e) {
@@ -351,6 +477,19 @@ async function save() {
     status(`saved ${r.saved}`);
   } catch (err) { status(err.message, true); }
 }
+
+/** Writes the SVG, G-code or glTF of the committed edits (the server runs `grainline run`'s
+ * stages for them); the path written is shown. */
+async function exportFile(what) {
+  await settle();
+  status(`exporting ${what}…`);
+  try {
+    const r = await api('/api/export', { what });
+    editor.exported = r.written;
+    status(`wrote ${r.written}`);
+  } catch (err) { editor.exported = null; status(err.message, true); }
+}
+editor.exportFile = exportFile;
 
 // ---- picking and the tools ----
 const raycaster = new THREE.Raycaster();
@@ -444,6 +583,9 @@ window.addEventListener('keydown', (ev) => {
   if (tools[k]) setTool(tools[k]);
   else if (k === 'h') { $('show-curves').click(); }
   else if (k === 'p') { $('show-critical').click(); }
+  else if (k === 'g') { $('show-grain').click(); }
+  else if (k === 't') { $('show-strokes').click(); }
+  else if (k === 'a') { $('show-brushed').click(); }
   else if (k === 'r') resetView();
   else if (k === '[') setRadius(radius / 1.15);
   else if (k === ']') setRadius(radius * 1.15);
@@ -454,6 +596,78 @@ window.addEventListener('keydown', (ev) => {
     change('/api/edit', { action: 'cancel' });
   }
 });
+
+// ---- the key light gizmo: a sphere seen from the camera; the point dragged on it is the
+// direction towards the light (x right, y up, z towards the viewer) ----
+const keyInfo = info.lights[info.key_light];
+const gizmo = $('light-gizmo');
+let gizmoDir = null; // the direction shown while dragging
+function keyDirection() {
+  return editor.state?.light ?? (keyInfo && keyInfo.direction);
+}
+function cameraBasis() {
+  const right = new THREE.Vector3(), up = new THREE.Vector3(), back = new THREE.Vector3();
+  camera.matrixWorld.extractBasis(right, up, back);
+  return { right, up, back };
+}
+function drawGizmo() {
+  const d = gizmoDir ?? keyDirection();
+  const g = gizmo.getContext('2d');
+  const w = gizmo.width, c = w / 2, r = w / 2 - 4;
+  g.clearRect(0, 0, w, w);
+  g.fillStyle = '#333'; g.strokeStyle = '#777';
+  g.beginPath(); g.arc(c, c, r, 0, 2 * Math.PI); g.fill(); g.stroke();
+  if (!d) return;
+  const { right, up, back } = cameraBasis();
+  const v = v3(d).normalize();
+  const x = v.dot(right), y = v.dot(up), z = v.dot(back);
+  g.beginPath();
+  g.arc(c + r * x, c - r * y, 5, 0, 2 * Math.PI);
+  // In front of the part (towards the viewer): filled; behind it: a ring.
+  if (z >= 0) { g.fillStyle = '#ffd84a'; g.fill(); } else { g.strokeStyle = '#ffd84a'; g.lineWidth = 2; g.stroke(); g.lineWidth = 1; }
+  $('light-value').textContent = `${v.x.toFixed(2)}, ${v.y.toFixed(2)}, ${v.z.toFixed(2)}`;
+}
+/** The world direction under a pointer event on the gizmo (the rim beyond the disc). */
+function gizmoDirection(ev) {
+  const rect = gizmo.getBoundingClientRect();
+  const r = rect.width / 2 - 4;
+  let x = (ev.clientX - rect.left - rect.width / 2) / r, y = -(ev.clientY - rect.top - rect.height / 2) / r;
+  const rr = x * x + y * y;
+  if (rr > 1) { x /= Math.sqrt(rr); y /= Math.sqrt(rr); }
+  const z = Math.sqrt(Math.max(0, 1 - x * x - y * y));
+  const { right, up, back } = cameraBasis();
+  const d = right.multiplyScalar(x).add(up.multiplyScalar(y)).add(back.multiplyScalar(z)).normalize();
+  return [d.x, d.y, d.z];
+}
+if (!keyInfo || keyInfo.type !== 'directional') {
+  $('light-box').style.display = 'none';
+} else {
+  gizmo.addEventListener('pointerdown', (ev) => {
+    gizmo.setPointerCapture(ev.pointerId);
+    gizmoDir = gizmoDirection(ev);
+    setLights(gizmoDir); drawGizmo(); requestRender();
+  });
+  gizmo.addEventListener('pointermove', (ev) => {
+    if (!gizmoDir) return;
+    gizmoDir = gizmoDirection(ev);
+    setLights(gizmoDir); drawGizmo(); requestRender();
+  });
+  const release = async () => {
+    if (!gizmoDir) return;
+    const direction = gizmoDir;
+    gizmoDir = null;
+    await change('/api/light', { direction });
+    drawGizmo();
+  };
+  gizmo.addEventListener('pointerup', release);
+  gizmo.addEventListener('pointercancel', release);
+  controls.addEventListener('change', drawGizmo);
+}
+editor.setKeyLight = (direction) => change('/api/light', { direction });
+editor.cameraBasis = () => {
+  const { right, up, back } = cameraBasis();
+  return { right: right.toArray(), up: up.toArray(), back: back.toArray() };
+};
 
 // ---- hooks for tests and scripts ----
 editor.setTool = setTool;
