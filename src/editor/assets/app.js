@@ -430,7 +430,7 @@ async function poll() {
 editor.whenIdle = async () => {
   for (;;) {
     const st = editor.state;
-    if (st && !inflight && !pending && !gesture) {
+    if (st && !inflight && !pending && !gesture && !changing) {
       const failed = st.error && st.error[0] === st.version;
       if (failed || (st.solved_version === st.version && editor.displayedVersion === st.version)) {
         await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
@@ -460,9 +460,17 @@ async function settle() {
   pending = null;
   while (inflight) await sleep(5);
 }
+// Changes on their way to the server (a commit waits for the preview in flight first):
+// `whenIdle` must not take the last preview's solve for the settled state meanwhile.
+let changing = 0;
 async function change(path, body) {
-  await settle();
-  try { applyState(await api(path, body)); } catch (err) { status(err.message, true); }
+  changing++;
+  try {
+    await settle();
+    try { applyState(await api(path, body)); } catch (err) { status(err.message, true); }
+  } finally {
+    changing--;
+  }
 }
 async function commit(edit) {
   editor.lastEdit = edit;
