@@ -16,20 +16,24 @@
 //! g changes sign and the highlight lands where the branches meet instead of where ĝ* puts it
 //! (on the corpus of docs/benchmarks.md a third to a half of a drawn curve got no highlight).
 //!
-//! [`coherent_start`] chooses one branch per vertex so that neighbours agree: vertices without a
-//! position row (fixed, or free without a target) keep their angle and are *decided*; the
-//! undecided vertex whose choice is clearest goes next — the one whose two branches differ most
-//! in their agreement with its decided neighbours (Σⱼ sᵢⱼ cos(φ − φⱼ − ρᵢⱼ), ρ the transport,
-//! sᵢⱼ = ±1 the relative orientation of the two grains at the start for a line field: the
-//! targets' signs are stated in those orientations; 1 for a vector field),
-//! plus a small preference for the branch nearer its own start — and the rest follow, region
-//! growing from the outside of the brush inwards. Each chosen angle is the representative nearest
-//! the vertex's start (mod 2π), so that a line field's orientation, in which ĝ*ᵢ is stated, is
-//! kept. The result satisfies every position row exactly; the optimizer tries it first
+//! [`coherent_start`] chooses one branch per vertex so that neighbours agree. Vertices without a
+//! position row (fixed, or free without a target) keep their angle and are *decided*. Every edge
+//! says which relative choice of its two vertices agrees better — the agreement of two grains
+//! being sᵢⱼ cos(φᵢ − φⱼ − ρᵢⱼ), ρ the transport, sᵢⱼ = ±1 the relative orientation of the two
+//! grains at the start for a line field (the targets' signs are stated in those orientations;
+//! 1 for a vector field) — and how clearly (the difference between the two relations); an edge
+//! to a decided vertex says which branch, and so does a small preference for the branch nearer
+//! the vertex's own start. The links are taken from the clearest down and kept when they join
+//! two groups (Kruskal's algorithm on a 2-colouring): clear links — where both vertices' branches
+//! are far apart, near the highlight the edit asks for — decide first, and the disagreements that
+//! no consistent choice avoids fall on the links where the two branches nearly coincide
+//! (|ĝ*| → 1, u ∥ h̄) and choosing either costs little. (It replaced a greedy growth from the
+//! decided vertices inwards, which let the rim of a brush decide before the highlight the edit
+//! asks for; on the corpus of docs/benchmarks.md the figures are the same but for one curve with
+//! a singular triangle fewer.) Each chosen angle is the representative nearest the vertex's
+//! start (mod 2π), so that a line field's orientation, in which ĝ*ᵢ is stated, is kept. The
+//! result satisfies every position row exactly; the optimizer tries it first
 //! ([`super::optimize()`]).
-
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
 use super::highlight_term::HighlightTerm;
 use super::position_term::TARGET_BOUND;
@@ -42,30 +46,144 @@ const SELF_PREFERENCE: f64 = 0.25;
 /// through it).
 const MIN_TANGENT_H: f64 = 1e-6;
 
-/// One undecided vertex in the queue: its margin when it was pushed.
+/// A constraint between two labels (or a label and the ground): which relation it prefers and
+/// how clearly.
 #[derive(Clone, Copy, Debug)]
-struct Entry {
-    margin: f64,
-    vertex: u32,
-    stamp: u32,
+struct Link {
+    confidence: f64,
+    a: u32,
+    /// `GROUND` for a constraint on `a` alone.
+    b: u32,
+    /// The preferred relation: labels equal (false) or different (true); against the ground,
+    /// the preferred label of `a`.
+    parity: bool,
 }
 
-impl PartialEq for Entry {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
+/// The node standing for the decided vertices (label 0 by definition).
+const GROUND: u32 = u32::MAX;
+
+/// Disjoint sets with the parity of every element relative to its root (a 2-colouring kept
+/// under union); the ground is element `n`.
+struct ParitySets {
+    parent: Vec<u32>,
+    /// Parity of the element relative to its parent.
+    parity: Vec<bool>,
+}
+
+impl ParitySets {
+    fn new(n: usize) -> Self {
+        ParitySets { parent: (0..=n as u32).collect(), parity: vec![false; n + 1] }
+    }
+
+    /// The root of `x` and the parity of `x` relative to it (path compression).
+    fn find(&mut self, x: u32) -> (u32, bool) {
+        let mut path = Vec::new();
+        let mut r = x;
+        while self.parent[r as usize] != r {
+            path.push(r);
+            r = self.parent[r as usize];
+        }
+        // Compress: every element on the path points at the root with its total parity.
+        let mut acc = false;
+        for &y in path.iter().rev() {
+            acc ^= self.parity[y as usize];
+            self.parity[y as usize] = acc;
+            self.parent[y as usize] = r;
+        }
+        (r, if path.is_empty() { false } else { self.parity[x as usize] })
+    }
+
+    /// Joins the sets of `a` and `b` so that parity(a) ⊕ parity(b) = `rel`; false when they
+    /// were one set already (the link is then left out). The ground stays a root.
+    fn union(&mut self, a: u32, b: u32, rel: bool, ground: u32) -> bool {
+        let (ra, pa) = self.find(a);
+        let (rb, pb) = self.find(b);
+        if ra == rb {
+            return false;
+        }
+        let (child, root) =
+            if rb == ground || (ra != ground && rb < ra) { (ra, rb) } else { (rb, ra) };
+        self.parent[child as usize] = root;
+        self.parity[child as usize] = pa ^ pb ^ rel;
+        true
     }
 }
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
+
+/// One branch per vertex with candidates (0 or 1), the links between neighbours taken from the
+/// clearest down (Kruskal with parities): a link joins two groups of vertices whose relative
+/// choices are made, or a group to the decided vertices, which fixes the group's choice. Clear
+/// links (the two branches of both vertices far apart) are kept, and the disagreements that no
+/// consistent choice avoids fall on the unclear ones, where the two branches nearly coincide
+/// and choosing either costs little.
+fn choose_branches(
+    term: &HighlightTerm,
+    phi: &[f64],
+    cand: &[Option<[f64; 2]>],
+    line: bool,
+) -> Vec<bool> {
+    let g = term.geometry;
+    let n = phi.len();
+    let mut links = Vec::new();
+    for (i, ci) in cand.iter().enumerate() {
+        let Some(ci) = ci else { continue };
+        // A small preference for the branch nearer the vertex's own start.
+        let own =
+            [SELF_PREFERENCE * (ci[0] - phi[i]).cos(), SELF_PREFERENCE * (ci[1] - phi[i]).cos()];
+        links.push(Link {
+            confidence: (own[0] - own[1]).abs(),
+            a: i as u32,
+            b: GROUND,
+            parity: own[1] > own[0],
+        });
+        for slot in g.adjacency.slots(i) {
+            let j = g.adjacency.target(slot);
+            let rho = g.transport[slot];
+            // The targets' signs were stated in the orientations of the start: weighted by how
+            // clear the relative orientation of the two grains was there (line fields).
+            let rel = if line { (phi[i] - phi[j] - rho).cos() } else { 1.0 };
+            match &cand[j] {
+                None => {
+                    let pj = phi[j] + rho;
+                    let s = [rel * (ci[0] - pj).cos(), rel * (ci[1] - pj).cos()];
+                    links.push(Link {
+                        confidence: (s[0] - s[1]).abs(),
+                        a: i as u32,
+                        b: GROUND,
+                        parity: s[1] > s[0],
+                    });
+                }
+                Some(cj) if j > i => {
+                    let agree = |a: usize, b: usize| rel * (ci[a] - cj[b] - rho).cos();
+                    let same = 0.5 * (agree(0, 0) + agree(1, 1));
+                    let differ = 0.5 * (agree(0, 1) + agree(1, 0));
+                    links.push(Link {
+                        confidence: (same - differ).abs(),
+                        a: i as u32,
+                        b: j as u32,
+                        parity: differ > same,
+                    });
+                }
+                Some(_) => {}
+            }
+        }
     }
-}
-impl Ord for Entry {
-    /// Larger margin first; among equal margins the lower vertex (deterministic).
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.margin.total_cmp(&other.margin).then_with(|| other.vertex.cmp(&self.vertex))
+    // Clearest first; ties by the vertices (deterministic).
+    links.sort_by(|x, y| {
+        y.confidence.total_cmp(&x.confidence).then(x.a.cmp(&y.a)).then(x.b.cmp(&y.b))
+    });
+    let ground = n as u32;
+    let mut sets = ParitySets::new(n);
+    for l in &links {
+        if !(l.confidence > 0.0) {
+            break;
+        }
+        let b = if l.b == GROUND { ground } else { l.b };
+        sets.union(l.a, b, l.parity, ground);
     }
+    (0..n as u32)
+        // A group never linked to the decided vertices gives its root branch 0.
+        .map(|i| sets.find(i).1)
+        .collect()
 }
 
 /// The nearest representative of `a` (mod 2π) to `near`.
@@ -82,7 +200,6 @@ fn nearest_turn(a: f64, near: f64) -> f64 {
 /// The branch-coherent start for the position rows of `term` on the `free` vertices, from
 /// `phi`; `None` when no free vertex has a position row.
 pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option<Vec<f64>> {
-    let g = term.geometry;
     let n = phi.len();
     let line = term.symmetry.k() == 2;
     // The two candidates of every free vertex with a position row.
@@ -107,57 +224,38 @@ pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option
         return None;
     }
     let mut out = phi.to_vec();
-    let mut decided: Vec<bool> = cand.iter().map(|c| c.is_none()).collect();
-    // Agreement of each candidate of vertex i with its decided neighbours and its own start.
-    let score = |i: usize, out: &[f64], decided: &[bool]| -> [f64; 2] {
-        let c = cand[i].expect("undecided vertices have candidates");
-        let mut s = [0.0; 2];
-        for slot in g.adjacency.slots(i) {
-            let j = g.adjacency.target(slot);
-            if !decided[j] {
-                continue;
-            }
-            // Agreement of the representatives, in the relative orientation the two had at the
-            // start (line fields): the targets' signs were stated in those orientations.
-            let pj = out[j] + g.transport[slot];
-            // Weighted by how clear that orientation was: cos of the start angle between them
-            // (near a right angle, the start says nothing about it).
-            let rel = if line { (phi[i] - phi[j] - g.transport[slot]).cos() } else { 1.0 };
-            for (b, sb) in s.iter_mut().enumerate() {
-                *sb += rel * (c[b] - pj).cos();
-            }
-        }
-        for (b, sb) in s.iter_mut().enumerate() {
-            *sb += SELF_PREFERENCE * (c[b] - phi[i]).cos();
-        }
-        s
-    };
-    let mut stamp = vec![0u32; n];
-    let mut heap = BinaryHeap::new();
-    for i in 0..n {
-        if !decided[i] {
-            let s = score(i, &out, &decided);
-            heap.push(Entry { margin: (s[0] - s[1]).abs(), vertex: i as u32, stamp: 0 });
-        }
-    }
-    while let Some(e) = heap.pop() {
-        let i = e.vertex as usize;
-        if decided[i] || e.stamp != stamp[i] {
-            continue;
-        }
-        let s = score(i, &out, &decided);
-        let c = cand[i].expect("undecided vertices have candidates");
-        out[i] = if s[1] > s[0] { c[1] } else { c[0] };
-        decided[i] = true;
-        for slot in g.adjacency.slots(i) {
-            let j = g.adjacency.target(slot);
-            if decided[j] {
-                continue;
-            }
-            stamp[j] += 1;
-            let sj = score(j, &out, &decided);
-            heap.push(Entry { margin: (sj[0] - sj[1]).abs(), vertex: j as u32, stamp: stamp[j] });
+    let choice = choose_branches(term, phi, &cand, line);
+    for (i, c) in cand.iter().enumerate() {
+        if let Some(c) = c {
+            out[i] = c[usize::from(choice[i])];
         }
     }
     Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ParitySets;
+
+    /// Unions with parities keep a consistent 2-colouring; a link inside one set is refused;
+    /// the ground (element n) stays a root.
+    #[test]
+    fn parity_sets_keep_a_two_colouring() {
+        let n = 5;
+        let ground = n as u32;
+        let mut s = ParitySets::new(n);
+        assert!(s.union(0, 1, true, ground));
+        assert!(s.union(1, 2, true, ground));
+        assert!(s.union(3, 4, false, ground));
+        assert!(!s.union(0, 2, true, ground), "0 and 2 are one set already");
+        assert!(s.union(4, ground, true, ground));
+        assert!(s.union(2, 3, false, ground));
+        let label = |s: &mut ParitySets, x: u32| s.find(x);
+        for x in 0..n as u32 {
+            assert_eq!(label(&mut s, x).0, ground, "{x} reaches the ground");
+        }
+        let l: Vec<bool> = (0..n as u32).map(|x| label(&mut s, x).1).collect();
+        // 4 is 1 (against the ground), 3 = 4, 2 = 3, 1 ≠ 2, 0 ≠ 1.
+        assert_eq!(l, vec![true, false, true, true, true]);
+    }
 }
