@@ -167,16 +167,15 @@ fn choose_branches(
             }
         }
     }
-    // Clearest first; ties by the vertices (deterministic).
+    // Clearest first; ties by the vertices (deterministic). A link that says nothing (or NaN,
+    // from a degenerate vertex) is left out.
+    links.retain(|l| l.confidence > 0.0);
     links.sort_by(|x, y| {
         y.confidence.total_cmp(&x.confidence).then(x.a.cmp(&y.a)).then(x.b.cmp(&y.b))
     });
     let ground = n as u32;
     let mut sets = ParitySets::new(n);
     for l in &links {
-        if !(l.confidence > 0.0) {
-            break;
-        }
         let b = if l.b == GROUND { ground } else { l.b };
         sets.union(l.a, b, l.parity, ground);
     }
