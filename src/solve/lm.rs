@@ -463,42 +463,47 @@ impl Block for SmoothnessBlock {
     }
 }
 
-struct HingeBlock<'a> {
-    hinge: GradientHinge<'a>,
+/// A hinge whose rows the solver assembles alike: per vertex ([`GradientHinge`]) or per face
+/// ([`FaceTurningHinge`]).
+trait HingeRows: Sync {
+    fn kind(&self) -> HingeKind;
+    fn residual(&self, phi: &[f64], row: usize) -> f64;
+    /// The residual, with its nonzero derivatives pushed into `entries`.
+    fn jacobian(&self, phi: &[f64], row: usize, entries: &mut Vec<(u32, f64)>) -> f64;
+}
+
+impl HingeRows for GradientHinge<'_> {
+    fn kind(&self) -> HingeKind {
+        self.kind
+    }
+    fn residual(&self, phi: &[f64], row: usize) -> f64 {
+        GradientHinge::residual(self, phi, row)
+    }
+    fn jacobian(&self, phi: &[f64], row: usize, entries: &mut Vec<(u32, f64)>) -> f64 {
+        GradientHinge::jacobian(self, phi, row, entries)
+    }
+}
+
+impl HingeRows for FaceTurningHinge<'_> {
+    fn kind(&self) -> HingeKind {
+        self.kind
+    }
+    fn residual(&self, phi: &[f64], row: usize) -> f64 {
+        FaceTurningHinge::residual(self, phi, row)
+    }
+    fn jacobian(&self, phi: &[f64], row: usize, entries: &mut Vec<(u32, f64)>) -> f64 {
+        FaceTurningHinge::jacobian(self, phi, row, entries)
+    }
+}
+
+struct HingeBlock<H> {
+    hinge: H,
     rows: Vec<u32>,
 }
 
-impl Block for HingeBlock<'_> {
+impl<H: HingeRows> Block for HingeBlock<H> {
     fn term(&self) -> Term {
-        match self.hinge.kind {
-            HingeKind::Turning => Term::Turning,
-            HingeKind::Splay => Term::Splay,
-        }
-    }
-    fn energy(&self, phi: &[f64]) -> f64 {
-        chunked_sum(&self.rows, |&i| {
-            let r = self.hinge.residual(phi, i as usize);
-            r * r
-        })
-    }
-    fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
-        acc.rows(&self.rows, |&i, local, col_of| {
-            let mut entries = std::mem::take(&mut local.entries1);
-            let r = self.hinge.jacobian(phi, i as usize, &mut entries);
-            local.push(col_of, entries.iter().map(|&(v, d)| (v, [d, 0.0])), [r, 0.0]);
-            local.entries1 = entries;
-        })
-    }
-}
-
-struct FaceHingeBlock<'a> {
-    hinge: FaceTurningHinge<'a>,
-    rows: Vec<u32>,
-}
-
-impl Block for FaceHingeBlock<'_> {
-    fn term(&self) -> Term {
-        match self.hinge.kind {
+        match self.hinge.kind() {
             HingeKind::Turning => Term::Turning,
             HingeKind::Splay => Term::Splay,
         }
@@ -713,7 +718,7 @@ pub fn solve_cached(
                     weight: h.weight,
                 };
                 let rows = (0..hinge.rows() as u32).collect();
-                blocks.push(Box::new(FaceHingeBlock { hinge, rows }));
+                blocks.push(Box::new(HingeBlock { hinge, rows }));
             }
         }
     }
