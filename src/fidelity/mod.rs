@@ -35,8 +35,6 @@
 // `!(x > 0.0)` is how the measure rejects NaN along with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use std::collections::HashMap;
-
 use nalgebra::{Vector2, Vector3};
 use serde::Serialize;
 
@@ -47,7 +45,13 @@ use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 
+mod grid;
+mod segments;
 mod uv_lift;
+
+use grid::{point_segment_distance, SegmentGrid};
+pub use segments::highlight_segments;
+use segments::{indexed_segments, segments_with_normals};
 pub use uv_lift::lift_uv_polylines;
 
 /// The goal on [`EditFidelity::within`]: at least 90 % of the target within tolerance.
@@ -202,98 +206,6 @@ fn on_faces(tris: &[[Vector2<f64>; 3]], p: &Vector2<f64>) -> bool {
     tris.iter().any(|t| barycentric(p, t).is_some_and(|b| b.iter().all(|&x| x >= -1e-6)))
 }
 
-/// g = hᵀu at the three corners of a face; line fields: corners aligned to the first one.
-/// `None` if a corner is out of range or a value is not finite.
-fn corner_g(
-    face: &[u32; 3],
-    h: &[Vector3<f64>],
-    u: &[Vector3<f64>],
-    symmetry: Symmetry,
-) -> Option<[f64; 3]> {
-    let idx = face.map(|v| v as usize);
-    let ua = *u.get(idx[0])?;
-    let mut g = [0.0; 3];
-    for k in 0..3 {
-        let mut uk = *u.get(idx[k])?;
-        if symmetry == Symmetry::Line && k > 0 && uk.dot(&ua) < 0.0 {
-            uk = -uk;
-        }
-        g[k] = h.get(idx[k])?.dot(&uk);
-    }
-    g.iter().all(|x| x.is_finite()).then_some(g)
-}
-
-/// The zero segment of the linear interpolant of `g` over triangle `p` (g ≥ 0 counts as
-/// positive); `None` if every corner has the same sign or the segment has no length.
-fn zero_segment(p: &[Vector3<f64>; 3], g: &[f64; 3]) -> Option<[Vector3<f64>; 2]> {
-    let pos = g.map(|x| x >= 0.0);
-    let lone = (0..3).find(|&k| pos[k] != pos[(k + 1) % 3] && pos[k] != pos[(k + 2) % 3])?;
-    let at = |j: usize| {
-        let t = g[lone] / (g[lone] - g[j]);
-        p[lone] + (p[j] - p[lone]) * t
-    };
-    let (a, b) = (at((lone + 1) % 3), at((lone + 2) % 3));
-    let ok = (a - b).norm_squared() > 0.0 && a.iter().chain(b.iter()).all(|c| c.is_finite());
-    ok.then_some([a, b])
-}
-
-/// Zero set of g = hᵀu per triangle (linear interpolation of g at the corners; line fields:
-/// corners aligned to the first corner's direction first). World-space segments, in face
-/// order; faces with a non-finite value (or `h`, `u` too short) give none.
-pub fn highlight_segments(
-    mesh: &Mesh,
-    h: &[Vector3<f64>],
-    u: &[Vector3<f64>],
-    symmetry: Symmetry,
-) -> Vec<[Vector3<f64>; 2]> {
-    let faces: Vec<usize> = (0..mesh.num_faces()).collect();
-    segments_on(mesh, h, u, symmetry, &faces)
-}
-
-fn segments_on(
-    mesh: &Mesh,
-    h: &[Vector3<f64>],
-    u: &[Vector3<f64>],
-    symmetry: Symmetry,
-    faces: &[usize],
-) -> Vec<[Vector3<f64>; 2]> {
-    let n = mesh.num_vertices();
-    faces
-        .iter()
-        .filter_map(|&f| {
-            let face = mesh.faces.get(f)?;
-            if face.iter().any(|&v| v as usize >= n) {
-                return None;
-            }
-            let g = corner_g(face, h, u, symmetry)?;
-            zero_segment(&mesh.face_positions(f), &g)
-        })
-        .collect()
-}
-
-/// [`segments_on`], each with the index in `faces` of its face.
-fn indexed_segments(
-    mesh: &Mesh,
-    h: &[Vector3<f64>],
-    u: &[Vector3<f64>],
-    symmetry: Symmetry,
-    faces: &[usize],
-) -> Vec<(usize, [Vector3<f64>; 2])> {
-    let n = mesh.num_vertices();
-    faces
-        .iter()
-        .enumerate()
-        .filter_map(|(k, &f)| {
-            let face = mesh.faces.get(f)?;
-            if face.iter().any(|&v| v as usize >= n) {
-                return None;
-            }
-            let g = corner_g(face, h, u, symmetry)?;
-            Some((k, zero_segment(&mesh.face_positions(f), &g)?))
-        })
-        .collect()
-}
-
 /// A face of a brush in its chart: the 3D corners and their chart coordinates.
 struct ChartFace {
     positions: [Vector3<f64>; 3],
@@ -344,137 +256,6 @@ fn brush_faces(
             Some((f, ChartFace { positions, corners }))
         })
         .collect()
-}
-
-/// [`segments_on`], with the unit normal of each segment's face.
-fn segments_with_normals(
-    mesh: &Mesh,
-    h: &[Vector3<f64>],
-    u: &[Vector3<f64>],
-    symmetry: Symmetry,
-    faces: &[usize],
-) -> (Vec<[Vector3<f64>; 2]>, Vec<Vector3<f64>>) {
-    let n = mesh.num_vertices();
-    let mut segs = Vec::new();
-    let mut normals = Vec::new();
-    for &f in faces {
-        let Some(face) = mesh.faces.get(f) else { continue };
-        if face.iter().any(|&v| v as usize >= n) {
-            continue;
-        }
-        let Some(g) = corner_g(face, h, u, symmetry) else { continue };
-        let p = mesh.face_positions(f);
-        if let Some(s) = zero_segment(&p, &g) {
-            segs.push(s);
-            normals.push(
-                (p[1] - p[0]).cross(&(p[2] - p[0])).try_normalize(1e-300).unwrap_or_default(),
-            );
-        }
-    }
-    (segs, normals)
-}
-
-/// Nearest-segment queries: segments bucketed in a sparse uniform grid.
-struct SegmentGrid {
-    segs: Vec<[Vector3<f64>; 2]>,
-    /// Per segment, the unit normal of the face it lies on (distances are then measured in
-    /// that face's plane, leaving out the offset along the normal), or zero (in space).
-    normals: Vec<Vector3<f64>>,
-    cell: f64,
-    cells: HashMap<[i64; 3], Vec<u32>>,
-}
-
-impl SegmentGrid {
-    /// `reach`: the largest distance queries care about (the cell is at least reach/8, so a
-    /// query visits at most 17³ cells).
-    fn new(segs: Vec<[Vector3<f64>; 2]>, reach: f64) -> Self {
-        let mean = if segs.is_empty() {
-            0.0
-        } else {
-            segs.iter().map(|s| (s[1] - s[0]).norm()).sum::<f64>() / segs.len() as f64
-        };
-        let cell = (2.0 * mean).max(reach / 8.0).max(1e-12);
-        let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-        for (k, s) in segs.iter().enumerate() {
-            let (lo, hi) = (key(&s[0].inf(&s[1]), cell), key(&s[0].sup(&s[1]), cell));
-            for i in lo[0]..=hi[0] {
-                for j in lo[1]..=hi[1] {
-                    for l in lo[2]..=hi[2] {
-                        cells.entry([i, j, l]).or_default().push(k as u32);
-                    }
-                }
-            }
-        }
-        let normals = vec![Vector3::zeros(); segs.len()];
-        SegmentGrid { segs, normals, cell, cells }
-    }
-
-    /// A grid whose distances are measured in the plane of each segment's face (`normals`, one
-    /// unit normal per segment).
-    fn in_planes(segs: Vec<[Vector3<f64>; 2]>, normals: Vec<Vector3<f64>>, reach: f64) -> Self {
-        let mut g = SegmentGrid::new(segs, reach);
-        if normals.len() == g.segs.len() {
-            g.normals = normals;
-        }
-        g
-    }
-
-    /// The distance from `p` to the nearest segment, or `cap` if none is closer.
-    fn nearest(&self, p: &Vector3<f64>, cap: f64) -> f64 {
-        if self.segs.is_empty() {
-            return cap;
-        }
-        let c = key(p, self.cell);
-        let mut best = cap;
-        let rings = (cap / self.cell).ceil().max(1.0) as i64 + 1;
-        for ring in 0..=rings {
-            // Cells of Chebyshev distance `ring` from c.
-            for i in -ring..=ring {
-                for j in -ring..=ring {
-                    for l in -ring..=ring {
-                        if i.abs().max(j.abs()).max(l.abs()) != ring {
-                            continue;
-                        }
-                        let Some(list) = self.cells.get(&[c[0] + i, c[1] + j, c[2] + l]) else {
-                            continue;
-                        };
-                        for &k in list {
-                            let s = &self.segs[k as usize];
-                            let n = &self.normals[k as usize];
-                            let q = p - n * (p - s[0]).dot(n);
-                            best = best.min(point_segment_distance(&q, &s[0], &s[1]));
-                        }
-                    }
-                }
-            }
-            // Every cell of a later ring is at least ring·cell away from p (one ring more when
-            // distances are measured in the faces' planes, which can be a little shorter).
-            let slack = if self.normals.iter().any(|n| n.norm_squared() > 0.0) { 1.0 } else { 0.0 };
-            if best <= (ring as f64 - slack) * self.cell {
-                break;
-            }
-        }
-        best
-    }
-}
-
-fn key(p: &Vector3<f64>, cell: f64) -> [i64; 3] {
-    p.map(|x| {
-        let c = (x / cell).floor();
-        if c.is_finite() {
-            c.clamp(-1e15, 1e15) as i64
-        } else {
-            0
-        }
-    })
-    .into()
-}
-
-fn point_segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
-    let e = b - a;
-    let ee = e.norm_squared();
-    let t = if ee > 0.0 { ((p - a).dot(&e) / ee).clamp(0.0, 1.0) } else { 0.0 };
-    (a + e * t - p).norm()
 }
 
 /// Walks pieces of a chain and emits a sample every `spacing` of arc length (the first at
@@ -810,6 +591,7 @@ pub fn fidelity_of_edits(
 
 #[cfg(test)]
 mod tests {
+    use super::segments::{corner_g, zero_segment};
     use super::*;
 
     #[test]
