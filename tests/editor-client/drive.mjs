@@ -16,7 +16,7 @@
 //      (light.png; the scene is not saved again);
 //   8. turns the toggles of 6 off again, screenshots the canvas (lic-off.png), turns the LIC on
 //      (key I), screenshots it (lic.png) and notes the key highlight's point and screen tangent
-//      near the middle; LIC off;
+//      near the middle; the whole page with LIC and overlays on (lic-page.png); LIC off;
 //   9. the light tool (key L): presses on the part 60 px across the key highlight (the
 //      highlight point nearest the middle whose surroundings are clear of the edits' brushes)
 //      and drags 40 px along the highlight's tangent; after the solve, screenshots
@@ -189,6 +189,11 @@ try {
     on: document.getElementById('show-lic').checked, frames: window.editor.lic.frames - f,
   }), licFrames);
   Object.assign(lic, { point: { x: hl.at.x - rect.left, y: hl.at.y - rect.top }, tangent: hl.tangent });
+  // The whole page with the LIC and the overlays on (docs/img/editor.png).
+  await page.evaluate(() => window.editor.setOverlays(true));
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  await page.screenshot({ path: out('lic-page.png') });
+  await page.evaluate(() => window.editor.setOverlays(false));
   await page.keyboard.press('i');
 
   // 9. The light tool (key L): press on the part 60 px across the key highlight, away from

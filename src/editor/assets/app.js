@@ -35,7 +35,10 @@ function status(text, isError) {
 
 const info = await (await fetch('/api/info')).json();
 editor.info = info;
-$('scene-name').textContent = `${info.scene} · ${info.vertices} vertices`;
+// The scene's file name (its whole path in the tooltip).
+const sceneName = info.scene.split(/[\\/]/).pop();
+$('scene-name').title = info.scene;
+$('scene-name').textContent = `${sceneName} · ${info.vertices} vertices`;
 
 // ---- the mesh: non-indexed, so that a line field's corners can be aligned per triangle ----
 // The server solves a drag on the part as prepared for the committed edits and refines the
@@ -68,7 +71,7 @@ function setMesh(buf, id) {
   partId = id;
   editor.partId = id;
   editor.vertices = nv;
-  $('scene-name').textContent = `${info.scene} · ${nv} vertices`;
+  $('scene-name').textContent = `${sceneName} · ${nv} vertices`;
 }
 async function loadMesh(id) {
   const r = await fetch(`/api/mesh?part=${id}`);

@@ -182,9 +182,10 @@ void main() {
   }
   vec3 col = vec3(srgb(toneMap(L.r)), srgb(toneMap(L.g)), srgb(toneMap(L.b)));
   if (uLicStrength > 0.0) {
-    // As the preview (render::resolve_pixel): the encoded colour times (1 − s) + 2 s · LIC.
+    // As the preview (render::resolve_pixel), the encoded colour times (1 − s) + 2 s · LIC,
+    // plus 0.2 s · LIC, so that the flow shows on the dark body too (the preview only modulates).
     vec4 lic = texture2D(uLicTex, gl_FragCoord.xy / uLicRes);
-    if (lic.a > 0.5) col = clamp(col * ((1.0 - uLicStrength) + 2.0 * uLicStrength * lic.r), 0.0, 1.0);
+    if (lic.a > 0.5) col = clamp(col * ((1.0 - uLicStrength) + 2.0 * uLicStrength * lic.r) + 0.2 * uLicStrength * lic.r, 0.0, 1.0);
   }
   if (uBrushRadius > 0.0) {
     float d = length(vPos - uBrush);

@@ -16,7 +16,8 @@
 //    line field), stopping at the image's edge and where the direction is undefined; the mean
 //    of n uniforms is stretched to a standard deviation of 0.2 (as the preview);
 // 3. the part's shader (brdf.js) multiplies its colour by (1 − s) + 2 s · LIC, s = 0.6 (the
-//    preview's `lic.strength` default); the overlays are drawn over it as before.
+//    preview's `lic.strength` default), and adds 0.2 s · LIC so that the flow shows on the
+//    dark body too (the preview only modulates); the overlays are drawn over it as before.
 
 /** Half length of the streamlines, pixels (the preview's `lic.length_px` default). */
 export const LENGTH = 12;
