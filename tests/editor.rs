@@ -18,7 +18,13 @@
 //!    light the way it went (in the camera's frame);
 //! 5. the screenshots before and after (kept under target/editor-acceptance/) show the
 //!    highlight's ridge moved by at least 10 px where the brush was, in the drag's direction:
-//!    measured on their pixels, along the drag, at several points along the highlight.
+//!    measured on their pixels, along the drag, at several points along the highlight;
+//! 6. the LIC toggle (key I): the texture it lays on the part (lic.png over lic-off.png, their
+//!    ratio, which takes the shading out) is correlated along the key highlight's tangent and
+//!    not across it, around the highlight near the middle of the view;
+//! 7. the light tool (key L): a tangent dragged 60 px across the key highlight turns the key
+//!    light, the highlight then runs through the pressed point (its curve within a few pixels,
+//!    the pixels there brighter), and the gizmo shows the light the edit found.
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -92,6 +98,69 @@ fn ridge(img: &(Vec<f64>, usize, usize), p: [f64; 2], across: [f64; 2], reach: f
         }
     }
     best
+}
+
+/// The ratio of two screenshots' luminance where the first is neither too dark to divide by
+/// nor saturated in either (`None` elsewhere).
+fn ratio(on: &(Vec<f64>, usize, usize), off: &(Vec<f64>, usize, usize)) -> Vec<Option<f64>> {
+    on.0.iter()
+        .zip(&off.0)
+        .map(|(&a, &b)| (b > 25.0 && b < 230.0 && a < 254.0).then(|| a / b))
+        .collect()
+}
+
+/// The normalized autocorrelation of `img` (width `w`) at `lag` pixels along the unit `dir`,
+/// over the valid pixels within `radius` of `c` whose lagged pixel is valid too.
+fn autocorrelation(img: &[Option<f64>], w: usize, c: [f64; 2], dir: [f64; 2], lag: f64) -> f64 {
+    let radius = 25.0;
+    let at = |x: f64, y: f64| {
+        let (x, y) = (x.round(), y.round());
+        if x < 0.0 || y < 0.0 || x >= w as f64 || y as usize >= img.len() / w {
+            return None;
+        }
+        img[y as usize * w + x as usize]
+    };
+    let mut pairs = Vec::new();
+    let r = radius as i64;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            let (x, y) = (c[0] + dx as f64, c[1] + dy as f64);
+            if (dx * dx + dy * dy) as f64 > radius * radius {
+                continue;
+            }
+            if let (Some(a), Some(b)) = (at(x, y), at(x + lag * dir[0], y + lag * dir[1])) {
+                pairs.push((a, b));
+            }
+        }
+    }
+    assert!(pairs.len() > 500, "only {} pixel pairs around {c:?}", pairs.len());
+    let n = pairs.len() as f64;
+    let (ma, mb) =
+        (pairs.iter().map(|p| p.0).sum::<f64>() / n, pairs.iter().map(|p| p.1).sum::<f64>() / n);
+    let cov: f64 = pairs.iter().map(|p| (p.0 - ma) * (p.1 - mb)).sum();
+    let va: f64 = pairs.iter().map(|p| (p.0 - ma).powi(2)).sum();
+    let vb: f64 = pairs.iter().map(|p| (p.1 - mb).powi(2)).sum();
+    cov / (va * vb).sqrt()
+}
+
+/// The mean luminance of the 7 × 7 pixels around `p`.
+fn patch_mean(img: &(Vec<f64>, usize, usize), p: [f64; 2]) -> f64 {
+    let mut sum = 0.0;
+    for dy in -3..=3 {
+        for dx in -3..=3 {
+            sum += sample(img, p[0] + f64::from(dx), p[1] + f64::from(dy));
+        }
+    }
+    sum / 49.0
+}
+
+/// The angle between two directions, degrees.
+fn angle_deg(a: &Value, b: &Value) -> f64 {
+    let v = |x: &Value| [0, 1, 2].map(|k| x[k].as_f64().unwrap());
+    let (a, b) = (v(a), v(b));
+    let dot: f64 = (0..3).map(|k| a[k] * b[k]).sum();
+    let n = |x: [f64; 3]| x.iter().map(|c| c * c).sum::<f64>().sqrt();
+    (dot / (n(a) * n(b))).clamp(-1.0, 1.0).acos().to_degrees()
 }
 
 #[test]
@@ -229,4 +298,46 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
         median >= 10.0,
         "the ridge moved {median:.1} px along the drag (need ≥ 10): {shifts:?}"
     );
+
+    // The LIC: streaks along the key highlight, not across it (the shading divided out).
+    let lic = &f["lic"];
+    assert_eq!(lic["on"], true, "{lic}");
+    assert!(lic["frames"].as_u64().unwrap() > 0, "no LIC pass was drawn: {lic}");
+    let (on, off) = (luminance(&dir.join("lic.png")), luminance(&dir.join("lic-off.png")));
+    let changed = on.0.iter().zip(&off.0).filter(|(a, b)| (*a - *b).abs() > 8.0).count();
+    assert!(changed > 5000, "the LIC changed {changed} pixels");
+    let r = ratio(&on, &off);
+    let c = [lic["point"]["x"].as_f64().unwrap(), lic["point"]["y"].as_f64().unwrap()];
+    let t = [lic["tangent"][0].as_f64().unwrap(), lic["tangent"][1].as_f64().unwrap()];
+    // Two pixels apart along a streamline, two LIC values share most of their noise; across,
+    // hardly any (the noise is white on the pixel grid, as the preview's).
+    let along = autocorrelation(&r, on.1, c, t, 2.0);
+    let across = autocorrelation(&r, on.1, c, [-t[1], t[0]], 2.0);
+    eprintln!("LIC around the highlight at {c:?}: autocorrelation at 2 px {along:.2} along, {across:.2} across");
+    assert!(along > 0.4 && across < 0.5 * along, "along {along:.2}, across {across:.2}");
+
+    // The light tool: the key light turned, the highlight came through the pressed point.
+    let lt = &f["light_tool"];
+    assert_eq!(lt["last"]["tool"], "light", "{lt}");
+    assert!(lt["tangent_drawn"].is_array(), "no tangent drawn while dragging: {lt}");
+    let turned = angle_deg(&lt["key"], &lt["key_before"]);
+    let (before, after) =
+        (lt["nearest_before"].as_f64().unwrap(), lt["nearest_after"].as_f64().unwrap());
+    let q = [lt["press"]["x"].as_f64().unwrap(), lt["press"]["y"].as_f64().unwrap()];
+    let (lb, la) = (
+        patch_mean(&luminance(&dir.join("light-tool-before.png")), q),
+        patch_mean(&luminance(&dir.join("light-tool-after.png")), q),
+    );
+    eprintln!(
+        "light tool at {q:?}: the key light turned {turned:.1}°; nearest highlight {before:.1} px \
+         before, {after:.1} px after; luminance there {lb:.0} before, {la:.0} after"
+    );
+    assert!(turned > 2.0, "the key light turned {turned:.2}°");
+    assert!(before > 20.0 && after < 5.0, "nearest highlight {before:.1} px → {after:.1} px");
+    assert!(la > lb + 30.0, "the pressed point's luminance {lb:.0} → {la:.0}");
+    // The gizmo shows the light the edit found.
+    let key: Vec<String> =
+        (0..3).map(|k| format!("{:.2}", lt["key"][k].as_f64().unwrap())).collect();
+    assert_eq!(lt["gizmo"].as_str(), Some(key.join(", ").as_str()), "{lt}");
+    assert!(lt["status"].as_str().unwrap().contains("light edit"), "{lt}");
 }

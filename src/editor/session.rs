@@ -426,12 +426,12 @@ impl Session {
         scene_text_of(&*self.current_base()?, edits)
     }
 
-    /// Checks an edit from the page: the tools the page drives (bend, expand, stencil, curve
-    /// from 3D points or UV polylines), their numbers in range. A curve from an SVG file is
-    /// refused: the page may not name files.
+    /// Checks an edit from the page: the tools the page drives (bend, expand, stencil, light,
+    /// curve from 3D points or UV polylines), their numbers in range, a vertex centre on the
+    /// part. A curve from an SVG file is refused: the page may not name files.
     pub fn check_edit(&self, e: &Edit) -> Result<()> {
         match e {
-            Edit::Bend(_) | Edit::Expand(_) | Edit::Stencil(_) => {}
+            Edit::Bend(_) | Edit::Expand(_) | Edit::Stencil(_) | Edit::Light(_) => {}
             Edit::Curve(c) if c.svg.is_none() => {}
             Edit::Curve(_) => {
                 return Err(Error::setting("svg", "the editor takes curves as points, not files"))
@@ -448,6 +448,7 @@ impl Session {
         let centre = match e {
             Edit::Bend(w) | Edit::Expand(w) => Some(&w.centre),
             Edit::Stencil(s) => Some(&s.centre),
+            Edit::Light(l) => Some(&l.centre),
             _ => None,
         };
         if let Some(crate::edit::Centre::Vertex(v)) = centre {

@@ -6,6 +6,7 @@
 import * as THREE from './three.module.js';
 import { OrbitControls } from './OrbitControls.js';
 import { vertexShader, fragmentShader } from './brdf.js';
+import { createLic } from './lic.js';
 
 const $ = (id) => document.getElementById(id);
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -34,7 +35,10 @@ function status(text, isError) {
 
 const info = await (await fetch('/api/info')).json();
 editor.info = info;
-$('scene-name').textContent = `${info.scene} · ${info.vertices} vertices`;
+// The scene's file name (its whole path in the tooltip).
+const sceneName = info.scene.split(/[\\/]/).pop();
+$('scene-name').title = info.scene;
+$('scene-name').textContent = `${sceneName} · ${info.vertices} vertices`;
 
 // ---- the mesh: non-indexed, so that a line field's corners can be aligned per triangle ----
 // The server solves a drag on the part as prepared for the committed edits and refines the
@@ -67,7 +71,7 @@ function setMesh(buf, id) {
   partId = id;
   editor.partId = id;
   editor.vertices = nv;
-  $('scene-name').textContent = `${info.scene} · ${nv} vertices`;
+  $('scene-name').textContent = `${sceneName} · ${nv} vertices`;
 }
 async function loadMesh(id) {
   const r = await fetch(`/api/mesh?part=${id}`);
@@ -79,6 +83,7 @@ async function loadMesh(id) {
   geometry = new THREE.BufferGeometry();
   setMesh(buf, id);
   part.geometry = geometry;
+  lic.setGeometry(geometry);
   old.dispose();
   return true;
 }
@@ -106,6 +111,7 @@ const uniforms = {
   uToneMap: { value: { none: 0, exposure: 1, reinhard: 2 }[info.tone_map] ?? 2 },
   uExposure: { value: info.exposure },
   uBrush: { value: new THREE.Vector3() }, uBrushRadius: { value: 0 },
+  uKeyType: { value: 0 }, uKeyVec: { value: new THREE.Vector3(0, 0, 1) },
 };
 function setLights(keyDirection) {
   let k = 0;
@@ -121,6 +127,11 @@ function setLights(keyDirection) {
       uniforms.uLightType.value[k] = 1;
       uniforms.uLightVec.value[k].copy(v3(l.position));
       uniforms.uLightE.value[k].set(c[0] * l.intensity, c[1] * l.intensity, c[2] * l.intensity);
+    }
+    // The key light's highlight is the one the LIC follows (lic.js).
+    if (i === info.key_light) {
+      uniforms.uKeyType.value = uniforms.uLightType.value[k];
+      uniforms.uKeyVec.value.copy(uniforms.uLightVec.value[k]);
     }
     k++;
   });
@@ -141,6 +152,11 @@ const critical = new THREE.Points(critGeom, new THREE.PointsMaterial({ color: 0x
 const strokeGeom = new THREE.BufferGeometry();
 const stroke = new THREE.Line(strokeGeom, new THREE.LineBasicMaterial({ color: 0x40e0ff }));
 stroke.frustumCulled = false;
+// The light tool's tangent: a segment through the pressed point along the drag, both ways.
+const tangentGeom = new THREE.BufferGeometry();
+const tangentLine = new THREE.Line(tangentGeom, new THREE.LineBasicMaterial({ color: 0xff7030, depthTest: false }));
+tangentLine.frustumCulled = false;
+tangentLine.renderOrder = 1;
 const grainGeom = new THREE.BufferGeometry();
 const grainLinesObj = new THREE.LineSegments(grainGeom, new THREE.LineBasicMaterial({ color: 0xb0b0b0, transparent: true, opacity: 0.5 }));
 grainLinesObj.visible = false;
@@ -161,7 +177,10 @@ renderer.setPixelRatio(window.devicePixelRatio || 1);
 const bg = info.background;
 renderer.setClearColor(new THREE.Color(bg[0], bg[1], bg[2]), 1);
 const scene = new THREE.Scene();
-scene.add(part, curves, critical, stroke, grainLinesObj, strokeLines);
+scene.add(part, curves, critical, stroke, tangentLine, grainLinesObj, strokeLines);
+const lic = createLic(THREE, renderer, uniforms, vertexShader);
+lic.setGeometry(geometry);
+editor.lic = lic;
 const view = info.view;
 const diag = info.diagonal;
 const camera = new THREE.PerspectiveCamera(view.fov_deg, 1, diag * 1e-3, diag * 100 + v3(view.eye).distanceTo(v3(view.target)) * 4);
@@ -187,6 +206,7 @@ function requestRender() {
   requestAnimationFrame(() => {
     renderQueued = false;
     resize();
+    lic.update(camera);
     renderer.render(scene, camera);
     editor.frames = (editor.frames ?? 0) + 1;
   });
@@ -235,6 +255,7 @@ $('show-grain').addEventListener('change', () => {
   if (grainLinesObj.visible) grainLines();
   requestRender();
 });
+$('show-lic').addEventListener('change', () => { lic.enabled = $('show-lic').checked; requestRender(); });
 $('show-strokes').addEventListener('change', () => wantStrokes());
 $('show-brushed').addEventListener('change', () => wantStrokes());
 $('reset-view').addEventListener('click', resetView);
@@ -390,7 +411,7 @@ function applyState(st) {
   editor.state = st;
   editor.version = st.version;
   editor.solvedVersion = st.solved_version;
-  if (st.key_light && !gizmoDir) setLights(st.key_light);
+  if (st.key_light && !gizmoDir) { setLights(st.key_light); requestRender(); }
   $('undo').disabled = st.undo === 0;
   $('redo').disabled = st.redo === 0;
   $('save').textContent = st.dirty ? 'Save *' : 'Save';
@@ -401,8 +422,12 @@ function applyState(st) {
     `version ${st.version}${st.solving ? ' · solving…' : ''}`,
     st.solved_version != null ? `shown ${st.solved_version} · solver: ${st.stop} · ${(1000 * st.seconds).toFixed(0)} ms` : 'solving…',
     ...landed,
-  ].join('\n');
-  status(err ? `${line}\n${err}` : line, !!err);
+  ];
+  // A light edit sets the key light after the scene's (the gizmo's) light: it wins.
+  const lit = st.edits.map((e, i) => [e, i]).filter(([e]) => e.tool === 'light').map(([, i]) => i);
+  if (lit.length) line.push(`key light: set by light edit #${lit[lit.length - 1]} (the gizmo turns the light under the edits)`);
+  const text = line.join('\n');
+  status(err ? `${text}\n${err}` : text, !!err);
   drawGizmo();
   $('edits').textContent = st.edits.map((e, i) => `${i}: ${e.tool} r=${(e.radius ?? 0).toPrecision(3)}`).join('\n');
 }
@@ -525,7 +550,7 @@ function onDown(ev) {
   if (!hit) return;
   controls.enabled = false;
   canvas.setPointerCapture(ev.pointerId);
-  gesture = { tool, p0: hit.point, n0: hit.normal, points: [hit.point], edit: null };
+  gesture = { tool, p0: hit.point, n0: hit.normal, points: [hit.point], edit: null, x0: ev.clientX, y0: ev.clientY };
   if (tool === 'curve') strokeGeom.setFromPoints(gesture.points);
 }
 function warpEdit(g, p1) {
@@ -538,6 +563,19 @@ function warpEdit(g, p1) {
   const s = Math.min(2 * len / radius, strength(), range[1] * 0.999);
   return { tool: g.tool, centre: { point: arr(g.p0) }, radius, strength: Number(s.toFixed(6)), direction: arr(d.normalize()) };
 }
+/** The light tool: the pressed point is the centre, the drag (on the tangent plane there) the
+ * highlight's wanted tangent ℓ; the server finds the key light. Drawn as a segment through the
+ * centre, both ways (ℓ is a line). */
+function lightEdit(g, p1, ev) {
+  if (Math.hypot(ev.clientX - g.x0, ev.clientY - g.y0) < 4) return null;
+  const d = p1.clone().sub(g.p0);
+  if (!(d.length() > 0)) return null;
+  const ends = [g.p0.clone().sub(d), g.p0.clone().add(d)];
+  tangentGeom.setFromPoints(ends);
+  editor.tangent = ends.map(arr);
+  requestRender();
+  return { tool: 'light', centre: { point: arr(g.p0) }, ell: arr(d.normalize()) };
+}
 canvas.addEventListener('pointermove', (ev) => {
   if (tool !== 'orbit' && !gesture && ringShown) {
     const hit = pick(ev);
@@ -549,6 +587,10 @@ canvas.addEventListener('pointermove', (ev) => {
   if (gesture.tool === 'bend' || gesture.tool === 'expand') {
     const p1 = onPlane(ev, gesture.p0, gesture.n0);
     const e = p1 && warpEdit(gesture, p1);
+    if (e) { gesture.edit = e; preview(e); }
+  } else if (gesture.tool === 'light') {
+    const p1 = onPlane(ev, gesture.p0, gesture.n0);
+    const e = p1 && lightEdit(gesture, p1, ev);
     if (e) { gesture.edit = e; preview(e); }
   } else if (gesture.tool === 'curve') {
     const hit = pick(ev);
@@ -566,8 +608,10 @@ async function onUp(ev) {
   gesture = null;
   controls.enabled = true;
   try { canvas.releasePointerCapture(ev.pointerId); } catch (_) { /* already released */ }
-  if (g.tool === 'bend' || g.tool === 'expand') {
+  if (g.tool === 'bend' || g.tool === 'expand' || g.tool === 'light') {
     if (g.edit) await commit(g.edit); else await change('/api/edit', { action: 'cancel' });
+    tangentGeom.setFromPoints([]);
+    editor.tangent = null;
   } else if (g.tool === 'stencil') {
     await commit({ tool: 'stencil', centre: { point: arr(g.p0) }, radius });
   } else if (g.tool === 'curve') {
@@ -587,11 +631,12 @@ window.addEventListener('keydown', (ev) => {
   if (mod && k === 'y') { ev.preventDefault(); change('/api/redo'); return; }
   if (mod && k === 's') { ev.preventDefault(); save(); return; }
   if (mod || ev.altKey) return;
-  const tools = { o: 'orbit', b: 'bend', e: 'expand', s: 'stencil', c: 'curve' };
+  const tools = { o: 'orbit', b: 'bend', e: 'expand', s: 'stencil', c: 'curve', l: 'light' };
   if (tools[k]) setTool(tools[k]);
   else if (k === 'h') { $('show-curves').click(); }
   else if (k === 'p') { $('show-critical').click(); }
   else if (k === 'g') { $('show-grain').click(); }
+  else if (k === 'i') { $('show-lic').click(); }
   else if (k === 't') { $('show-strokes').click(); }
   else if (k === 'a') { $('show-brushed').click(); }
   else if (k === 'r') resetView();
@@ -601,6 +646,7 @@ window.addEventListener('keydown', (ev) => {
     gesture = null;
     controls.enabled = true;
     strokeGeom.setFromPoints([]);
+    tangentGeom.setFromPoints([]);
     change('/api/edit', { action: 'cancel' });
   }
 });
@@ -610,8 +656,12 @@ window.addEventListener('keydown', (ev) => {
 const keyInfo = info.lights[info.key_light];
 const gizmo = $('light-gizmo');
 let gizmoDir = null; // the direction shown while dragging
+/** The key light shown: the solved field's (after the edits: a light edit wins over the
+ * scene's light), or, while a change is being solved, the light set on the page. */
 function keyDirection() {
-  return editor.state?.light ?? (keyInfo && keyInfo.direction);
+  const st = editor.state;
+  if (st && st.key_light && st.solved_version === st.version) return st.key_light;
+  return st?.light ?? (keyInfo && keyInfo.direction);
 }
 function cameraBasis() {
   const right = new THREE.Vector3(), up = new THREE.Vector3(), back = new THREE.Vector3();
@@ -679,6 +729,8 @@ editor.cameraBasis = () => {
 
 // ---- hooks for tests and scripts ----
 editor.setTool = setTool;
+/** The part's point (world) under the page point (CSS px), or null. */
+editor.pickAt = (x, y) => { const h = pick({ clientX: x, clientY: y }); return h && arr(h.point); };
 editor.setRadius = setRadius;
 editor.resetView = resetView;
 editor.radius = () => radius;

@@ -3,7 +3,7 @@
 // Ashikhmin–Shirley follows AshikhminShirley::eval_f32 (the (h·n)^e of the lobe by
 // exp(e·ln(1 − δ)), δ = 1 − h·n computed without cancellation); Ward and GGX follow their
 // f64 eval; Fresnel: none, Schlick, exact conductor (fresnel.rs). Tone maps and the sRGB
-// curve follow src/render/image.rs.
+// curve follow src/render/image.rs. The LIC texture of lic.js modulates the colour when on.
 
 export const vertexShader = /* glsl */ `
 attribute vec3 grain;
@@ -39,6 +39,9 @@ uniform int uToneMap;       // 0 none, 1 exposure, 2 reinhard
 uniform float uExposure;
 uniform vec3 uBrush;        // brush centre (world)
 uniform float uBrushRadius; // 0: no brush ring
+uniform sampler2D uLicTex;  // the LIC of ℓ per pixel (lic.js), alpha 0 off the part
+uniform vec2 uLicRes;       // its size, pixels
+uniform float uLicStrength; // 0: no LIC
 varying vec3 vPos;
 varying vec3 vNormal;
 varying vec3 vGrain;
@@ -178,6 +181,12 @@ void main() {
     L += brdf(lwi, lwo) * e * c;
   }
   vec3 col = vec3(srgb(toneMap(L.r)), srgb(toneMap(L.g)), srgb(toneMap(L.b)));
+  if (uLicStrength > 0.0) {
+    // As the preview (render::resolve_pixel), the encoded colour times (1 − s) + 2 s · LIC,
+    // plus 0.2 s · LIC, so that the flow shows on the dark body too (the preview only modulates).
+    vec4 lic = texture2D(uLicTex, gl_FragCoord.xy / uLicRes);
+    if (lic.a > 0.5) col = clamp(col * ((1.0 - uLicStrength) + 2.0 * uLicStrength * lic.r) + 0.2 * uLicStrength * lic.r, 0.0, 1.0);
+  }
   if (uBrushRadius > 0.0) {
     float d = length(vPos - uBrush);
     float w = 0.025 * uBrushRadius;
