@@ -14,151 +14,16 @@
 //! - after commits and an undo, the FIELD.json the server shows for its newest version is byte
 //!   for byte the one `grainline run` writes for the saved scene.
 
-use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-struct Server {
-    child: Child,
-    port: u16,
-    dir: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        // Kept when the test failed, to look at.
-        if !std::thread::panicking() {
-            let _ = std::fs::remove_dir_all(&self.dir);
-        }
-    }
-}
-
-/// The small scene of the tests: a cylinder brushed around, no edits.
-const SCENE: &str = r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
-            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-            "field": {"init": "uv", "symmetry": "line", "output": "field.json"}}"#;
-
-/// The cylinder (32 × 8 quads) and the scene `text` in their own directory.
-fn scene_dir_with(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("grainline-editor-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let cylinder = grainline::generate::cylinder(30.0, 80.0, 32, 8);
-    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&cylinder, "t"))
-        .unwrap();
-    std::fs::write(dir.join("scene.json"), text).unwrap();
-    dir
-}
-
-fn start(name: &str) -> Server {
-    start_with(name, SCENE)
-}
-
-fn start_with(name: &str, text: &str) -> Server {
-    start_in(scene_dir_with(name, text))
-}
-
-/// The editor on `dir/scene.json`.
-fn start_in(dir: PathBuf) -> Server {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "edit", "--port", "0"])
-        .arg(dir.join("scene.json"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
-    let line = line.trim_end();
-    let port = line
-        .strip_prefix("http://127.0.0.1:")
-        .and_then(|r| r.strip_suffix('/'))
-        .and_then(|p| p.parse::<u16>().ok())
-        .unwrap_or_else(|| panic!("first stdout line {line:?} is not http://127.0.0.1:PORT/"));
-    assert_ne!(port, 0);
-    Server { child, port, dir }
-}
-
-/// Sends `request` as is; the status code (None: the connection closed without one) and body.
-fn raw(port: u16, request: &[u8]) -> (Option<u16>, String) {
-    let (status, body) = raw_bytes(port, request);
-    (status, String::from_utf8_lossy(&body).to_string())
-}
-
-/// [`raw`] with the body as bytes.
-fn raw_bytes(port: u16, request: &[u8]) -> (Option<u16>, Vec<u8>) {
-    let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
-    s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
-    let _ = s.write_all(request);
-    let mut buf = Vec::new();
-    let _ = s.read_to_end(&mut buf);
-    let split = buf.windows(4).position(|w| w == b"\r\n\r\n");
-    let (head, body) = match split {
-        Some(i) => (String::from_utf8_lossy(&buf[..i]).to_string(), buf[i + 4..].to_vec()),
-        None => (String::from_utf8_lossy(&buf).to_string(), Vec::new()),
-    };
-    let status = head.split_whitespace().nth(1).and_then(|c| c.parse().ok());
-    let chunked = head
-        .lines()
-        .any(|l| l.to_ascii_lowercase().starts_with("transfer-encoding:") && l.contains("chunked"));
-    let body = if chunked { dechunk(&body) } else { body };
-    (status, body)
-}
-
-/// The body of a `Transfer-Encoding: chunked` response (RFC 9112 §7.1).
-fn dechunk(mut rest: &[u8]) -> Vec<u8> {
-    let mut out = Vec::new();
-    while let Some(i) = rest.windows(2).position(|w| w == b"\r\n") {
-        let size = String::from_utf8_lossy(&rest[..i]).to_string();
-        let n = usize::from_str_radix(size.split(';').next().unwrap().trim(), 16).unwrap();
-        if n == 0 {
-            break;
-        }
-        let after = &rest[i + 2..];
-        out.extend_from_slice(&after[..n]);
-        rest = &after[n + 2..];
-    }
-    out
-}
-
-fn get_with_host(port: u16, path: &str, host: &str) -> (Option<u16>, String) {
-    raw(
-        port,
-        format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").as_bytes(),
-    )
-}
-
-fn get(port: u16, path: &str) -> (Option<u16>, String) {
-    get_with_host(port, path, &format!("127.0.0.1:{port}"))
-}
-
-fn post(port: u16, path: &str, headers: &[(&str, String)], body: &str) -> (Option<u16>, String) {
-    let mut rq = format!("POST {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n");
-    for (k, v) in headers {
-        rq.push_str(&format!("{k}: {v}\r\n"));
-    }
-    rq.push_str(&format!("Content-Length: {}\r\n\r\n{body}", body.len()));
-    raw(port, rq.as_bytes())
-}
-
-fn own(port: u16) -> Vec<(&'static str, String)> {
-    vec![
-        ("Origin", format!("http://127.0.0.1:{port}")),
-        ("Content-Type", "application/json".to_string()),
-    ]
-}
-
-fn state(port: u16) -> Value {
-    let (s, b) = get(port, "/api/state");
-    assert_eq!(s, Some(200), "{b}");
-    serde_json::from_str(&b).unwrap()
-}
+#[path = "support/editor_http.rs"]
+mod editor_http;
+use editor_http::*;
 
 #[test]
 fn prints_its_url_and_listens_on_127_0_0_1_only() {
@@ -412,22 +277,6 @@ fn sigterm_and_sigint_end_it_within_a_second() {
 }
 
 /// Waits (bounded) until the newest version is solved; returns it.
-fn solved(port: u16) -> u64 {
-    let mut after = 0;
-    for _ in 0..60 {
-        let st: Value =
-            serde_json::from_str(&get(port, &format!("/api/state?after={after}")).1).unwrap();
-        if let Some(e) = st["error"].as_array() {
-            assert!(e[0] != st["version"], "the solve failed: {}", e[1]);
-        }
-        if st["solved_version"] == st["version"] {
-            return st["version"].as_u64().unwrap();
-        }
-        after = st["solved_version"].as_u64().unwrap_or(0);
-    }
-    panic!("never solved");
-}
-
 #[test]
 fn saved_scene_reproduces_the_shown_field_byte_for_byte() {
     let srv = start("save");
@@ -449,29 +298,14 @@ fn saved_scene_reproduces_the_shown_field_byte_for_byte() {
     let (s, shown) = get(p, &format!("/api/field.json?version={v}"));
     assert_eq!(s, Some(200));
     std::fs::write(srv.dir.join("shown.json"), &shown).unwrap();
-    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
-    let scene = srv.dir.join("scene.json");
+    let scene = save_and_run(&srv);
     let saved = std::fs::read_to_string(&scene).unwrap();
     let parsed = grainline::scene::Scene::from_str(&saved, &scene).unwrap();
     let tools: Vec<&str> = parsed.edits.iter().map(|e| e.tool()).collect();
     assert_eq!(tools, ["bend", "stencil"]);
-    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
     assert!(ran.contains("phi_before"), "not an optimized field");
     assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
-}
-
-fn get_bytes(port: u16, path: &str) -> (Option<u16>, Vec<u8>) {
-    let host = format!("127.0.0.1:{port}");
-    raw_bytes(
-        port,
-        format!("GET {path} HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n").as_bytes(),
-    )
 }
 
 /// The little-endian `u32` at byte `k` of `b`.
@@ -511,14 +345,7 @@ fn drag_commit_save_run(srv: &Server) -> (u32, u32, u32, bool) {
     assert_eq!(u32_at(&mesh, 0), committed);
     let (s, shown) = get_bytes(p, &format!("/api/field.json?version={v}"));
     assert_eq!(s, Some(200));
-    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
-    let scene = srv.dir.join("scene.json");
-    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    save_and_run(srv);
     let ran = std::fs::read(srv.dir.join("field.json")).unwrap();
     let field: Value = serde_json::from_slice(&ran).unwrap();
     assert_eq!(field["u"].as_array().unwrap().len(), committed as usize);
@@ -608,13 +435,7 @@ fn export_writes_what_the_run_of_the_saved_scene_writes() {
     // The saved scene's run writes the same bytes.
     std::fs::remove_file(&svg_path).unwrap();
     std::fs::remove_file(&gcode_path).unwrap();
-    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
-    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(srv.dir.join("scene.json"))
-        .output()
-        .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    save_and_run(&srv);
     assert!(std::fs::read(&svg_path).unwrap() == svg, "the run's SVG differs from the export");
     assert!(std::fs::read(&gcode_path).unwrap() == gcode, "the run's G-code differs");
     // The strokes shown are the run's: as many, on the part (radius 30), and the as-brushed
@@ -703,8 +524,7 @@ fn a_key_light_set_on_the_page_is_saved_and_the_run_reproduces_the_field() {
     let (s, shown) = get(p, &format!("/api/field.json?version={v}"));
     assert_eq!(s, Some(200));
     assert!(shown != under_old, "the field did not change with the light");
-    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
-    let scene = srv.dir.join("scene.json");
+    let scene = save_and_run(&srv);
     let saved: Value = serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
     let d: Vec<f64> = saved["lights"][0]["direction"]
         .as_array()
@@ -714,12 +534,6 @@ fn a_key_light_set_on_the_page_is_saved_and_the_run_reproduces_the_field() {
         .collect();
     assert_eq!(d, l);
     assert_eq!(saved["edits"].as_array().unwrap().len(), 1);
-    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
     assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
     // Undo: the light as read, the field as before it turned.
@@ -728,206 +542,4 @@ fn a_key_light_set_on_the_page_is_saved_and_the_run_reproduces_the_field() {
     assert!(state(p)["light"].is_null());
     let (_, back) = get(p, &format!("/api/field.json?version={v}"));
     assert!(back == under_old, "undo did not bring the old light's field back");
-}
-
-/// A 3-vector from a JSON array.
-fn vec3(v: &Value) -> [f64; 3] {
-    let a = v.as_array().unwrap_or_else(|| panic!("not an array: {v}"));
-    [0, 1, 2].map(|k| a[k].as_f64().unwrap())
-}
-
-fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn unit3(a: [f64; 3]) -> [f64; 3] {
-    let n = dot3(a, a).sqrt();
-    a.map(|c| c / n)
-}
-
-/// The highlight function g = hᵀu near vertex `i` of a FIELD.json, under the distant light
-/// `light` and the point eye `eye`, computed from the file's positions, normals and grain
-/// alone: g at `i`, and the tangent-plane gradient of g there, a least-squares plane through
-/// g at the vertices within `reach` (the line field's u aligned with uᵢ first).
-fn g_near(f: &Value, i: usize, light: [f64; 3], eye: [f64; 3], reach: f64) -> (f64, [f64; 3]) {
-    let (pos, nor, u) = (&f["position"], &f["normal"], &f["u"]);
-    let g_at = |j: usize, ui: [f64; 3]| {
-        let p = vec3(&pos[j]);
-        let wo = unit3([0, 1, 2].map(|k| eye[k] - p[k]));
-        let h = unit3([0, 1, 2].map(|k| light[k] + wo[k]));
-        let mut uj = vec3(&u[j]);
-        if dot3(uj, ui) < 0.0 {
-            uj = uj.map(|c| -c);
-        }
-        dot3(h, uj)
-    };
-    let (pi, ni, ui) = (vec3(&pos[i]), vec3(&nor[i]), vec3(&u[i]));
-    let (e1, e2) = (ui, cross3(ni, ui));
-    // Normal equations of g ≈ a + b x + c y over the neighbours (x, y in the tangent plane).
-    let mut m = [[0.0f64; 3]; 3];
-    let mut r = [0.0f64; 3];
-    for j in 0..u.as_array().unwrap().len() {
-        let d = vec3(&pos[j]).map(|c| c).iter().zip(pi).map(|(a, b)| a - b).collect::<Vec<_>>();
-        let d = [d[0], d[1], d[2]];
-        if dot3(d, d) > reach * reach || dot3(vec3(&nor[j]), ni) < 0.5 {
-            continue;
-        }
-        let row = [1.0, dot3(d, e1), dot3(d, e2)];
-        let g = g_at(j, ui);
-        for a in 0..3 {
-            for b in 0..3 {
-                m[a][b] += row[a] * row[b];
-            }
-            r[a] += row[a] * g;
-        }
-    }
-    // Cramer's rule.
-    let det = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d0 = det(&m);
-    let solve = |k: usize| {
-        let mut mk = m;
-        for (a, row) in mk.iter_mut().enumerate() {
-            row[k] = r[a];
-        }
-        det(&mk) / d0
-    };
-    let (b, c) = (solve(1), solve(2));
-    (g_at(i, ui), [0, 1, 2].map(|k| b * e1[k] + c * e2[k]))
-}
-
-/// Angle between two lines (mod π), degrees.
-fn line_angle(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let (a, b) = (unit3(a), unit3(b));
-    dot3(a, b).abs().min(1.0).acos().to_degrees()
-}
-
-/// Issue 16, the light tool driven from the page (`{"tool": "light"}` through `/api/edit`):
-/// the key light found makes the highlight pass through the vertex asked, with the tangent
-/// asked. Checked from the solved FIELD.json alone: with the state's key light and the eye,
-/// g = hᵀu at the vertex is ≈ 0 (the zero set within a tenth of an edge of it) and the level
-/// set's tangent n × ∇g there is the asked ℓ within a few degrees. The asked ℓ is one a light
-/// of the scene can give (the tangent made by a light whose half vector is ⟂ uᵢ, computed the
-/// same way), and the light found is far from the scene's. The preview of a drag step reports
-/// a key light too; saving writes the edit, and `grainline run` reproduces the field byte for
-/// byte.
-#[test]
-fn the_light_tool_puts_the_highlight_through_the_vertex_with_the_tangent_asked() {
-    let dir =
-        std::env::temp_dir().join(format!("grainline-editor-lighttool-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    // A cylinder (r 30, 2° and 2.5 mm apart) with a grain at 45° to its axis on the front.
-    let cylinder = grainline::generate::cylinder(30.0, 80.0, 96, 32);
-    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&cylinder, "t"))
-        .unwrap();
-    std::fs::write(
-        dir.join("scene.json"),
-        r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
-            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-            "field": {"init": "world", "world": [1, 0, 1], "symmetry": "line",
-                      "output": "field.json"}}"#,
-    )
-    .unwrap();
-    let srv = start_in(dir);
-    let p = srv.port;
-    let field_of = |v: u64| -> Value {
-        let (s, b) = get(p, &format!("/api/field.json?version={v}"));
-        assert_eq!(s, Some(200), "{b}");
-        serde_json::from_str(&b).unwrap()
-    };
-    let before = field_of(solved(p));
-    let eye = vec3(&before["meta"]["eye"]);
-    let scene_light = vec3(&before["meta"]["light"]);
-    // The vertex: on the front, off the middle.
-    let pos = before["position"].as_array().unwrap();
-    let want = [-30.0 * 0.3f64.sin(), -30.0 * 0.3f64.cos(), 10.0];
-    let d2 = |j: usize| {
-        let q = vec3(&pos[j]);
-        (0..3).map(|k| (q[k] - want[k]).powi(2)).sum::<f64>()
-    };
-    let i = (0..pos.len()).min_by(|a, b| d2(*a).total_cmp(&d2(*b))).unwrap();
-    let spacing = 30.0 * std::f64::consts::TAU / 96.0;
-    let reach = 2.2 * spacing;
-    // A light that gives vertex i a highlight (h ⟂ uᵢ, 0.35 rad off the normal towards
-    // v = n × u), and the tangent it gives there: the ℓ to ask for.
-    let (pi, ni, ui) = (vec3(&pos[i]), vec3(&before["normal"][i]), vec3(&before["u"][i]));
-    let wo = unit3([0, 1, 2].map(|k| eye[k] - pi[k]));
-    let vi = cross3(ni, ui);
-    let h0 = unit3([0, 1, 2].map(|k| 0.35f64.cos() * ni[k] + 0.35f64.sin() * vi[k]));
-    let l0 = unit3([0, 1, 2].map(|k| 2.0 * dot3(h0, wo) * h0[k] - wo[k]));
-    let (g0, grad0) = g_near(&before, i, l0, eye, reach);
-    assert!(g0.abs() < 1e-9, "the constructed light does not give g = 0: {g0}");
-    let asked = unit3(cross3(ni, grad0));
-    assert!(line_angle(l0, scene_light) > 20.0, "the scene's light is already the one");
-
-    let edit = |ell: [f64; 3]| {
-        format!(
-            r#"{{"tool": "light", "centre": {{"vertex": {i}}}, "ell": [{}, {}, {}]}}"#,
-            ell[0], ell[1], ell[2]
-        )
-    };
-    let send = |action: &str, e: &str| {
-        let body = format!(r#"{{"action": "{action}", "edit": {e}}}"#);
-        let (s, b) = post(p, "/api/edit", &own(p), &body);
-        assert_eq!(s, Some(200), "{body}: {b}");
-    };
-    // Refused: a vertex the part does not have, an ℓ that is no direction.
-    for bad in [
-        r#"{"tool": "light", "centre": {"vertex": 99999999}, "ell": [1, 0, 0]}"#,
-        r#"{"tool": "light", "centre": {"vertex": 3}, "ell": [0, 0, 0]}"#,
-    ] {
-        let (s, b) =
-            post(p, "/api/edit", &own(p), &format!(r#"{{"action": "commit", "edit": {bad}}}"#));
-        assert_eq!(s, Some(400), "{bad}: {b}");
-    }
-    // A drag step (preview) with another tangent, then the commit with the asked one.
-    send("preview", &edit(vi));
-    solved(p);
-    let previewed = vec3(&state(p)["key_light"]);
-    assert!(line_angle(previewed, scene_light) > 1.0, "the preview kept the scene's light");
-    send("commit", &edit(asked));
-    let v = solved(p);
-    let st = state(p);
-    let key = vec3(&st["key_light"]);
-    let after = field_of(v);
-    let meta_light = vec3(&after["meta"]["light"]);
-    assert!(line_angle(key, meta_light) < 1e-6, "state {key:?}, FIELD.json {meta_light:?}");
-    assert!(line_angle(key, scene_light) > 5.0, "the light did not turn: {key:?}");
-    let (g, grad) = g_near(&after, i, key, eye, reach);
-    let off = g.abs() / dot3(grad, grad).sqrt();
-    let tangent = cross3(vec3(&after["normal"][i]), grad);
-    let err = line_angle(tangent, asked);
-    eprintln!(
-        "light tool: vertex {i}, light {key:?} ({:.1}° from the constructed one), zero set \
-         {off:.3} mm from the vertex (edge {spacing:.2} mm), tangent {err:.2}° from the asked",
-        line_angle(key, l0)
-    );
-    assert!(off < 0.1 * spacing, "the highlight passes {off:.3} mm from the vertex");
-    assert!(err < 5.0, "the highlight's tangent is {err:.2}° from the asked ℓ");
-
-    // Saved as the scene's edit; the run reproduces the field shown.
-    let shown = get(p, &format!("/api/field.json?version={v}")).1;
-    assert_eq!(post(p, "/api/save", &own(p), "{}").0, Some(200));
-    let scene = srv.dir.join("scene.json");
-    let parsed =
-        grainline::scene::Scene::from_str(&std::fs::read_to_string(&scene).unwrap(), &scene)
-            .unwrap();
-    let tools: Vec<&str> = parsed.edits.iter().map(|e| e.tool()).collect();
-    assert_eq!(tools, ["light"]);
-    let run = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let ran = std::fs::read_to_string(srv.dir.join("field.json")).unwrap();
-    assert!(ran == shown, "run: {} bytes, shown: {} bytes", ran.len(), shown.len());
 }

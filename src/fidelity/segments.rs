@@ -61,18 +61,7 @@ pub(super) fn segments_on(
     symmetry: Symmetry,
     faces: &[usize],
 ) -> Vec<[Vector3<f64>; 2]> {
-    let n = mesh.num_vertices();
-    faces
-        .iter()
-        .filter_map(|&f| {
-            let face = mesh.faces.get(f)?;
-            if face.iter().any(|&v| v as usize >= n) {
-                return None;
-            }
-            let g = corner_g(face, h, u, symmetry)?;
-            zero_segment(&mesh.face_positions(f), &g)
-        })
-        .collect()
+    indexed_segments(mesh, h, u, symmetry, faces).into_iter().map(|(_, s)| s).collect()
 }
 
 /// [`segments_on`], each with the index in `faces` of its face.
@@ -106,22 +95,13 @@ pub(super) fn segments_with_normals(
     symmetry: Symmetry,
     faces: &[usize],
 ) -> (Vec<[Vector3<f64>; 2]>, Vec<Vector3<f64>>) {
-    let n = mesh.num_vertices();
-    let mut segs = Vec::new();
-    let mut normals = Vec::new();
-    for &f in faces {
-        let Some(face) = mesh.faces.get(f) else { continue };
-        if face.iter().any(|&v| v as usize >= n) {
-            continue;
-        }
-        let Some(g) = corner_g(face, h, u, symmetry) else { continue };
-        let p = mesh.face_positions(f);
-        if let Some(s) = zero_segment(&p, &g) {
-            segs.push(s);
-            normals.push(
-                (p[1] - p[0]).cross(&(p[2] - p[0])).try_normalize(1e-300).unwrap_or_default(),
-            );
-        }
-    }
-    (segs, normals)
+    indexed_segments(mesh, h, u, symmetry, faces)
+        .into_iter()
+        .map(|(k, s)| {
+            let p = mesh.face_positions(faces[k]);
+            let normal =
+                (p[1] - p[0]).cross(&(p[2] - p[0])).try_normalize(1e-300).unwrap_or_default();
+            (s, normal)
+        })
+        .unzip()
 }

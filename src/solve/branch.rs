@@ -75,22 +75,22 @@ impl ParitySets {
         ParitySets { parent: (0..=n as u32).collect(), parity: vec![false; n + 1] }
     }
 
-    /// The root of `x` and the parity of `x` relative to it (path compression).
+    /// The root of `x` and the parity of `x` relative to it; every element on the way is
+    /// pointed at the root (path compression).
     fn find(&mut self, x: u32) -> (u32, bool) {
-        let mut path = Vec::new();
-        let mut r = x;
+        let (mut r, mut p) = (x, false);
         while self.parent[r as usize] != r {
-            path.push(r);
+            p ^= self.parity[r as usize];
             r = self.parent[r as usize];
         }
-        // Compress: every element on the path points at the root with its total parity.
-        let mut acc = false;
-        for &y in path.iter().rev() {
-            acc ^= self.parity[y as usize];
-            self.parity[y as usize] = acc;
+        let (mut y, mut py) = (x, p);
+        while self.parent[y as usize] != y {
+            let (next, next_p) = (self.parent[y as usize], py ^ self.parity[y as usize]);
             self.parent[y as usize] = r;
+            self.parity[y as usize] = py;
+            (y, py) = (next, next_p);
         }
-        (r, if path.is_empty() { false } else { self.parity[x as usize] })
+        (r, p)
     }
 
     /// Joins the sets of `a` and `b` so that parity(a) ⊕ parity(b) = `rel`; false when they
