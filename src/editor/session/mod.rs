@@ -6,7 +6,8 @@
 //! Every field the page is shown is computed from the scene **text** that saving would write
 //! ([`Session::scene_text`]), read back by [`Scene::from_str`] and run through the same stages
 //! as `grainline run` ([`crate::pipeline::load_stage`], [`crate::pipeline::prepare_part`],
-//! [`optimize_stage`], [`optimized_field_file`], [`crate::output::json_compact`]).
+//! [`crate::pipeline::optimize::optimize_stage`],
+//! [`crate::pipeline::optimize::optimized_field_file`], [`crate::output::json_compact`]).
 //!
 //! Refinement (`mesh.refine`, docs/math.md §12): `grainline run` refines the part inside the
 //! brushes of the scene's edits before it computes the field. The session does the same for
