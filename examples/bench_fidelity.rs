@@ -3,8 +3,13 @@
 //! ```text
 //! cargo run --release --example bench_fidelity -- [--energy position|tensor|both]
 //!     [--cases NAME,...] [--edits bend,expand,curve] [--small] [--dump DIR]
-//!     [--solver JSON]
+//!     [--solver JSON] [--mesh FILE [--weld D]]...
 //! ```
+//!
+//! `--mesh FILE` (repeatable) runs the three edits on any mesh (OBJ, STL, PLY) instead of the
+//! corpus, lit and placed as the shared meshes are (`corpus::mesh_case`): a part the corpus has
+//! never seen. `--weld D` welds its vertices closer than D (file units) and accepts the
+//! non-manifold vertices that leaves.
 //!
 //! `--solver '{"smoothness": 1e-6}'` merges further `solver` keys into every case's settings.
 //! `--dump DIR` also writes each case's edited scene as `DIR/CASE-EDIT-ENERGY.json` (mesh path
@@ -44,6 +49,8 @@ fn main() {
     let mut tools: Vec<String> = corpus::TOOLS.iter().map(|s| s.to_string()).collect();
     let mut size = Size::Full;
     let mut dump: Option<std::path::PathBuf> = None;
+    let mut meshes: Vec<std::path::PathBuf> = Vec::new();
+    let mut weld: Option<f64> = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -56,6 +63,14 @@ fn main() {
             "--edits" => tools = list(&args.next().unwrap_or_default()),
             "--small" => size = Size::Small,
             "--dump" => dump = args.next().map(Into::into),
+            "--mesh" => match args.next() {
+                Some(m) => meshes.push(m.into()),
+                None => usage("--mesh takes a mesh file"),
+            },
+            "--weld" => match args.next().and_then(|w| w.parse::<f64>().ok()) {
+                Some(w) if w >= 0.0 => weld = Some(w),
+                _ => usage("--weld takes a distance ≥ 0 in the file's units"),
+            },
             // SAFETY: single-threaded here, before any thread starts.
             "--solver" => unsafe {
                 std::env::set_var("GRAINLINE_CORPUS_SOLVER", args.next().unwrap_or_default())
@@ -80,13 +95,25 @@ fn main() {
         }
     }
     let names = cases.as_deref();
-    let mut all = match corpus::generated_cases(size, names) {
-        Ok(c) => c,
-        Err(e) => fail(&e),
-    };
-    match corpus::shared_cases(names) {
-        Ok(c) => all.extend(c),
-        Err(e) => fail(&e),
+    let mut all = Vec::new();
+    if meshes.is_empty() {
+        match corpus::generated_cases(size, names) {
+            Ok(c) => all.extend(c),
+            Err(e) => fail(&e),
+        };
+        match corpus::shared_cases(names) {
+            Ok(c) => all.extend(c),
+            Err(e) => fail(&e),
+        }
+    }
+    for m in &meshes {
+        let name = m.file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+        // Non-manifold vertices are accepted when a weld is asked for (welded patches, as
+        // the teapot's, leave some).
+        match corpus::mesh_case(&name, m, true, weld, weld.is_some()) {
+            Ok(c) => all.push(c),
+            Err(e) => fail(&format!("{}: {e}", m.display())),
+        }
     }
     if let Some(n) = names {
         for want in n {
@@ -258,7 +285,8 @@ fn usage(msg: &str) -> ! {
     }
     eprintln!(
         "usage: bench_fidelity [--energy position|tensor|both] [--cases NAME,...] \
-         [--edits bend,expand,curve] [--small]"
+         [--edits bend,expand,curve] [--small] [--dump DIR] [--solver JSON] \
+         [--mesh FILE [--weld D]]..."
     );
     std::process::exit(if msg.is_empty() { 0 } else { 2 });
 }

@@ -8,9 +8,15 @@
 //! directions, not positions, and ask for nothing.
 //!
 //! The regions are Euclidean balls and tubes: they contain the geodesic supports the tools
-//! use later, so a face of a support is never left coarse. A region that holds none of the
-//! part's vertices asks for nothing: its tool refuses it as before (a brush smaller than the
-//! triangles is most often a slip of units, and refinement is not meant to hide it).
+//! use later, so a face of a support is never left coarse.
+//!
+//! A region that holds none of the part's vertices falls between them: either the part's
+//! triangles are larger than the brush (a CAD export whose flat and cylindrical faces are a
+//! few long slivers, a developable strip) or the radius is a slip of units. The two are told
+//! apart by the part's size: a region whose reach is at least [`MIN_REACH_SHARE`] of the
+//! bounding-box diagonal asks for its edge on the faces it touches (their exact distance to
+//! the region, not a bound), so the tool then finds vertices inside it; a smaller one asks for
+//! nothing and its tool refuses it, naming the radius, as before.
 
 use std::path::Path;
 
@@ -21,6 +27,10 @@ use super::support::Centre;
 use super::{at_edit, Edit};
 use crate::mesh::Mesh;
 use crate::Result;
+
+/// The smallest reach, as a share of the part's bounding-box diagonal, for which a region that
+/// holds no vertex is refined (module docs): 1 mm on a 200 mm part.
+pub const MIN_REACH_SHARE: f64 = 0.005;
 
 /// One region of an edit: a polyline (one point for a brush) and its reach, and the edge
 /// length wanted inside it.
@@ -99,6 +109,7 @@ fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
         near && region.lines.iter().any(|l| polyline_distance(p, l) <= region.reach)
     });
     if !holds_a_vertex {
+        mark_between_vertices(mesh, region, want, target);
         return;
     }
     for (f, face) in mesh.faces.iter().enumerate() {
@@ -115,6 +126,49 @@ fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
         }
         let d = region.lines.iter().map(|l| polyline_distance(&c, l)).fold(f64::INFINITY, f64::min);
         if d <= reach {
+            target[f] = target[f].min(want);
+        }
+    }
+}
+
+/// [`mark`] for a region that holds no vertex: nothing when the region is small against the
+/// part (a slip of units, refused by its tool), else `want` on the faces within the reach.
+fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for p in mesh.positions.iter().filter(|p| p.iter().all(|c| c.is_finite())) {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let diagonal = (hi - lo).norm();
+    if !(diagonal.is_finite() && region.reach >= MIN_REACH_SHARE * diagonal) {
+        return;
+    }
+    // The region's points, its polylines sampled every half reach: the distance of a face to
+    // the samples exceeds its distance to the polyline by at most a quarter reach.
+    let step = 0.5 * region.reach;
+    let mut samples = Vec::new();
+    for line in &region.lines {
+        if let [p] = line.as_slice() {
+            samples.push(*p);
+        }
+        for w in line.windows(2) {
+            let n = ((w[1] - w[0]).norm() / step).ceil().clamp(1.0, 1e6) as usize;
+            samples.extend((0..=n).map(|k| w[0] + (w[1] - w[0]) * (k as f64 / n as f64)));
+        }
+    }
+    samples.retain(|p| p.iter().all(|c| c.is_finite()));
+    let slack = if region.lines.iter().any(|l| l.len() > 1) { 0.25 * region.reach } else { 0.0 };
+    let n = mesh.num_vertices();
+    for (f, face) in mesh.faces.iter().enumerate() {
+        if face.iter().any(|&v| v as usize >= n) {
+            continue;
+        }
+        let [a, b, c] = face.map(|v| mesh.positions[v as usize]);
+        let near = samples.iter().any(|p| {
+            let (q, _) = crate::edit::support::closest_point_on_triangle(p, &a, &b, &c);
+            (q - p).norm() <= region.reach + slack
+        });
+        if near {
             target[f] = target[f].min(want);
         }
     }
@@ -196,6 +250,34 @@ mod tests {
         });
         let t = edit_resolution(&m, &[tiny], 1.0 / 3.0).unwrap();
         assert!(t.iter().all(|v| v.is_infinite()));
+    }
+
+    /// Two long slivers (a 100 × 1 strip, as a CAD export meshes a flat face): a brush of 5 in
+    /// its middle holds no vertex, but it is no slip of units (5 % of the diagonal), so the two
+    /// faces it touches ask for its edge; a brush off the strip asks for nothing.
+    #[test]
+    fn a_brush_on_triangles_larger_than_it_asks_for_its_edge() {
+        let pos = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(100.0, 0.0, 0.0),
+            Vector3::new(100.0, 1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
+        let m = Mesh::from_triangles(pos, vec![[0, 1, 2], [0, 2, 3]]);
+        let brush = |p: [f64; 3]| {
+            Edit::Bend(WarpEdit {
+                centre: Centre::Point(p),
+                radius: 5.0,
+                metric: Default::default(),
+                strength: 0.8,
+                direction: None,
+                weight: 1.0,
+            })
+        };
+        let t = edit_resolution(&m, &[brush([50.0, 0.5, 0.0])], 1.0 / 3.0).unwrap();
+        assert!(t.iter().all(|v| (v - 5.0 / 3.0).abs() < 1e-12), "{t:?}");
+        let t = edit_resolution(&m, &[brush([50.0, 20.0, 0.0])], 1.0 / 3.0).unwrap();
+        assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
     }
 
     #[test]

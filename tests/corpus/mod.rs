@@ -201,45 +201,59 @@ pub fn shared_cases(names: Option<&[String]>) -> Result<Vec<Case>, String> {
         if !names.is_none_or(|l| l.contains(&name)) {
             continue;
         }
-        let path = dir.join(file);
-        let options = grainline::mesh::load::LoadOptions {
-            weld,
-            allow_nonmanifold: nonmanifold,
-            ..Default::default()
-        };
-        let mesh = match grainline::mesh::load::load_obj(&path, &options) {
-            Ok(m) => m.mesh,
-            Err(e) => {
-                eprintln!("skipping {name}: {e}");
-                continue;
-            }
-        };
-        let (lo, hi) = bbox(&mesh.positions);
-        let scale = 200.0 / (hi - lo).norm();
-        let (lo, hi) = (lo * scale, hi * scale);
-        let (c, ext) = ((lo + hi) * 0.5, hi - lo);
-        let mut axes = [0usize, 1, 2];
-        axes.sort_by(|&a, &b| ext[b].total_cmp(&ext[a]).then(a.cmp(&b)));
-        let unit = |k: usize| {
-            let mut v = V3::zeros();
-            v[k] = 1.0;
-            v
-        };
-        let (a1, a2, a3) = (unit(axes[0]), unit(axes[1]), unit(axes[2]));
-        let view = (a3 + 0.3 * a2).normalize();
-        out.push(Case {
-            name,
-            obj: path,
-            scale,
-            weld,
-            nonmanifold,
-            init: if uv { Init::Uv } else { Init::World(a1) },
-            eye: c + 300.0 * view,
-            target: c,
-            light: (a3 + a2).normalize(),
-        });
+        match mesh_case(&name, &dir.join(file), uv, weld, nonmanifold) {
+            Ok(c) => out.push(c),
+            Err(e) => eprintln!("skipping {name}: {e}"),
+        }
     }
     Ok(out)
+}
+
+/// The case of any mesh file (OBJ, STL or PLY), lit and placed as the shared meshes are: scaled
+/// to a 200 mm diagonal, seen from its thinnest bounding-box axis a₃ tilted towards a₂, lit
+/// from a₃ + a₂, the initial field along a₁ (or its UVs when `uv` and it has them). This is how
+/// a part the corpus has never seen is measured (`bench_fidelity --mesh FILE`).
+pub fn mesh_case(
+    name: &str,
+    path: &std::path::Path,
+    uv: bool,
+    weld: Option<f64>,
+    nonmanifold: bool,
+) -> Result<Case, String> {
+    let options = grainline::mesh::load::LoadOptions {
+        weld,
+        allow_nonmanifold: nonmanifold,
+        ..Default::default()
+    };
+    let mesh = grainline::mesh::load::load_mesh(path, &options).map_err(|e| e.to_string())?.mesh;
+    let (lo, hi) = bbox(&mesh.positions);
+    let scale = 200.0 / (hi - lo).norm();
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!("{}: the mesh has no extent", path.display()));
+    }
+    let (lo, hi) = (lo * scale, hi * scale);
+    let (c, ext) = ((lo + hi) * 0.5, hi - lo);
+    let mut axes = [0usize, 1, 2];
+    axes.sort_by(|&a, &b| ext[b].total_cmp(&ext[a]).then(a.cmp(&b)));
+    let unit = |k: usize| {
+        let mut v = V3::zeros();
+        v[k] = 1.0;
+        v
+    };
+    let (a1, a2, a3) = (unit(axes[0]), unit(axes[1]), unit(axes[2]));
+    let view = (a3 + 0.3 * a2).normalize();
+    let uv = uv && mesh.uv.is_some();
+    Ok(Case {
+        name: name.to_string(),
+        obj: path.to_path_buf(),
+        scale,
+        weld,
+        nonmanifold,
+        init: if uv { Init::Uv } else { Init::World(a1) },
+        eye: c + 300.0 * view,
+        target: c,
+        light: (a3 + a2).normalize(),
+    })
 }
 
 /// The scene of a case, without edits.
