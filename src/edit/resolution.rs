@@ -158,12 +158,25 @@ fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [
     }
     samples.retain(|p| p.iter().all(|c| c.is_finite()));
     let slack = if region.lines.iter().any(|l| l.len() > 1) { 0.25 * region.reach } else { 0.0 };
+    // The samples' box grown by the reach: a face outside it is farther than the reach from
+    // every sample, so the closest points are sought only for the faces that meet it.
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for p in &samples {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    let grow = Vector3::repeat(region.reach + slack);
+    let (lo, hi) = (lo - grow, hi + grow);
     let n = mesh.num_vertices();
     for (f, face) in mesh.faces.iter().enumerate() {
         if face.iter().any(|&v| v as usize >= n) {
             continue;
         }
         let [a, b, c] = face.map(|v| mesh.positions[v as usize]);
+        let (flo, fhi) = (a.inf(&b).inf(&c), a.sup(&b).sup(&c));
+        if (0..3).any(|i| fhi[i] < lo[i] || flo[i] > hi[i]) {
+            continue;
+        }
         let near = samples.iter().any(|p| {
             let (q, _) = crate::edit::support::closest_point_on_triangle(p, &a, &b, &c);
             (q - p).norm() <= region.reach + slack
