@@ -32,6 +32,10 @@ use crate::Result;
 /// holds no vertex is refined (module docs): 1 mm on a 200 mm part.
 pub const MIN_REACH_SHARE: f64 = 0.005;
 
+/// Most points a curve is sampled at when its tube holds no vertex (the work of marking the
+/// faces is at most this many closest-point queries per face near the curve).
+const MAX_SAMPLES: usize = 100_000;
+
 /// One region of an edit: a polyline (one point for a brush) and its reach, and the edge
 /// length wanted inside it.
 struct Region {
@@ -92,18 +96,13 @@ fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
 
 /// Lowers `target` to `want` on every face that reaches within `region.reach` of its lines.
 fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
-    let pts = region.lines.iter().flatten();
-    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-    for p in pts.filter(|p| p.iter().all(|c| c.is_finite())) {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
+    let (lo, hi) = bounds(region.lines.iter().flatten());
     if !(lo.x <= hi.x) {
         return;
     }
     let n = mesh.num_vertices();
-    // A brush or tube that holds none of the part's vertices is refused by its tool (a radius
-    // smaller than the triangles is most often a slip of units); refinement does not rescue it.
+    // A brush or tube that holds none of the part's vertices lies on triangles larger than
+    // itself, or its radius is a slip of units (module docs): `mark_between_vertices` decides.
     let holds_a_vertex = mesh.positions.iter().any(|p| {
         let near = (0..3).all(|i| p[i] >= lo[i] - region.reach && p[i] <= hi[i] + region.reach);
         near && region.lines.iter().any(|l| polyline_distance(p, l) <= region.reach)
@@ -134,37 +133,34 @@ fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
 /// [`mark`] for a region that holds no vertex: nothing when the region is small against the
 /// part (a slip of units, refused by its tool), else `want` on the faces within the reach.
 fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
-    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-    for p in mesh.positions.iter().filter(|p| p.iter().all(|c| c.is_finite())) {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
+    let (lo, hi) = bounds(mesh.positions.iter());
     let diagonal = (hi - lo).norm();
     if !(diagonal.is_finite() && region.reach >= MIN_REACH_SHARE * diagonal) {
         return;
     }
-    // The region's points, its polylines sampled every half reach: the distance of a face to
-    // the samples exceeds its distance to the polyline by at most a quarter reach.
-    let step = 0.5 * region.reach;
-    let mut samples = Vec::new();
-    for line in &region.lines {
-        if let [p] = line.as_slice() {
-            samples.push(*p);
-        }
-        for w in line.windows(2) {
-            let n = ((w[1] - w[0]).norm() / step).ceil().clamp(1.0, 1e6) as usize;
-            samples.extend((0..=n).map(|k| w[0] + (w[1] - w[0]) * (k as f64 / n as f64)));
-        }
+    // The region's points, its polylines sampled every half reach (coarser, at most
+    // MAX_SAMPLES in all, for a polyline longer than MAX_SAMPLES half reaches): the distance
+    // of a face to the samples exceeds its distance to the polyline by at most half a step.
+    let segments = || {
+        region
+            .lines
+            .iter()
+            .flat_map(|l| l.windows(2))
+            .filter(|w| w.iter().flatten().all(|c| c.is_finite()))
+    };
+    let length: f64 = segments().map(|w| (w[1] - w[0]).norm()).sum();
+    let step = (0.5 * region.reach).max(length / MAX_SAMPLES as f64);
+    let mut samples: Vec<Vector3<f64>> =
+        region.lines.iter().filter(|l| l.len() == 1).map(|l| l[0]).collect();
+    for w in segments() {
+        let n = ((w[1] - w[0]).norm() / step).ceil().max(1.0) as usize;
+        samples.extend((0..=n).map(|k| w[0] + (w[1] - w[0]) * (k as f64 / n as f64)));
     }
     samples.retain(|p| p.iter().all(|c| c.is_finite()));
-    let slack = if region.lines.iter().any(|l| l.len() > 1) { 0.25 * region.reach } else { 0.0 };
+    let slack = if segments().next().is_some() { 0.5 * step } else { 0.0 };
     // The samples' box grown by the reach: a face outside it is farther than the reach from
     // every sample, so the closest points are sought only for the faces that meet it.
-    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-    for p in &samples {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
+    let (lo, hi) = bounds(samples.iter());
     let grow = Vector3::repeat(region.reach + slack);
     let (lo, hi) = (lo - grow, hi + grow);
     let n = mesh.num_vertices();
@@ -185,6 +181,16 @@ fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [
             target[f] = target[f].min(want);
         }
     }
+}
+
+/// The box of the finite points (lo > hi when there is none).
+fn bounds<'a>(points: impl Iterator<Item = &'a Vector3<f64>>) -> (Vector3<f64>, Vector3<f64>) {
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    for p in points.filter(|p| p.iter().all(|c| c.is_finite())) {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    (lo, hi)
 }
 
 fn polyline_distance(p: &Vector3<f64>, line: &[Vector3<f64>]) -> f64 {
@@ -267,7 +273,8 @@ mod tests {
 
     /// Two long slivers (a 100 × 1 strip, as a CAD export meshes a flat face): a brush of 5 in
     /// its middle holds no vertex, but it is no slip of units (5 % of the diagonal), so the two
-    /// faces it touches ask for its edge; a brush off the strip asks for nothing.
+    /// faces it touches ask for its edge, and so do a curve's; a brush or curve off the strip
+    /// asks for nothing.
     #[test]
     fn a_brush_on_triangles_larger_than_it_asks_for_its_edge() {
         let pos = vec![
@@ -290,6 +297,22 @@ mod tests {
         let t = edit_resolution(&m, &[brush([50.0, 0.5, 0.0])], 1.0 / 3.0).unwrap();
         assert!(t.iter().all(|v| (v - 5.0 / 3.0).abs() < 1e-12), "{t:?}");
         let t = edit_resolution(&m, &[brush([50.0, 20.0, 0.0])], 1.0 / 3.0).unwrap();
+        assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
+        // A curve across the strip's middle, between its vertices, and one 10 above it.
+        let curve = |y: f64| {
+            Edit::Curve(CurveEdit {
+                svg: None,
+                uv: None,
+                points: Some(vec![vec![[40.0, y, 0.0], [60.0, y + 0.5, 0.0]]]),
+                radius: 2.0,
+                weight: 1.0,
+                tolerance: 1e-3,
+                width: None,
+            })
+        };
+        let t = edit_resolution(&m, &[curve(0.25)], 0.5).unwrap();
+        assert!(t.iter().all(|v| (v - 1.0).abs() < 1e-12), "{t:?}");
+        let t = edit_resolution(&m, &[curve(10.0)], 0.5).unwrap();
         assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
     }
 
