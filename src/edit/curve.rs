@@ -244,13 +244,19 @@ pub(crate) fn apply(
     let mut count = 0;
     let mut critical = 0;
     let width = e.width.unwrap_or(e.radius);
-    let profile = position_profile(ctx, st, &found, reach, width);
+    let (profile, design) = position_profile(ctx, st, &found, reach, width);
     for (i, hit) in found.iter().enumerate() {
         let Some(hit) = hit else { continue };
         st.support[i] = true;
         if st.critical[i] {
             critical += 1;
             continue;
+        }
+        // The optimizer starts from the designed grain (the fidelity figures compare against
+        // the grain before it: `State::designed`).
+        if let Some(phi) = design[i] {
+            st.designed[i].get_or_insert(st.phi[i]);
+            st.phi[i] = phi;
         }
         // The position rows keep the full weight over the tube: their target itself blends
         // into the current field at the tube's edge.
@@ -269,6 +275,7 @@ pub(crate) fn apply(
         st.set_target(i, t.normalize() * len, w);
         count += 1;
     }
+    st.refresh(ctx, false);
     report.vertices = count;
     report.critical_vertices = critical;
     if critical > 0 {
@@ -341,15 +348,16 @@ impl Ord for Clarity {
     }
 }
 
-/// The position target ĝ* of every vertex with a hit (module docs, "Position"); other entries
-/// are the current targets.
+/// The position target ĝ* of every vertex with a hit (module docs, "Position"), with the
+/// designed grain φ* it is stated for ([`designed_grain`]; `None` where the vertex keeps its
+/// grain); other entries are the current targets.
 fn position_profile(
     ctx: &Context,
     st: &State,
     found: &[Option<Hit>],
     radius: f64,
     width: f64,
-) -> Vec<f64> {
+) -> (Vec<f64>, Vec<Option<f64>>) {
     let n = found.len();
     // oᵢ: an orientation of a line field over the tube (k = 1: all +1), grown along a maximum
     // spanning tree of |uᵢ·uⱼ| from the lowest vertex of each connected piece, so that it
@@ -407,22 +415,135 @@ fn position_profile(
         }
     }
     let sigma: Vec<f64> = agree.iter().map(|&a| if a < 0.0 { -1.0 } else { 1.0 }).collect();
+    let tube = Tube { found, orient: &orient, signed: &signed, sigma: &sigma, radius, width };
+    // The core's side of h̄ with the smaller turn over the ring.
+    let designs = [designed_grain(ctx, st, &tube, 1.0), designed_grain(ctx, st, &tube, -1.0)];
+    let design = if designs[1].1 < designs[0].1 { &designs[1].0 } else { &designs[0].0 };
     (0..n)
-        .map(|i| match &found[i] {
-            Some(h) => {
+        .map(|i| match (&found[i], design[i]) {
+            (Some(_), Some((phi, g))) => (g, Some(phi)),
+            (Some(h), None) => {
                 let b = blend(h.distance, radius);
                 let wanted = sigma[h.line] * orient[i] * (signed[i] / width).tanh();
                 let g = (1.0 - b) * st.target_g[i] + b * wanted;
-                if g.is_finite() {
-                    g
-                } else {
-                    st.target_g[i]
-                }
+                (if g.is_finite() { g } else { st.target_g[i] }, None)
             }
-            None => st.target_g[i],
+            (None, _) => (st.target_g[i], None),
         })
-        .collect()
+        .unzip()
 }
+
+/// A curve's tube: the closest curve of every vertex, the orientation of a line field over it,
+/// the signed distances and the side σ of each polyline's profile.
+struct Tube<'a> {
+    found: &'a [Option<Hit>],
+    orient: &'a [f64],
+    signed: &'a [f64],
+    sigma: &'a [f64],
+    radius: f64,
+    width: f64,
+}
+
+/// The grain the curve asks for over its tube, designed as angles (docs/math.md §9, "curve"):
+/// per vertex `(φ*, ĝ*)` (`None` where h̄ vanishes: a critical point), and the squared turn
+/// Σ A (φ* − φ)² it costs.
+///
+/// In the core the grain is the profile's: ψ_c = s arccos(σ o tanh(d/width)) from h̄ on the
+/// core's side `s`. Out to the tube's edge it turns back to the field before the edit by a
+/// fraction β of D = ψ_c − ψ₀, the turn between the two, *lifted continuously* over the tube
+/// (modulo a half-turn for a line field, whose two orientations are one grain): φ* = φ + β D.
+/// D is continuous wherever the field before the edit and the profile are, so φ* has no
+/// singularity the two do not have. (A blend of ĝ instead cannot leave the side of h̄ it
+/// starts on — ĝ would have to reach ±1 — so where the field before the edit crossed its own
+/// highlight near the curve, no grain realised it without singular triangles.) The lift is
+/// grown from the smallest steps first and shifted by whole periods for the smallest turn.
+fn designed_grain(
+    ctx: &Context,
+    st: &State,
+    tube: &Tube,
+    side: f64,
+) -> (Vec<Option<(f64, f64)>>, f64) {
+    use std::f64::consts::{PI, TAU};
+    let Tube { found, orient, signed, sigma, radius, width } = *tube;
+    let n = found.len();
+    let line_field = ctx.symmetry == crate::highlight::Symmetry::Line;
+    let period = if line_field { PI } else { TAU };
+    let wrap = |x: f64, p: f64| x - p * (x / p).round();
+    // θ (the angle of h̄) and D (the turn from the field before the edit to the profile).
+    let mut theta = vec![f64::NAN; n];
+    let mut turn = vec![f64::NAN; n];
+    for i in 0..n {
+        let Some(h) = &found[i] else { continue };
+        let hb = ctx.geom.frames[i].to_local(&st.h[i]);
+        if !(hb.norm() > MIN_TANGENT_H) || st.critical[i] {
+            continue;
+        }
+        theta[i] = hb.y.atan2(hb.x);
+        let psi0 = st.phi[i] + if orient[i] < 0.0 { PI } else { 0.0 } - theta[i];
+        let profile = (sigma[h.line] * (signed[i] / width).tanh()).clamp(-1.0, 1.0);
+        let d = wrap(side * profile.acos() - psi0, TAU);
+        turn[i] = if d.is_finite() { d } else { f64::NAN };
+    }
+    // Lift D over each connected piece of the tube: Prim's order on the smallest steps.
+    let mut lift = vec![f64::NAN; n];
+    let mut cost = 0.0;
+    for seed in 0..n {
+        if turn[seed].is_nan() || !lift[seed].is_nan() {
+            continue;
+        }
+        lift[seed] = wrap(turn[seed], period);
+        let mut piece = vec![seed];
+        // (−|step|, Reverse(vertex), value): the smallest step first, ties by the lower vertex.
+        let mut heap = std::collections::BinaryHeap::new();
+        let push = |heap: &mut std::collections::BinaryHeap<_>, i: usize, lift: &[f64]| {
+            for &j in ctx.geom.adjacency.neighbors(i) {
+                let j = j as usize;
+                if turn[j].is_nan() || !lift[j].is_nan() {
+                    continue;
+                }
+                let step = wrap(turn[j] - turn[i], period);
+                heap.push((Clarity(-step.abs()), std::cmp::Reverse(j), Clarity(lift[i] + step)));
+            }
+        };
+        push(&mut heap, seed, &lift);
+        while let Some((_, std::cmp::Reverse(j), Clarity(v))) = heap.pop() {
+            if lift[j].is_nan() {
+                lift[j] = v;
+                piece.push(j);
+                push(&mut heap, j, &lift);
+            }
+        }
+        // The whole number of periods that makes the weighted turn smallest.
+        let (mut num, mut den) = (0.0, 0.0);
+        for &i in &piece {
+            let b = found[i].map_or(0.0, |h| blend(h.distance, radius));
+            let w = b * b * ctx.geom.areas[i].max(0.0);
+            num += w * lift[i];
+            den += w;
+        }
+        let shift = if den > 0.0 { period * (num / den / period).round() } else { 0.0 };
+        for &i in &piece {
+            lift[i] -= shift;
+            let b = found[i].map_or(0.0, |h| blend(h.distance, radius));
+            cost += ctx.geom.areas[i].max(0.0) * (b * lift[i]).powi(2);
+        }
+    }
+    let design = (0..n)
+        .map(|i| {
+            let h = found[i]?;
+            if !lift[i].is_finite() {
+                return None;
+            }
+            let phi = st.phi[i] + blend(h.distance, radius) * lift[i];
+            let g = (phi - theta[i]).cos();
+            (phi.is_finite() && g.is_finite()).then_some((phi, g))
+        })
+        .collect();
+    (design, cost)
+}
+
+/// |h̄| below which the curve tool leaves a vertex's grain alone (a critical point, h ∥ n).
+const MIN_TANGENT_H: f64 = 1e-6;
 
 /// Per vertex, the closest 3D polyline within `radius`.
 fn space_targets(ctx: &Context, lines: &[Vec<Vector3<f64>>], radius: f64) -> Vec<Option<Hit>> {

@@ -141,8 +141,12 @@ pub fn validate_edits(edits: &[Edit]) -> Result<()> {
 /// What [`apply_edits`] produces: the inputs of the optimizer.
 #[derive(Clone, Debug)]
 pub struct EditResult {
-    /// The grain angles after the stencils (the optimizer's starting field).
+    /// The grain angles after the stencils, with the curve tool's designed grain inside its
+    /// tubes (docs/math.md §9): the optimizer's starting field.
     pub phi: Vec<f64>,
+    /// The grain angles after the stencils alone: the field the edits' fidelity figures
+    /// compare against (`phi` without the curve tool's designed grain).
+    pub phi_before: Vec<f64>,
     /// The lighting after the light tools.
     pub lighting: Lighting,
     /// The half vectors of `lighting`.
@@ -467,6 +471,8 @@ pub(crate) struct State {
     pub support: Vec<bool>,
     /// Set by move_light: the untargeted vertices keep the old light's ℓ from then on.
     pub pinned: bool,
+    /// The angle a vertex had before the curve tool designed its grain (`None`: not designed).
+    pub designed: Vec<Option<f64>>,
 }
 
 impl State {
@@ -493,6 +499,7 @@ impl State {
             edit_weight_g: vec![None; n],
             support: vec![false; n],
             pinned: false,
+            designed: vec![None; n],
         }
     }
 
@@ -575,8 +582,11 @@ impl State {
                 message: format!("the grain angle of vertex {i} is not finite"),
             });
         }
+        let phi_before =
+            self.phi.iter().zip(&self.designed).map(|(p, d)| d.unwrap_or(*p)).collect();
         Ok(EditResult {
             phi: self.phi,
+            phi_before,
             lighting: self.lighting,
             h: self.h,
             h_gradient: self.h_gradient,

@@ -3,8 +3,9 @@
 //! The grain lives on vertices and the highlight a designer sees is the zero set of its linear
 //! interpolant per triangle, so a warp or a drawn curve that bends within one triangle cannot
 //! be followed, whatever the solver does. Each bend and expand asks for edges no longer than
-//! `edge` × its radius on the faces that reach into its ball; each curve asks for `edge` ×
-//! min(radius, width) on the faces that reach into its tube. Stencils and the light tools set
+//! `edge` × its radius on the faces that reach into its ball; each curve asks for
+//! `edge` × 3/8 × min(radius, width) on the faces that reach into its tube (its designed grain
+//! turns across half the tube: `CURVE_EDGE`). Stencils and the light tools set
 //! directions, not positions, and ask for nothing.
 //!
 //! The regions are Euclidean balls and tubes: they contain the geodesic supports the tools
@@ -35,6 +36,13 @@ pub const MIN_REACH_SHARE: f64 = 0.005;
 /// Most points a curve is sampled at when its tube holds no vertex (the work of marking the
 /// faces is at most this many closest-point queries per face near the curve).
 const MAX_SAMPLES: usize = 100_000;
+
+/// A curve's edge relative to a brush's: the grain the curve tool designs turns back to the
+/// field before the edit across the outer half of its tube (up to a half-turn for a line field,
+/// more where the lift needs it), and a turn of more than a right angle along one edge is no
+/// longer a grain but a singular triangle. With the default `edge` of 1/3 this gives r/8:
+/// about four edges across the ring (docs/math.md §9, docs/benchmarks.md session 12).
+const CURVE_EDGE: f64 = 3.0 / 8.0;
 
 /// One region of an edit: a polyline (one point for a brush) and its reach, and the edge
 /// length wanted inside it.
@@ -88,7 +96,7 @@ fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
                 crate::fidelity::lift_uv_polylines(mesh, &uv)
             };
             let width = c.width.unwrap_or(c.radius).min(c.radius);
-            Some(Region { lines, reach: c.radius, edge: width })
+            Some(Region { lines, reach: c.radius, edge: width * CURVE_EDGE })
         }
         Edit::Stencil(_) | Edit::Light(_) | Edit::MoveLight(_) => None,
     })
@@ -311,11 +319,12 @@ mod tests {
             })
         };
         let t = edit_resolution(&m, &[curve(0.25)], 0.5).unwrap();
-        assert!(t.iter().all(|v| (v - 1.0).abs() < 1e-12), "{t:?}");
+        assert!(t.iter().all(|v| (v - 2.0 * 0.5 * CURVE_EDGE).abs() < 1e-12), "{t:?}");
         let t = edit_resolution(&m, &[curve(10.0)], 0.5).unwrap();
         assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
     }
 
+    /// min(radius, width) × edge × [`CURVE_EDGE`]: 0.3 × 0.5 × 3/8.
     #[test]
     fn a_curve_asks_for_the_smaller_of_radius_and_width_along_its_tube() {
         let m = strip();
@@ -329,7 +338,7 @@ mod tests {
             width: Some(0.3),
         });
         let t = edit_resolution(&m, &[curve], 0.5).unwrap();
-        assert!((t[0] - 0.15).abs() < 1e-12);
+        assert!((t[0] - 0.05625).abs() < 1e-12, "{}", t[0]);
         assert!(t[19].is_infinite());
     }
 }

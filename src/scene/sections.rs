@@ -56,7 +56,8 @@ pub struct RefineSettings {
     /// triangles as they are.
     #[serde(default)]
     pub mode: RefineMode,
-    /// The longest edge allowed inside a brush, as a fraction of its radius (default 1/3).
+    /// The longest edge allowed inside a brush, as a fraction of its radius (default 1/3; a
+    /// curve: ⅜ of this fraction of the smaller of its radius and `width`, r/8 by default).
     #[serde(default = "default_refine_edge")]
     pub edge: f64,
     /// Most vertices refinement may add (default 2,000,000); past it the scene is refused.
