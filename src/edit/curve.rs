@@ -255,8 +255,7 @@ pub(crate) fn apply(
         // The optimizer starts from the designed grain (the fidelity figures compare against
         // the grain before it: `State::designed`).
         if let Some(phi) = design[i] {
-            st.designed[i].get_or_insert(st.phi[i]);
-            st.phi[i] = phi;
+            st.design(ctx, i, phi);
         }
         // The position rows keep the full weight over the tube: their target itself blends
         // into the current field at the tube's edge.
@@ -275,7 +274,6 @@ pub(crate) fn apply(
         st.set_target(i, t.normalize() * len, w);
         count += 1;
     }
-    st.refresh(ctx, false);
     report.vertices = count;
     report.critical_vertices = critical;
     if critical > 0 {

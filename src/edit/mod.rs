@@ -526,6 +526,16 @@ impl State {
         }
     }
 
+    /// Sets vertex `i`'s grain to the angle an edit designed for it (the optimizer's start;
+    /// the grain before is kept for the fidelity figures). Only ĝ is brought up to date: ℓ,
+    /// and with it every vertex's "keep the current ℓ" target, stays the field's before the
+    /// design, as the tensor energy's targets outside the brushes must.
+    pub fn design(&mut self, ctx: &Context, i: usize, phi: f64) {
+        self.designed[i].get_or_insert(self.phi[i]);
+        self.phi[i] = phi;
+        self.g[i] = g_hat(&ctx.geom.frames[i], phi, &self.h[i]);
+    }
+
     /// Sets the position target of vertex `i` from an edit of weight `w`.
     pub fn set_target_g(&mut self, i: usize, g: f64, w: f64) {
         self.target_g[i] = g;

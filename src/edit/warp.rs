@@ -166,6 +166,54 @@ impl WarpEdit {
     }
 }
 
+/// The grain a warp asks for at vertex `v`, designed as an angle (docs/math.md §9, "bend /
+/// expand"): the grain's angle from h̄ at W⁻¹(p), ψ* (the corners' unit vectors (cos ψ, sin ψ)
+/// interpolated barycentrically, a line field's corners in the orientation of v's grain), put
+/// back at v: φ* = θ(h̄ᵥ) + ψ*, with ĝ* = cos ψ*. Its zero set is the one of the interpolated ĝ
+/// (the cosine's sign is the interpolated vector's x), so W(C0) is the same; but it also says
+/// on which side of h̄ the grain lies, as the field before the edit did at W⁻¹(p), which ĝ alone
+/// does not: rows alone let neighbours take mirrored grains. `None` at a critical point, or
+/// where the corners disagree by so much that the interpolated vector is short (the grain turns
+/// within one triangle there), or where a corner's target is not its grain's ĝ (after a
+/// move_light): the vertex keeps its grain and the interpolated ĝ.
+fn pulled_back_grain(
+    ctx: &Context,
+    st: &State,
+    locator: &PlaneLocator,
+    q: &Vector2<f64>,
+    pos: &nalgebra::Vector3<f64>,
+    v: usize,
+    sign: &impl Fn(usize) -> f64,
+) -> Option<(f64, f64)> {
+    let theta = |i: usize| {
+        let hb = ctx.geom.frames[i].to_local(&st.h[i]);
+        (hb.norm() > 1e-6 && !st.critical[i]).then(|| hb.y.atan2(hb.x))
+    };
+    let theta_v = theta(v)?;
+    let ((f, b), _) = locator.locate_or_nearest(ctx, q, pos);
+    let mut sum = Vector2::zeros();
+    for (k, &c) in ctx.mesh.faces[f].iter().enumerate() {
+        let c = c as usize;
+        // The grain stands for the target only where an earlier edit did not set one apart
+        // from it (a move_light keeps the old light's ĝ as the target).
+        if !((st.g[c] - st.target_g[c]).abs() <= 1e-6) {
+            return None;
+        }
+        let flip = if sign(c) < 0.0 { std::f64::consts::PI } else { 0.0 };
+        let psi = st.phi[c] + flip - theta(c)?;
+        sum += Vector2::new(psi.cos(), psi.sin()) * b[k];
+    }
+    if !(sum.norm() > 0.5) {
+        return None;
+    }
+    let psi = sum.y.atan2(sum.x);
+    // The representative of θ + ψ* nearest the vertex's own angle.
+    let a = theta_v + psi;
+    let tau = std::f64::consts::TAU;
+    let phi = a + tau * ((st.phi[v] - a) / tau).round();
+    (phi.is_finite() && psi.is_finite()).then_some((phi, psi.cos()))
+}
+
 /// Applies a warp edit to the state.
 pub(crate) fn apply(
     ctx: &Context,
@@ -213,11 +261,18 @@ pub(crate) fn apply(
         if !inside {
             outside += 1;
         }
-        targets.push((v, new, g_new));
+        let design = pulled_back_grain(ctx, st, &locator, &q, &pos, v, &sign);
+        targets.push((v, new, g_new, design));
     }
-    for &(v, t, g) in &targets {
+    for &(v, t, g, design) in &targets {
         st.set_target(v, t, e.weight);
-        st.set_target_g(v, g, e.weight);
+        match design {
+            Some((phi, g)) => {
+                st.design(ctx, v, phi);
+                st.set_target_g(v, g, e.weight);
+            }
+            None => st.set_target_g(v, g, e.weight),
+        }
     }
     for &v in &support.vertices {
         st.support[v] = true;
