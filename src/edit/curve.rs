@@ -254,12 +254,13 @@ pub(crate) fn apply(
         }
         // The optimizer starts from the designed grain (the fidelity figures compare against
         // the grain before it: `State::designed`).
-        if let Some(phi) = design[i] {
-            st.design(ctx, i, phi);
-        }
-        // The position rows keep the full weight over the tube: their target itself blends
-        // into the current field at the tube's edge.
-        st.set_target_g(i, profile[i], e.weight);
+        // The position rows keep the full weight over the tube: their target itself turns
+        // back into the current field at the tube's edge.
+        let g = match design[i] {
+            Some(phi) => st.design(ctx, i, phi),
+            None => profile[i],
+        };
+        st.set_target_g(i, g, e.weight);
         if hit.distance >= e.radius {
             continue;
         }

@@ -527,13 +527,20 @@ impl State {
     }
 
     /// Sets vertex `i`'s grain to the angle an edit designed for it (the optimizer's start;
-    /// the grain before is kept for the fidelity figures). Only ĝ is brought up to date: ℓ,
+    /// the grain before is kept for the fidelity figures) and returns its ĝ, the position
+    /// target it meets. Only ĝ is brought up to date: ℓ,
     /// and with it every vertex's "keep the current ℓ" target, stays the field's before the
     /// design, as the tensor energy's targets outside the brushes must.
-    pub fn design(&mut self, ctx: &Context, i: usize, phi: f64) {
+    ///
+    /// A grain within acos(0.995) of ±h̄ is turned out to that angle (on its own side of h̄):
+    /// the position rows' targets are clamped there ([`crate::solve::position_term::TARGET_BOUND`]),
+    /// so the designed grain meets its row exactly and the solve has nothing left to do.
+    pub fn design(&mut self, ctx: &Context, i: usize, phi: f64) -> f64 {
+        let phi = clamp_design(&ctx.geom.frames[i], phi, &self.h[i]);
         self.designed[i].get_or_insert(self.phi[i]);
         self.phi[i] = phi;
         self.g[i] = g_hat(&ctx.geom.frames[i], phi, &self.h[i]);
+        self.g[i]
     }
 
     /// Sets the position target of vertex `i` from an edit of weight `w`.
@@ -607,6 +614,27 @@ impl State {
             support: self.support,
             reports,
         })
+    }
+}
+
+/// The grain angle `phi` turned, if need be, to within [`crate::solve::position_term::TARGET_BOUND`]
+/// of ±h̄ in cosine, on its side of h̄ (unchanged where h̄ vanishes).
+fn clamp_design(frame: &crate::geometry::Frame, phi: f64, h: &Vector3<f64>) -> f64 {
+    let bound = crate::solve::position_term::TARGET_BOUND;
+    let hb = frame.to_local(h);
+    if !(hb.norm() > 0.0) {
+        return phi;
+    }
+    let tau = std::f64::consts::TAU;
+    let psi = phi - hb.y.atan2(hb.x);
+    let psi = psi - tau * (psi / tau).round();
+    let clamped = psi.cos().clamp(-bound, bound).acos();
+    let turned = if psi < 0.0 { -clamped } else { clamped };
+    let out = phi + (turned - psi);
+    if out.is_finite() {
+        out
+    } else {
+        phi
     }
 }
 

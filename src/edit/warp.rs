@@ -169,13 +169,14 @@ impl WarpEdit {
 /// The grain a warp asks for at vertex `v`, designed as an angle (docs/math.md §9, "bend /
 /// expand"): the grain's angle from h̄ at W⁻¹(p), ψ* (the corners' unit vectors (cos ψ, sin ψ)
 /// interpolated barycentrically, a line field's corners in the orientation of v's grain), put
-/// back at v: φ* = θ(h̄ᵥ) + ψ*, with ĝ* = cos ψ*. Its zero set is the one of the interpolated ĝ
-/// (the cosine's sign is the interpolated vector's x), so W(C0) is the same; but it also says
-/// on which side of h̄ the grain lies, as the field before the edit did at W⁻¹(p), which ĝ alone
-/// does not: rows alone let neighbours take mirrored grains. `None` at a critical point, or
-/// where the corners disagree by so much that the interpolated vector is short (the grain turns
-/// within one triangle there), or where a corner's target is not its grain's ĝ (after a
-/// move_light): the vertex keeps its grain and the interpolated ĝ.
+/// back at v: φ* = θ(h̄ᵥ) + ψ*, whose ĝ = cos ψ* is the target ([`State::design`]). Its zero
+/// set is the one of the interpolated ĝ (the cosine's sign is the interpolated vector's x), so
+/// W(C0) is the same; but it also says on which side of h̄ the grain lies, as the field before
+/// the edit did at W⁻¹(p), which ĝ alone does not: rows alone let neighbours take mirrored
+/// grains. `None` at a critical point, where the corners disagree by so much that the
+/// interpolated vector is short (the grain turns within one triangle there), or where a
+/// corner's target is not its grain's ĝ (after a move_light): the vertex keeps its grain and
+/// the interpolated ĝ.
 fn pulled_back_grain(
     ctx: &Context,
     st: &State,
@@ -184,7 +185,7 @@ fn pulled_back_grain(
     pos: &nalgebra::Vector3<f64>,
     v: usize,
     sign: &impl Fn(usize) -> f64,
-) -> Option<(f64, f64)> {
+) -> Option<f64> {
     let theta = |i: usize| {
         let hb = ctx.geom.frames[i].to_local(&st.h[i]);
         (hb.norm() > 1e-6 && !st.critical[i]).then(|| hb.y.atan2(hb.x))
@@ -211,7 +212,7 @@ fn pulled_back_grain(
     let a = theta_v + psi;
     let tau = std::f64::consts::TAU;
     let phi = a + tau * ((st.phi[v] - a) / tau).round();
-    (phi.is_finite() && psi.is_finite()).then_some((phi, psi.cos()))
+    phi.is_finite().then_some(phi)
 }
 
 /// Applies a warp edit to the state.
@@ -267,8 +268,8 @@ pub(crate) fn apply(
     for &(v, t, g, design) in &targets {
         st.set_target(v, t, e.weight);
         match design {
-            Some((phi, g)) => {
-                st.design(ctx, v, phi);
+            Some(phi) => {
+                let g = st.design(ctx, v, phi);
                 st.set_target_g(v, g, e.weight);
             }
             None => st.set_target_g(v, g, e.weight),

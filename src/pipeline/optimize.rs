@@ -93,11 +93,12 @@ fn edit_input(p: &Prepared) -> EditInput<'_> {
 }
 
 /// The regularization ε of the tensor energy: [`default_epsilon`] of |m| of the field before
-/// the solve (the optimizer's input, after the stencils) under the edits' lighting.
+/// the solve (after the stencils, without the tools' designed grain) under the edits' lighting.
 fn epsilon_before(p: &Prepared, er: &EditResult) -> f64 {
     let g = &p.field.geometry;
     let (symmetry, form) = (p.field_options.symmetry, p.field_options.gradient_form);
-    let before = highlight_field_near(g, &er.phi, symmetry, form, &er.h, er.h_gradient.as_deref());
+    let phi = &er.phi_before;
+    let before = highlight_field_near(g, phi, symmetry, form, &er.h, er.h_gradient.as_deref());
     let m_norms: Vec<f64> = before.m.iter().map(|m| m.norm()).collect();
     default_epsilon(&m_norms)
 }
@@ -196,9 +197,9 @@ fn finish_optimized(
 pub struct DragBase {
     edits: EditBase,
     options: EditOptions,
-    /// φ, h and G after the committed edits: a dragged edit that leaves them as they are (a
-    /// warp, a curve) reuses ε and the critical points below.
-    phi: Vec<f64>,
+    /// φ before the designed grain, h and G after the committed edits: a dragged edit that
+    /// leaves them as they are (a warp, a curve) reuses ε and the critical points below.
+    phi_before: Vec<f64>,
     h: Vec<Vector3<f64>>,
     h_gradient: Option<Vec<Matrix2<f64>>>,
     epsilon: f64,
@@ -241,7 +242,7 @@ impl DragBase {
         Ok(DragBase {
             edits,
             options,
-            phi: er.phi,
+            phi_before: er.phi_before,
             h: er.h,
             h_gradient: er.h_gradient,
             epsilon,
@@ -260,7 +261,8 @@ impl DragBase {
             .edits
             .then(&edit_input(p), more, &self.options)
             .map_err(|e| crate::scene::prefix("edits", e))?;
-        let same_field = er.phi == self.phi && er.h == self.h && er.h_gradient == self.h_gradient;
+        let same_field =
+            er.phi_before == self.phi_before && er.h == self.h && er.h_gradient == self.h_gradient;
         let epsilon = if same_field { self.epsilon } else { epsilon_before(p, &er) };
         let reuse = OptimizeReuse {
             cotan_weights: Some(self.cotan_weights.clone()),

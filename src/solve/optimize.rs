@@ -342,6 +342,14 @@ pub fn optimize_with(
     if let Some(coherent) = coherent_start(term, &given.1, &free_list) {
         candidates.insert(0, (StartChoice::CoherentBranch, coherent));
     }
+    // The energy of a unit residual on every free row, Σ wᵢAᵢ: a run that ends below a
+    // negligible fraction of it has met its rows to round-off, however small the start's own
+    // energy was (an edit's designed grain starts the solve near zero energy).
+    let unit_energy: f64 = free_list
+        .iter()
+        .map(|&v| (term.weight[v as usize] * g.areas[v as usize]).max(0.0))
+        .filter(|e| e.is_finite())
+        .sum();
     let mut best: Option<(StartChoice, Run)> = None;
     let mut starts_tried = 0;
     for (choice, start) in candidates {
@@ -354,7 +362,7 @@ pub fn optimize_with(
             best = Some((choice, run));
         }
         let scale = if coherent { given_energy.max(e0) } else { e0 };
-        if e1 <= NEGLIGIBLE_ENERGY * scale {
+        if e1 <= NEGLIGIBLE_ENERGY * scale || e1 <= NEGLIGIBLE_ENERGY * unit_energy {
             break;
         }
     }
