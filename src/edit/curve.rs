@@ -252,10 +252,9 @@ pub(crate) fn apply(
             critical += 1;
             continue;
         }
-        // The optimizer starts from the designed grain (the fidelity figures compare against
-        // the grain before it: `State::designed`).
-        // The position rows keep the full weight over the tube: their target itself turns
-        // back into the current field at the tube's edge.
+        // The optimizer starts from the designed grain, which meets its position row; the rows
+        // keep the full weight over the tube, as the grain itself turns back into the current
+        // field at the tube's edge.
         let g = match design[i] {
             Some(phi) => st.design(ctx, i, phi),
             None => profile[i],
@@ -347,9 +346,10 @@ impl Ord for Clarity {
     }
 }
 
-/// The position target ĝ* of every vertex with a hit (module docs, "Position"), with the
-/// designed grain φ* it is stated for ([`designed_grain`]; `None` where the vertex keeps its
-/// grain); other entries are the current targets.
+/// Per vertex, the designed grain φ* ([`designed_grain`]), or where there is none (no hit, or
+/// h̄ vanishes) the position target ĝ* (module docs, "Position"; the current target without a
+/// hit). A designed vertex's ĝ entry is unused (its current target): its target is the ĝ of
+/// φ* ([`State::design`]).
 fn position_profile(
     ctx: &Context,
     st: &State,
@@ -420,7 +420,7 @@ fn position_profile(
     let design = if designs[1].1 < designs[0].1 { &designs[1].0 } else { &designs[0].0 };
     (0..n)
         .map(|i| match (&found[i], design[i]) {
-            (Some(_), Some((phi, g))) => (g, Some(phi)),
+            (Some(_), Some(phi)) => (st.target_g[i], Some(phi)),
             (Some(h), None) => {
                 let b = blend(h.distance, radius);
                 let wanted = sigma[h.line] * orient[i] * (signed[i] / width).tanh();
@@ -444,7 +444,7 @@ struct Tube<'a> {
 }
 
 /// The grain the curve asks for over its tube, designed as angles (docs/math.md §9, "curve"):
-/// per vertex `(φ*, ĝ*)` (`None` where h̄ vanishes: a critical point), and the squared turn
+/// per vertex φ* (`None` where h̄ vanishes: a critical point), and the squared turn
 /// Σ A (φ* − φ)² it costs.
 ///
 /// In the core the grain is the profile's: ψ_c = s arccos(σ o tanh(d/width)) from h̄ on the
@@ -456,31 +456,23 @@ struct Tube<'a> {
 /// starts on — ĝ would have to reach ±1 — so where the field before the edit crossed its own
 /// highlight near the curve, no grain realised it without singular triangles.) The lift is
 /// grown from the smallest steps first and shifted by whole periods for the smallest turn.
-fn designed_grain(
-    ctx: &Context,
-    st: &State,
-    tube: &Tube,
-    side: f64,
-) -> (Vec<Option<(f64, f64)>>, f64) {
+fn designed_grain(ctx: &Context, st: &State, tube: &Tube, side: f64) -> (Vec<Option<f64>>, f64) {
+    use crate::geometry::connection::wrap_angle;
     use std::f64::consts::{PI, TAU};
     let Tube { found, orient, signed, sigma, radius, width } = *tube;
     let n = found.len();
     let line_field = ctx.symmetry == crate::highlight::Symmetry::Line;
     let period = if line_field { PI } else { TAU };
-    let wrap = |x: f64, p: f64| x - p * (x / p).round();
-    // θ (the angle of h̄) and D (the turn from the field before the edit to the profile).
-    let mut theta = vec![f64::NAN; n];
+    // Wrapped to (−period/2, period/2].
+    let k = TAU / period;
+    let wrap = |x: f64| wrap_angle(k * x) / k;
+    // D, the turn from the field before the edit to the profile (NaN where h̄ vanishes).
     let mut turn = vec![f64::NAN; n];
     for i in 0..n {
-        let Some(h) = &found[i] else { continue };
-        let hb = ctx.geom.frames[i].to_local(&st.h[i]);
-        if !(hb.norm() > MIN_TANGENT_H) || st.critical[i] {
-            continue;
-        }
-        theta[i] = hb.y.atan2(hb.x);
-        let psi0 = st.phi[i] + if orient[i] < 0.0 { PI } else { 0.0 } - theta[i];
+        let (Some(h), Some(theta)) = (&found[i], st.h_angle(ctx, i)) else { continue };
+        let psi0 = st.phi[i] + if orient[i] < 0.0 { PI } else { 0.0 } - theta;
         let profile = (sigma[h.line] * (signed[i] / width).tanh()).clamp(-1.0, 1.0);
-        let d = wrap(side * profile.acos() - psi0, TAU);
+        let d = wrap_angle(side * profile.acos() - psi0);
         turn[i] = if d.is_finite() { d } else { f64::NAN };
     }
     // Lift D over each connected piece of the tube: Prim's order on the smallest steps.
@@ -490,7 +482,7 @@ fn designed_grain(
         if turn[seed].is_nan() || !lift[seed].is_nan() {
             continue;
         }
-        lift[seed] = wrap(turn[seed], period);
+        lift[seed] = wrap(turn[seed]);
         let mut piece = vec![seed];
         // (−|step|, Reverse(vertex), value): the smallest step first, ties by the lower vertex.
         let mut heap = std::collections::BinaryHeap::new();
@@ -500,7 +492,7 @@ fn designed_grain(
                 if turn[j].is_nan() || !lift[j].is_nan() {
                     continue;
                 }
-                let step = wrap(turn[j] - turn[i], period);
+                let step = wrap(turn[j] - turn[i]);
                 heap.push((Clarity(-step.abs()), std::cmp::Reverse(j), Clarity(lift[i] + step)));
             }
         };
@@ -534,15 +526,11 @@ fn designed_grain(
                 return None;
             }
             let phi = st.phi[i] + blend(h.distance, radius) * lift[i];
-            let g = (phi - theta[i]).cos();
-            (phi.is_finite() && g.is_finite()).then_some((phi, g))
+            phi.is_finite().then_some(phi)
         })
         .collect();
     (design, cost)
 }
-
-/// |h̄| below which the curve tool leaves a vertex's grain alone (a critical point, h ∥ n).
-const MIN_TANGENT_H: f64 = 1e-6;
 
 /// Per vertex, the closest 3D polyline within `radius`.
 fn space_targets(ctx: &Context, lines: &[Vec<Vector3<f64>>], radius: f64) -> Vec<Option<Hit>> {

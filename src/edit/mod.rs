@@ -141,11 +141,11 @@ pub fn validate_edits(edits: &[Edit]) -> Result<()> {
 /// What [`apply_edits`] produces: the inputs of the optimizer.
 #[derive(Clone, Debug)]
 pub struct EditResult {
-    /// The grain angles after the stencils, with the curve tool's designed grain inside its
-    /// tubes (docs/math.md §9): the optimizer's starting field.
+    /// The grain angles after the stencils, with the grain the curve, bend and expand tools
+    /// designed inside their supports (docs/math.md §9): the optimizer's starting field.
     pub phi: Vec<f64>,
     /// The grain angles after the stencils alone: the field the edits' fidelity figures
-    /// compare against (`phi` without the curve tool's designed grain).
+    /// compare against (`phi` without the designed grain).
     pub phi_before: Vec<f64>,
     /// The lighting after the light tools.
     pub lighting: Lighting,
@@ -471,7 +471,7 @@ pub(crate) struct State {
     pub support: Vec<bool>,
     /// Set by move_light: the untargeted vertices keep the old light's ℓ from then on.
     pub pinned: bool,
-    /// The angle a vertex had before the curve tool designed its grain (`None`: not designed).
+    /// The angle a vertex had before an edit designed its grain (`None`: not designed).
     pub designed: Vec<Option<f64>>,
 }
 
@@ -528,19 +528,27 @@ impl State {
 
     /// Sets vertex `i`'s grain to the angle an edit designed for it (the optimizer's start;
     /// the grain before is kept for the fidelity figures) and returns its ĝ, the position
-    /// target it meets. Only ĝ is brought up to date: ℓ,
-    /// and with it every vertex's "keep the current ℓ" target, stays the field's before the
-    /// design, as the tensor energy's targets outside the brushes must.
+    /// target it meets. Only ĝ is brought up to date: ℓ, and with it every vertex's "keep the
+    /// current ℓ" target, stays the field's before the design, as the tensor energy's targets
+    /// outside the brushes must.
     ///
     /// A grain within acos(0.995) of ±h̄ is turned out to that angle (on its own side of h̄):
-    /// the position rows' targets are clamped there ([`crate::solve::position_term::TARGET_BOUND`]),
-    /// so the designed grain meets its row exactly and the solve has nothing left to do.
+    /// the position rows' targets are clamped there
+    /// ([`crate::solve::position_term::TARGET_BOUND`]), so the designed grain meets its row
+    /// exactly and the solve has nothing left to do.
     pub fn design(&mut self, ctx: &Context, i: usize, phi: f64) -> f64 {
-        let phi = clamp_design(&ctx.geom.frames[i], phi, &self.h[i]);
+        let phi = self.h_angle(ctx, i).map_or(phi, |theta| clamp_design(phi, theta));
         self.designed[i].get_or_insert(self.phi[i]);
         self.phi[i] = phi;
         self.g[i] = g_hat(&ctx.geom.frames[i], phi, &self.h[i]);
         self.g[i]
+    }
+
+    /// The angle θ of h̄ (the tangent part of h) in vertex `i`'s frame; `None` at a critical
+    /// point or where h̄ (nearly) vanishes, where no grain moves the highlight.
+    pub fn h_angle(&self, ctx: &Context, i: usize) -> Option<f64> {
+        let hb = ctx.geom.frames[i].to_local(&self.h[i]);
+        (hb.norm() > MIN_TANGENT_H && !self.critical[i]).then(|| hb.y.atan2(hb.x))
     }
 
     /// Sets the position target of vertex `i` from an edit of weight `w`.
@@ -617,17 +625,16 @@ impl State {
     }
 }
 
-/// The grain angle `phi` turned, if need be, to within [`crate::solve::position_term::TARGET_BOUND`]
-/// of ±h̄ in cosine, on its side of h̄ (unchanged where h̄ vanishes).
-fn clamp_design(frame: &crate::geometry::Frame, phi: f64, h: &Vector3<f64>) -> f64 {
+/// |h̄| (of a unit h) below which an edit leaves a vertex's grain alone: h ∥ n, every grain
+/// puts the highlight through it.
+const MIN_TANGENT_H: f64 = 1e-6;
+
+/// The grain angle `phi` turned, if need be, to within
+/// [`crate::solve::position_term::TARGET_BOUND`] of ±h̄ in cosine (h̄ at angle `theta`), on its
+/// side of h̄.
+fn clamp_design(phi: f64, theta: f64) -> f64 {
     let bound = crate::solve::position_term::TARGET_BOUND;
-    let hb = frame.to_local(h);
-    if !(hb.norm() > 0.0) {
-        return phi;
-    }
-    let tau = std::f64::consts::TAU;
-    let psi = phi - hb.y.atan2(hb.x);
-    let psi = psi - tau * (psi / tau).round();
+    let psi = crate::geometry::connection::wrap_angle(phi - theta);
     let clamped = psi.cos().clamp(-bound, bound).acos();
     let turned = if psi < 0.0 { -clamped } else { clamped };
     let out = phi + (turned - psi);

@@ -186,11 +186,7 @@ fn pulled_back_grain(
     v: usize,
     sign: &impl Fn(usize) -> f64,
 ) -> Option<f64> {
-    let theta = |i: usize| {
-        let hb = ctx.geom.frames[i].to_local(&st.h[i]);
-        (hb.norm() > 1e-6 && !st.critical[i]).then(|| hb.y.atan2(hb.x))
-    };
-    let theta_v = theta(v)?;
+    let theta_v = st.h_angle(ctx, v)?;
     let ((f, b), _) = locator.locate_or_nearest(ctx, q, pos);
     let mut sum = Vector2::zeros();
     for (k, &c) in ctx.mesh.faces[f].iter().enumerate() {
@@ -201,17 +197,15 @@ fn pulled_back_grain(
             return None;
         }
         let flip = if sign(c) < 0.0 { std::f64::consts::PI } else { 0.0 };
-        let psi = st.phi[c] + flip - theta(c)?;
+        let psi = st.phi[c] + flip - st.h_angle(ctx, c)?;
         sum += Vector2::new(psi.cos(), psi.sin()) * b[k];
     }
     if !(sum.norm() > 0.5) {
         return None;
     }
-    let psi = sum.y.atan2(sum.x);
     // The representative of θ + ψ* nearest the vertex's own angle.
-    let a = theta_v + psi;
-    let tau = std::f64::consts::TAU;
-    let phi = a + tau * ((st.phi[v] - a) / tau).round();
+    let a = theta_v + sum.y.atan2(sum.x);
+    let phi = st.phi[v] + crate::geometry::connection::wrap_angle(a - st.phi[v]);
     phi.is_finite().then_some(phi)
 }
 

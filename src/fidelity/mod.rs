@@ -29,8 +29,9 @@
 //! figure is finite. The figures: the share of samples within `tolerance`·r (`within`), the
 //! 95th percentile and the median of the distances (nearest rank), and the singular triangles
 //! ([`crate::solve::singularities()`]) among the faces with a corner in the support (a singular
-//! pair straddling the support's edge is the edit's doing too), before and after. An edit has *landed* when within ≥ [`GOAL_WITHIN`], p95 ≤ [`GOAL_P95`]
-//! and it added no singular triangle.
+//! pair straddling the support's edge is the edit's doing too), before and after. An edit has
+//! *landed* when within ≥ [`GOAL_WITHIN`], p95 ≤ [`GOAL_P95`] and it added no singular
+//! triangle.
 
 // `!(x > 0.0)` is how the measure rejects NaN along with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

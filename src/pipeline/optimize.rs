@@ -18,8 +18,8 @@ use crate::Result;
 pub struct Optimized {
     /// φ after the solve.
     pub phi: Vec<f64>,
-    /// φ after the edits' direct changes (stencils, and the curve tool's designed grain): the
-    /// solve's start.
+    /// φ after the edits' direct changes (stencils, and the grain the curve, bend and expand
+    /// tools designed): the solve's start.
     pub phi_edited: Vec<f64>,
     /// The lighting after the light tools.
     pub lighting: Lighting,
@@ -155,7 +155,7 @@ fn finish_optimized(
     let h = er.h.clone();
     let hg = er.h_gradient.clone();
     let highlight = highlight_field_near(g, &solved.phi, symmetry, form, &h, hg.as_deref());
-    // The field before is the optimizer's input after the stencils (without the curve tool's
+    // The field before is the optimizer's input after the stencils (without the tools'
     // designed grain), under the key light.
     let fidelity = fidelity_of_edits(
         &p.mesh,
