@@ -3,7 +3,9 @@
 //! The grain lives on vertices and the highlight a designer sees is the zero set of its linear
 //! interpolant per triangle, so a warp or a drawn curve that bends within one triangle cannot
 //! be followed, whatever the solver does. Each bend and expand asks for edges no longer than
-//! `edge` × its radius on the faces that reach into its ball; each curve asks for
+//! `edge` × its radius × the warp's largest compression ([`finest_scale`]: the target carries
+//! the field's detail that much closer together) on the faces that reach into its ball; each
+//! curve asks for
 //! `edge` × 3/8 × min(radius, width) on the faces that reach into its tube (its designed grain
 //! turns across half the tube: `CURVE_EDGE`). Stencils and the light tools set
 //! directions, not positions, and ask for nothing.
@@ -25,6 +27,7 @@ use nalgebra::Vector3;
 
 use super::curve::read_svg_polylines;
 use super::support::Centre;
+use super::warp::{finest_scale, WarpKind};
 use super::{at_edit, Edit};
 use crate::mesh::Mesh;
 use crate::Result;
@@ -72,6 +75,7 @@ pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Vec<f64
 fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
     Ok(match e {
         Edit::Bend(w) | Edit::Expand(w) => {
+            let kind = if matches!(e, Edit::Bend(_)) { WarpKind::Bend } else { WarpKind::Expand };
             let p = match &w.centre {
                 Centre::Vertex(i) => match mesh.positions.get(*i as usize) {
                     Some(p) => *p,
@@ -79,7 +83,10 @@ fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
                 },
                 Centre::Point(p) => Vector3::from(*p),
             };
-            Some(Region { lines: vec![vec![p]], reach: w.radius, edge: w.radius })
+            // The warp compresses the highlight pattern by up to `finest_scale`: its target
+            // needs edges that much finer to be as well resolved as the field before it.
+            let edge = w.radius * finest_scale(kind, w.strength);
+            Some(Region { lines: vec![vec![p]], reach: w.radius, edge })
         }
         Edit::Curve(c) => {
             let lines: Vec<Vec<Vector3<f64>>> = if let Some(pts) = &c.points {
@@ -251,12 +258,14 @@ mod tests {
             weight: 1.0,
         });
         let t = edit_resolution(&m, &[bend], 1.0 / 3.0).unwrap();
-        // Faces of squares 1, 2, 3 (centroids within 1 + their reach of x = 2.5) ask for 1/3;
-        // squares 5 and beyond ask for nothing.
+        // Faces of squares 1, 2, 3 (centroids within 1 + their reach of x = 2.5) ask for 1/3
+        // of the radius times the bend's compression, 1 − 0.8 · 4/(3√3); squares 5 and beyond
+        // ask for nothing.
+        let want = (1.0 - 0.8 * 4.0 / (3.0 * 3f64.sqrt())) / 3.0;
         for (f, v) in t.iter().enumerate() {
             let square = f / 2;
             if (1..=3).contains(&square) {
-                assert!((v - 1.0 / 3.0).abs() < 1e-12, "face {f}: {v}");
+                assert!((v - want).abs() < 0.01 * want, "face {f}: {v} vs {want}");
             }
             if square >= 5 {
                 assert!(v.is_infinite(), "face {f}: {v}");
@@ -303,7 +312,8 @@ mod tests {
             })
         };
         let t = edit_resolution(&m, &[brush([50.0, 0.5, 0.0])], 1.0 / 3.0).unwrap();
-        assert!(t.iter().all(|v| (v - 5.0 / 3.0).abs() < 1e-12), "{t:?}");
+        let want = 5.0 / 3.0 * finest_scale(WarpKind::Bend, 0.8);
+        assert!(t.iter().all(|v| (v - want).abs() < 1e-12), "{t:?}");
         let t = edit_resolution(&m, &[brush([50.0, 20.0, 0.0])], 1.0 / 3.0).unwrap();
         assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
         // A curve across the strip's middle, between its vertices, and one 10 above it.

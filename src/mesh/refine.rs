@@ -10,11 +10,13 @@
 //! mesh stays conforming, and since every split starts at a longest edge the angles stay
 //! bounded away from zero (Rivara's longest-edge bisection).
 //!
-//! A new vertex sits at the Phong-tessellation point of its edge (Boubekeur & Alexa 2008,
-//! shape factor 3/4): the midpoint moved towards the tangent planes of the edge's two vertices,
-//! so refinement follows the part's curvature instead of keeping its facets. Across a crease
-//! (vertex normals more than 30° apart) the midpoint stays on the edge. Vertex normals are the
-//! area-weighted normals of the input, carried to new vertices as normalised means.
+//! A new vertex sits at the Phong-tessellation point of its edge (Boubekeur & Alexa 2008)
+//! with shape factor 1/2: the midpoint moved halfway towards the tangent planes of the edge's
+//! two vertices, which puts it on the surface to second order (the paper's visual default 3/4
+//! overshoots by a quarter of the chord's sagitta, and the refined part came out bumpy: its
+//! jet-fitted curvature doubled at new vertices). Across a crease (vertex normals more than 30°
+//! apart) the midpoint stays on the edge. Vertex normals are the input's with Max's weights
+//! (exact on a sphere), carried to new vertices as normalised means.
 //!
 //! The input's vertices keep their indices; new vertices are appended, and each records the
 //! edge it split ([`Refined::parents`]), so per-vertex data can be carried over. Corner
@@ -78,8 +80,8 @@ impl Refined {
 /// Angle between the vertex normals of an edge beyond which its midpoint is not curved.
 const CREASE_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
 
-/// Phong tessellation's shape factor.
-const PHONG_ALPHA: f64 = 0.75;
+/// Phong tessellation's shape factor: ½ is exact to second order (module docs).
+const PHONG_ALPHA: f64 = 0.5;
 
 /// Refines `mesh` until no edge is longer than the smaller `target` of its faces (one target
 /// length per face, scene units; `f64::INFINITY` where nothing is asked). Refuses, naming
@@ -142,14 +144,21 @@ pub fn refine(mesh: &Mesh, target: &[f64], options: &RefineOptions) -> Result<Re
     })
 }
 
-/// Area-weighted vertex normals (zero-area neighbourhoods get +z).
+/// Vertex normals with Max's weights (Max 1999, "Weights for computing vertex normals from
+/// facet normals"): each incident face adds (e₁ × e₂)/(|e₁|²|e₂|²) for its two edges e₁, e₂
+/// out of the vertex, which is exact when the vertex and its neighbours lie on a sphere —
+/// the Phong points of [`State::midpoint`] are only as good as these normals. Zero-area
+/// neighbourhoods get +z.
 fn vertex_normals(mesh: &Mesh) -> Vec<Vector3<f64>> {
     let mut n = vec![Vector3::zeros(); mesh.num_vertices()];
     for f in &mesh.faces {
         let p = f.map(|v| mesh.positions[v as usize]);
-        let a = (p[1] - p[0]).cross(&(p[2] - p[0]));
-        for &v in f {
-            n[v as usize] += a;
+        for k in 0..3 {
+            let (e1, e2) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            let w = e1.norm_squared() * e2.norm_squared();
+            if w > 0.0 && w.is_finite() {
+                n[f[k] as usize] += e1.cross(&e2) / w;
+            }
         }
     }
     n.into_iter().map(|v| v.try_normalize(1e-300).unwrap_or_else(Vector3::z)).collect()
@@ -483,12 +492,12 @@ mod tests {
         let (p, n) = st.midpoint(0, 1);
         // Hand-derived: m = (cos t, 0, 0); (m − pa)·na = cos²t − 1 = −sin²t, so each tangent
         // plane projection is m + sin²t·nᵢ, their mean m + sin²t (cos t, 0, 0), and
-        // m + ¾(p* − m) = (cos t (1 + ¾ sin²t), 0, 0): moved out from the chord (cos t) to
-        // within 1 % of the circle.
-        let want = t.cos() * (1.0 + 0.75 * t.sin().powi(2));
+        // m + ½(p* − m) = (cos t (1 + ½ sin²t), 0, 0) = (1 − 3t⁴/8 + …, 0, 0): moved out from
+        // the chord (cos t, 1.5 % inside) to within 0.04 % of the circle.
+        let want = t.cos() * (1.0 + 0.5 * t.sin().powi(2));
         assert!((p - Vector3::new(want, 0.0, 0.0)).norm() < 1e-12, "{p}");
         assert!((n - Vector3::x()).norm() < 1e-12);
-        assert!((p.norm() - 1.0).abs() < 0.01 && (t.cos() - 1.0).abs() > 0.01);
+        assert!((p.norm() - 1.0).abs() < 4e-4 && (t.cos() - 1.0).abs() > 0.01);
     }
 
     #[test]
