@@ -75,9 +75,9 @@ fn g(p: &Vector3<f64>, u: &Vector3<f64>) -> f64 {
 }
 
 /// Where the highlight of the field `u` crosses the row y ≈ `y` (|Δy| < `band`): the mean x of
-/// the vertex pairs along the row whose g changes sign, each crossing interpolated linearly, and
-/// of the vertices where g is 0.
-fn crossing(pos: &[Vector3<f64>], u: &[Vector3<f64>], y: f64, band: f64) -> Option<f64> {
+/// the vertex pairs along the row, at most `gap` apart, whose g changes sign, each crossing
+/// interpolated linearly, and of the vertices where g is 0.
+fn crossing(pos: &[Vector3<f64>], u: &[Vector3<f64>], y: f64, band: f64, gap: f64) -> Option<f64> {
     let mut row: Vec<usize> = (0..pos.len()).filter(|&i| (pos[i].y - y).abs() < band).collect();
     row.sort_by(|&a, &b| pos[a].x.total_cmp(&pos[b].x));
     let mut xs = Vec::new();
@@ -86,7 +86,7 @@ fn crossing(pos: &[Vector3<f64>], u: &[Vector3<f64>], y: f64, band: f64) -> Opti
         // A line field: align the second grain to the first before comparing signs.
         let ub = if u[a].dot(&u[b]) < 0.0 { -u[b] } else { u[b] };
         let (ga, gb) = (g(&pos[a], &u[a]), g(&pos[b], &ub));
-        if ga * gb < 0.0 && (pos[b].x - pos[a].x) < 5.0 {
+        if ga * gb < 0.0 && (pos[b].x - pos[a].x) < gap {
             xs.push(pos[a].x + (pos[b].x - pos[a].x) * ga / (ga - gb));
         }
     }
@@ -121,14 +121,17 @@ fn a_bend_between_the_vertices_of_two_triangles_refines_them_and_lands() {
     assert!(inside >= 20, "{inside} vertices inside the brush");
     // Before the edit: the highlight is x = 0 on every row that has vertices.
     let band = 1.0;
-    let x0 = crossing(&pos, &before, 0.0, band).expect("a highlight crosses y = 0 before");
+    let x0 = crossing(&pos, &before, 0.0, band, 5.0).expect("a highlight crosses y = 0 before");
     assert!(x0.abs() < 0.3, "before the edit the highlight crosses y = 0 at x = {x0}");
-    // After: unchanged outside the brush, moved across inside it.
-    for y in [-25.0, -15.0, 15.0, 25.0] {
-        let x = crossing(&pos, &u, y, 2.5).expect("a highlight crosses the row outside the brush");
+    // After: unchanged outside the brush — along the panel's edges y = ±30, whose consecutive
+    // vertices share an edge (g is linear along it, however far apart they are: the panel is
+    // refined near the brush only) — and moved across inside it.
+    for y in [-30.0, 30.0] {
+        let x = crossing(&pos, &u, y, 1e-9, f64::INFINITY)
+            .expect("a highlight crosses the panel's edge");
         assert!(x.abs() < 0.5, "outside the brush (y = {y}) the highlight moved to x = {x}");
     }
-    let x1 = crossing(&pos, &u, 0.0, band).expect("a highlight crosses y = 0 after");
+    let x1 = crossing(&pos, &u, 0.0, band, 5.0).expect("a highlight crosses y = 0 after");
     assert!(x1.abs() > 0.8, "the bend did not move the highlight at the centre: x = {x1}");
 }
 

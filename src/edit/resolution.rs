@@ -49,16 +49,73 @@ const CURVE_EDGE: f64 = 3.0 / 8.0;
 
 /// One region of an edit: a polyline (one point for a brush) and its reach, and the edge
 /// length wanted inside it.
+#[derive(Clone, Debug, PartialEq)]
 struct Region {
     lines: Vec<Vec<Vector3<f64>>>,
     reach: f64,
     edge: f64,
 }
 
+/// A region with the edge it asks for, and its segments bucketed for distance queries.
+#[derive(Clone, Debug)]
+struct Marked {
+    region: Region,
+    want: f64,
+    grid: SegmentGrid,
+}
+
+/// What the edits ask of the refinement: the edge each face of the part needs, and the
+/// regions that asked, so that the faces a split makes can be asked again
+/// ([`Resolution::child_target`]). Two requests are equal when their faces' edges and their
+/// regions are: they refine the part the same way.
+#[derive(Clone, Debug)]
+pub struct Resolution {
+    /// The edge length each face of the part needs (`f64::INFINITY` where none asks).
+    pub faces: Vec<f64>,
+    marked: Vec<Marked>,
+}
+
+impl PartialEq for Resolution {
+    fn eq(&self, other: &Self) -> bool {
+        self.faces == other.faces
+            && self.marked.len() == other.marked.len()
+            && self
+                .marked
+                .iter()
+                .zip(&other.marked)
+                .all(|(a, b)| a.region == b.region && a.want == b.want)
+    }
+}
+
+impl Resolution {
+    /// The finest edge asked anywhere (`f64::INFINITY` when no face asks).
+    pub fn finest(&self) -> f64 {
+        self.faces.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+
+    /// The edge a face made by a split needs, from its corners `p`: the smallest `want` of the
+    /// regions it may reach (its centroid within reach + its radius about the centroid of
+    /// their lines, the test the part's own faces were marked by), `f64::INFINITY` when it
+    /// reaches none. A split face's children are asked again, so that a long sliver touched by
+    /// a brush is refined near the brush only, not along its whole length (docs/math.md §12).
+    pub fn child_target(&self, p: &[Vector3<f64>; 3]) -> f64 {
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let rho = p.iter().map(|q| (q - c).norm()).fold(0.0, f64::max);
+        let mut t = f64::INFINITY;
+        for m in &self.marked {
+            if m.want < t && m.grid.within(&c, m.region.reach + rho) {
+                t = m.want;
+            }
+        }
+        t
+    }
+}
+
 /// The edge length each face of `mesh` needs for `edits` (`f64::INFINITY` where none asks),
 /// with `edge` the fraction of a brush radius (or a curve's width) an edge may span.
-pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Vec<f64>> {
+pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Resolution> {
     let mut target = vec![f64::INFINITY; mesh.num_faces()];
+    let mut marked = Vec::new();
     for (k, e) in edits.iter().enumerate() {
         let Some(region) = region_of(mesh, e).map_err(|err| at_edit(k, e.tool(), err))? else {
             continue;
@@ -67,9 +124,105 @@ pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Vec<f64
         if !(want.is_finite() && want > 0.0) {
             continue;
         }
-        mark(mesh, &region, want, &mut target);
+        if mark(mesh, &region, want, &mut target) {
+            let grid = SegmentGrid::new(&region.lines, region.reach);
+            marked.push(Marked { region, want, grid });
+        }
     }
-    Ok(target)
+    Ok(Resolution { faces: target, marked })
+}
+
+/// The segments of a region's polylines (a lone point as a segment of length 0), bucketed in
+/// a uniform grid of cells no smaller than the reach, each segment under the cells of its
+/// samples every half cell: a point within `d` of a segment is within `d` + ¼ cell of one of
+/// its samples. A query whose box spans more cells than there are segments scans them all.
+#[derive(Clone, Debug)]
+struct SegmentGrid {
+    segments: Vec<[Vector3<f64>; 2]>,
+    origin: Vector3<f64>,
+    cell: f64,
+    cells: std::collections::HashMap<[i64; 3], Vec<u32>>,
+}
+
+impl SegmentGrid {
+    /// Below this many segments a query scans them all.
+    const SCAN: usize = 16;
+    /// Most cells per axis across the segments' box.
+    const MAX_CELLS: f64 = 256.0;
+
+    fn new(lines: &[Vec<Vector3<f64>>], reach: f64) -> SegmentGrid {
+        let finite = |p: &Vector3<f64>| p.iter().all(|c| c.is_finite());
+        let mut segments = Vec::new();
+        for l in lines {
+            match l.as_slice() {
+                [a] if finite(a) => segments.push([*a, *a]),
+                _ => segments.extend(
+                    l.windows(2).filter(|w| finite(&w[0]) && finite(&w[1])).map(|w| [w[0], w[1]]),
+                ),
+            }
+        }
+        let (lo, hi) = bounds(segments.iter().flatten());
+        let mut grid =
+            SegmentGrid { segments, origin: lo, cell: f64::INFINITY, cells: Default::default() };
+        if grid.segments.len() <= Self::SCAN || !(lo.x <= hi.x) {
+            return grid;
+        }
+        let cell = reach.max((hi - lo).max() / Self::MAX_CELLS);
+        if !(cell.is_finite() && cell > 0.0) {
+            return grid;
+        }
+        grid.cell = cell;
+        for (k, [a, b]) in grid.segments.iter().enumerate() {
+            let n = ((b - a).norm() / (0.5 * cell)).ceil().max(1.0) as usize;
+            for j in 0..=n {
+                let key = grid.key(&(a + (b - a) * (j as f64 / n as f64)));
+                let bucket = grid.cells.entry(key).or_default();
+                if bucket.last() != Some(&(k as u32)) {
+                    bucket.push(k as u32);
+                }
+            }
+        }
+        grid
+    }
+
+    fn key(&self, p: &Vector3<f64>) -> [i64; 3] {
+        let q = (p - self.origin) / self.cell;
+        [q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64]
+    }
+
+    /// Whether `p` is within `d` of a segment.
+    fn within(&self, p: &Vector3<f64>, d: f64) -> bool {
+        let near = |k: usize| segment_distance(p, &self.segments[k]) <= d;
+        if !self.cell.is_finite() {
+            return (0..self.segments.len()).any(near);
+        }
+        let slack = Vector3::repeat(d + 0.25 * self.cell);
+        let (lo, hi) = (self.key(&(p - slack)), self.key(&(p + slack)));
+        let span: f64 = (0..3).map(|i| (hi[i] - lo[i] + 1) as f64).product();
+        if !(span <= self.segments.len() as f64) {
+            return (0..self.segments.len()).any(near);
+        }
+        for x in lo[0]..=hi[0] {
+            for y in lo[1]..=hi[1] {
+                for z in lo[2]..=hi[2] {
+                    if let Some(b) = self.cells.get(&[x, y, z]) {
+                        if b.iter().any(|&k| near(k as usize)) {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// The distance from `p` to the segment `s`.
+fn segment_distance(p: &Vector3<f64>, s: &[Vector3<f64>; 2]) -> f64 {
+    let ab = s[1] - s[0];
+    let l2 = ab.norm_squared();
+    let t = if l2 > 0.0 { ((p - s[0]).dot(&ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (p - s[0] - ab * t).norm()
 }
 
 fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
@@ -109,11 +262,12 @@ fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
     })
 }
 
-/// Lowers `target` to `want` on every face that reaches within `region.reach` of its lines.
-fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
+/// Lowers `target` to `want` on every face that reaches within `region.reach` of its lines;
+/// whether the region asks for anything (it may not: see [`mark_between_vertices`]).
+fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) -> bool {
     let (lo, hi) = bounds(region.lines.iter().flatten());
     if !(lo.x <= hi.x) {
-        return;
+        return false;
     }
     let n = mesh.num_vertices();
     // A brush or tube that holds none of the part's vertices lies on triangles larger than
@@ -123,8 +277,7 @@ fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
         near && region.lines.iter().any(|l| polyline_distance(p, l) <= region.reach)
     });
     if !holds_a_vertex {
-        mark_between_vertices(mesh, region, want, target);
-        return;
+        return mark_between_vertices(mesh, region, want, target);
     }
     for (f, face) in mesh.faces.iter().enumerate() {
         if face.iter().any(|&v| v as usize >= n) {
@@ -143,15 +296,16 @@ fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
             target[f] = target[f].min(want);
         }
     }
+    true
 }
 
 /// [`mark`] for a region that holds no vertex: nothing when the region is small against the
 /// part (a slip of units, refused by its tool), else `want` on the faces within the reach.
-fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) {
+fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) -> bool {
     let (lo, hi) = bounds(mesh.positions.iter());
     let diagonal = (hi - lo).norm();
     if !(diagonal.is_finite() && region.reach >= MIN_REACH_SHARE * diagonal) {
-        return;
+        return false;
     }
     // The region's points, its polylines sampled every half reach (coarser, at most
     // MAX_SAMPLES in all, for a polyline longer than MAX_SAMPLES half reaches): the distance
@@ -196,6 +350,7 @@ fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [
             target[f] = target[f].min(want);
         }
     }
+    true
 }
 
 /// The box of the finite points (lo > hi when there is none).
@@ -257,7 +412,7 @@ mod tests {
             direction: None,
             weight: 1.0,
         });
-        let t = edit_resolution(&m, &[bend], 1.0 / 3.0).unwrap();
+        let t = edit_resolution(&m, &[bend], 1.0 / 3.0).unwrap().faces;
         // Faces of squares 1, 2, 3 (centroids within 1 + their reach of x = 2.5) ask for 1/3
         // of the radius times the bend's compression, 1 − 0.8 · 4/(3√3); squares 5 and beyond
         // ask for nothing.
@@ -284,7 +439,7 @@ mod tests {
             direction: None,
             weight: 1.0,
         });
-        let t = edit_resolution(&m, &[tiny], 1.0 / 3.0).unwrap();
+        let t = edit_resolution(&m, &[tiny], 1.0 / 3.0).unwrap().faces;
         assert!(t.iter().all(|v| v.is_infinite()));
     }
 
@@ -311,10 +466,10 @@ mod tests {
                 weight: 1.0,
             })
         };
-        let t = edit_resolution(&m, &[brush([50.0, 0.5, 0.0])], 1.0 / 3.0).unwrap();
+        let t = edit_resolution(&m, &[brush([50.0, 0.5, 0.0])], 1.0 / 3.0).unwrap().faces;
         let want = 5.0 / 3.0 * finest_scale(WarpKind::Bend, 0.8);
         assert!(t.iter().all(|v| (v - want).abs() < 1e-12), "{t:?}");
-        let t = edit_resolution(&m, &[brush([50.0, 20.0, 0.0])], 1.0 / 3.0).unwrap();
+        let t = edit_resolution(&m, &[brush([50.0, 20.0, 0.0])], 1.0 / 3.0).unwrap().faces;
         assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
         // A curve across the strip's middle, between its vertices, and one 10 above it.
         let curve = |y: f64| {
@@ -328,10 +483,66 @@ mod tests {
                 width: None,
             })
         };
-        let t = edit_resolution(&m, &[curve(0.25)], 0.5).unwrap();
+        let t = edit_resolution(&m, &[curve(0.25)], 0.5).unwrap().faces;
         assert!(t.iter().all(|v| (v - 2.0 * 0.5 * CURVE_EDGE).abs() < 1e-12), "{t:?}");
-        let t = edit_resolution(&m, &[curve(10.0)], 0.5).unwrap();
+        let t = edit_resolution(&m, &[curve(10.0)], 0.5).unwrap().faces;
         assert!(t.iter().all(|v| v.is_infinite()), "{t:?}");
+    }
+
+    /// The 100 × 1 strip of two slivers with a brush of radius 5 in its middle: asked again
+    /// after each split, the slivers' children far from the brush are left alone, so every new
+    /// vertex lies within a few radii of the centre (the faces touching the ball, and the
+    /// longest-edge closure around them); inheriting the target splits the strip along its
+    /// whole length to the brush's edge.
+    #[test]
+    fn a_sliver_is_refined_near_the_brush_only() {
+        use crate::mesh::refine::{refine, refine_with, RefineOptions};
+        let pos = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(100.0, 0.0, 0.0),
+            Vector3::new(100.0, 1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+        ];
+        let m = Mesh::from_triangles(pos, vec![[0, 1, 2], [0, 2, 3]]);
+        let bend = Edit::Bend(WarpEdit {
+            centre: Centre::Point([50.0, 0.5, 0.0]),
+            radius: 5.0,
+            metric: Default::default(),
+            strength: 0.8,
+            direction: None,
+            weight: 1.0,
+        });
+        let request = edit_resolution(&m, &[bend], 1.0 / 3.0).unwrap();
+        let want = request.finest();
+        let options = RefineOptions { max_levels: 12, ..Default::default() };
+        let retarget = |p: &[Vector3<f64>; 3], _: f64| request.child_target(p);
+        let near = refine_with(&m, &request.faces, &options, &retarget).unwrap();
+        let whole = refine(&m, &request.faces, &options).unwrap();
+        // New vertices more than three radii from the centre (the longest-edge closure may
+        // carry a few splits down a sliver; the strip's length is 10 radii each way).
+        let far = |r: &crate::mesh::refine::Refined| {
+            r.mesh.positions[4..].iter().filter(|p| (p.x - 50.0).abs() > 15.0).count()
+        };
+        eprintln!(
+            "near: {} vertices, {} far; whole: {} vertices, {} far",
+            near.added(),
+            far(&near),
+            whole.added(),
+            far(&whole)
+        );
+        assert!(far(&near) * 20 <= near.added(), "{} of {} far", far(&near), near.added());
+        assert!(far(&whole) * 2 > whole.added());
+        assert!(near.added() * 5 < whole.added(), "{} vs {}", near.added(), whole.added());
+        // Inside the ball the edges are as asked.
+        for f in &near.mesh.faces {
+            let p = f.map(|v| near.mesh.positions[v as usize]);
+            let c = (p[0] + p[1] + p[2]) / 3.0;
+            if (c - Vector3::new(50.0, 0.5, 0.0)).norm() < 4.0 {
+                for k in 0..3 {
+                    assert!((p[k] - p[(k + 1) % 3]).norm() <= want + 1e-9);
+                }
+            }
+        }
     }
 
     /// min(radius, width) × edge × [`CURVE_EDGE`]: 0.3 × 0.5 × 3/8.
@@ -347,7 +558,7 @@ mod tests {
             tolerance: 1e-3,
             width: Some(0.3),
         });
-        let t = edit_resolution(&m, &[curve], 0.5).unwrap();
+        let t = edit_resolution(&m, &[curve], 0.5).unwrap().faces;
         assert!((t[0] - 0.05625).abs() < 1e-12, "{}", t[0]);
         assert!(t[19].is_infinite());
     }

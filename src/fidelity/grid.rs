@@ -12,18 +12,26 @@ pub(super) struct SegmentGrid {
     normals: Vec<Vector3<f64>>,
     cell: f64,
     cells: HashMap<[i64; 3], Vec<u32>>,
+    /// Rings of cells [`SegmentGrid::nearest`] visits past the one that settles the distance:
+    /// one when distances are measured in the faces' planes (they can be a little shorter).
+    slack: f64,
+    /// The smallest and largest cell keys holding a segment, per axis (queries visit no cell
+    /// beyond them: a flat set of segments is searched in its plane only).
+    bounds: [[i64; 3]; 2],
 }
 
 impl SegmentGrid {
-    /// `reach`: the largest distance queries care about (the cell is at least reach/8, so a
-    /// query visits at most 17³ cells).
+    /// `reach`: the largest distance queries care about (the cell is twice the mean segment's
+    /// length but at least reach/32, so a query visits at most 65³ cells, and no more than
+    /// the occupied cells' box holds: a noisy zero set of many short segments is not searched
+    /// a few hundred segments per cell).
     pub(super) fn new(segs: Vec<[Vector3<f64>; 2]>, reach: f64) -> Self {
         let mean = if segs.is_empty() {
             0.0
         } else {
             segs.iter().map(|s| (s[1] - s[0]).norm()).sum::<f64>() / segs.len() as f64
         };
-        let cell = (2.0 * mean).max(reach / 8.0).max(1e-12);
+        let cell = (2.0 * mean).max(reach / 32.0).max(1e-12);
         let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
         for (k, s) in segs.iter().enumerate() {
             let (lo, hi) = (key(&s[0].inf(&s[1]), cell), key(&s[0].sup(&s[1]), cell));
@@ -36,7 +44,14 @@ impl SegmentGrid {
             }
         }
         let normals = vec![Vector3::zeros(); segs.len()];
-        SegmentGrid { segs, normals, cell, cells }
+        let mut bounds = [[i64::MAX; 3], [i64::MIN; 3]];
+        for k in cells.keys() {
+            for i in 0..3 {
+                bounds[0][i] = bounds[0][i].min(k[i]);
+                bounds[1][i] = bounds[1][i].max(k[i]);
+            }
+        }
+        SegmentGrid { segs, normals, cell, cells, slack: 0.0, bounds }
     }
 
     /// A grid whose distances are measured in the plane of each segment's face (`normals`, one
@@ -48,6 +63,7 @@ impl SegmentGrid {
     ) -> Self {
         let mut g = SegmentGrid::new(segs, reach);
         if normals.len() == g.segs.len() {
+            g.slack = if normals.iter().any(|n| n.norm_squared() > 0.0) { 1.0 } else { 0.0 };
             g.normals = normals;
         }
         g
@@ -61,11 +77,16 @@ impl SegmentGrid {
         let c = key(p, self.cell);
         let mut best = cap;
         let rings = (cap / self.cell).ceil().max(1.0) as i64 + 1;
+        // The offsets from c along axis `a` that reach an occupied cell, within `ring`.
+        let [lo, hi] = self.bounds;
+        let range = |a: usize, ring: i64| {
+            (-ring).max(lo[a].saturating_sub(c[a]))..=ring.min(hi[a].saturating_sub(c[a]))
+        };
         for ring in 0..=rings {
             // Cells of Chebyshev distance `ring` from c.
-            for i in -ring..=ring {
-                for j in -ring..=ring {
-                    for l in -ring..=ring {
+            for i in range(0, ring) {
+                for j in range(1, ring) {
+                    for l in range(2, ring) {
                         if i.abs().max(j.abs()).max(l.abs()) != ring {
                             continue;
                         }
@@ -83,8 +104,7 @@ impl SegmentGrid {
             }
             // Every cell of a later ring is at least ring·cell away from p (one ring more when
             // distances are measured in the faces' planes, which can be a little shorter).
-            let slack = if self.normals.iter().any(|n| n.norm_squared() > 0.0) { 1.0 } else { 0.0 };
-            if best <= (ring as f64 - slack) * self.cell {
+            if best <= (ring as f64 - self.slack) * self.cell {
                 break;
             }
         }

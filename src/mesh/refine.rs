@@ -87,6 +87,22 @@ const PHONG_ALPHA: f64 = 0.5;
 /// length per face, scene units; `f64::INFINITY` where nothing is asked). Refuses, naming
 /// `options.budget_key`, when more than `options.max_new_vertices` would be added.
 pub fn refine(mesh: &Mesh, target: &[f64], options: &RefineOptions) -> Result<Refined> {
+    refine_with(mesh, target, options, &|_, inherited| inherited)
+}
+
+/// The target length of a face a split makes, from its corners and its parent's target.
+pub type Retarget<'a> = &'a dyn Fn(&[Vector3<f64>; 3], f64) -> f64;
+
+/// [`refine`] asking `retarget` for the target of every face a split makes (its corners and
+/// its parent's target in, its own out; [`refine`] keeps the parent's). A target that follows
+/// where a face is — the edits' regions — keeps a long sliver touched by a brush from being
+/// split along its whole length.
+pub fn refine_with(
+    mesh: &Mesh,
+    target: &[f64],
+    options: &RefineOptions,
+    retarget: Retarget<'_>,
+) -> Result<Refined> {
     if target.len() != mesh.num_faces() {
         return Err(Error::invalid_arg(
             "refine",
@@ -118,7 +134,7 @@ pub fn refine(mesh: &Mesh, target: &[f64], options: &RefineOptions) -> Result<Re
                 ),
             ));
         }
-        state.split(&plan);
+        state.split(&plan, retarget);
         levels += 1;
     }
     let mut split = vec![false; mesh.num_faces()];
@@ -295,7 +311,7 @@ impl State {
         (m + (star - m) * PHONG_ALPHA, n)
     }
 
-    fn split(&mut self, plan: &Plan) {
+    fn split(&mut self, plan: &Plan, retarget: Retarget<'_>) {
         let mut mid = vec![u32::MAX; plan.edges.len()];
         for (e, &[a, b]) in plan.edges.iter().enumerate() {
             if !plan.marked[e] {
@@ -323,10 +339,16 @@ impl State {
             let n_slots = normals
                 .as_mut()
                 .map(|c| c.slots(f, |x, y| (x + y).try_normalize(1e-300).unwrap_or(*x)));
+            let split = children.len() > 1;
             for ch in children {
-                faces.push(ch.map(slot_vertex));
+                let face = ch.map(slot_vertex);
+                faces.push(face);
                 origin.push(self.origin[f]);
-                target.push(self.target[f]);
+                target.push(if split {
+                    retarget(&face.map(|v| self.pos[v as usize]), self.target[f])
+                } else {
+                    self.target[f]
+                });
                 if let (Some(c), Some(s)) = (uv.as_mut(), uv_slots.as_ref()) {
                     c.push(ch.map(|k| s[k]));
                 }

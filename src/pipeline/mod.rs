@@ -248,7 +248,10 @@ pub struct RefinementReport {
 /// ([`crate::edit::resolution::edit_resolution`] with `mesh.refine.edge`): the refinement's
 /// request. `None` when nothing would be refined (`mesh.refine.mode: "none"`, no edits, or no
 /// face asks for an edge). Two scenes whose requests are equal refine the part the same way.
-pub fn refine_request(s: &LoadedScene, mesh: &Mesh) -> Result<Option<Vec<f64>>> {
+pub fn refine_request(
+    s: &LoadedScene,
+    mesh: &Mesh,
+) -> Result<Option<crate::edit::resolution::Resolution>> {
     let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
     if settings.mode == crate::scene::RefineMode::None || s.scene.edits.is_empty() {
         return Ok(None);
@@ -257,8 +260,7 @@ pub fn refine_request(s: &LoadedScene, mesh: &Mesh) -> Result<Option<Vec<f64>>> 
     let key = |e: Error| crate::scene::prefix("edits", e);
     let target =
         crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
-    let finest = target.iter().copied().fold(f64::INFINITY, f64::min);
-    Ok(finest.is_finite().then_some(target))
+    Ok(target.finest().is_finite().then_some(target))
 }
 
 /// Refines the part inside the edits' brushes where its triangles are coarser than
@@ -273,14 +275,17 @@ fn refine_for_edits(
     let Some(target) = refine_request(s, mesh)? else {
         return Ok(None);
     };
-    let finest = target.iter().copied().fold(f64::INFINITY, f64::min);
+    let finest = target.finest();
     stages.start("refine");
     let options = crate::mesh::refine::RefineOptions {
         max_new_vertices: settings.max_vertices,
         budget_key: "mesh.refine.max_vertices",
         ..Default::default()
     };
-    let refined = crate::mesh::refine::refine(mesh, &target, &options)?;
+    // The faces a split makes are asked again where they are (a sliver's far children are
+    // left alone: docs/math.md §12).
+    let retarget = |p: &[nalgebra::Vector3<f64>; 3], _: f64| target.child_target(p);
+    let refined = crate::mesh::refine::refine_with(mesh, &target.faces, &options, &retarget)?;
     if refined.added() == 0 {
         return Ok(None);
     }

@@ -68,7 +68,7 @@ struct Parts {
     next_id: u32,
     /// Refined preparations, oldest first, keyed by their base's generation and their
     /// refinement request.
-    refined: Vec<(u64, Vec<f64>, Arc<Part>)>,
+    refined: Vec<(u64, crate::edit::resolution::Resolution, Arc<Part>)>,
     /// The base's generation and edit list asked for last, and its part.
     last: Option<(u64, Vec<Edit>, Arc<Part>)>,
 }
@@ -311,7 +311,12 @@ impl Session {
     }
 
     /// The part refined for `request` (made from the part as loaded when not kept).
-    fn refined_part(&self, b: &Base, s: &LoadedScene, request: Vec<f64>) -> Result<Arc<Part>> {
+    fn refined_part(
+        &self,
+        b: &Base,
+        s: &LoadedScene,
+        request: crate::edit::resolution::Resolution,
+    ) -> Result<Arc<Part>> {
         let kept = self
             .parts()
             .refined
