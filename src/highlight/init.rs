@@ -120,9 +120,48 @@ pub fn initial_field(
                 .collect::<Result<Vec<f64>>>()
                 .map(|phi| InitialFieldResult { phi, fallback_vertices: Vec::new() });
         }
-        InitialField::Uv => uv_directions(mesh, geom)?,
+        InitialField::Uv => uv_directions(mesh, geom, symmetry)?,
     };
-    Ok(with_fallbacks(geom, dirs))
+    Ok(with_fallbacks(geom, dirs, symmetry))
+}
+
+/// A direction and its weight.
+type Weighted = (Vector3<f64>, f64);
+
+/// Sums directions at vertex `i` as `symmetry` reads them: as vectors for an oriented field;
+/// for a line field by their doubled angle in the vertex's tangent frame (u and −u add up
+/// instead of cancelling: a mirrored chart's ∂p/∂u on either side of its fold, or neighbours
+/// whose directions point opposite ways along one line). `None` when the sum vanishes.
+fn sum_directions(
+    geom: &Geometry,
+    i: usize,
+    dirs: impl Iterator<Item = Weighted>,
+    symmetry: Symmetry,
+) -> Option<Vector3<f64>> {
+    match symmetry {
+        Symmetry::Oriented => {
+            let sum: Vector3<f64> = dirs.map(|(d, w)| d * w).sum();
+            project(geom, i, &sum)
+        }
+        Symmetry::Line => {
+            let f = &geom.frames[i];
+            let (mut c, mut s, mut total) = (0.0, 0.0, 0.0);
+            for (d, w) in dirs {
+                let local = f.to_local(&d);
+                let len2 = local.norm_squared();
+                // A direction along the normal has no line in the tangent plane (`project`).
+                if !(len2 > (VANISHING * VANISHING) * d.norm_squared() && len2.is_finite()) {
+                    continue;
+                }
+                // (cos 2α, sin 2α) from (cos α, sin α) without an angle.
+                c += w * (local.x * local.x - local.y * local.y) / len2;
+                s += w * 2.0 * local.x * local.y / len2;
+                total += w;
+            }
+            let len = c.hypot(s);
+            (len > VANISHING * total && len.is_finite()).then(|| f.direction(0.5 * s.atan2(c)))
+        }
+    }
 }
 
 /// `w` projected onto the tangent plane of vertex `i` and normalized, unless it vanishes there.
@@ -133,7 +172,11 @@ fn project(geom: &Geometry, i: usize, w: &Vector3<f64>) -> Option<Vector3<f64>> 
     (len > VANISHING * w.norm() && len.is_finite()).then(|| p / len)
 }
 
-fn with_fallbacks(geom: &Geometry, dirs: Vec<Option<Vector3<f64>>>) -> InitialFieldResult {
+fn with_fallbacks(
+    geom: &Geometry,
+    dirs: Vec<Option<Vector3<f64>>>,
+    symmetry: Symmetry,
+) -> InitialFieldResult {
     let mut fallback_vertices = Vec::new();
     let phi = (0..dirs.len())
         .map(|i| {
@@ -142,9 +185,9 @@ fn with_fallbacks(geom: &Geometry, dirs: Vec<Option<Vector3<f64>>>) -> InitialFi
                 return f.angle_of(&u);
             }
             fallback_vertices.push(i as u32);
-            let sum: Vector3<f64> =
-                geom.adjacency.neighbors(i).iter().filter_map(|&j| dirs[j as usize]).sum();
-            project(geom, i, &sum).map_or(0.0, |u| f.angle_of(&u))
+            let near = geom.adjacency.neighbors(i).iter().filter_map(|&j| dirs[j as usize]);
+            sum_directions(geom, i, near.map(|d| (d, 1.0)), symmetry)
+                .map_or(0.0, |u| f.angle_of(&u))
         })
         .collect();
     InitialFieldResult { phi, fallback_vertices }
@@ -153,9 +196,16 @@ fn with_fallbacks(geom: &Geometry, dirs: Vec<Option<Vector3<f64>>>) -> InitialFi
 /// Per vertex, ∂p/∂u averaged (by corner angle) over the faces of the UV chart that holds most
 /// of the vertex's corner angle. Faces are grouped by the UV index at the vertex's corner, so
 /// faces across a seam (other charts, unrelated UV orientation) never cancel each other. ∂p/∂u
-/// is the direction of increasing u on the surface whatever the chart's handedness, so
-/// mirrored charts need no special case; faces with a degenerate UV triangle are skipped.
-fn uv_directions(mesh: &Mesh, geom: &Geometry) -> Result<Vec<Option<Vector3<f64>>>> {
+/// is the direction of increasing u on the surface whatever the chart's handedness; where a
+/// mirrored chart folds (u = |x|: the faces on either side share the fold's UVs but their ∂p/∂u
+/// point opposite ways), a line field sums them as lines ([`sum_directions`]) and gets the
+/// fold's common line, which a sum of vectors cancelled. Faces with a degenerate UV triangle
+/// are skipped.
+fn uv_directions(
+    mesh: &Mesh,
+    geom: &Geometry,
+    symmetry: Symmetry,
+) -> Result<Vec<Option<Vector3<f64>>>> {
     let uv = mesh.uv.as_ref().ok_or_else(|| {
         Error::invalid_arg("init", "the mesh has no UV coordinates (vt); use another --init")
     })?;
@@ -177,8 +227,9 @@ fn uv_directions(mesh: &Mesh, geom: &Geometry) -> Result<Vec<Option<Vector3<f64>
     let vf = crate::geometry::VertexFaces::new(mesh);
     Ok((0..mesh.num_vertices())
         .map(|v| {
-            // (uv index, total corner angle, weighted direction) per chart around v.
-            let mut groups: Vec<(u32, f64, Vector3<f64>)> = Vec::new();
+            // (uv index, total corner angle, (unit direction, corner angle) of its faces) per
+            // chart around v.
+            let mut groups: Vec<(u32, f64, Vec<Weighted>)> = Vec::new();
             for &(f, c) in vf.of(v) {
                 let (f, c) = (f as usize, c as usize);
                 let tri = mesh.face_positions(f);
@@ -187,17 +238,17 @@ fn uv_directions(mesh: &Mesh, geom: &Geometry) -> Result<Vec<Option<Vector3<f64>
                 let idx = match groups.iter().position(|g| g.0 == key) {
                     Some(k) => k,
                     None => {
-                        groups.push((key, 0.0, Vector3::zeros()));
+                        groups.push((key, 0.0, Vec::new()));
                         groups.len() - 1
                     }
                 };
                 groups[idx].1 += angle;
                 if let Some(d) = dpdu[f] {
-                    groups[idx].2 += d.normalize() * angle;
+                    groups[idx].2.push((d.normalize(), angle));
                 }
             }
             groups.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-            groups.iter().find_map(|g| project(geom, v, &g.2))
+            groups.iter().find_map(|g| sum_directions(geom, v, g.2.iter().copied(), symmetry))
         })
         .collect())
 }
