@@ -82,3 +82,85 @@ fn refining_a_cylinder_keeps_it_round() {
     assert!(radial < 1e-3, "a new vertex is {radial:.2e} R off the cylinder");
     assert!(k < 0.10, "curvature off by {k:.3} of 1/R");
 }
+
+/// A CAD-like puck's top: a flat disc of radius 35 at z = 20 meshed as a fan of 96 slivers
+/// from its centre, meeting a quarter-round fillet of radius 5 (8 rings) down to the wall.
+fn puck() -> Mesh {
+    let (r, h, fr, nseg) = (40.0, 20.0, 5.0, 96usize);
+    let mut prof = vec![(r, 0.0), (r, h - fr)];
+    for k in 1..=8 {
+        let a = std::f64::consts::FRAC_PI_2 * k as f64 / 8.0;
+        prof.push((r - fr + fr * a.cos(), h - fr + fr * a.sin()));
+    }
+    let mut pos = Vec::new();
+    let mut rings = Vec::new();
+    for &(rr, z) in &prof {
+        let mut ring = Vec::new();
+        for i in 0..nseg {
+            let ph = 2.0 * std::f64::consts::PI * i as f64 / nseg as f64;
+            ring.push(pos.len() as u32);
+            pos.push(nalgebra::Vector3::new(rr * ph.cos(), rr * ph.sin(), z));
+        }
+        rings.push(ring);
+    }
+    let mut faces = Vec::new();
+    for w in rings.windows(2) {
+        let (p, q) = (&w[0], &w[1]);
+        for i in 0..nseg {
+            let j = (i + 1) % nseg;
+            faces.push([p[i], p[j], q[j]]);
+            faces.push([p[i], q[j], q[i]]);
+        }
+    }
+    let c = pos.len() as u32;
+    pos.push(nalgebra::Vector3::new(0.0, 0.0, h));
+    let top = rings.last().unwrap();
+    for i in 0..nseg {
+        faces.push([top[i], top[(i + 1) % nseg], c]);
+    }
+    Mesh::from_triangles(pos, faces)
+}
+
+/// A band across the puck's flat top refined to edges of 0.5: every new vertex inside the
+/// disc stays on its plane z = 20 (Phong points from the rim's normals, which lean towards the
+/// fillet, lifted them by up to 0.21 — a bump along every split sliver that the preview
+/// showed as streaks), and the new vertices on the fillet stay on its quarter circle within
+/// 60 % of its chords' sagitta (the rim's normals, shared by the disc and the fillet, lean
+/// by half a fillet step: Phong points are no better than the normals).
+#[test]
+fn refining_a_flat_face_keeps_it_flat() {
+    let m = puck();
+    let target: Vec<f64> = m
+        .faces
+        .iter()
+        .map(|f| {
+            let c =
+                f.iter().map(|&v| m.positions[v as usize]).sum::<nalgebra::Vector3<f64>>() / 3.0;
+            if c.z > 14.0 && c.x.abs() < 30.0 && (c.y - 10.0).abs() < 4.0 {
+                0.5
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    let r = refine(&m, &target, &RefineOptions::default()).unwrap();
+    let first = m.num_vertices();
+    // Inside the disc, away from its rim (whose chords' midpoints sit at r = 35 cos 1.9°).
+    let inside = (first..r.mesh.num_vertices()).filter(|&i| r.mesh.positions[i].xy().norm() < 34.9);
+    let (mut count, mut off) = (0, 0.0f64);
+    for i in inside {
+        count += 1;
+        off = off.max((r.mesh.positions[i].z - 20.0).abs());
+    }
+    // The fillet: the distance to its centre circle (radius 35 at z = 15) is 5.
+    let fillet = (first..r.mesh.num_vertices())
+        .map(|i| r.mesh.positions[i])
+        .filter(|p| p.z > 15.0 + 1e-9 && p.xy().norm() > 35.0 + 1e-9)
+        .map(|p| ((p.xy().norm() - 35.0).hypot(p.z - 15.0) - 5.0).abs())
+        .fold(0.0, f64::max);
+    eprintln!("flat top: {count} new vertices, the farthest {off:.2e} off the plane; fillet {fillet:.2e} off its circle");
+    assert!(count > 1000);
+    assert!(off < 1e-9, "a new vertex of the flat top is {off} off its plane");
+    // The fillet's chords span 11.25°: sagitta 5 (1 − cos 5.6°) = 0.024.
+    assert!(fillet < 0.6 * 0.024, "a new fillet vertex is {fillet} off the fillet");
+}

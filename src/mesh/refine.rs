@@ -80,6 +80,9 @@ impl Refined {
 /// Angle between the vertex normals of an edge beyond which its midpoint is not curved.
 const CREASE_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
 
+/// Faces whose unit normals agree this closely (within 1e-4 rad) lie in one plane.
+const FLAT_COS: f64 = 1.0 - 5e-9;
+
 /// Phong tessellation's shape factor: ½ is exact to second order (module docs).
 const PHONG_ALPHA: f64 = 0.5;
 
@@ -112,6 +115,7 @@ pub fn refine_with(
     let mut state = State {
         pos: mesh.positions.clone(),
         nrm: vertex_normals(mesh),
+        plane: flat_planes(mesh),
         faces: mesh.faces.clone(),
         origin: (0..mesh.num_faces() as u32).collect(),
         target: target.to_vec(),
@@ -160,6 +164,30 @@ pub fn refine_with(
     })
 }
 
+/// Per vertex, the unit normal of its faces when they all lie in one plane (within
+/// [`FLAT_COS`]; faces of zero area do not count), else `None`: the vertices inside a flat
+/// region of the part as loaded. They are classified once, before any split: a new vertex on
+/// the region's curved rim may lie a little off the plane, and would make its flat neighbours
+/// look curved.
+fn flat_planes(mesh: &Mesh) -> Vec<Option<Vector3<f64>>> {
+    // (the first face's unit normal, whether every face so far agrees)
+    let mut seen: Vec<Option<(Vector3<f64>, bool)>> = vec![None; mesh.num_vertices()];
+    for f in &mesh.faces {
+        let p = f.map(|v| mesh.positions[v as usize]);
+        let Some(n) = (p[1] - p[0]).cross(&(p[2] - p[0])).try_normalize(1e-300) else {
+            continue;
+        };
+        for &v in f {
+            let s = &mut seen[v as usize];
+            match s {
+                None => *s = Some((n, true)),
+                Some((first, agree)) => *agree &= first.dot(&n) >= FLAT_COS,
+            }
+        }
+    }
+    seen.into_iter().map(|s| s.and_then(|(n, agree)| agree.then_some(n))).collect()
+}
+
 /// Vertex normals with Max's weights (Max 1999, "Weights for computing vertex normals from
 /// facet normals"): each incident face adds (e₁ × e₂)/(|e₁|²|e₂|²) for its two edges e₁, e₂
 /// out of the vertex, which is exact when the vertex and its neighbours lie on a sphere —
@@ -183,6 +211,10 @@ fn vertex_normals(mesh: &Mesh) -> Vec<Vector3<f64>> {
 struct State {
     pos: Vec<Vector3<f64>>,
     nrm: Vec<Vector3<f64>>,
+    /// Per vertex, the plane (unit normal) of the flat region it lies inside: for the input's
+    /// vertices, the normal of their faces when all lie in one plane ([`flat_planes`]); a new
+    /// vertex on an edge out of such a vertex inherits its plane.
+    plane: Vec<Option<Vector3<f64>>>,
     faces: Vec<[u32; 3]>,
     /// The input face each face descends from.
     origin: Vec<u32>,
@@ -298,17 +330,33 @@ impl State {
         Some(Plan { edges, face_edges, marked, longest })
     }
 
-    /// The Phong-tessellation point of edge (a, b) and its normal.
-    fn midpoint(&self, a: usize, b: usize) -> (Vector3<f64>, Vector3<f64>) {
+    /// The Phong-tessellation point of edge (a, b), its normal and its plane. An edge out of a
+    /// flat vertex ([`State::plane`]) lies in that vertex's plane, and so do its midpoint and
+    /// the faces around it: a CAD export's flat face meshed as a fan of slivers meets its
+    /// fillet at vertices whose normals lean towards the fillet, and the tangent planes of
+    /// those would lift the face's new vertices off it (a bump the shading shows along every
+    /// split sliver).
+    fn midpoint(&self, a: usize, b: usize) -> (Vector3<f64>, Vector3<f64>, Option<Vector3<f64>>) {
         let (pa, pb, na, nb) = (self.pos[a], self.pos[b], self.nrm[a], self.nrm[b]);
         let m = (pa + pb) * 0.5;
+        let flat = match (self.plane[a], self.plane[b]) {
+            (Some(p), _) => Some((p, pa)),
+            (None, Some(p)) => Some((p, pb)),
+            (None, None) => None,
+        };
+        if let Some((plane, on)) = flat {
+            // On the plane itself (the other end may be a rim vertex a little off it), with
+            // the plane's normal, pointing the way the vertices' do.
+            let n = if plane.dot(&(na + nb)) < 0.0 { -plane } else { plane };
+            return (m - plane * (m - on).dot(&plane), n, Some(plane));
+        }
         let n = (na + nb).try_normalize(1e-300).unwrap_or(na);
         if na.dot(&nb) < CREASE_COS {
-            return (m, n);
+            return (m, n, None);
         }
         let proj = |p: &Vector3<f64>, q: &Vector3<f64>| m - q * (m - p).dot(q);
         let star = (proj(&pa, &na) + proj(&pb, &nb)) * 0.5;
-        (m + (star - m) * PHONG_ALPHA, n)
+        (m + (star - m) * PHONG_ALPHA, n, None)
     }
 
     fn split(&mut self, plan: &Plan, retarget: Retarget<'_>) {
@@ -317,10 +365,11 @@ impl State {
             if !plan.marked[e] {
                 continue;
             }
-            let (p, n) = self.midpoint(a as usize, b as usize);
+            let (p, n, plane) = self.midpoint(a as usize, b as usize);
             mid[e] = self.pos.len() as u32;
             self.pos.push(p);
             self.nrm.push(n);
+            self.plane.push(plane);
             self.parents.push([a, b]);
         }
         let mut uv = self.uv.take().map(Corners::new);
@@ -504,6 +553,7 @@ mod tests {
         let st = State {
             pos: vec![pa, pb],
             nrm: vec![pa, pb],
+            plane: vec![None, None],
             faces: vec![],
             origin: vec![],
             target: vec![],
@@ -511,7 +561,7 @@ mod tests {
             normals: None,
             parents: Vec::new(),
         };
-        let (p, n) = st.midpoint(0, 1);
+        let (p, n, _) = st.midpoint(0, 1);
         // Hand-derived: m = (cos t, 0, 0); (m − pa)·na = cos²t − 1 = −sin²t, so each tangent
         // plane projection is m + sin²t·nᵢ, their mean m + sin²t (cos t, 0, 0), and
         // m + ½(p* − m) = (cos t (1 + ½ sin²t), 0, 0) = (1 − 3t⁴/8 + …, 0, 0): moved out from
