@@ -83,6 +83,10 @@ fn ranges_are_checked_with_key_paths() {
             "field.critical_threshold",
         ),
         (
+            r#"{"mesh": "p.obj", "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}, "field": {"fit_radius": 0}}"#,
+            "field.fit_radius",
+        ),
+        (
             r#"{"lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#,
             "mesh",
         ),

@@ -172,13 +172,84 @@ pub(crate) struct JetRings {
     offsets: [Vec<Vector3<f64>>; 4],
     ring: Vec<u32>,
     grow: Vec<u32>,
+    /// The ball of [`JetRings::fit_in_ball`] at the current vertex, once gathered: 1/h and the
+    /// scaled offsets, or `None` when it holds too few vertices.
+    ball: Option<Option<(f64, Vec<Vector3<f64>>)>>,
+    seen: std::collections::HashSet<u32>,
 }
+
+/// Most vertices a fit over a ball uses (`field.fit_radius`): the nearest in breadth-first
+/// order. Bounds the work at 512 points per vertex however fine the mesh is against the radius.
+pub const MAX_BALL_POINTS: usize = 512;
 
 impl JetRings {
     /// Forgets the cached rings; the next fits are at vertex `i`.
     pub(crate) fn start(&mut self, i: usize) {
         self.vertex = i;
         self.valid = [false; 4];
+        self.ball = None;
+    }
+
+    /// The jet fit over the vertices within `radius` of the current vertex (reached through
+    /// edges between such vertices; at most [`MAX_BALL_POINTS`]), when they are more than its
+    /// 2-ring; else, or when that fit fails, [`JetRings::fit`]. A fit over a ball a few edges
+    /// wide averages out a scan's noise instead of fitting it (docs/math.md §5.6,
+    /// `field.fit_radius`).
+    pub(crate) fn fit_in_ball(
+        &mut self,
+        positions: &[Vector3<f64>],
+        adj: &Adjacency,
+        frame: &Frame,
+        radius: f64,
+    ) -> JetFit {
+        if self.ball.is_none() {
+            self.ball = Some(self.gather_ball(positions, adj, radius));
+        }
+        if let Some(Some((inv_h, offsets))) = &self.ball {
+            if let Some((w, slope)) = fit_scaled(offsets, *inv_h, frame) {
+                return JetFit { w, slope, ring: 1 };
+            }
+        }
+        self.fit(positions, adj, frame)
+    }
+
+    fn gather_ball(
+        &mut self,
+        positions: &[Vector3<f64>],
+        adj: &Adjacency,
+        radius: f64,
+    ) -> Option<(f64, Vec<Vector3<f64>>)> {
+        let i = self.vertex;
+        let pi = positions[i];
+        let r2 = radius * radius;
+        self.seen.clear();
+        self.seen.insert(i as u32);
+        self.ring.clear();
+        let mut head = 0;
+        let mut frontier = vec![i as u32];
+        'grow: while head < frontier.len() {
+            let v = frontier[head] as usize;
+            head += 1;
+            for &j in adj.neighbors(v) {
+                let inside = (positions[j as usize] - pi).norm_squared() <= r2;
+                if !inside || !self.seen.insert(j) {
+                    continue;
+                }
+                self.ring.push(j);
+                frontier.push(j);
+                if self.ring.len() >= MAX_BALL_POINTS {
+                    break 'grow;
+                }
+            }
+        }
+        gather_ring(adj, i, 2, &mut self.grow, &mut frontier);
+        if self.ring.len() <= self.grow.len() {
+            return None;
+        }
+        self.ring.sort_unstable();
+        let mut offsets = Vec::new();
+        let inv_h = scaled_offsets(positions, i, &self.ring, &mut offsets)?;
+        Some((inv_h, offsets))
     }
 
     /// Exactly [`jet_fit`] at the current vertex, reusing the rings gathered by earlier fits at it.

@@ -37,6 +37,10 @@ pub struct GeometryOptions {
     /// Every quantity grainline reports is independent of the frames; this exists to test
     /// that, and to make frame-dependent bugs visible.
     pub frame_twist_seed: Option<u64>,
+    /// Fit the jets over the vertices within this distance (scene units) rather than the
+    /// 1-ring (`field.fit_radius`, docs/math.md §5.6): a scan's noise averaged out at that
+    /// scale. `None` (the default): the 1-ring, grown only where it is degenerate.
+    pub fit_radius: Option<f64>,
 }
 
 impl Default for GeometryOptions {
@@ -45,6 +49,7 @@ impl Default for GeometryOptions {
             normals: NormalSource::AngleWeighted,
             normal_refinements: 1,
             frame_twist_seed: None,
+            fit_radius: None,
         }
     }
 }
@@ -74,19 +79,23 @@ fn fit_vertex(
     rings: &mut curvature::JetRings,
 ) -> (Frame, curvature::JetFit) {
     rings.start(i);
+    let fit_in = |rings: &mut curvature::JetRings, frame: &Frame| match options.fit_radius {
+        Some(r) => rings.fit_in_ball(&mesh.positions, adjacency, frame, r),
+        None => rings.fit(&mesh.positions, adjacency, frame),
+    };
     let mut frame = Frame::from_normal(*n);
-    let mut fit = rings.fit(&mesh.positions, adjacency, &frame);
+    let mut fit = fit_in(rings, &frame);
     for _ in 0..refinements {
         if fit.ring == 0 {
             break;
         }
         let tilted = frame.n - frame.t * fit.slope[0] - frame.b * fit.slope[1];
         frame = Frame::from_normal(normals::normalize_or(tilted, frame.n));
-        fit = rings.fit(&mesh.positions, adjacency, &frame);
+        fit = fit_in(rings, &frame);
     }
     if let Some(seed) = options.frame_twist_seed {
         frame = Frame::with_tangent(frame.n, frame.direction(twist_angle(seed, i)));
-        fit = rings.fit(&mesh.positions, adjacency, &frame);
+        fit = fit_in(rings, &frame);
     }
     (frame, fit)
 }

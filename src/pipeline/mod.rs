@@ -217,6 +217,7 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     field_options.symmetry = scene.field.symmetry.symmetry();
     field_options.gradient_form = scene.field.gradient_form;
     field_options.geometry.normals = scene.field.normals;
+    field_options.geometry.fit_radius = scene.field.fit_radius;
     field_options.critical_threshold = scene.field.critical_threshold;
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);

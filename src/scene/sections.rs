@@ -422,6 +422,11 @@ pub struct FieldSection {
     pub normals: NormalSource,
     /// hᵀn above which a vertex is a critical point (default 0.9995).
     pub critical_threshold: f64,
+    /// Fit normals and curvature over the vertices within this distance (scene units) instead
+    /// of each vertex's 1-ring: for scans, a few times the noise's wavelength (none by default;
+    /// docs/math.md §5.6).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fit_radius: Option<f64>,
     /// Where `grainline run` writes FIELD.json (none by default).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
@@ -437,6 +442,7 @@ impl Default for FieldSection {
             gradient_form: GradientForm::default(),
             normals: NormalSource::default(),
             critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
+            fit_radius: None,
             output: None,
         }
     }
@@ -467,6 +473,14 @@ impl FieldSection {
         }
         if self.directions.is_some() && self.init != InitKind::Directions {
             return Err(Error::setting("directions", "is only used with `init: \"directions\"`"));
+        }
+        if let Some(r) = self.fit_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::setting(
+                    "fit_radius",
+                    format!("must be a positive distance, got {}", crate::error::fmt_num(r)),
+                ));
+            }
         }
         let t = self.critical_threshold;
         if !(t.is_finite() && t > 0.0 && t <= 1.0) {
