@@ -39,7 +39,7 @@
 use nalgebra::{Vector2, Vector3};
 use serde::Serialize;
 
-use crate::edit::support::{barycentric, Support};
+use crate::edit::support::Support;
 use crate::edit::{EditReport, WarpKind};
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
@@ -50,7 +50,7 @@ mod grid;
 mod segments;
 mod uv_lift;
 
-use grid::{point_segment_distance, SegmentGrid};
+use grid::{point_segment_distance, SegmentGrid, TriangleGrid};
 pub use segments::highlight_segments;
 use segments::{indexed_segments, segments_with_normals};
 pub use uv_lift::lift_uv_polylines;
@@ -200,94 +200,6 @@ pub struct EditFidelity {
     pub off_part: usize,
     /// Why the edit could not be measured, or what missed.
     pub note: Option<String>,
-}
-
-/// Point-in-triangle queries for planar triangles: each triangle listed under the cells of a
-/// uniform grid over the chart that its box covers (cells about the mean triangle's size, at
-/// most 256 per axis); a triangle covering more than [`OnFaces::WIDE`] cells (a sliver along
-/// the brush) is kept apart and tried for every query.
-struct OnFaces<'a> {
-    tris: &'a [[Vector2<f64>; 3]],
-    lo: Vector2<f64>,
-    cell: f64,
-    n: [usize; 2],
-    cells: Vec<Vec<u32>>,
-    wide: Vec<u32>,
-}
-
-impl<'a> OnFaces<'a> {
-    const WIDE: usize = 64;
-
-    fn new(tris: &'a [[Vector2<f64>; 3]]) -> Self {
-        let finite = |t: &&[Vector2<f64>; 3]| t.iter().all(|p| p.iter().all(|c| c.is_finite()));
-        let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(-f64::INFINITY));
-        let mut size = 0.0;
-        for t in tris.iter().filter(finite) {
-            for p in t {
-                lo = lo.inf(p);
-                hi = hi.sup(p);
-            }
-            size += (t[1] - t[0]).norm() + (t[2] - t[1]).norm() + (t[0] - t[2]).norm();
-        }
-        let count = tris.iter().filter(finite).count().max(1) as f64;
-        let span = (hi - lo).max();
-        let cell = (size / (3.0 * count)).max(span / 256.0);
-        let mut grid = OnFaces { tris, lo, cell, n: [0, 0], cells: Vec::new(), wide: Vec::new() };
-        if !(cell.is_finite() && cell > 0.0) {
-            grid.wide = (0..tris.len() as u32).collect();
-            return grid;
-        }
-        let n = |i: usize| ((hi[i] - lo[i]) / cell).floor() as usize + 1;
-        grid.n = [n(0), n(1)];
-        grid.cells = vec![Vec::new(); grid.n[0] * grid.n[1]];
-        for (k, t) in tris.iter().enumerate() {
-            if !finite(&t) {
-                continue;
-            }
-            // The box grown by a little more than the barycentric tolerance allows outside.
-            let (tlo, thi) = (t[0].inf(&t[1]).inf(&t[2]), t[0].sup(&t[1]).sup(&t[2]));
-            let margin = Vector2::repeat(1e-5 * (thi - tlo).norm());
-            let (a, b) = (grid.key(&(tlo - margin)), grid.key(&(thi + margin)));
-            if (b[0] - a[0] + 1) * (b[1] - a[1] + 1) > Self::WIDE {
-                grid.wide.push(k as u32);
-                continue;
-            }
-            for i in a[0]..=b[0] {
-                for j in a[1]..=b[1] {
-                    grid.cells[i * grid.n[1] + j].push(k as u32);
-                }
-            }
-        }
-        grid
-    }
-
-    /// The cell of `p`, clamped to the grid.
-    fn key(&self, p: &Vector2<f64>) -> [usize; 2] {
-        let q = (p - self.lo) / self.cell;
-        let at = |x: f64, n: usize| (x.floor().max(0.0) as usize).min(n.saturating_sub(1));
-        [at(q.x, self.n[0]), at(q.y, self.n[1])]
-    }
-
-    /// Whether planar point `p` lies in one of the triangles (a small tolerance).
-    fn contains(&self, p: &Vector2<f64>) -> bool {
-        let inside = |k: &u32| {
-            barycentric(p, &self.tris[*k as usize]).is_some_and(|b| b.iter().all(|&x| x >= -1e-6))
-        };
-        if self.wide.iter().any(inside) {
-            return true;
-        }
-        if self.cells.is_empty() || !p.iter().all(|c| c.is_finite()) {
-            return false;
-        }
-        // A point just outside the grid's box may still be within the tolerance of a triangle
-        // on its edge: the clamped cell holds those.
-        self.cells[{
-            let k = self.key(p);
-            k[0] * self.n[1] + k[1]
-        }]
-        .iter()
-        .any(inside)
-    }
 }
 
 /// A face of a brush in its chart: the 3D corners and their chart coordinates.
@@ -538,7 +450,7 @@ pub fn edit_fidelity(
             // the part's boundary: no grain the edit may change puts a highlight there. They
             // are counted and left out.
             let tris: Vec<[Vector2<f64>; 3]> = chart_faces.iter().map(|x| x.1.corners).collect();
-            let on_faces = OnFaces::new(&tris);
+            let on_faces = TriangleGrid::new(&tris);
             let samples: Vec<Vector2<f64>> =
                 all_samples.iter().copied().filter(|p| on_faces.contains(p)).collect();
             fid.off_part = all_samples.len() - samples.len();
