@@ -3,7 +3,7 @@
 //! ```text
 //! cargo run --release --example bench_fidelity -- [--energy position|tensor|both]
 //!     [--cases NAME,...] [--edits bend,expand,curve] [--small] [--dump DIR]
-//!     [--solver JSON] [--mesh FILE [--weld D]]...
+//!     [--solver JSON] [--field JSON] [--mesh FILE [--weld D]]...
 //! ```
 //!
 //! `--mesh FILE` (repeatable) runs the three edits on any mesh (OBJ, STL, PLY) instead of the
@@ -11,7 +11,8 @@
 //! never seen. `--weld D` welds its vertices closer than D (file units) and accepts the
 //! non-manifold vertices that leaves.
 //!
-//! `--solver '{"smoothness": 1e-6}'` merges further `solver` keys into every case's settings.
+//! `--solver '{"smoothness": 1e-6}'` merges further `solver` keys into every case's settings,
+//! `--field '{"fit_radius": 8}'` further `field` keys into every case's scene.
 //! `--dump DIR` also writes each case's edited scene as `DIR/CASE-EDIT-ENERGY.json` (mesh path
 //! absolute, a 768² preview with the key highlight curves and the edit's support drawn), so that
 //! `grainline run DIR/CASE-EDIT-ENERGY.json --out-dir DIR` shows by eye what the figures say.
@@ -71,6 +72,14 @@ fn main() {
                 Some(w) if w >= 0.0 => weld = Some(w),
                 _ => usage("--weld takes a distance ≥ 0 in the file's units"),
             },
+            "--field" => {
+                let extra = args.next().unwrap_or_default();
+                if !serde_json::from_str::<serde_json::Value>(&extra).is_ok_and(|v| v.is_object()) {
+                    usage(&format!("--field takes a JSON object of `field` keys, got {extra:?}"));
+                }
+                // SAFETY: single-threaded here, before any thread starts.
+                unsafe { std::env::set_var("GRAINLINE_CORPUS_FIELD", extra) }
+            }
             // SAFETY: single-threaded here, before any thread starts.
             "--solver" => unsafe {
                 std::env::set_var("GRAINLINE_CORPUS_SOLVER", args.next().unwrap_or_default())
@@ -285,7 +294,7 @@ fn usage(msg: &str) -> ! {
     }
     eprintln!(
         "usage: bench_fidelity [--energy position|tensor|both] [--cases NAME,...] \
-         [--edits bend,expand,curve] [--small] [--dump DIR] [--solver JSON] \
+         [--edits bend,expand,curve] [--small] [--dump DIR] [--solver JSON] [--field JSON] \
          [--mesh FILE [--weld D]]..."
     );
     std::process::exit(if msg.is_empty() { 0 } else { 2 });

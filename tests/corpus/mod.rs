@@ -275,12 +275,23 @@ pub fn scene_json(case: &Case) -> serde_json::Value {
     if case.nonmanifold {
         mesh["allow_nonmanifold"] = true.into();
     }
-    let field = match case.init {
+    let mut field = match case.init {
         Init::Uv => serde_json::json!({ "init": "uv", "symmetry": "line" }),
         Init::World(d) => {
             serde_json::json!({ "init": "world", "world": arr(&d), "symmetry": "line" })
         }
     };
+    // `GRAINLINE_CORPUS_FIELD` (a JSON object of further `field` keys, the bench's `--field`,
+    // e.g. `{"fit_radius": 8}`) is merged in, for experiments; a malformed one is ignored here
+    // and refused by the bench before any case runs.
+    if let Some(extra) = std::env::var("GRAINLINE_CORPUS_FIELD")
+        .ok()
+        .and_then(|e| serde_json::from_str::<serde_json::Value>(&e).ok())
+    {
+        for (k, v) in extra.as_object().into_iter().flatten() {
+            field[k] = v.clone();
+        }
+    }
     serde_json::json!({
         "mesh": mesh,
         "units": "mm",
