@@ -161,8 +161,15 @@ impl Geometry {
         lap("vertex_faces");
         let adjacency = Adjacency::from_vertex_faces(&mesh.faces, &vf);
         lap("adjacency");
-        let (normals, fallback_normals) =
+        let (mut normals, fallback_normals) =
             normals::vertex_normals_from_faces(mesh, &vf, &face_n, options.normals);
+        // Vertices whose normal the flat faces around them fix (math.md §3, "Flat regions"):
+        // their normal is that plane's and the jet fit does not tilt it.
+        let pinned = if options.normals == NormalSource::File && mesh.normals.is_some() {
+            vec![false; normals.len()]
+        } else {
+            normals::pin_flat_normals(mesh, &vf, &adjacency, &face_n, &mut normals)
+        };
         drop(face_n);
         lap("normals");
         let refinements = if options.normals == NormalSource::File && mesh.normals.is_some() {
@@ -193,8 +200,9 @@ impl Geometry {
             .for_each_init(curvature::JetRings::default, |bufs, (c, (((fr, w), pr), rg))| {
                 for k in 0..fr.len() {
                     let i = c * FIT_CHUNK + k;
+                    let refine = if pinned[i] { 0 } else { refinements };
                     let (frame, fit) =
-                        fit_vertex(mesh, &adjacency, options, refinements, &normals[i], i, bufs);
+                        fit_vertex(mesh, &adjacency, options, refine, &normals[i], i, bufs);
                     fr[k] = frame;
                     w[k] = fit.w;
                     pr[k] = Principal::from_weingarten(&fit.w);

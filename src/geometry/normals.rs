@@ -304,3 +304,89 @@ fn sector_normals(
         .collect();
     (Some(normals), sharp)
 }
+
+/// Faces whose unit normals agree this closely (within 1e-4 rad) lie in one plane.
+const FLAT_COS: f64 = 1.0 - 5e-9;
+
+/// Fewest faces around a flat vertex: a corner of a curved quad grid has one quad's two
+/// coplanar triangles.
+pub const MIN_FLAT_FACES: usize = 3;
+
+/// Beyond this angle from a flat region's plane, a face meets it at a crease, not tangentially.
+const TANGENT_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
+
+/// Sets the normal of the vertices that flat faces fix, and says which (math.md §3, "Flat
+/// regions"): an interior vertex with at least three faces, all coplanar (within 1e-4 rad), is
+/// *flat*, and its normal is their plane's, which the jet fit does not tilt; a vertex on the
+/// rim of flat faces — some of its faces are incident to a flat
+/// vertex, all of those lie in one plane, and its other faces lean less than 30° from it (a
+/// fillet or a gently curved face meeting the plane tangentially, as CAD parts are made) — gets
+/// the plane's normal too. Weighted averages leaned such a rim towards the curved side by half
+/// its first step, so the flat face shaded as if it curved up to its rim.
+pub fn pin_flat_normals(
+    mesh: &Mesh,
+    vf: &VertexFaces,
+    adjacency: &crate::mesh::Adjacency,
+    faces: &[FaceData],
+    normals: &mut [Vector3<f64>],
+) -> Vec<bool> {
+    let nv = normals.len();
+    // The plane of each flat vertex.
+    let plane: Vec<Option<Vector3<f64>>> = (0..nv)
+        .map(|v| {
+            // Two faces (one quad of a curved grid's corner) or a boundary vertex (the first
+            // strip of a ruled surface, a cylinder meshed along its rulings, is planar) do not
+            // make a flat region.
+            if vf.of(v).len() < MIN_FLAT_FACES || adjacency.is_boundary_vertex(v) {
+                return None;
+            }
+            let mut it = vf.of(v).iter().map(|&(f, _)| faces[f as usize].normal);
+            let first = it.find(|n| n.norm_squared() > 0.0)?;
+            it.all(|n| n.norm_squared() == 0.0 || n.dot(&first) >= FLAT_COS).then_some(first)
+        })
+        .collect();
+    let mut pinned = vec![false; nv];
+    for v in 0..nv {
+        // A flat vertex's normal is its plane's, and the jet fit must not tilt it: a ring grown
+        // past the rim (a low-valence vertex's 2-ring) reaches the curved side.
+        let target = match plane[v] {
+            Some(p) => Some(p),
+            None => rim_plane(mesh, vf, faces, &plane, v),
+        };
+        if let Some(p) = target {
+            // The plane's normal, on the side the vertex's own normal is.
+            normals[v] = if p.dot(&normals[v]) < 0.0 { -p } else { p };
+            pinned[v] = true;
+        }
+    }
+    pinned
+}
+
+/// The plane of the flat faces at rim vertex `v` ([`pin_flat_normals`]), if there is one.
+fn rim_plane(
+    mesh: &Mesh,
+    vf: &VertexFaces,
+    faces: &[FaceData],
+    plane: &[Option<Vector3<f64>>],
+    v: usize,
+) -> Option<Vector3<f64>> {
+    // The planes of the flat vertices that share a face with v.
+    let mut p: Option<Vector3<f64>> = None;
+    for &(f, _) in vf.of(v) {
+        for &w in &mesh.faces[f as usize] {
+            let Some(n) = plane[w as usize] else { continue };
+            match p {
+                None => p = Some(n),
+                Some(q) if q.dot(&n) >= FLAT_COS => {}
+                Some(_) => return None, // two planes meet here
+            }
+        }
+    }
+    let p = p?;
+    let tangent = vf
+        .of(v)
+        .iter()
+        .map(|&(f, _)| faces[f as usize].normal)
+        .all(|n| n.norm_squared() == 0.0 || n.dot(&p) >= TANGENT_COS);
+    tangent.then_some(p)
+}

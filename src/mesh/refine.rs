@@ -116,6 +116,7 @@ pub fn refine_with(
         pos: mesh.positions.clone(),
         nrm: vertex_normals(mesh),
         plane: flat_planes(mesh),
+        rim: Vec::new(),
         faces: mesh.faces.clone(),
         origin: (0..mesh.num_faces() as u32).collect(),
         target: target.to_vec(),
@@ -123,6 +124,7 @@ pub fn refine_with(
         normals: mesh.normals.clone(),
         parents: Vec::new(),
     };
+    state.rim = rim_planes(mesh, &state.plane);
     let mut levels = 0;
     for _ in 0..options.max_levels {
         let Some(plan) = state.plan() else { break };
@@ -164,8 +166,8 @@ pub fn refine_with(
     })
 }
 
-/// Per vertex, the unit normal of its faces when they all lie in one plane (within
-/// [`FLAT_COS`]; faces of zero area do not count), else `None`: the vertices inside a flat
+/// Per interior vertex with at least three faces, the unit normal of its faces when they all
+/// lie in one plane (within [`FLAT_COS`]; faces of zero area do not count), else `None`: the vertices inside a flat
 /// region of the part as loaded. They are classified once, before any split: a new vertex on
 /// the region's curved rim may lie a little off the plane, and would make its flat neighbours
 /// look curved.
@@ -185,7 +187,61 @@ fn flat_planes(mesh: &Mesh) -> Vec<Option<Vector3<f64>>> {
             }
         }
     }
-    seen.into_iter().map(|s| s.and_then(|(n, agree)| agree.then_some(n))).collect()
+    // Two faces (one quad of a curved grid's corner) or a boundary vertex (the first strip of a
+    // ruled surface meshed along its rulings is planar) do not make a flat region.
+    let mut count = vec![0usize; mesh.num_vertices()];
+    let mut edges: HashMap<[u32; 2], u32> = HashMap::new();
+    for f in &mesh.faces {
+        for k in 0..3 {
+            count[f[k] as usize] += 1;
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *edges.entry([a.min(b), a.max(b)]).or_insert(0) += 1;
+        }
+    }
+    let mut boundary = vec![false; mesh.num_vertices()];
+    for (e, n) in &edges {
+        if *n == 1 {
+            boundary[e[0] as usize] = true;
+            boundary[e[1] as usize] = true;
+        }
+    }
+    seen.into_iter()
+        .enumerate()
+        .map(|(v, s)| {
+            s.and_then(|(n, agree)| (agree && count[v] >= 3 && !boundary[v]).then_some(n))
+        })
+        .collect()
+}
+
+/// Per vertex of the part as loaded on the rim of a flat region ([`State::rim`]): not flat,
+/// every flat vertex it shares a face with in one plane, and itself on that plane (within 1e-6
+/// of its distance to them).
+fn rim_planes(
+    mesh: &Mesh,
+    plane: &[Option<Vector3<f64>>],
+) -> Vec<Option<(Vector3<f64>, Vector3<f64>)>> {
+    // (plane, a point of it, still one plane)
+    type Seen = Option<(Vector3<f64>, Vector3<f64>, bool)>;
+    let mut seen: Vec<Seen> = vec![None; mesh.num_vertices()];
+    for f in &mesh.faces {
+        for &w in f {
+            let Some(n) = plane[w as usize] else { continue };
+            let pw = mesh.positions[w as usize];
+            for &v in f {
+                let v = v as usize;
+                if plane[v].is_some() {
+                    continue;
+                }
+                let d = mesh.positions[v] - pw;
+                let on = d.dot(&n).abs() <= 1e-6 * d.norm();
+                match &mut seen[v] {
+                    s @ None => *s = Some((n, pw, on)),
+                    Some((q, _, ok)) => *ok &= on && q.dot(&n) >= FLAT_COS,
+                }
+            }
+        }
+    }
+    seen.into_iter().map(|s| s.and_then(|(n, p, ok)| ok.then_some((n, p)))).collect()
 }
 
 /// Vertex normals with Max's weights (Max 1999, "Weights for computing vertex normals from
@@ -215,6 +271,10 @@ struct State {
     /// vertices, the normal of their faces when all lie in one plane ([`flat_planes`]); a new
     /// vertex on an edge out of such a vertex inherits its plane.
     plane: Vec<Option<Vector3<f64>>>,
+    /// Per vertex on the rim of a flat region (not flat itself, but sharing a face with a flat
+    /// vertex, and lying on its plane): that plane's unit normal and a point of it. An edge
+    /// along the rim keeps its new vertex on the plane ([`rim_planes`]).
+    rim: Vec<Option<(Vector3<f64>, Vector3<f64>)>>,
     faces: Vec<[u32; 3]>,
     /// The input face each face descends from.
     origin: Vec<u32>,
@@ -351,12 +411,23 @@ impl State {
             return (m - plane * (m - on).dot(&plane), n, Some(plane));
         }
         let n = (na + nb).try_normalize(1e-300).unwrap_or(na);
-        if na.dot(&nb) < CREASE_COS {
-            return (m, n, None);
+        let p = if na.dot(&nb) < CREASE_COS {
+            m
+        } else {
+            let proj = |p: &Vector3<f64>, q: &Vector3<f64>| m - q * (m - p).dot(q);
+            let star = (proj(&pa, &na) + proj(&pb, &nb)) * 0.5;
+            m + (star - m) * PHONG_ALPHA
+        };
+        (p, n, None)
+    }
+
+    /// The plane an edge along a flat region's rim keeps its new vertex on: both ends on the
+    /// rim of one plane ([`State::rim`]).
+    fn rim_of(&self, a: usize, b: usize) -> Option<(Vector3<f64>, Vector3<f64>)> {
+        match (self.rim[a], self.rim[b]) {
+            (Some((n, on)), Some((q, _))) if n.dot(&q) >= FLAT_COS => Some((n, on)),
+            _ => None,
         }
-        let proj = |p: &Vector3<f64>, q: &Vector3<f64>| m - q * (m - p).dot(q);
-        let star = (proj(&pa, &na) + proj(&pb, &nb)) * 0.5;
-        (m + (star - m) * PHONG_ALPHA, n, None)
     }
 
     fn split(&mut self, plan: &Plan, retarget: Retarget<'_>) {
@@ -365,11 +436,18 @@ impl State {
             if !plan.marked[e] {
                 continue;
             }
-            let (p, n, plane) = self.midpoint(a as usize, b as usize);
+            let (mut p, n, plane) = self.midpoint(a as usize, b as usize);
+            // Along a flat region's rim the Phong point follows the rim's curve in the plane
+            // but not the rim's normals out of it (they lean towards the curved side).
+            let rim = if plane.is_none() { self.rim_of(a as usize, b as usize) } else { None };
+            if let Some((rn, on)) = rim {
+                p -= rn * (p - on).dot(&rn);
+            }
             mid[e] = self.pos.len() as u32;
             self.pos.push(p);
             self.nrm.push(n);
             self.plane.push(plane);
+            self.rim.push(rim);
             self.parents.push([a, b]);
         }
         let mut uv = self.uv.take().map(Corners::new);
@@ -554,6 +632,7 @@ mod tests {
             pos: vec![pa, pb],
             nrm: vec![pa, pb],
             plane: vec![None, None],
+            rim: vec![None, None],
             faces: vec![],
             origin: vec![],
             target: vec![],
