@@ -53,9 +53,9 @@ fn check_gcode_tool() -> Option<PathBuf> {
 /// travel height is above every cutting point, and every feed is > 0.
 fn check_gcode(name: &str, ngc: &std::path::Path, canon: &std::path::Path) {
     let Some(tool) = check_gcode_tool() else { return };
-    let o = Command::new("bash").arg(&tool).arg("--canon").arg(canon).arg(ngc).output().unwrap();
-    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{name}: check-gcode rejected {}:\n{text}", ngc.display());
+    let (ok, text) =
+        common::run_checker(&tool, &["--canon".as_ref(), canon.as_os_str(), ngc.as_os_str()]);
+    assert!(ok, "{name}: check-gcode rejected {}:\n{text}", ngc.display());
     let file = canon.join(format!("{}.canon", ngc.file_name().unwrap().to_string_lossy()));
     let c = std::fs::read_to_string(file).unwrap();
     let args = |l: &str| -> Vec<f64> {

@@ -390,14 +390,8 @@ fn check_gcode(shared: &std::path::Path, name: &str, ngc: &std::path::Path) {
         return;
     }
     common::ensure_rs274(&tool);
-    let o = Command::new("bash").arg(&tool).arg(ngc).output().unwrap();
-    assert!(
-        o.status.success(),
-        "{name}: check-gcode rejected {}:\n{}{}",
-        ngc.display(),
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let (ok, text) = common::run_checker(&tool, &[ngc.as_os_str()]);
+    assert!(ok, "{name}: check-gcode rejected {}:\n{text}", ngc.display());
 }
 
 /// Coverage every corpus mesh must reach on its generated layout (issue 14: 95 %; with the

@@ -22,4 +22,4 @@ pub fn shared_mesh(name: &str) -> Option<PathBuf> {
 #[path = "../support/rs274.rs"]
 mod rs274;
 #[allow(unused_imports)] // not every test binary runs check-gcode
-pub use rs274::ensure_rs274;
+pub use rs274::{ensure_rs274, run_checker};

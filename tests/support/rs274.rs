@@ -27,3 +27,26 @@ pub fn ensure_rs274(tool: &std::path::Path) {
         let _ = std::fs::remove_file(&program);
     }
 }
+
+/// Runs a shared checker (`bash TOOL ARGS…`) and returns whether it accepted and what it
+/// printed. A checker that *crashed* — LinuxCNC's rs274 dies of a bus error about once in a few
+/// hundred runs on programs it accepts otherwise — is run again, at most twice more; a
+/// rejection is never retried.
+pub fn run_checker(tool: &std::path::Path, args: &[&std::ffi::OsStr]) -> (bool, String) {
+    let mut text = String::new();
+    for attempt in 0..3 {
+        let out = std::process::Command::new("bash")
+            .arg(tool)
+            .args(args)
+            .output()
+            .expect("run shared tool");
+        text = String::from_utf8_lossy(&out.stdout).to_string()
+            + &String::from_utf8_lossy(&out.stderr);
+        let crashed = ["Bus error", "Segmentation fault"].iter().any(|c| text.contains(c));
+        if !crashed {
+            return (out.status.success(), text);
+        }
+        eprintln!("{} crashed (attempt {}), trying again:\n{text}", tool.display(), attempt + 1);
+    }
+    (false, text)
+}

@@ -98,22 +98,8 @@ pub fn scratch(name: &str) -> PathBuf {
 /// the suite here, on a program it accepts every other time) has given no verdict: the run is
 /// tried again, at most twice, and the crash is printed. A rejection is never retried.
 pub fn run_tool(tool: &std::path::Path, args: &[&std::path::Path]) -> (bool, String) {
-    let mut text = String::new();
-    for attempt in 0..3 {
-        let out = std::process::Command::new("bash")
-            .arg(tool)
-            .args(args)
-            .output()
-            .expect("run shared tool");
-        text = String::from_utf8_lossy(&out.stdout).to_string()
-            + &String::from_utf8_lossy(&out.stderr);
-        let crashed = ["Bus error", "Segmentation fault"].iter().any(|c| text.contains(c));
-        if !crashed {
-            return (out.status.success(), text);
-        }
-        eprintln!("{} crashed (attempt {}), trying again:\n{text}", tool.display(), attempt + 1);
-    }
-    (false, text)
+    let args: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_os_str()).collect();
+    rs274::run_checker(tool, &args)
 }
 
 /// A canonical move read back from rs274's output.
