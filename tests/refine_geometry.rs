@@ -121,17 +121,9 @@ fn puck() -> Mesh {
     Mesh::from_triangles(pos, faces)
 }
 
-/// A band across the puck's flat top refined to edges of 0.5: every new vertex inside the
-/// disc stays on its plane z = 20 (Phong points from the rim's normals, which lean towards the
-/// fillet, lifted them by up to 0.21 — a bump along every split sliver that the preview
-/// showed as streaks), and the new vertices on the fillet stay on its quarter circle within
-/// 60 % of its chords' sagitta (the rim's normals, shared by the disc and the fillet, lean
-/// by half a fillet step: Phong points are no better than the normals).
-#[test]
-fn refining_a_flat_face_keeps_it_flat() {
-    let m = puck();
-    let target: Vec<f64> = m
-        .faces
+/// Edges of 0.5 asked on the faces of a band across the puck's top (and its fillet there).
+fn band_across_the_top(m: &Mesh) -> Vec<f64> {
+    m.faces
         .iter()
         .map(|f| {
             let c =
@@ -142,7 +134,19 @@ fn refining_a_flat_face_keeps_it_flat() {
                 f64::INFINITY
             }
         })
-        .collect();
+        .collect()
+}
+
+/// A band across the puck's flat top refined to edges of 0.5: every new vertex inside the
+/// disc stays on its plane z = 20 (Phong points from the rim's normals, which lean towards the
+/// fillet, lifted them by up to 0.21 — a bump along every split sliver that the preview
+/// showed as streaks), and the new vertices on the fillet stay on its quarter circle within
+/// 60 % of its chords' sagitta (the rim's normals, shared by the disc and the fillet, lean
+/// by half a fillet step: Phong points are no better than the normals).
+#[test]
+fn refining_a_flat_face_keeps_it_flat() {
+    let m = puck();
+    let target = band_across_the_top(&m);
     let r = refine(&m, &target, &RefineOptions::default()).unwrap();
     let first = m.num_vertices();
     // Inside the disc, away from its rim (whose chords' midpoints sit at r = 35 cos 1.9°).
@@ -174,19 +178,7 @@ fn refining_a_flat_face_keeps_it_flat() {
 #[test]
 fn a_flat_face_meeting_a_fillet_has_the_planes_normal_up_to_its_rim() {
     let m = puck();
-    let target: Vec<f64> = m
-        .faces
-        .iter()
-        .map(|f| {
-            let c =
-                f.iter().map(|&v| m.positions[v as usize]).sum::<nalgebra::Vector3<f64>>() / 3.0;
-            if c.z > 14.0 && c.x.abs() < 30.0 && (c.y - 10.0).abs() < 4.0 {
-                0.5
-            } else {
-                f64::INFINITY
-            }
-        })
-        .collect();
+    let target = band_across_the_top(&m);
     let refined = refine(&m, &target, &RefineOptions::default()).unwrap().mesh;
     for (name, mesh) in [("as loaded", &m), ("refined", &refined)] {
         let g = Geometry::compute(mesh, &GeometryOptions::default());

@@ -369,12 +369,7 @@ fn polyline_distance(p: &Vector3<f64>, line: &[Vector3<f64>]) -> f64 {
         [a] => (p - a).norm(),
         _ => line
             .windows(2)
-            .map(|w| {
-                let ab = w[1] - w[0];
-                let l2 = ab.norm_squared();
-                let t = if l2 > 0.0 { ((p - w[0]).dot(&ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
-                (p - w[0] - ab * t).norm()
-            })
+            .map(|w| segment_distance(p, &[w[0], w[1]]))
             .fold(f64::INFINITY, f64::min),
     }
 }
@@ -443,19 +438,24 @@ mod tests {
         assert!(t.iter().all(|v| v.is_infinite()));
     }
 
-    /// Two long slivers (a 100 × 1 strip, as a CAD export meshes a flat face): a brush of 5 in
-    /// its middle holds no vertex, but it is no slip of units (5 % of the diagonal), so the two
-    /// faces it touches ask for its edge, and so do a curve's; a brush or curve off the strip
-    /// asks for nothing.
-    #[test]
-    fn a_brush_on_triangles_larger_than_it_asks_for_its_edge() {
+    /// A 100 × 1 strip of two long slivers, as a CAD export meshes a flat face.
+    fn two_slivers() -> Mesh {
         let pos = vec![
             Vector3::new(0.0, 0.0, 0.0),
             Vector3::new(100.0, 0.0, 0.0),
             Vector3::new(100.0, 1.0, 0.0),
             Vector3::new(0.0, 1.0, 0.0),
         ];
-        let m = Mesh::from_triangles(pos, vec![[0, 1, 2], [0, 2, 3]]);
+        Mesh::from_triangles(pos, vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    /// Two long slivers (a 100 × 1 strip, as a CAD export meshes a flat face): a brush of 5 in
+    /// its middle holds no vertex, but it is no slip of units (5 % of the diagonal), so the two
+    /// faces it touches ask for its edge, and so do a curve's; a brush or curve off the strip
+    /// asks for nothing.
+    #[test]
+    fn a_brush_on_triangles_larger_than_it_asks_for_its_edge() {
+        let m = two_slivers();
         let brush = |p: [f64; 3]| {
             Edit::Bend(WarpEdit {
                 centre: Centre::Point(p),
@@ -490,20 +490,14 @@ mod tests {
     }
 
     /// The 100 × 1 strip of two slivers with a brush of radius 5 in its middle: asked again
-    /// after each split, the slivers' children far from the brush are left alone, so every new
-    /// vertex lies within a few radii of the centre (the faces touching the ball, and the
-    /// longest-edge closure around them); inheriting the target splits the strip along its
-    /// whole length to the brush's edge.
+    /// after each split, the slivers' children far from the brush are left alone, so all but a
+    /// few new vertices (the longest-edge closure's, down the slivers) lie within three radii of
+    /// the centre; inheriting the target splits the strip along its whole length to the
+    /// brush's edge.
     #[test]
     fn a_sliver_is_refined_near_the_brush_only() {
         use crate::mesh::refine::{refine, refine_with, RefineOptions};
-        let pos = vec![
-            Vector3::new(0.0, 0.0, 0.0),
-            Vector3::new(100.0, 0.0, 0.0),
-            Vector3::new(100.0, 1.0, 0.0),
-            Vector3::new(0.0, 1.0, 0.0),
-        ];
-        let m = Mesh::from_triangles(pos, vec![[0, 1, 2], [0, 2, 3]]);
+        let m = two_slivers();
         let bend = Edit::Bend(WarpEdit {
             centre: Centre::Point([50.0, 0.5, 0.0]),
             radius: 5.0,

@@ -8,6 +8,7 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::mesh::refine::{FLAT_COS, MIN_FLAT_FACES};
 use crate::mesh::Mesh;
 pub use crate::mesh::VertexFaces;
 
@@ -305,13 +306,6 @@ fn sector_normals(
     (Some(normals), sharp)
 }
 
-/// Faces whose unit normals agree this closely (within 1e-4 rad) lie in one plane.
-const FLAT_COS: f64 = 1.0 - 5e-9;
-
-/// Fewest faces around a flat vertex: a corner of a curved quad grid has one quad's two
-/// coplanar triangles.
-pub const MIN_FLAT_FACES: usize = 3;
-
 /// Beyond this angle from a flat region's plane, a face meets it at a crease, not tangentially.
 const TANGENT_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
 
@@ -332,7 +326,9 @@ pub fn pin_flat_normals(
 ) -> Vec<bool> {
     let nv = normals.len();
     // The plane of each flat vertex.
+    // Per vertex and independent (in parallel; the same result at any thread count).
     let plane: Vec<Option<Vector3<f64>>> = (0..nv)
+        .into_par_iter()
         .map(|v| {
             // Two faces (one quad of a curved grid's corner) or a boundary vertex (the first
             // strip of a ruled surface, a cylinder meshed along its rulings, is planar) do not
@@ -345,21 +341,20 @@ pub fn pin_flat_normals(
             it.all(|n| n.norm_squared() == 0.0 || n.dot(&first) >= FLAT_COS).then_some(first)
         })
         .collect();
-    let mut pinned = vec![false; nv];
-    for v in 0..nv {
-        // A flat vertex's normal is its plane's, and the jet fit must not tilt it: a ring grown
-        // past the rim (a low-valence vertex's 2-ring) reaches the curved side.
-        let target = match plane[v] {
-            Some(p) => Some(p),
-            None => rim_plane(mesh, vf, faces, &plane, v),
-        };
-        if let Some(p) = target {
+    normals
+        .par_iter_mut()
+        .enumerate()
+        .map(|(v, n)| {
+            // A flat vertex's normal is its plane's, and the jet fit must not tilt it: a ring
+            // grown past the rim (a low-valence vertex's 2-ring) reaches the curved side.
+            let target = match plane[v] {
+                Some(p) => Some(p),
+                None => rim_plane(mesh, vf, faces, &plane, v),
+            };
             // The plane's normal, on the side the vertex's own normal is.
-            normals[v] = if p.dot(&normals[v]) < 0.0 { -p } else { p };
-            pinned[v] = true;
-        }
-    }
-    pinned
+            target.map(|p| *n = if p.dot(n) < 0.0 { -p } else { p }).is_some()
+        })
+        .collect()
 }
 
 /// The plane of the flat faces at rim vertex `v` ([`pin_flat_normals`]), if there is one.

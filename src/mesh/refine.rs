@@ -80,8 +80,13 @@ impl Refined {
 /// Angle between the vertex normals of an edge beyond which its midpoint is not curved.
 const CREASE_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
 
-/// Faces whose unit normals agree this closely (within 1e-4 rad) lie in one plane.
-const FLAT_COS: f64 = 1.0 - 5e-9;
+/// Faces whose unit normals agree this closely (within 1e-4 rad) lie in one plane (here and
+/// in the geometry's flat regions, [`crate::geometry::normals::pin_flat_normals`]).
+pub const FLAT_COS: f64 = 1.0 - 5e-9;
+
+/// Fewest faces around a flat vertex: a corner of a curved quad grid has one quad's two
+/// coplanar triangles.
+pub const MIN_FLAT_FACES: usize = 3;
 
 /// Phong tessellation's shape factor: ½ is exact to second order (module docs).
 const PHONG_ALPHA: f64 = 0.5;
@@ -208,7 +213,9 @@ fn flat_planes(mesh: &Mesh) -> Vec<Option<Vector3<f64>>> {
     seen.into_iter()
         .enumerate()
         .map(|(v, s)| {
-            s.and_then(|(n, agree)| (agree && count[v] >= 3 && !boundary[v]).then_some(n))
+            s.and_then(|(n, agree)| {
+                (agree && count[v] >= MIN_FLAT_FACES && !boundary[v]).then_some(n)
+            })
         })
         .collect()
 }
