@@ -13,9 +13,8 @@
 
 use std::f64::consts::PI;
 
-use serde::{Deserialize, Serialize};
-
 use crate::geom::{cross, norm, scale, sub, Vec2};
+pub use crate::mesh::Singularity;
 use crate::mesh::{Domain, Symmetry};
 
 /// Below this fraction of `Σ λᵢ |dᵢ|` the blended field counts as vanishing or incoherent.
@@ -46,17 +45,6 @@ pub(crate) fn sample(dom: &Domain, f: u32, bary: [f64; 3], heading: Option<Vec2>
     }
     let l = m.length(v);
     (l > 0.0).then(|| scale(v, 1.0 / l))
-}
-
-/// A singular point of the field.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Singularity {
-    /// UV position (where the blended field vanishes, else the triangle centroid).
-    pub uv: Vec2,
-    /// Face that holds it.
-    pub face: u32,
-    /// Poincaré index: +1 vortex/source, −1 saddle, ±½ for line fields (−½ trisector).
-    pub index: f64,
 }
 
 fn wrap(a: f64) -> f64 {
@@ -147,4 +135,11 @@ fn zero_in_triangle(c: [Vec2; 3], d: [Vec2; 3], k: f64) -> Option<(Vec2, f64)> {
     let jc = cross(sub(c[1], c[0]), sub(c[2], c[0]));
     let p = [0, 1].map(|j| l[0] * c[0][j] + l[1] * c[1][j] + l[2] * c[2][j]);
     Some((p, (jr / jc).signum()))
+}
+
+impl Domain {
+    /// The field's singularities ([`crate::singularities`]), computed once and cached.
+    pub fn singularities(&self) -> &[Singularity] {
+        self.sing.get_or_init(|| singularities(self))
+    }
 }

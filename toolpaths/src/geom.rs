@@ -134,3 +134,13 @@ pub(crate) fn point_segment_distance(m: &Metric, p: Vec2, a: Vec2, b: Vec2) -> f
     let t = if l2 > 0.0 { (m.inner(ap, ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
     m.length(sub(ap, scale(ab, t)))
 }
+
+/// Barycentric coordinates of `p` in face `f` (they sum to 1; all ≥ 0 inside).
+#[inline]
+pub(crate) fn barycentric(corners: [Vec2; 3], p: Vec2) -> [f64; 3] {
+    let [a, b, c] = corners;
+    let area = cross(sub(b, a), sub(c, a));
+    let l0 = cross(sub(b, p), sub(c, p)) / area;
+    let l1 = cross(sub(c, p), sub(a, p)) / area;
+    [l0, l1, 1.0 - l0 - l1]
+}

@@ -1,6 +1,7 @@
 //! A uniform bucket grid over UV for fixed-radius neighbour queries (the "grid for the
 //! distance tests" of Jobard & Lefer 1997, §3). Cells are sized near `d_sep`, so a query
-//! of radius `d_sep` touches about nine cells.
+//! of radius `d_sep` touches about nine cells. Also the grid over triangle bounding boxes
+//! that point location starts from ([`FaceGrid`]).
 
 use crate::geom::Vec2;
 
@@ -142,5 +143,80 @@ impl Grid3 {
                 }
             }
         }
+    }
+}
+
+/// A uniform grid over the UV bounding box; each cell lists the faces whose bounding box
+/// overlaps it (CSR layout, ascending face order so lookups are deterministic). Point
+/// location in it ([`FaceGrid::locate`]) is in `locate.rs`.
+#[derive(Debug)]
+pub(crate) struct FaceGrid {
+    pub(crate) origin: Vec2,
+    pub(crate) inv_cell: f64,
+    pub(crate) nx: usize,
+    pub(crate) ny: usize,
+    pub(crate) start: Vec<u32>,
+    pub(crate) faces: Vec<u32>,
+}
+
+impl FaceGrid {
+    pub(crate) fn new(uv: &[Vec2], tris: &[[u32; 3]], bbox: [Vec2; 2]) -> FaceGrid {
+        let w = (bbox[1][0] - bbox[0][0]).max(1e-300);
+        let h = (bbox[1][1] - bbox[0][1]).max(1e-300);
+        let target = (tris.len() as f64).clamp(1.0, 4e6);
+        let cell = (w * h / target).sqrt().max(w.max(h) / 4096.0);
+        let nx = ((w / cell).ceil() as usize).max(1);
+        let ny = ((h / cell).ceil() as usize).max(1);
+        let inv_cell = 1.0 / cell;
+        let range = |t: &[u32; 3]| {
+            let ps = t.map(|v| uv[v as usize]);
+            let lo = [0, 1].map(|k| ps.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min));
+            let hi = [0, 1].map(|k| ps.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max));
+            let cx = |x: f64, o: f64, n: usize| (((x - o) * inv_cell) as usize).min(n - 1);
+            (
+                cx(lo[0], bbox[0][0], nx),
+                cx(hi[0], bbox[0][0], nx),
+                cx(lo[1], bbox[0][1], ny),
+                cx(hi[1], bbox[0][1], ny),
+            )
+        };
+        let mut count = vec![0u32; nx * ny + 1];
+        for t in tris {
+            let (x0, x1, y0, y1) = range(t);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    count[y * nx + x + 1] += 1;
+                }
+            }
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let mut fill = count.clone();
+        let mut faces = vec![0u32; count[nx * ny] as usize];
+        for (f, t) in tris.iter().enumerate() {
+            let (x0, x1, y0, y1) = range(t);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let c = y * nx + x;
+                    faces[fill[c] as usize] = f as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        FaceGrid { origin: bbox[0], inv_cell, nx, ny, start: count, faces }
+    }
+
+    /// Faces whose bounding box overlaps the grid cell of `p` (empty outside the grid).
+    pub(crate) fn faces_near(&self, p: Vec2) -> &[u32] {
+        let fx = (p[0] - self.origin[0]) * self.inv_cell;
+        let fy = (p[1] - self.origin[1]) * self.inv_cell;
+        if !(fx >= 0.0 && fy >= 0.0) {
+            return &[];
+        }
+        let x = (fx as usize).min(self.nx - 1);
+        let y = (fy as usize).min(self.ny - 1);
+        let c = y * self.nx + x;
+        &self.faces[self.start[c] as usize..self.start[c + 1] as usize]
     }
 }

@@ -38,6 +38,7 @@ mod gcode;
 mod geom;
 mod grid;
 mod improve;
+mod input;
 mod job;
 mod json;
 mod locate;

@@ -1,5 +1,5 @@
-//! The input: a triangle mesh in UV carrying a direction field, and its validated form
-//! [`Domain`] with adjacency, per-triangle metric and point location.
+//! The validated form [`Domain`] of the input ([`FieldMesh`], in `input.rs`), with
+//! adjacency, per-triangle metric and the point-location grid.
 
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
@@ -7,130 +7,11 @@ use std::sync::OnceLock;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, ToolpathError};
-use crate::field::Singularity;
-use crate::geom::{cross, sub, Metric, Vec2, Vec3};
-use crate::locate::FaceGrid;
+use crate::geom::{barycentric, cross, sub, Metric, Vec2, Vec3};
+use crate::grid::FaceGrid;
+pub use crate::input::{Directions, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
 use crate::topology::{build_adjacency, build_metric, build_seams};
-
-/// Index of a UV vertex.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct VertexId(pub u32);
-
-/// Index of a UV triangle.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct FaceId(pub u32);
-
-/// Rotational symmetry of the direction field.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Symmetry {
-    /// k = 1: an oriented vector field; strokes follow the arrows.
-    Vector,
-    /// k = 2: a line field (`d ≡ −d`); corners are aligned to the current heading before
-    /// interpolation, so a stroke never reverses.
-    Line,
-}
-
-impl Symmetry {
-    /// `k = 1 → Vector`, `k = 2 → Line`; any other k is an error.
-    pub fn from_k(k: u32) -> Result<Symmetry> {
-        match k {
-            1 => Ok(Symmetry::Vector),
-            2 => Ok(Symmetry::Line),
-            _ => Err(ToolpathError::InvalidOption {
-                name: "symmetry",
-                value: k as f64,
-                reason: "only k = 1 (vector) and k = 2 (line) fields are supported",
-            }),
-        }
-    }
-}
-
-/// Per-vertex directions, expressed in UV coordinates.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Directions {
-    /// A UV vector per vertex. Its length matters only near zero: a vanishing vector marks a
-    /// singularity.
-    Vectors(Vec<Vec2>),
-    /// An angle per vertex, radians counter-clockwise from the +U axis (unit length).
-    Angles(Vec<f64>),
-}
-
-/// Two boundary edges of the UV layout that are the same edge on the part (a UV seam):
-/// vertex `a[0]` is glued to `b[0]` and `a[1]` to `b[1]`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct SeamPair {
-    /// One side of the seam (two UV vertex indices).
-    pub a: [u32; 2],
-    /// The other side, corresponding vertex by vertex.
-    pub b: [u32; 2],
-}
-
-/// The crate's input: a UV triangle mesh with a direction field and optional 3D lift.
-///
-/// UV coordinates are in millimetres for flat-sheet work. When a `metric` (or 3D
-/// `positions`, from which it is derived) is given, lengths are measured on the part instead.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FieldMesh {
-    /// UV position per vertex.
-    pub uv: Vec<Vec2>,
-    /// Triangles as vertex indices (either orientation; mirrored charts are fine).
-    pub triangles: Vec<[u32; 3]>,
-    /// Direction per vertex.
-    pub directions: Directions,
-    /// k = 1 or 2.
-    pub symmetry: Symmetry,
-    /// Optional 3D position per vertex (mm), the lift back onto the part.
-    pub positions: Option<Vec<Vec3>>,
-    /// Optional 3D unit normal per vertex, for surface following and tilt checks.
-    pub normals: Option<Vec<Vec3>>,
-    /// Optional first fundamental form per triangle; derived from `positions` when absent,
-    /// identity when both are absent.
-    pub metric: Option<Vec<Metric>>,
-    /// UV seams across which strokes may continue (see [`crate::TraceOptions::cross_seams`]).
-    pub seams: Vec<SeamPair>,
-}
-
-impl FieldMesh {
-    /// A flat field mesh: UV in mm, no lift, identity metric.
-    pub fn new(
-        uv: Vec<Vec2>,
-        triangles: Vec<[u32; 3]>,
-        directions: Directions,
-        symmetry: Symmetry,
-    ) -> FieldMesh {
-        FieldMesh {
-            uv,
-            triangles,
-            directions,
-            symmetry,
-            positions: None,
-            normals: None,
-            metric: None,
-            seams: Vec::new(),
-        }
-    }
-
-    /// Attach per-vertex 3D positions and (optionally) normals.
-    pub fn with_lift(mut self, positions: Vec<Vec3>, normals: Option<Vec<Vec3>>) -> FieldMesh {
-        self.positions = Some(positions);
-        self.normals = normals;
-        self
-    }
-
-    /// Attach a per-triangle first fundamental form.
-    pub fn with_metric(mut self, metric: Vec<Metric>) -> FieldMesh {
-        self.metric = Some(metric);
-        self
-    }
-
-    /// Attach UV seam pairs.
-    pub fn with_seams(mut self, seams: Vec<SeamPair>) -> FieldMesh {
-        self.seams = seams;
-        self
-    }
-}
+pub(crate) use crate::topology::{SeamLink, NONE};
 
 /// Connected components of the face adjacency, numbered by lowest face, and their UV boxes.
 fn build_charts(uv: &[Vec2], tris: &[[u32; 3]], nb: &[[u32; 3]]) -> (Vec<u32>, Vec<[Vec2; 2]>) {
@@ -191,17 +72,15 @@ fn vertex_normals(p: &[Vec3], tris: &[[u32; 3]], given: Option<&[Vec3]>) -> Vec<
     n
 }
 
-/// Sentinel for "no neighbour" in [`Domain`] adjacency.
-pub(crate) const NONE: u32 = u32::MAX;
-
-/// Where a boundary edge continues across a UV seam.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct SeamLink {
-    /// Face on the other side.
+/// A singular point of the field.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Singularity {
+    /// UV position (where the blended field vanishes, else the triangle centroid).
+    pub uv: Vec2,
+    /// Face that holds it.
     pub face: u32,
-    /// UV of the two glued vertices on this side, then on the other side.
-    pub from: [Vec2; 2],
-    pub to: [Vec2; 2],
+    /// Poincaré index: +1 vortex/source, −1 saddle, ±½ for line fields (−½ trisector).
+    pub index: f64,
 }
 
 /// A validated [`FieldMesh`] with triangle adjacency, metrics and a point-location grid.
@@ -230,8 +109,8 @@ pub struct Domain {
     /// Unit vertex normals used by the 3D spacing measure (the given normals, else area-
     /// weighted face normals); present with the lift.
     pub(crate) spacing_normals: Option<Vec<Vec3>>,
-    /// Singularities, found on first use.
-    sing: OnceLock<Vec<Singularity>>,
+    /// Singularities, found on first use (`field.rs`).
+    pub(crate) sing: OnceLock<Vec<Singularity>>,
 }
 
 fn check_finite2(what: &'static str, v: &[Vec2]) -> Result<()> {
@@ -344,11 +223,6 @@ impl Domain {
         })
     }
 
-    /// The field's singularities ([`crate::singularities`]), computed once and cached.
-    pub fn singularities(&self) -> &[Singularity] {
-        self.sing.get_or_init(|| crate::field::singularities(self))
-    }
-
     /// Number of charts (connected pieces of the UV layout; seams do not join them).
     pub fn chart_count(&self) -> usize {
         self.chart_bbox.len()
@@ -362,7 +236,7 @@ impl Domain {
     /// Pairs of charts `(a, b)`, `a < b`, whose UV triangles overlap (share interior
     /// points): such charts are separate sheets. Ascending order.
     pub fn overlapping_charts(&self) -> Vec<(usize, usize)> {
-        crate::topology::overlapping_charts(self)
+        overlapping_charts(self)
     }
 
     /// Number of triangles.
@@ -440,4 +314,31 @@ impl Domain {
         let l = crate::geom::norm3(n);
         (l > 0.0).then(|| n.map(|x| x / l))
     }
+}
+
+/// Chart pairs whose UV triangles overlap: some face's centroid lies inside a face of
+/// another chart (tested through the location grid's cell of the centroid).
+fn overlapping_charts(dom: &Domain) -> Vec<(usize, usize)> {
+    let mut pairs = std::collections::BTreeSet::new();
+    if dom.chart_count() < 2 {
+        return Vec::new();
+    }
+    for f in 0..dom.tris.len() as u32 {
+        let c = dom.corners(f);
+        let p = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0];
+        let cf = dom.chart[f as usize];
+        for &g in dom.grid.faces_near(p) {
+            let cg = dom.chart[g as usize];
+            if cg == cf || pairs.contains(&(cf.min(cg), cf.max(cg))) {
+                continue;
+            }
+            // A centroid inside or on the closed triangle: the open triangle of `f` meets
+            // the chart of `g` in interior points either way.
+            let b = barycentric(dom.corners(g), p);
+            if b.iter().all(|&x| x >= -1e-12) {
+                pairs.insert((cf.min(cg), cf.max(cg)));
+            }
+        }
+    }
+    pairs.into_iter().map(|(a, b)| (a as usize, b as usize)).collect()
 }

@@ -5,7 +5,20 @@ use std::collections::BTreeMap;
 
 use crate::error::{Result, ToolpathError};
 use crate::geom::{Metric, Vec2, Vec3};
-use crate::mesh::{SeamLink, SeamPair, NONE};
+use crate::input::SeamPair;
+
+/// Sentinel for "no neighbour" in [`Domain`](crate::Domain) adjacency.
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Where a boundary edge continues across a UV seam.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct SeamLink {
+    /// Face on the other side.
+    pub face: u32,
+    /// UV of the two glued vertices on this side, then on the other side.
+    pub from: [Vec2; 2],
+    pub to: [Vec2; 2],
+}
 
 pub(crate) fn build_metric(
     uv: &[Vec2],
@@ -115,32 +128,4 @@ pub(crate) fn build_seams(
         out.insert((fb, ib), SeamLink { face: fa, from: ub, to: ua });
     }
     Ok(out)
-}
-
-/// Chart pairs whose UV triangles overlap: some face's centroid lies inside a face of
-/// another chart (tested through the location grid's cell of the centroid).
-pub(crate) fn overlapping_charts(dom: &crate::mesh::Domain) -> Vec<(usize, usize)> {
-    use crate::locate::barycentric;
-    let mut pairs = std::collections::BTreeSet::new();
-    if dom.chart_count() < 2 {
-        return Vec::new();
-    }
-    for f in 0..dom.tris.len() as u32 {
-        let c = dom.corners(f);
-        let p = [(c[0][0] + c[1][0] + c[2][0]) / 3.0, (c[0][1] + c[1][1] + c[2][1]) / 3.0];
-        let cf = dom.chart[f as usize];
-        for &g in dom.grid.faces_near(p) {
-            let cg = dom.chart[g as usize];
-            if cg == cf || pairs.contains(&(cf.min(cg), cf.max(cg))) {
-                continue;
-            }
-            // A centroid inside or on the closed triangle: the open triangle of `f` meets
-            // the chart of `g` in interior points either way.
-            let b = barycentric(dom.corners(g), p);
-            if b.iter().all(|&x| x >= -1e-12) {
-                pairs.insert((cf.min(cg), cf.max(cg)));
-            }
-        }
-    }
-    pairs.into_iter().map(|(a, b)| (a as usize, b as usize)).collect()
 }
