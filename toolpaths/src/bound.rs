@@ -30,7 +30,7 @@ use std::collections::BinaryHeap;
 
 use crate::buckets::Buckets;
 use crate::geom::Vec2;
-use crate::order::{cell_size, d, Ends};
+use crate::tour::{cell_size, d, Ends};
 
 /// Lower bounds on travel for strokes in fixed orientation (see the module docs).
 #[derive(Clone, Debug, PartialEq)]

@@ -27,7 +27,7 @@ use std::collections::VecDeque;
 
 use crate::buckets::Buckets;
 use crate::geom::Vec2;
-use crate::order::{cell_size, d, Tour};
+use crate::tour::{cell_size, d, Tour};
 
 /// Least gain (mm) for a move to count; far above the rounding of the prefix sums.
 const EPS: f64 = 1e-9;

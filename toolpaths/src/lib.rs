@@ -54,6 +54,7 @@ mod stroke;
 mod stroke_checks;
 mod svg_out;
 mod topology;
+mod tour;
 mod trace;
 
 pub use bound::{travel_bound, BoundOptions, TravelBound};
