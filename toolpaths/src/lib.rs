@@ -9,6 +9,26 @@
 //! [`plan_toolpath`] (orient, simplify/arcs, order, leads, Z) → [`write_svg`],
 //! [`write_gcode`], [`strokes_json`]. [`generate`] runs all of it and fills a [`Report`].
 //!
+//! Layers of the source files, bottom to top (a file uses only files of lower layers):
+//!
+//! 1. `error`, `geom`: errors; vectors, metrics, barycentric coordinates.
+//! 2. `input`, `grid`, `buckets`, `simplify`, `stroke`, `tour`: the input mesh; uniform
+//!    grids; point buckets; polyline simplification; strokes; the stroke tour model.
+//! 3. `topology`, `improve`, `bound`: adjacency, metrics and seams; tour local search;
+//!    travel bounds.
+//! 4. `mesh`, `order`: the validated [`Domain`]; stroke ordering.
+//! 5. `field`, `locate`: field sampling and singularities; point location.
+//! 6. `trace`: streamline tracing.
+//! 7. `spacing`: stroke-to-stroke distances.
+//! 8. `place`: stroke placement.
+//! 9. `budget`, `coverage`, `stroke_checks`: work budgets; coverage; stroke checks.
+//! 10. `plan_options`: planner options.
+//! 11. `passes`: one pass from one stroke.
+//! 12. `plan`: the ordered passes.
+//! 13. `gcode`, `json`, `report`: G-code; JSON strokes; the report.
+//! 14. `svg_out`: SVG.
+//! 15. `job`: the whole pipeline ([`generate`]).
+//!
 //! ```
 //! use grainline_toolpaths::*;
 //! // A 4 × 2 mm sheet of two triangles with a constant field along +V.
@@ -47,6 +67,7 @@ mod order;
 mod passes;
 mod place;
 mod plan;
+mod plan_options;
 mod report;
 mod simplify;
 mod spacing;

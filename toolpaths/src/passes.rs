@@ -2,12 +2,65 @@
 //! part edge, the simplified (or arc-fitted) stroke, lead-out ramp; plus the simplified UV
 //! and 3D polylines for SVG and JSON. See [`crate::plan`] for the geometry.
 
+use serde::{Deserialize, Serialize};
+
 use crate::geom::{Vec2, Vec3};
 use crate::locate::barycentric;
 use crate::mesh::Domain;
-use crate::plan::{Item, MoveKind, Pass, PlanOptions};
+use crate::plan_options::PlanOptions;
 use crate::simplify::{fit_moves, Segment};
 use crate::trace::StopReason;
+
+/// Which part of a pass a move belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MoveKind {
+    /// Ramp down onto the stroke.
+    LeadIn,
+    /// Extension past the part edge.
+    Overtravel,
+    /// The stroke itself.
+    Cut,
+    /// Ramp up off the stroke.
+    LeadOut,
+}
+
+/// One pass of the tool: plunge at `start`, then `moves`, then retract.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pass {
+    /// Index of the stroke in [`Placement::strokes`](crate::Placement::strokes).
+    pub stroke: usize,
+    /// Whether the stroke runs end → start relative to its traced order.
+    pub reversed: bool,
+    /// First point (machine coordinates): where the tool plunges to.
+    pub start: Vec3,
+    /// Moves in order, with their kind.
+    pub moves: Vec<(MoveKind, Segment)>,
+    /// UV polyline pieces in cutting order (split at seam jumps), simplified.
+    pub uv: Vec<Vec<Vec2>>,
+    /// 3D lift of the oriented stroke points (when the input has positions), simplified
+    /// like `uv` (one list per piece).
+    pub xyz: Option<Vec<Vec<Vec3>>>,
+    /// Stop reason at the first / last point of the pass (after orientation).
+    pub stops: [StopReason; 2],
+    /// Surface length of the stroke, mm.
+    pub length: f64,
+    /// Sheet of the pass (flat mode: charts that overlap in UV go on separate sheets,
+    /// numbered from 0; always 0 when surface following or when no charts overlap).
+    pub sheet: usize,
+}
+
+/// An oriented stroke in machine space before ordering.
+#[derive(Clone)]
+pub(crate) struct Item {
+    pub(crate) stroke: usize,
+    pub(crate) reversed: bool,
+    pub(crate) uv: Vec<Vec<Vec2>>,
+    pub(crate) faces: Vec<Vec<u32>>,
+    pub(crate) machine: Vec<Vec3>,
+    pub(crate) stops: [StopReason; 2],
+    pub(crate) length: f64,
+}
 
 fn tangent_xy(a: Vec3, b: Vec3) -> Vec2 {
     let t = [b[0] - a[0], b[1] - a[1]];

@@ -14,185 +14,16 @@
 //! extensions in XY of length `lead_in`/`lead_out`, rising `ramp_height` above the cutting
 //! Z at their free end, so the tool touches down while moving.
 
-use serde::{Deserialize, Serialize};
-
-use crate::error::{finite, non_negative, positive, Result, ToolpathError};
+use crate::error::{Result, ToolpathError};
 use crate::geom::{cross, Vec2, Vec3};
 use crate::locate::barycentric;
 use crate::mesh::{Domain, Symmetry};
-use crate::order::{order_strokes, Direction, Ends, OrderOptions};
-use crate::passes::make_pass;
+use crate::order::{order_strokes, Direction, Ends};
+use crate::passes::{make_pass, Item};
+pub use crate::passes::{MoveKind, Pass};
 use crate::place::Placement;
-use crate::simplify::Segment;
+pub use crate::plan_options::{PlanOptions, TiltPolicy, ZMode};
 use crate::trace::{StopReason, Stroke};
-
-/// What to do with a stroke whose surface tilts beyond the limit.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
-pub enum TiltPolicy {
-    /// Refuse the whole job with [`ToolpathError::TiltExceeded`].
-    #[default]
-    Error,
-    /// Leave the stroke out and list it in [`Plan::skipped_tilt`].
-    Skip,
-}
-
-/// How Z is chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "mode")]
-#[serde(deny_unknown_fields)]
-#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
-pub enum ZMode {
-    /// A flat sheet at height `surface_z`; XY = UV.
-    Flat {
-        /// Z of the sheet's top surface, mm.
-        surface_z: f64,
-    },
-    /// Follow the 3D lift (needs positions in the input).
-    SurfaceFollowing {
-        /// Largest allowed angle between the surface normal and +Z, degrees.
-        max_tilt_deg: f64,
-        /// What to do beyond it.
-        on_tilt: TiltPolicy,
-    },
-}
-
-/// Options of [`plan_toolpath`]. Lengths in mm.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-#[serde(deny_unknown_fields)]
-#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
-pub struct PlanOptions {
-    /// Global orientation. Default `along`.
-    pub direction: Direction,
-    /// Reference direction (UV) for orienting line-field strokes. Default +U.
-    pub reference: Vec2,
-    /// Simplification tolerance, mm (RDP and arc fitting). Default 0.01.
-    pub tolerance: f64,
-    /// Fit G2/G3 arcs (flat mode, or surface mode where Z is constant). Default false.
-    pub arcs: bool,
-    /// How far below the surface the brush presses, mm (≥ 0). Default 0.
-    pub contact_depth: f64,
-    /// Flat or surface-following Z. Default flat at Z = 0.
-    pub z_mode: ZMode,
-    /// Lead-in length, mm. Default 0.
-    pub lead_in: f64,
-    /// Lead-out length, mm. Default 0.
-    pub lead_out: f64,
-    /// Height of the lead ramps above the cutting Z at their free ends, mm. Default 0.
-    pub ramp_height: f64,
-    /// Extension past the part edge at strokes that end on a chart boundary, mm. Default 0.
-    pub overtravel: f64,
-    /// Ordering options.
-    pub order: OrderOptions,
-    /// The tool's minimum turning radius, mm (> 0; default none): stroke ends at a boundary or
-    /// a singularity's exclusion zone that turn tighter within two brush widths of the end are
-    /// cut back before coverage and planning ([`crate::cut_tight_ends`]; the report counts
-    /// the cuts). grainline sets it from `solver.constraints.turning_radius`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub min_turning_radius: Option<f64>,
-}
-
-impl Default for PlanOptions {
-    fn default() -> Self {
-        PlanOptions {
-            direction: Direction::Along,
-            reference: [1.0, 0.0],
-            tolerance: 0.01,
-            arcs: false,
-            contact_depth: 0.0,
-            z_mode: ZMode::Flat { surface_z: 0.0 },
-            lead_in: 0.0,
-            lead_out: 0.0,
-            ramp_height: 0.0,
-            overtravel: 0.0,
-            order: OrderOptions::default(),
-            min_turning_radius: None,
-        }
-    }
-}
-
-impl PlanOptions {
-    /// Reject NaN and out-of-range values.
-    pub fn validate(&self) -> Result<()> {
-        finite("plan.reference[0]", self.reference[0])?;
-        finite("plan.reference[1]", self.reference[1])?;
-        if self.reference == [0.0, 0.0] {
-            return Err(ToolpathError::InvalidOption {
-                name: "plan.reference",
-                value: 0.0,
-                reason: "must be a non-zero vector",
-            });
-        }
-        positive("plan.tolerance", self.tolerance)?;
-        if let Some(r) = self.min_turning_radius {
-            positive("plan.min_turning_radius", r)?;
-        }
-        non_negative("plan.contact_depth", self.contact_depth)?;
-        non_negative("plan.lead_in", self.lead_in)?;
-        non_negative("plan.lead_out", self.lead_out)?;
-        non_negative("plan.ramp_height", self.ramp_height)?;
-        non_negative("plan.overtravel", self.overtravel)?;
-        finite("plan.order.home[0]", self.order.home[0])?;
-        finite("plan.order.home[1]", self.order.home[1])?;
-        crate::budget::check_neighbours(self.order.neighbours)?;
-        match self.z_mode {
-            ZMode::Flat { surface_z } => {
-                finite("plan.z_mode.surface_z", surface_z)?;
-            }
-            ZMode::SurfaceFollowing { max_tilt_deg, .. } => {
-                crate::error::in_range(
-                    "plan.z_mode.max_tilt_deg",
-                    max_tilt_deg,
-                    0.0,
-                    180.0,
-                    "must be in [0, 180) degrees",
-                )?;
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Which part of a pass a move belongs to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MoveKind {
-    /// Ramp down onto the stroke.
-    LeadIn,
-    /// Extension past the part edge.
-    Overtravel,
-    /// The stroke itself.
-    Cut,
-    /// Ramp up off the stroke.
-    LeadOut,
-}
-
-/// One pass of the tool: plunge at `start`, then `moves`, then retract.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Pass {
-    /// Index of the stroke in [`Placement::strokes`].
-    pub stroke: usize,
-    /// Whether the stroke runs end → start relative to its traced order.
-    pub reversed: bool,
-    /// First point (machine coordinates): where the tool plunges to.
-    pub start: Vec3,
-    /// Moves in order, with their kind.
-    pub moves: Vec<(MoveKind, Segment)>,
-    /// UV polyline pieces in cutting order (split at seam jumps), simplified.
-    pub uv: Vec<Vec<Vec2>>,
-    /// 3D lift of the oriented stroke points (when the input has positions), simplified
-    /// like `uv` (one list per piece).
-    pub xyz: Option<Vec<Vec<Vec3>>>,
-    /// Stop reason at the first / last point of the pass (after orientation).
-    pub stops: [StopReason; 2],
-    /// Surface length of the stroke, mm.
-    pub length: f64,
-    /// Sheet of the pass (flat mode: charts that overlap in UV go on separate sheets,
-    /// numbered from 0; always 0 when surface following or when no charts overlap).
-    pub sheet: usize,
-}
 
 /// The ordered passes.
 #[derive(Clone, Debug, PartialEq)]
@@ -251,18 +82,6 @@ fn rotate_loop(it: &mut Item, k: usize) {
     rot(&mut it.machine, k);
     rot(&mut it.uv[0], k);
     rot(&mut it.faces[0], k);
-}
-
-/// An oriented stroke in machine space before ordering.
-#[derive(Clone)]
-pub(crate) struct Item {
-    pub(crate) stroke: usize,
-    pub(crate) reversed: bool,
-    pub(crate) uv: Vec<Vec<Vec2>>,
-    pub(crate) faces: Vec<Vec<u32>>,
-    pub(crate) machine: Vec<Vec3>,
-    pub(crate) stops: [StopReason; 2],
-    pub(crate) length: f64,
 }
 
 /// Whether a stroke should be reversed to satisfy `direction` (before ordering).
