@@ -573,16 +573,8 @@ fn share(count: usize, length: f64, samples: usize, total_length: f64) -> Share 
     }
 }
 
-/// Measures the figures of `opts` on the placed strokes (module docs).
-pub fn check_strokes(
-    dom: &Domain,
-    placement: &Placement,
-    opts: &StrokeCheckOptions,
-) -> Result<StrokeChecks> {
-    opts.validate()?;
-    let step = opts.step.unwrap_or(0.5 * placement.width);
-    let trim = opts.trim.unwrap_or(placement.width);
-    let radius = opts.neighbour_radius.unwrap_or(2.5 * placement.d_sep);
+/// The lifted stroke pieces of a placement, and which placement stroke each belongs to.
+fn lift_placement(dom: &Domain, placement: &Placement) -> (Vec<Lifted>, Vec<usize>) {
     let mut strokes = Vec::new();
     for s in &placement.strokes {
         if dom.has_lift() {
@@ -602,22 +594,227 @@ pub fn check_strokes(
         let k = if dom.has_lift() { 1 } else { s.pieces().len() };
         owner.extend(std::iter::repeat_n(i, k));
     }
+    (strokes, owner)
+}
+
+/// The samples every figure is measured on: the lifted stroke pieces and their centres.
+struct Sampling<'a> {
+    /// Lifted stroke pieces.
+    strokes: &'a [Lifted],
+    /// Which placement stroke each lifted piece belongs to.
+    owner: &'a [usize],
+    /// The sample centres, piece by piece.
+    cs: &'a [Centre],
+    /// Arc step between the three points of a sample, mm.
+    step: f64,
+    /// Length left out at each end of an open stroke, mm.
+    trim: f64,
+    /// Arc length per sample (`step / 2`), mm.
+    h: f64,
+}
+
+impl Sampling<'_> {
+    /// Where a sample centre lies on the placement.
+    fn place(&self, c: &Centre) -> StrokePlace {
+        let l = &self.strokes[c.stroke];
+        StrokePlace { stroke: self.owner[c.stroke], arc_mm: l.s[c.b], uv: l.uv[c.b], xyz: l.x[c.b] }
+    }
+}
+
+/// Turning radius: the share of samples below `r_lim`, 0.95 and 0.8 of it, and the tightest.
+fn turning_figures(sm: &Sampling, r_lim: f64, samples: &mut [CheckSample]) -> TurningFigures {
+    let (cs, h) = (sm.cs, sm.h);
+    let total_len = cs.len() as f64 * h;
+    let (mut n80, mut n95, mut n100) = (0usize, 0usize, 0usize);
+    let mut min: Option<(f64, usize)> = None;
+    for (j, c) in cs.iter().enumerate() {
+        let l = &sm.strokes[c.stroke];
+        let r = turning_radius(l.n[c.b], l.x[c.a], l.x[c.b], l.x[c.c]);
+        if let Some(r) = r {
+            n100 += usize::from(r < r_lim);
+            n95 += usize::from(r < 0.95 * r_lim);
+            n80 += usize::from(r < 0.8 * r_lim);
+            if min.is_none_or(|(m, _)| r < m) {
+                min = Some((r, j));
+            }
+        }
+        if let Some(s) = samples.get_mut(j) {
+            s.turning_radius = r;
+        }
+    }
+    let n = cs.len();
+    TurningFigures {
+        radius: r_lim,
+        samples: n,
+        length_mm: total_len,
+        below_radius: share(n100, n100 as f64 * h, n, total_len),
+        below_95: share(n95, n95 as f64 * h, n, total_len),
+        below_80: share(n80, n80 as f64 * h, n, total_len),
+        min_radius_mm: min.map(|m| m.0),
+        max_ratio: min.map_or(0.0, |m| r_lim / m.0),
+        tightest: min.map(|(_, j)| sm.place(&cs[j])),
+    }
+}
+
+/// Spread rate: `|d ln δ/ds|` to the nearest neighbour on each side (within `radius`),
+/// against `bound`.
+fn splay_figures(
+    sm: &Sampling,
+    bound: f64,
+    radius: f64,
+    samples: &mut [CheckSample],
+) -> SplayFigures {
+    let (strokes, cs, h) = (sm.strokes, sm.cs, sm.h);
+    let grid = SegmentGrid::new(strokes, radius);
+    let sides: Vec<[Side; 2]> = cs
+        .iter()
+        .map(|c| {
+            let l = &strokes[c.stroke];
+            let n = l.n[c.b];
+            match unit(proj(n, sub3(l.x[c.c], l.x[c.a]))) {
+                Some(t) => neighbours(&grid, strokes, c.stroke, l.x[c.b], n, t, radius, sm.trim),
+                None => [None, None],
+            }
+        })
+        .collect();
+    let (mut count, mut above, mut above110) = (0usize, 0usize, 0usize);
+    let mut worst: Option<(f64, usize)> = None;
+    for j in 1..cs.len().saturating_sub(1) {
+        let (p, q) = (&cs[j - 1], &cs[j + 1]);
+        if p.stroke != cs[j].stroke || q.stroke != cs[j].stroke {
+            continue;
+        }
+        let l = &strokes[cs[j].stroke];
+        let ds = l.arc_between(p.b, q.b);
+        if ds.is_nan() || ds <= 0.0 || ds > 3.0 * sm.step {
+            continue;
+        }
+        for (side, (before, after)) in sides[j - 1].iter().zip(&sides[j + 1]).enumerate() {
+            let (Some((s0, d0)), Some((s1, d1))) = (*before, *after) else {
+                continue;
+            };
+            if s0 != s1 {
+                continue;
+            }
+            let rate = (d1.ln() - d0.ln()) / ds;
+            if !rate.is_finite() {
+                continue;
+            }
+            count += 1;
+            above += usize::from(rate.abs() > bound);
+            above110 += usize::from(rate.abs() > 1.1 * bound);
+            if worst.is_none_or(|(w, _)| rate.abs() > w) {
+                worst = Some((rate.abs(), j));
+            }
+            if let Some(s) = samples.get_mut(j) {
+                s.spread[side] = Some(rate);
+            }
+        }
+    }
+    let max_rate = worst.map_or(0.0, |w| w.0);
+    let tl = count as f64 * h;
+    SplayFigures {
+        bound,
+        samples: count,
+        max_rate,
+        max_ratio: max_rate / bound,
+        above_bound: share(above, above as f64 * h, count, tl),
+        above_110: share(above110, above110 as f64 * h, count, tl),
+        worst: worst.map(|(_, j)| sm.place(&cs[j])),
+    }
+}
+
+/// Deviation of the strokes through lock `pi` (`probe`) from the lock's direction.
+fn lock_figures(
+    dom: &Domain,
+    sm: &Sampling,
+    pi: usize,
+    probe: &LockProbe,
+    samples: &mut [CheckSample],
+) -> LockFigures {
+    let nv = dom.uv.len();
+    let mut dir: Vec<Option<Vec3>> = vec![None; nv];
+    for (&v, d) in probe.vertices.iter().zip(&probe.directions) {
+        if let Some(slot) = dir.get_mut(v as usize) {
+            *slot = Some(*d);
+        }
+    }
+    let (mut count, mut sum) = (0usize, 0.0);
+    let mut worst: Option<(f64, usize)> = None;
+    let mut touched = std::collections::BTreeSet::new();
+    for (j, c) in sm.cs.iter().enumerate() {
+        let l = &sm.strokes[c.stroke];
+        let f = l.face[c.b];
+        let t = dom.tris[f as usize];
+        let Some(ds) = t.iter().map(|&v| dir[v as usize]).collect::<Option<Vec<Vec3>>>() else {
+            continue;
+        };
+        let n = l.n[c.b];
+        // The local tangent: the chord between the sample's adjacent vertices (the step's
+        // chord would reach outside the region).
+        let last = l.x.len() - 1;
+        let (prev, next) = if l.closed {
+            (if c.b == 0 { last - 1 } else { c.b - 1 }, c.b + 1)
+        } else {
+            (c.b.saturating_sub(1), (c.b + 1).min(last))
+        };
+        let Some(tan) = unit(proj(n, sub3(l.x[next], l.x[prev]))) else { continue };
+        let mut target = [0.0; 3];
+        for (i, d) in ds.iter().enumerate() {
+            let mut d = if dom.has_lift() { *d } else { [d[0], d[1], 0.0] };
+            if dot3(d, ds[0]) < 0.0 {
+                d = d.map(|x| -x);
+            }
+            for k in 0..3 {
+                target[k] += l.bary[c.b][i].max(0.0) * d[k];
+            }
+        }
+        let Some(target) = unit(proj(n, target)) else { continue };
+        let cosang = dot3(tan, target).abs().min(1.0);
+        let sinang = norm3(cross3(tan, target));
+        let dev = sinang.atan2(cosang).to_degrees();
+        count += 1;
+        sum += dev;
+        touched.insert(sm.owner[c.stroke]);
+        if worst.is_none_or(|(w, _)| dev > w) {
+            worst = Some((dev, j));
+        }
+        if let Some(s) = samples.get_mut(j) {
+            s.lock_deviation = Some((pi, dev));
+        }
+    }
+    LockFigures {
+        name: probe.name.clone(),
+        samples: count,
+        strokes: touched.len(),
+        max_deviation_deg: worst.map_or(0.0, |w| w.0),
+        mean_deviation_deg: if count > 0 { sum / count as f64 } else { 0.0 },
+        worst: worst.map(|(_, j)| sm.place(&sm.cs[j])),
+    }
+}
+
+/// Measures the figures of `opts` on the placed strokes (module docs).
+pub fn check_strokes(
+    dom: &Domain,
+    placement: &Placement,
+    opts: &StrokeCheckOptions,
+) -> Result<StrokeChecks> {
+    opts.validate()?;
+    let step = opts.step.unwrap_or(0.5 * placement.width);
+    let trim = opts.trim.unwrap_or(placement.width);
+    let radius = opts.neighbour_radius.unwrap_or(2.5 * placement.d_sep);
+    let (strokes, owner) = lift_placement(dom, placement);
     let mut cs = Vec::new();
     for (i, l) in strokes.iter().enumerate() {
         centres(l, i, step, trim, &mut cs);
     }
-    let place = |c: &Centre| {
-        let l = &strokes[c.stroke];
-        StrokePlace { stroke: owner[c.stroke], arc_mm: l.s[c.b], uv: l.uv[c.b], xyz: l.x[c.b] }
-    };
-    let h = 0.5 * step;
-    let total_len = cs.len() as f64 * h;
+    let sm = Sampling { strokes: &strokes, owner: &owner, cs: &cs, step, trim, h: 0.5 * step };
     let mut samples: Vec<CheckSample> = Vec::new();
     if opts.keep_samples {
         samples = cs
             .iter()
             .map(|c| CheckSample {
-                at: place(c),
+                at: sm.place(c),
                 turning_radius: None,
                 spread: [None, None],
                 lock_deviation: None,
@@ -625,37 +822,7 @@ pub fn check_strokes(
             .collect();
     }
     // Turning radius.
-    let turning = opts.turning_radius.map(|r_lim| {
-        let (mut n80, mut n95, mut n100) = (0usize, 0usize, 0usize);
-        let mut min: Option<(f64, usize)> = None;
-        for (j, c) in cs.iter().enumerate() {
-            let l = &strokes[c.stroke];
-            let r = turning_radius(l.n[c.b], l.x[c.a], l.x[c.b], l.x[c.c]);
-            if let Some(r) = r {
-                n100 += usize::from(r < r_lim);
-                n95 += usize::from(r < 0.95 * r_lim);
-                n80 += usize::from(r < 0.8 * r_lim);
-                if min.is_none_or(|(m, _)| r < m) {
-                    min = Some((r, j));
-                }
-            }
-            if let Some(s) = samples.get_mut(j) {
-                s.turning_radius = r;
-            }
-        }
-        let n = cs.len();
-        TurningFigures {
-            radius: r_lim,
-            samples: n,
-            length_mm: total_len,
-            below_radius: share(n100, n100 as f64 * h, n, total_len),
-            below_95: share(n95, n95 as f64 * h, n, total_len),
-            below_80: share(n80, n80 as f64 * h, n, total_len),
-            min_radius_mm: min.map(|m| m.0),
-            max_ratio: min.map_or(0.0, |m| r_lim / m.0),
-            tightest: min.map(|(_, j)| place(&cs[j])),
-        }
-    });
+    let turning = opts.turning_radius.map(|r_lim| turning_figures(&sm, r_lim, &mut samples));
     // Keep the turning radius even when only splay or locks were asked for the samples.
     if opts.keep_samples && opts.turning_radius.is_none() {
         for (j, c) in cs.iter().enumerate() {
@@ -664,127 +831,11 @@ pub fn check_strokes(
         }
     }
     // Spread rate.
-    let splay = opts.splay.map(|bound| {
-        let grid = SegmentGrid::new(&strokes, radius);
-        let sides: Vec<[Side; 2]> = cs
-            .iter()
-            .map(|c| {
-                let l = &strokes[c.stroke];
-                let n = l.n[c.b];
-                match unit(proj(n, sub3(l.x[c.c], l.x[c.a]))) {
-                    Some(t) => neighbours(&grid, &strokes, c.stroke, l.x[c.b], n, t, radius, trim),
-                    None => [None, None],
-                }
-            })
-            .collect();
-        let (mut count, mut above, mut above110) = (0usize, 0usize, 0usize);
-        let mut worst: Option<(f64, usize)> = None;
-        for j in 1..cs.len().saturating_sub(1) {
-            let (p, q) = (&cs[j - 1], &cs[j + 1]);
-            if p.stroke != cs[j].stroke || q.stroke != cs[j].stroke {
-                continue;
-            }
-            let l = &strokes[cs[j].stroke];
-            let ds = l.arc_between(p.b, q.b);
-            if ds.is_nan() || ds <= 0.0 || ds > 3.0 * step {
-                continue;
-            }
-            for (side, (before, after)) in sides[j - 1].iter().zip(&sides[j + 1]).enumerate() {
-                let (Some((s0, d0)), Some((s1, d1))) = (*before, *after) else {
-                    continue;
-                };
-                if s0 != s1 {
-                    continue;
-                }
-                let rate = (d1.ln() - d0.ln()) / ds;
-                if !rate.is_finite() {
-                    continue;
-                }
-                count += 1;
-                above += usize::from(rate.abs() > bound);
-                above110 += usize::from(rate.abs() > 1.1 * bound);
-                if worst.is_none_or(|(w, _)| rate.abs() > w) {
-                    worst = Some((rate.abs(), j));
-                }
-                if let Some(s) = samples.get_mut(j) {
-                    s.spread[side] = Some(rate);
-                }
-            }
-        }
-        let max_rate = worst.map_or(0.0, |w| w.0);
-        let tl = count as f64 * h;
-        SplayFigures {
-            bound,
-            samples: count,
-            max_rate,
-            max_ratio: max_rate / bound,
-            above_bound: share(above, above as f64 * h, count, tl),
-            above_110: share(above110, above110 as f64 * h, count, tl),
-            worst: worst.map(|(_, j)| place(&cs[j])),
-        }
-    });
+    let splay = opts.splay.map(|bound| splay_figures(&sm, bound, radius, &mut samples));
     // Locks.
-    let nv = dom.uv.len();
     let mut locks = Vec::new();
     for (pi, probe) in opts.locks.iter().enumerate() {
-        let mut dir: Vec<Option<Vec3>> = vec![None; nv];
-        for (&v, d) in probe.vertices.iter().zip(&probe.directions) {
-            if let Some(slot) = dir.get_mut(v as usize) {
-                *slot = Some(*d);
-            }
-        }
-        let (mut count, mut sum) = (0usize, 0.0);
-        let mut worst: Option<(f64, usize)> = None;
-        let mut touched = std::collections::BTreeSet::new();
-        for (j, c) in cs.iter().enumerate() {
-            let l = &strokes[c.stroke];
-            let f = l.face[c.b];
-            let t = dom.tris[f as usize];
-            let Some(ds) = t.iter().map(|&v| dir[v as usize]).collect::<Option<Vec<Vec3>>>() else {
-                continue;
-            };
-            let n = l.n[c.b];
-            // The local tangent: the chord between the sample's adjacent vertices (the step's
-            // chord would reach outside the region).
-            let last = l.x.len() - 1;
-            let (prev, next) = if l.closed {
-                (if c.b == 0 { last - 1 } else { c.b - 1 }, c.b + 1)
-            } else {
-                (c.b.saturating_sub(1), (c.b + 1).min(last))
-            };
-            let Some(tan) = unit(proj(n, sub3(l.x[next], l.x[prev]))) else { continue };
-            let mut target = [0.0; 3];
-            for (i, d) in ds.iter().enumerate() {
-                let mut d = if dom.has_lift() { *d } else { [d[0], d[1], 0.0] };
-                if dot3(d, ds[0]) < 0.0 {
-                    d = d.map(|x| -x);
-                }
-                for k in 0..3 {
-                    target[k] += l.bary[c.b][i].max(0.0) * d[k];
-                }
-            }
-            let Some(target) = unit(proj(n, target)) else { continue };
-            let cosang = dot3(tan, target).abs().min(1.0);
-            let sinang = norm3(cross3(tan, target));
-            let dev = sinang.atan2(cosang).to_degrees();
-            count += 1;
-            sum += dev;
-            touched.insert(owner[c.stroke]);
-            if worst.is_none_or(|(w, _)| dev > w) {
-                worst = Some((dev, j));
-            }
-            if let Some(s) = samples.get_mut(j) {
-                s.lock_deviation = Some((pi, dev));
-            }
-        }
-        locks.push(LockFigures {
-            name: probe.name.clone(),
-            samples: count,
-            strokes: touched.len(),
-            max_deviation_deg: worst.map_or(0.0, |w| w.0),
-            mean_deviation_deg: if count > 0 { sum / count as f64 } else { 0.0 },
-            worst: worst.map(|(_, j)| place(&cs[j])),
-        });
+        locks.push(lock_figures(dom, &sm, pi, probe, &mut samples));
     }
     Ok(StrokeChecks {
         step_mm: step,
