@@ -119,6 +119,21 @@ pub(crate) struct Tracer<'a> {
     sign: f64,
 }
 
+/// Where the integration of a half-stroke stands.
+struct Cursor {
+    /// The current point and its face.
+    p: Vec2,
+    f: u32,
+    /// The field at `p` (the first stage of the next step).
+    k0: Vec2,
+    /// The next step size, surface mm.
+    h: f64,
+    /// Arc length integrated so far, surface mm.
+    arc: f64,
+    /// UV seams crossed so far.
+    seam_jumps: usize,
+}
+
 enum StepFail {
     Exit,
     Field,
@@ -237,28 +252,27 @@ impl<'a> Tracer<'a> {
             stop: StopReason::MaxLength,
             length: 0.0,
         };
-        let (mut p, mut f) = (p0, f0);
+        let (p, f) = (p0, f0);
         self.sign = sign;
-        let Some(mut k0) =
+        let Some(k0) =
             self.oriented(sample(self.dom, f, barycentric(self.dom.corners(f), p), Some(h0)))
         else {
             half.stop = StopReason::Singularity;
             return half;
         };
-        let mut h = 0.25 * o.max_step;
-        let mut arc = 0.0;
-        let mut seam_jumps = 0usize;
+        let mut c = Cursor { p, f, k0, h: 0.25 * o.max_step, arc: 0.0, seam_jumps: 0 };
         for _ in 0..o.max_steps {
-            let remaining = o.max_length - arc;
+            let remaining = o.max_length - c.arc;
             if remaining <= o.min_step {
                 half.stop = StopReason::MaxLength;
                 return half;
             }
-            let hs = h.min(remaining);
-            match self.step(p, f, k0, hs) {
+            let hs = c.h.min(remaining);
+            let (p, k0) = (c.p, c.k0);
+            match self.step(p, c.f, k0, hs) {
                 Ok((q, fq, k6, err)) => {
                     if err > o.tolerance && hs > o.min_step {
-                        h = (hs * (0.9 * (o.tolerance / err).powf(0.2)).max(0.2)).max(o.min_step);
+                        c.h = (hs * (0.9 * (o.tolerance / err).powf(0.2)).max(0.2)).max(o.min_step);
                         continue;
                     }
                     // The chord p → q must also stay within tolerance of the curve: for a
@@ -267,7 +281,7 @@ impl<'a> Tracer<'a> {
                     let sag =
                         if turn > 1e-12 { hs / turn * (1.0 - (0.5 * turn).cos()) } else { 0.0 };
                     if sag > o.tolerance && hs > o.min_step {
-                        h = (hs * 0.9 * (o.tolerance / sag).sqrt()).max(o.min_step);
+                        c.h = (hs * 0.9 * (o.tolerance / sag).sqrt()).max(o.min_step);
                         continue;
                     }
                     // Accepted step.
@@ -282,7 +296,7 @@ impl<'a> Tracer<'a> {
                     }
                     let m = &self.dom.metric[fq as usize];
                     let chord = m.length(sub(q, p));
-                    if arc > 4.0 * self.closure
+                    if c.arc > 4.0 * self.closure
                         && half.breaks.is_empty()
                         && passes_by(m, p0, p, q, self.closure)
                         && dot(k6, h0) > 0.0
@@ -294,85 +308,91 @@ impl<'a> Tracer<'a> {
                         return half;
                     }
                     let mid = scale(add(p, q), 0.5);
-                    if blocked(mid, fq, sign * (arc + 0.5 * hs), false)
-                        || blocked(q, fq, sign * (arc + hs), true)
+                    if blocked(mid, fq, sign * (c.arc + 0.5 * hs), false)
+                        || blocked(q, fq, sign * (c.arc + hs), true)
                     {
                         half.stop = StopReason::TooClose;
                         return half;
                     }
                     half.length += chord;
-                    arc += hs;
+                    c.arc += hs;
                     half.uv.push(q);
                     half.faces.push(fq);
-                    p = q;
-                    f = fq;
-                    k0 = k6;
+                    c.p = q;
+                    c.f = fq;
+                    c.k0 = k6;
                     let mut grow =
                         if err > 0.0 { 0.9 * (o.tolerance / err).powf(0.2) } else { 5.0 };
                     // Sagitta grows with h²: do not grow into a step that will be rejected.
                     if sag > 0.0 {
                         grow = grow.min(0.9 * (o.tolerance / sag).sqrt());
                     }
-                    h = (hs * grow.clamp(0.2, 5.0)).clamp(o.min_step, o.max_step);
+                    c.h = (hs * grow.clamp(0.2, 5.0)).clamp(o.min_step, o.max_step);
                 }
                 Err(StepFail::Field) => {
                     if hs <= o.min_step {
                         half.stop = StopReason::Singularity;
                         return half;
                     }
-                    h = (hs * 0.25).max(o.min_step);
+                    c.h = (hs * 0.25).max(o.min_step);
                 }
                 Err(StepFail::Exit) => {
-                    let hit = self.boundary_along(p, f, k0, hs);
-                    let finish = match hit {
-                        Some((d, _, _)) => d < 1e-3 * o.max_step || hs <= o.min_step,
-                        None => hs <= o.min_step,
-                    };
-                    if !finish {
-                        h = match hit {
-                            Some((d, _, _)) if d < hs => d.max(o.min_step),
-                            _ => (hs * 0.5).max(o.min_step),
-                        };
-                        continue;
-                    }
-                    let Some((d, bf, be)) =
-                        hit.or_else(|| self.boundary_along(p, f, k0, o.max_step))
-                    else {
-                        half.stop = StopReason::Boundary;
+                    if let Some(stop) = self.at_boundary(&mut half, &mut c, hs) {
+                        half.stop = stop;
                         return half;
-                    };
-                    let end = add(p, scale(k0, d));
-                    half.length += self.dom.metric[f as usize].length(sub(end, p));
-                    half.uv.push(end);
-                    half.faces.push(bf);
-                    let link = self.dom.seams.get(&(bf, be)).copied();
-                    match link {
-                        Some(link) if o.cross_seams && seam_jumps < 1000 => {
-                            seam_jumps += 1;
-                            let (q, hq) = cross_seam(self.dom, bf, &link, end, k0);
-                            let fq = link.face;
-                            let bq = barycentric(self.dom.corners(fq), q);
-                            let Some(kq) = self.oriented(sample(self.dom, fq, bq, Some(hq))) else {
-                                half.stop = StopReason::Singularity;
-                                return half;
-                            };
-                            half.breaks.push(half.uv.len());
-                            half.uv.push(q);
-                            half.faces.push(fq);
-                            p = q;
-                            f = fq;
-                            k0 = kq;
-                        }
-                        _ => {
-                            half.stop = StopReason::Boundary;
-                            return half;
-                        }
                     }
                 }
             }
         }
         half.stop = StopReason::MaxLength;
         half
+    }
+
+    /// A step of size `hs` from the cursor left the domain: retry with a shorter step, or
+    /// end the half on the boundary (appending the point where it leaves), or continue
+    /// across a UV seam. `Some(stop)` when the half ends.
+    fn at_boundary(&self, half: &mut Half, c: &mut Cursor, hs: f64) -> Option<StopReason> {
+        let o = self.opts;
+        let (p, f, k0) = (c.p, c.f, c.k0);
+        let hit = self.boundary_along(p, f, k0, hs);
+        let finish = match hit {
+            Some((d, _, _)) => d < 1e-3 * o.max_step || hs <= o.min_step,
+            None => hs <= o.min_step,
+        };
+        if !finish {
+            c.h = match hit {
+                Some((d, _, _)) if d < hs => d.max(o.min_step),
+                _ => (hs * 0.5).max(o.min_step),
+            };
+            return None;
+        }
+        let Some((d, bf, be)) = hit.or_else(|| self.boundary_along(p, f, k0, o.max_step)) else {
+            return Some(StopReason::Boundary);
+        };
+        let end = add(p, scale(k0, d));
+        half.length += self.dom.metric[f as usize].length(sub(end, p));
+        half.uv.push(end);
+        half.faces.push(bf);
+        let link = self.dom.seams.get(&(bf, be)).copied();
+        match link {
+            Some(link) if o.cross_seams && c.seam_jumps < 1000 => {
+                c.seam_jumps += 1;
+                let (q, hq) = cross_seam(self.dom, bf, &link, end, k0);
+                let fq = link.face;
+                let bq = barycentric(self.dom.corners(fq), q);
+                let Some(kq) = self.oriented(sample(self.dom, fq, bq, Some(hq))) else {
+                    return Some(StopReason::Singularity);
+                };
+                half.breaks.push(half.uv.len());
+                half.uv.push(q);
+                half.faces.push(fq);
+                c.p = q;
+                c.f = fq;
+                c.k0 = kq;
+                None
+            }
+            _ => Some(StopReason::Boundary),
+        }
     }
 
     /// Trace both ways from a located seed and join the halves. `None` when the seed is in
