@@ -613,20 +613,42 @@ fn sanitize(s: &str) -> String {
     s.chars().map(|c| if c == '(' || c == ')' || c.is_control() { ' ' } else { c }).collect()
 }
 
-/// Write the plan as G-code. Refuses (with an error) programs that break the envelope, the
-/// floor or the clearance, snippets with forbidden words, numbers that print as zero, and
-/// empty programs (unless `allow_empty`); see the module docs for the program shape.
-pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
-    o.validate()?;
-    if plan.passes.is_empty() && !o.allow_empty {
-        return Err(ToolpathError::EmptyProgram { skipped_tilt: plan.skipped_tilt.len() });
+/// Write the snippet's non-empty lines, trimmed.
+fn snippet(w: &mut String, text: &str) {
+    for l in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
+        let _ = writeln!(w, "{l}");
     }
-    let prog = build(plan, o)?;
-    check_program(plan, o, &prog)?;
-    let dp = o.decimals;
-    let n = |x: f64| num(x, dp);
-    let f = |x: f64| num(x, FEED_DECIMALS);
-    let mut g = String::new();
+}
+
+/// Start the spindle (`M3 S…` or the `on` snippet; nothing in the plain dialect).
+fn spindle_on(w: &mut String, o: &GcodeOptions) {
+    if o.dialect != Dialect::Plain {
+        match &o.spindle {
+            Spindle::None => {}
+            Spindle::Speed(s) => {
+                let _ = writeln!(w, "M3 S{}", num(*s, 0));
+            }
+            Spindle::Snippet { on, .. } => snippet(w, on),
+        }
+    }
+}
+
+/// Stop the spindle (`M5` or the `off` snippet; nothing in the plain dialect).
+fn spindle_off(w: &mut String, o: &GcodeOptions) {
+    if o.dialect != Dialect::Plain {
+        match &o.spindle {
+            Spindle::None => {}
+            Spindle::Speed(_) => {
+                let _ = writeln!(w, "M5");
+            }
+            Spindle::Snippet { off, .. } => snippet(w, off),
+        }
+    }
+}
+
+/// The program's head: job, dialect, passes, units and sheets as comments, the modal
+/// state, path blending and the move to safe Z.
+fn write_header(w: &mut String, plan: &Plan, o: &GcodeOptions, prog: &Program) {
     let dialect = match o.dialect {
         Dialect::Grbl => "grbl",
         Dialect::LinuxCnc => "linuxcnc",
@@ -636,7 +658,6 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
         LengthUnit::Mm => "units: mm, G21".to_string(),
         u => format!("units: mm, G21; lengths converted from {} x{}", u.as_str(), u.in_mm()),
     };
-    let w = &mut g;
     let _ = writeln!(w, "(grainline-toolpaths job: {})", sanitize(&o.job));
     let _ = writeln!(w, "(dialect: {dialect}; passes: {}; {units})", plan.passes.len());
     let n_sheets = plan.passes.iter().map(|p| p.sheet + 1).max().unwrap_or(1);
@@ -650,21 +671,59 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
     if let Some((p, d)) = prog.blend {
         let _ = writeln!(w, "G64 P{}", num(p, d));
     }
-    let _ = writeln!(w, "G0 Z{}", n(prog.safe_z));
-    let snippet = |w: &mut String, text: &str| {
-        for l in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
-            let _ = writeln!(w, "{l}");
-        }
-    };
-    if o.dialect != Dialect::Plain {
-        match &o.spindle {
-            Spindle::None => {}
-            Spindle::Speed(s) => {
-                let _ = writeln!(w, "M3 S{}", num(*s, 0));
+    let _ = writeln!(w, "G0 Z{}", num(prog.safe_z, o.decimals));
+}
+
+/// The moves of one pass: the rapid to its start, the plunge, the cut, the retract.
+fn write_moves(w: &mut String, moves: &[Move], dp: usize) {
+    let n = |x: f64| num(x, dp);
+    let f = |x: f64| num(x, FEED_DECIMALS);
+    for (j, m) in moves.iter().enumerate() {
+        match *m {
+            Move::Rapid(q) if j == 0 => {
+                let _ = writeln!(w, "G0 X{} Y{}", n(q[0]), n(q[1]));
             }
-            Spindle::Snippet { on, .. } => snippet(w, on),
+            Move::Rapid(q) => {
+                let _ = writeln!(w, "G0 Z{}", n(q[2]));
+            }
+            Move::Line { to, feed, .. } if j == 1 => {
+                let _ = writeln!(w, "G1 Z{} F{}", n(to[2]), f(feed));
+            }
+            Move::Line { to, feed, first } => {
+                let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
+                let _ = writeln!(w, "G1 X{} Y{} Z{}{fw}", n(to[0]), n(to[1]), n(to[2]));
+            }
+            Move::Arc { to, ij, ccw, feed, first, .. } => {
+                let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
+                let _ = writeln!(
+                    w,
+                    "{} X{} Y{} Z{} I{} J{}{fw}",
+                    if ccw { "G3" } else { "G2" },
+                    n(to[0]),
+                    n(to[1]),
+                    n(to[2]),
+                    num(ij[0], dp + 1),
+                    num(ij[1], dp + 1)
+                );
+            }
         }
     }
+}
+
+/// Write the plan as G-code. Refuses (with an error) programs that break the envelope, the
+/// floor or the clearance, snippets with forbidden words, numbers that print as zero, and
+/// empty programs (unless `allow_empty`); see the module docs for the program shape.
+pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
+    o.validate()?;
+    if plan.passes.is_empty() && !o.allow_empty {
+        return Err(ToolpathError::EmptyProgram { skipped_tilt: plan.skipped_tilt.len() });
+    }
+    let prog = build(plan, o)?;
+    check_program(plan, o, &prog)?;
+    let mut g = String::new();
+    let w = &mut g;
+    write_header(w, plan, o, &prog);
+    spindle_on(w, o);
     for (i, (stroke, moves)) in prog.passes.iter().enumerate() {
         // A new sheet (charts overlapping in UV, flat mode): the tool is at safe Z after
         // the previous pass; stop the spindle, pause for the operator to load the next
@@ -672,68 +731,14 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
         let sheet = plan.passes.get(i).map_or(0, |p| p.sheet);
         if i > 0 && plan.passes.get(i - 1).is_some_and(|p| p.sheet != sheet) {
             let _ = writeln!(w, "(sheet {sheet}: load sheet {sheet}, then cycle start)");
-            let spindle = o.dialect != Dialect::Plain;
-            if spindle {
-                match &o.spindle {
-                    Spindle::None => {}
-                    Spindle::Speed(_) => {
-                        let _ = writeln!(w, "M5");
-                    }
-                    Spindle::Snippet { off, .. } => snippet(w, off),
-                }
-            }
+            spindle_off(w, o);
             let _ = writeln!(w, "M0");
-            if spindle {
-                match &o.spindle {
-                    Spindle::None => {}
-                    Spindle::Speed(s) => {
-                        let _ = writeln!(w, "M3 S{}", num(*s, 0));
-                    }
-                    Spindle::Snippet { on, .. } => snippet(w, on),
-                }
-            }
+            spindle_on(w, o);
         }
         let _ = writeln!(w, "(pass {i}: stroke {stroke})");
-        for (j, m) in moves.iter().enumerate() {
-            match *m {
-                Move::Rapid(q) if j == 0 => {
-                    let _ = writeln!(w, "G0 X{} Y{}", n(q[0]), n(q[1]));
-                }
-                Move::Rapid(q) => {
-                    let _ = writeln!(w, "G0 Z{}", n(q[2]));
-                }
-                Move::Line { to, feed, .. } if j == 1 => {
-                    let _ = writeln!(w, "G1 Z{} F{}", n(to[2]), f(feed));
-                }
-                Move::Line { to, feed, first } => {
-                    let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
-                    let _ = writeln!(w, "G1 X{} Y{} Z{}{fw}", n(to[0]), n(to[1]), n(to[2]));
-                }
-                Move::Arc { to, ij, ccw, feed, first, .. } => {
-                    let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
-                    let _ = writeln!(
-                        w,
-                        "{} X{} Y{} Z{} I{} J{}{fw}",
-                        if ccw { "G3" } else { "G2" },
-                        n(to[0]),
-                        n(to[1]),
-                        n(to[2]),
-                        num(ij[0], dp + 1),
-                        num(ij[1], dp + 1)
-                    );
-                }
-            }
-        }
+        write_moves(w, moves, o.decimals);
     }
-    if o.dialect != Dialect::Plain {
-        match &o.spindle {
-            Spindle::None => {}
-            Spindle::Speed(_) => {
-                let _ = writeln!(w, "M5");
-            }
-            Spindle::Snippet { off, .. } => snippet(w, off),
-        }
-    }
+    spindle_off(w, o);
     let _ = writeln!(w, "{}", if o.dialect == Dialect::Grbl { "M30" } else { "M2" });
     Ok(g)
 }
