@@ -133,7 +133,7 @@ fn main() {
         ..loaded.clone()
     };
     let t = Instant::now();
-    let base = grainline::pipeline::optimize::DragBase::new(&bare, session.prepared()).unwrap();
+    let base = grainline::editor::drag::DragBase::new(&bare, session.prepared()).unwrap();
     parts.entry("4 drag base (once per drag)".into()).or_default().push(t.elapsed().as_secs_f64());
     for k in 0..steps.min(10) {
         let text = session.scene_text(&[edit(k)]).unwrap();

@@ -5,9 +5,29 @@
 //!
 //! The library follows Raymond et al. 2014, "Optimizing BRDF Orientations for the Manipulation
 //! of Anisotropic Highlights": the tangent ℓ of the highlight curves produced by a grain field u
-//! (Eq. 4/7), and its inversion. The layers depend on each other in one direction:
-//! `mesh` ← `geometry` ← `highlight` ← `edit` / `solve` ← `pipeline`; `render` and `uvfield`
-//! (into the `grainline-toolpaths` crate) consume a field, `scene` describes a whole job.
+//! (Eq. 4/7), and its inversion.
+//!
+//! ## Layers
+//!
+//! The modules stand on each other in one direction. Bottom to top, a module uses only modules
+//! of its own layer or below, and no modules use each other in a cycle (`tests/structure.rs`
+//! reads this list and the sources, and fails on an upward use or a cycle):
+//!
+//! 1. `error`, `limits`, `output`, `factor`, `allocator` — the error type, the budgets, the
+//!    outputs written atomically, the bounded sparse Cholesky factor, the allocator.
+//! 2. `mesh` — loading (OBJ, STL, PLY), validation, topology, UV charts, refinement.
+//! 3. `svg_read`, `generate` — SVG drawings read as polylines; analytic test parts.
+//! 4. `geometry` — normals, frames, areas, connection, curvature, ∇φ, face angles.
+//! 5. `highlight`, `layout`, `panel`, `appearance` — ℓ and the initial fields; UV layouts;
+//!    panels from outlines; materials, lights and BRDFs.
+//! 6. `edit`, `solve`, `field`, `uvfield` — the edit tools; the solver; FIELD.json; the grain
+//!    carried into the UV layout.
+//! 7. `fidelity`, `render`, `export` — did an edit land; the CPU preview; glTF.
+//! 8. `scene` — the scene file.
+//! 9. `pipeline` — the staged run: a plan, one file per stage, a short sequencer.
+//! 10. `editor` — `grainline edit`'s server and session.
+//!
+//! The binary's `cli` (src/cli) sits on top and uses the library by its public paths.
 //!
 //! ```
 //! use grainline::field::{compute_field, FieldOptions};
@@ -34,10 +54,12 @@
 #![warn(missing_docs)]
 
 pub mod allocator;
+pub mod appearance;
 pub mod edit;
 pub mod editor;
 pub mod error;
 pub mod export;
+pub(crate) mod factor;
 pub mod fidelity;
 pub mod field;
 pub mod generate;
@@ -56,20 +78,4 @@ pub mod svg_read;
 pub mod uvfield;
 
 pub use error::{Error, Result};
-
-/// Parses `X,Y,Z` (three finite numbers separated by commas) for the option `name`.
-pub fn parse_vec3(name: &str, s: &str) -> Result<nalgebra::Vector3<f64>> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let bad = || Error::invalid_arg(name, format!("{s:?}: expected three numbers X,Y,Z"));
-    if parts.len() != 3 {
-        return Err(bad());
-    }
-    let mut v = [0.0; 3];
-    for (k, p) in parts.iter().enumerate() {
-        v[k] = p.parse::<f64>().map_err(|_| bad())?;
-        if !v[k].is_finite() {
-            return Err(Error::invalid_arg(name, format!("{s:?}: components must be finite")));
-        }
-    }
-    Ok(nalgebra::Vector3::new(v[0], v[1], v[2]))
-}
+pub use highlight::parse_vec3;

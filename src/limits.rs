@@ -54,26 +54,6 @@ pub use grainline_toolpaths::budget::MAX_STROKE_SAMPLES;
 /// Largest `toolpaths.plan.order.neighbours`.
 pub use grainline_toolpaths::budget::MAX_NEIGHBOURS;
 
-/// The work a scene asks for, estimated as soon as its part is loaded (before the field, the
-/// solve, the strokes or the render start) and refused past its budget, naming the key:
-/// the strokes' samples (`toolpaths.placement.*`, over the part's surface area).
-/// The render's memory and the ordering's neighbours are checked with the scene itself
-/// (`Scene::validate`), the panel's triangles before the outline is meshed.
-pub fn check_scene_work(
-    scene: &crate::scene::Scene,
-    mesh: &crate::mesh::Mesh,
-) -> crate::Result<()> {
-    let traced = crate::pipeline::run::StagePlan::of(scene).trace;
-    if let (true, Some(t)) = (traced, &scene.toolpaths) {
-        // Placement lengths are in scene units on the part, and the UV field is scaled to
-        // the part's area, so the mesh's surface area is the area the strokes cover.
-        t.placement
-            .check_budget(mesh.area())
-            .map_err(|e| crate::scene::prefix("toolpaths", crate::uvfield::toolpath_error(e)))?;
-    }
-    Ok(())
-}
-
 /// `--threads` is capped at this many worker threads per available core.
 pub const THREADS_PER_CORE: usize = 4;
 

@@ -5,7 +5,7 @@ mod common;
 use common::shared_mesh;
 
 use grainline::mesh::load::{load_obj, LoadOptions, LoadedMesh};
-use grainline::mesh::report::InspectReport;
+use grainline::mesh::report::{InspectReport, QualityReport};
 use grainline::mesh::topology::Topology;
 use grainline::mesh::uv_charts::UvCharts;
 
@@ -14,7 +14,8 @@ fn inspect(name: &str, options: LoadOptions) -> Option<(LoadedMesh, InspectRepor
     let loaded = load_obj(&path, &options).unwrap();
     let topo = Topology::new(&loaded.mesh).unwrap();
     let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
-    let report = InspectReport::new(&path, &loaded, &topo, charts.as_ref());
+    let report =
+        InspectReport::new(&path, &loaded, &topo, charts.as_ref(), QualityReport::new(&loaded));
     Some((loaded, report))
 }
 

@@ -4,7 +4,7 @@
 //! elements, inconsistent orientation) and reports them; only unreadable files fail.
 
 use clap::Args;
-use grainline::mesh::report::InspectReport;
+use grainline::mesh::report::{InspectReport, QualityReport};
 use grainline::mesh::topology::Topology;
 use grainline::mesh::uv_charts::UvCharts;
 
@@ -26,7 +26,8 @@ pub fn run(args: InspectArgs, _quiet: bool) -> anyhow::Result<()> {
     let loaded = grainline::mesh::load::load_mesh(path, &args.mesh.load_options().tolerant())?;
     let topo = Topology::new(&loaded.mesh)?;
     let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
-    let report = InspectReport::new(path, &loaded, &topo, charts.as_ref());
+    let report =
+        InspectReport::new(path, &loaded, &topo, charts.as_ref(), QualityReport::new(&loaded));
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {

@@ -234,13 +234,13 @@ pub(crate) fn apply(
         let found = uv_targets(ctx, &lines, reach).ok_or_else(|| {
             Error::setting(key, "the mesh has no UV coordinates; give 3D `points` instead")
         })?;
-        (found, crate::fidelity::lift_uv_polylines(ctx.mesh, &lines))
+        (found, super::uv_lift::lift_uv_polylines(ctx.mesh, &lines))
     };
     let support = (0..found.len())
         .filter(|&i| found[i].is_some_and(|h| h.distance < e.radius))
         .map(|i| i as u32)
         .collect();
-    report.shape = Some(crate::fidelity::EditShape::Curve { radius: e.radius, polylines, support });
+    report.shape = Some(super::shape::EditShape::Curve { radius: e.radius, polylines, support });
     let mut count = 0;
     let mut critical = 0;
     let width = e.width.unwrap_or(e.radius);

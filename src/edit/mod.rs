@@ -26,8 +26,10 @@ pub mod chart;
 pub mod curve;
 pub mod light;
 pub mod resolution;
+pub mod shape;
 pub mod stencil;
 pub mod support;
+pub mod uv_lift;
 pub mod warp;
 
 use nalgebra::{Matrix2, Vector2, Vector3};
@@ -226,7 +228,7 @@ pub struct EditReport {
     pub notes: Vec<String>,
     /// What the edit asked for (bend, expand, curve), for [`crate::fidelity`].
     #[serde(skip)]
-    pub shape: Option<crate::fidelity::EditShape>,
+    pub shape: Option<shape::EditShape>,
 }
 
 impl EditReport {

@@ -253,7 +253,7 @@ fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
                     (None, Some(svg)) => read_svg_polylines(Path::new(svg), c.tolerance)?,
                     (None, None) => return Ok(None),
                 };
-                crate::fidelity::lift_uv_polylines(mesh, &uv)
+                super::uv_lift::lift_uv_polylines(mesh, &uv)
             };
             let width = c.width.unwrap_or(c.radius).min(c.radius);
             Some(Region { lines, reach: c.radius, edge: width * CURVE_EDGE })

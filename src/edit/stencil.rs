@@ -186,7 +186,7 @@ fn blend_band(ctx: &Context, phi: &mut [f64], band: &[usize], k: f64) -> Result<
             message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
         }
     })?;
-    let llt = crate::solve::factor::Factor::new(a.as_ref(), "stencil blend")?;
+    let llt = crate::factor::Factor::new(a.as_ref(), "stencil blend")?;
     llt.solve_in_place(rhs.as_mut());
     for (r, &i) in band.iter().enumerate() {
         let zi = rhs[(r, 0)];

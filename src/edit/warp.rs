@@ -323,7 +323,7 @@ pub(crate) fn apply(
              highlight"
         ));
     }
-    report.shape = Some(crate::fidelity::warp_shape(kind, e.strength, &support));
+    report.shape = Some(super::shape::warp_shape(kind, e.strength, &support));
     Ok(())
 }
 

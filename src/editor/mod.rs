@@ -15,6 +15,7 @@
 //! request with a 4xx and keeps running.
 
 pub mod assets;
+pub mod drag;
 pub mod server;
 pub mod session;
 

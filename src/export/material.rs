@@ -19,7 +19,7 @@
 
 use serde::Serialize;
 
-use crate::render::{BrdfSpec, Fresnel, Material};
+use crate::appearance::{BrdfSpec, Fresnel, Material};
 
 /// The glTF material of a scene's BRDF.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -50,7 +50,7 @@ pub fn phong_alpha(n: f64) -> f64 {
 
 /// F₀ of the Fresnel setting (normal incidence), linear RGB.
 fn f0(f: &Fresnel) -> [f64; 3] {
-    let term = crate::render::brdf::fresnel::FresnelTerm::new(f);
+    let term = crate::appearance::brdf::fresnel::FresnelTerm::new(f);
     term.eval(1.0)
 }
 

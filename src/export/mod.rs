@@ -25,9 +25,9 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
+use crate::appearance::Material;
 use crate::highlight::Symmetry;
 use crate::mesh::Units;
-use crate::render::Material;
 use crate::{Error, Result};
 
 pub use material::{gltf_material, GltfMaterial};

@@ -41,7 +41,7 @@ impl std::str::FromStr for InitialField {
             "curvature-min" => InitialField::CurvatureMin,
             "curvature-max" => InitialField::CurvatureMax,
             _ => match s.strip_prefix("world:") {
-                Some(v) => InitialField::World(crate::parse_vec3("init", v)?),
+                Some(v) => InitialField::World(super::parse_vec3("init", v)?),
                 None => {
                     return Err(Error::invalid_arg(
                         "init",

@@ -44,3 +44,23 @@ impl Symmetry {
         }
     }
 }
+
+/// Parses `X,Y,Z` (three finite numbers separated by commas) for the option `name`.
+pub fn parse_vec3(name: &str, s: &str) -> crate::Result<nalgebra::Vector3<f64>> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let bad = || crate::Error::invalid_arg(name, format!("{s:?}: expected three numbers X,Y,Z"));
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let mut v = [0.0; 3];
+    for (k, p) in parts.iter().enumerate() {
+        v[k] = p.parse::<f64>().map_err(|_| bad())?;
+        if !v[k].is_finite() {
+            return Err(crate::Error::invalid_arg(
+                name,
+                format!("{s:?}: components must be finite"),
+            ));
+        }
+    }
+    Ok(nalgebra::Vector3::new(v[0], v[1], v[2]))
+}

@@ -91,7 +91,7 @@ pub fn smoothest_field(
             message: format!("matrix assembly: {}", crate::error::describe_creation(&e)),
         }
     })?;
-    let llt = crate::solve::factor::Factor::new(a.as_ref(), "smoothest field")?;
+    let llt = crate::factor::Factor::new(a.as_ref(), "smoothest field")?;
 
     // Deterministic start: golden-angle phases.
     let mut z: Vec<c64> = (0..n)

@@ -1,13 +1,13 @@
 //! Sparse symmetric positive definite systems for the flattening methods: assembled from
 //! (row, column, value) entries and solved with the project's solver, faer's sparse Cholesky
-//! factorization (`solve::factor`, as `highlight::smoothest` and `edit::stencil` use, its size
+//! factorization (`factor`, as `highlight::smoothest` and `edit::stencil` use, its size
 //! bounded before it is allocated), factored once and reused for every right-hand side (ARAP
 //! solves the same matrix at each iteration).
 
 use faer::prelude::*;
 use faer::sparse::{SparseColMat, Triplet};
 
-use crate::solve::factor::Factor;
+use crate::factor::Factor;
 use crate::{Error, Result};
 
 /// A factored SPD matrix of size `n`.

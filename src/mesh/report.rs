@@ -206,7 +206,7 @@ pub struct QualityReport {
 }
 
 /// The name of mesh face `f` in the file's own terms.
-fn face_name(r: &super::load::LoadReport, f: usize) -> String {
+pub fn face_name(r: &super::load::LoadReport, f: usize) -> String {
     use super::load::MeshFormat;
     use super::validate::Naming;
     let line = r.face_line.get(f).copied().unwrap_or(0);
@@ -216,36 +216,6 @@ fn face_name(r: &super::load::LoadReport, f: usize) -> String {
         MeshFormat::Obj => format!("face {f}"),
         MeshFormat::Stl => Naming::Stl.face(line, index),
         MeshFormat::Ply => Naming::Ply.face(line, index),
-    }
-}
-
-impl QualityReport {
-    /// Angles and creases of a loaded mesh.
-    pub fn new(loaded: &LoadedMesh) -> Self {
-        use crate::geometry::normals::{self, DEFAULT_CREASE_ANGLE_DEG};
-        let mesh = &loaded.mesh;
-        let fd = normals::face_data(mesh);
-        let mut min = (f64::INFINITY, 0usize);
-        let mut slivers = 0;
-        for (f, d) in fd.iter().enumerate() {
-            let a = d.angles.iter().copied().fold(f64::INFINITY, f64::min).to_degrees();
-            if a < min.0 {
-                min = (a, f);
-            }
-            slivers += usize::from(a < SLIVER_ANGLE_DEG);
-        }
-        let vf = super::VertexFaces::new(mesh);
-        let vn = vec![nalgebra::Vector3::zeros(); mesh.num_vertices()];
-        let c = normals::corner_normals(mesh, &vf, &fd, &vn, DEFAULT_CREASE_ANGLE_DEG);
-        QualityReport {
-            min_angle_deg: if min.0.is_finite() { min.0 } else { 0.0 },
-            min_angle_face: face_name(&loaded.report, min.1),
-            sliver_angle_deg: SLIVER_ANGLE_DEG,
-            slivers,
-            crease_angle_deg: DEFAULT_CREASE_ANGLE_DEG,
-            crease_edges: c.crease_edges,
-            split_vertices: c.split_vertices,
-        }
     }
 }
 
@@ -316,8 +286,15 @@ pub struct InspectReport {
 }
 
 impl InspectReport {
-    /// Computes the report of a loaded mesh.
-    pub fn new(path: &Path, loaded: &LoadedMesh, topo: &Topology, uv: Option<&UvCharts>) -> Self {
+    /// Computes the report of a loaded mesh; `quality` is the mesh's angles and creases
+    /// (`QualityReport::new`, computed with the face normals in [`crate::geometry`]).
+    pub fn new(
+        path: &Path,
+        loaded: &LoadedMesh,
+        topo: &Topology,
+        uv: Option<&UvCharts>,
+        quality: QualityReport,
+    ) -> Self {
         let (mesh, r) = (&loaded.mesh, &loaded.report);
         let (lo, hi) = mesh.bounding_box().unwrap_or_default();
         let boundary_loops = (0..topo.num_boundary_loops())
@@ -373,7 +350,7 @@ impl InspectReport {
             boundary_vertices: topo.boundary_vertices().len(),
             uv,
             has_normals: mesh.normals.is_some(),
-            quality: QualityReport::new(loaded),
+            quality,
             problems: Problems {
                 degenerate_faces: r.dropped_degenerate_faces,
                 nonmanifold_edges: r.nonmanifold_edges,

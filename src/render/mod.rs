@@ -8,7 +8,7 @@
 //! proves which ran. The renderer reads the mesh and the model's outputs; it never calls the
 //! solver or the toolpaths.
 
-pub mod brdf;
+pub use crate::appearance::brdf;
 mod bvh;
 pub mod camera;
 pub mod env;

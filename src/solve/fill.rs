@@ -78,7 +78,7 @@ pub fn harmonic_fill(
         triplets.push(Triplet::new(c, c, c64::new(d + 1e-10 * mean.max(1e-300), 0.0)));
     }
     let a = SparseColMat::<usize, c64>::try_new_from_triplets(n, n, &triplets).ok()?;
-    let llt = super::factor::Factor::new(a.as_ref(), "harmonic fill").ok()?;
+    let llt = crate::factor::Factor::new(a.as_ref(), "harmonic fill").ok()?;
     llt.solve_in_place(rhs.as_mut());
     let scale = rhs.col(0).iter().map(|z| z.norm()).fold(0.0f64, f64::max);
     let mut out = phi.to_vec();

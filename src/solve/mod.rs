@@ -6,7 +6,6 @@ pub mod branch;
 mod cg;
 pub mod fabrication;
 pub mod face_hinge;
-pub(crate) mod factor;
 pub mod fill;
 pub mod highlight_term;
 pub mod lm;

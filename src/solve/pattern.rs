@@ -217,7 +217,7 @@ impl DirectSystem {
         )
         .map_err(|e| crate::error::describe_faer(&e))?;
         // The factor's size is known here, before it is allocated (issue 15, item 12).
-        super::factor::check_factor_size("solve", symbolic.len_val(), 8)
+        crate::factor::check_factor_size("solve", symbolic.len_val(), 8)
             .map_err(|e| e.to_string())?;
         let l_values = vec![0.0; symbolic.len_val()];
         let workspace = MemBuffer::try_new(

@@ -31,8 +31,8 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use crate::edit::{Edit, WarpKind};
+use crate::editor::drag::DragBase;
 use crate::fidelity::EditFidelity;
-use crate::pipeline::optimize::DragBase;
 use crate::pipeline::run::StagePlan;
 use crate::pipeline::{
     load_stage, prepare_part, refine_request, LoadedPart, Prepared, Silent, Stages,

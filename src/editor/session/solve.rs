@@ -7,11 +7,11 @@ use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use crate::edit::Edit;
+use crate::editor::drag::DragBase;
 use crate::fidelity::{highlight_segments, EditFidelity};
 use crate::field::FieldFile;
-use crate::pipeline::optimize::{optimize_stage, optimized_field_file, DragBase, Optimized};
+use crate::pipeline::optimize::{optimize_stage, optimized_field_file, Optimized};
 use crate::pipeline::{Silent, Stages};
-use crate::uvfield::{as_brushed, field_mesh, toolpath_error};
 use crate::{Error, Result};
 
 use super::{Base, Part, Session};
@@ -231,8 +231,7 @@ impl Session {
     }
 
     /// The strokes `grainline run` traces for a solved field and the as-brushed grain rebuilt
-    /// from them, through the run's own code ([`crate::pipeline::run::toolpath_section`],
-    /// [`field_mesh`], [`grainline_toolpaths::generate`], [`as_brushed`]) on the angles the run
+    /// from them, through the run's own trace stage ([`crate::pipeline::trace::trace`]) on the angles the run
     /// traces (FIELD.json's, after a solve). Made once per result; a part without a UV layout
     /// is told the key to add.
     pub fn traced<'a>(&self, solved: &'a Solved) -> Result<&'a Traced> {
@@ -256,18 +255,26 @@ impl Session {
             ));
         }
         let s = self.with_edits(&solved.base, &solved.edits)?;
-        let (g, symmetry, units) = (&p.field.geometry, p.field_options.symmetry, p.mesh.units);
+        let (g, symmetry) = (&p.field.geometry, p.field_options.symmetry);
         // As `grainline run`: the solved angles as FIELD.json states them, the initial as is.
         let phi = if solved.edits.is_empty() {
             solved.phi.clone()
         } else {
             g.angles_of(&g.directions_of(&solved.phi))
         };
-        let section = crate::pipeline::run::toolpath_section(&s.scene, units, false)?;
-        let (fm, uvr) = field_mesh(&p.mesh, g, &phi, symmetry, &section.uv_field)?;
-        let job = grainline_toolpaths::generate(fm.clone(), &section.job_options(units))
-            .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
-        let ab = as_brushed(&p.mesh, g, &phi, symmetry, &fm, &uvr, &job.placement)?;
+        let input = crate::pipeline::trace::TraceInput {
+            scene: &s.scene,
+            mesh: &p.mesh,
+            geometry: g,
+            phi: &phi,
+            symmetry,
+            keep_map: false,
+            keep_field_mesh: true,
+        };
+        let t = crate::pipeline::trace::trace(&input)?;
+        let ab =
+            t.as_brushed(&input)?.ok_or_else(|| Error::invalid_arg("trace", "no field mesh"))?;
+        let job = t.job;
         let f32s = |v: &[f64; 3]| v.map(|c| c as f32);
         Ok(Traced {
             strokes: job.strokes_3d.iter().map(|s| s.iter().map(f32s).collect()).collect(),

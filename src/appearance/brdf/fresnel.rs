@@ -1,6 +1,6 @@
 //! Fresnel factors: none, Schlick, and the exact unpolarized conductor formula with presets.
 
-use super::super::settings::Fresnel;
+use crate::appearance::Fresnel;
 
 /// Aluminium η, k at (650, 550, 450) nm (Rakić 1995, as tabulated by PBRT/Mitsuba).
 pub const ALUMINIUM: ([f64; 3], [f64; 3]) =

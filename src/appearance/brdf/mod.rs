@@ -11,7 +11,7 @@ pub mod ward;
 
 use nalgebra::Vector3;
 
-use super::settings::{BrdfSpec, Material};
+use super::{BrdfSpec, Material};
 
 /// A BRDF f(ω_in, ω_out), both unit vectors in the local frame, pointing away from the surface.
 pub trait Brdf: Send + Sync {

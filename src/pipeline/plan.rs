@@ -1,0 +1,161 @@
+//! The plan: which stages a scene needs, the files a run writes and reads, where its outputs
+//! go, and the work it asks for, checked before any of it starts.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::output::OutputPlan;
+use crate::scene::LoadedScene;
+use crate::Result;
+
+/// Options of [`run`](super::run::run).
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Every relative output path of the scene lands under this directory (default: the scene
+    /// file's directory).
+    pub out_dir: Option<PathBuf>,
+    /// Take the grain from this FIELD.json (the output of `grainline optimize` or `grainline
+    /// field` on the same mesh) instead of computing it: no edits, no solve.
+    pub field: Option<PathBuf>,
+    /// Also write the run report (pretty JSON) here, after every other output.
+    pub report: Option<PathBuf>,
+}
+
+/// Which stages a scene needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct StagePlan {
+    /// The scene has edits: apply them and solve.
+    pub solve: bool,
+    /// A toolpath output or a strokes / as-brushed / gap effect needs the strokes.
+    pub trace: bool,
+    /// The scene has a `render` section.
+    pub render: bool,
+    /// The as-brushed field is needed (as-brushed effect, or `export.as_brushed`).
+    pub as_brushed: bool,
+    /// The scene asks for a glTF export (`export.glb`).
+    pub export: bool,
+}
+
+impl StagePlan {
+    /// The stages `scene` needs.
+    pub fn of(scene: &crate::scene::Scene) -> StagePlan {
+        let fx = scene.render.as_ref().map(|r| &r.effects);
+        let ex = scene.export.as_ref().filter(|e| e.glb.is_some());
+        let export_needs_strokes = ex.is_some_and(|e| e.strokes || e.as_brushed);
+        let as_brushed =
+            fx.is_some_and(|f| f.as_brushed.is_some()) || ex.is_some_and(|e| e.as_brushed);
+        let render_needs_strokes =
+            fx.is_some_and(|f| f.strokes.is_some() || f.as_brushed.is_some() || f.gap.is_some());
+        let toolpath_outputs = scene
+            .toolpaths
+            .as_ref()
+            .is_some_and(|t| t.svg.is_some() || t.gcode.is_some() || t.strokes_json.is_some());
+        StagePlan {
+            solve: !scene.edits.is_empty(),
+            trace: toolpath_outputs || render_needs_strokes || export_needs_strokes,
+            render: scene.render.is_some(),
+            as_brushed,
+            export: ex.is_some(),
+        }
+    }
+}
+
+/// The files a run of `s` writes (with their scene keys) and the files it reads, for
+/// [`OutputPlan::check`]: no output may be a directory, a device, a FIFO or a link, two
+/// outputs may not share a file, and no output may overwrite an input.
+pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> OutputPlan {
+    let scene = &s.scene;
+    let out = |p: &str| output_path(s, options.out_dir.as_deref(), p);
+    let mut plan = OutputPlan::new();
+    if let Some(p) = &scene.field.output {
+        plan.output("field.output", out(p));
+    }
+    let needs = StagePlan::of(scene);
+    if let Some(t) = scene.toolpaths.as_ref().filter(|_| needs.trace) {
+        for (key, p) in [
+            ("toolpaths.svg", &t.svg),
+            ("toolpaths.gcode", &t.gcode),
+            ("toolpaths.strokes_json", &t.strokes_json),
+        ] {
+            if let Some(p) = p {
+                plan.output(key, out(p));
+            }
+        }
+    }
+    if let Some(r) = &scene.render {
+        plan.output("render.output", out(&r.output));
+        if let Some(p) = &r.linear {
+            plan.output("render.linear", out(p));
+        }
+    }
+    if let Some(p) = scene.export.as_ref().and_then(|e| e.glb.as_ref()) {
+        plan.output("export.glb", out(p));
+    }
+    if let Some(p) = &options.report {
+        plan.output("the run report", p.clone());
+    }
+    scene_inputs(s, &mut plan);
+    if let Some(p) = &options.field {
+        plan.input("--field", p.clone());
+    }
+    plan
+}
+
+/// Adds the files a scene reads to `plan`: the scene file, the mesh or outline, the
+/// directions file, curve edits' SVGs and environment images.
+pub fn scene_inputs(s: &LoadedScene, plan: &mut OutputPlan) {
+    let scene = &s.scene;
+    plan.input("the scene file", s.path.clone());
+    if let Some(m) = &scene.mesh {
+        plan.input("mesh", s.input(&m.0.path));
+    }
+    if let Some(o) = &scene.outline {
+        plan.input("outline", s.input(&o.path));
+    }
+    if let Some(p) = &scene.field.directions {
+        plan.input("field.directions", s.input(p));
+    }
+    for (i, e) in scene.edits.iter().enumerate() {
+        if let crate::edit::Edit::Curve(c) = e {
+            if let Some(p) = &c.svg {
+                plan.input(format!("edits[{i}].svg"), s.input(p));
+            }
+        }
+    }
+    for (i, l) in scene.lights.iter().enumerate() {
+        if let crate::render::LightSpec::Environment { file, .. } = l {
+            plan.input(format!("lights[{i}].file"), s.input(file));
+        }
+    }
+}
+
+/// The work a scene asks for, estimated as soon as its part is loaded (before the field, the
+/// solve, the strokes or the render start) and refused past its budget, naming the key:
+/// the strokes' samples (`toolpaths.placement.*`, over the part's surface area).
+/// The render's memory and the ordering's neighbours are checked with the scene itself
+/// (`Scene::validate`), the panel's triangles before the outline is meshed.
+pub fn check_scene_work(scene: &crate::scene::Scene, mesh: &crate::mesh::Mesh) -> Result<()> {
+    let traced = StagePlan::of(scene).trace;
+    if let (true, Some(t)) = (traced, &scene.toolpaths) {
+        // Placement lengths are in scene units on the part, and the UV field is scaled to
+        // the part's area, so the mesh's surface area is the area the strokes cover.
+        t.placement
+            .check_budget(mesh.area())
+            .map_err(|e| crate::scene::prefix("toolpaths", crate::uvfield::toolpath_error(e)))?;
+    }
+    Ok(())
+}
+
+/// Where an output of the scene goes: under `out_dir` when given, else relative to the scene
+/// file.
+pub fn output_path(s: &LoadedScene, out_dir: Option<&Path>, p: &str) -> PathBuf {
+    let p = Path::new(p);
+    if p.is_absolute() {
+        return p.to_path_buf();
+    }
+    match out_dir {
+        Some(d) => d.join(p),
+        None => s.base.join(p),
+    }
+}

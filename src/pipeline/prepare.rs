@@ -1,0 +1,344 @@
+//! The field stage: load the part (or mesh its outline), make its UV layout when the
+//! toolpaths need one, refine it inside the edits' brushes, and compute the geometry, the
+//! initial field and its highlights.
+
+use nalgebra::Vector3;
+
+use super::plan::check_scene_work;
+use super::Stages;
+use crate::field::{compute_field, read_directions, FieldOptions, FieldResult};
+use crate::highlight::Lighting;
+use crate::mesh::Mesh;
+use crate::scene::{InitKind, LoadedScene};
+use crate::{Error, Result};
+
+/// The part, its geometry and the initial field with its highlights.
+pub struct Prepared {
+    /// The mesh (loaded from OBJ or meshed from an outline).
+    pub mesh: Mesh,
+    /// The mesh's source as written in the scene.
+    pub mesh_name: String,
+    /// The options the field was computed with.
+    pub field_options: FieldOptions,
+    /// Geometry, φ, h, ℓ, critical points.
+    pub field: FieldResult,
+    /// The UV layout made for the part ([`prepare_with`] with `layout: true`), if one was.
+    pub layout: Option<crate::layout::LayoutReport>,
+    /// The refinement made inside the edits' brushes (`mesh.refine`), if any.
+    pub refinement: Option<RefinementReport>,
+}
+
+/// The highlight model's key light as the scene gives it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KeyLight {
+    /// A distant light: the direction towards it.
+    Directional(Vector3<f64>),
+    /// A point light at this position.
+    Point(Vector3<f64>),
+}
+
+impl KeyLight {
+    /// The [`Lighting`] of this key light and `view` for the mesh `mesh` (a point light's
+    /// nominal direction is taken from the centre of the mesh's bounding box).
+    pub fn lighting(&self, view: crate::highlight::View, mesh: &Mesh) -> Result<Lighting> {
+        match *self {
+            KeyLight::Directional(d) => Lighting::new(d, view),
+            KeyLight::Point(p) => {
+                Lighting::point(p, crate::highlight::lighting::centre_of(&mesh.positions), view)
+            }
+        }
+    }
+}
+
+/// The highlight model's light: the first directional or point light marked `"key": true`,
+/// else the first directional light, else the first point light
+/// ([`crate::render::key_light_index`]).
+pub fn key_light(scene: &crate::scene::Scene) -> Result<KeyLight> {
+    let none = || Error::setting("lights", "needs a directional or point light");
+    let i = crate::render::key_light_index(&scene.lights).ok_or_else(none)?;
+    match &scene.lights[i] {
+        crate::render::LightSpec::Directional { direction, .. } => {
+            Ok(KeyLight::Directional(Vector3::from(*direction)))
+        }
+        crate::render::LightSpec::Point { position, .. } => {
+            Ok(KeyLight::Point(Vector3::from(*position)))
+        }
+        _ => Err(none()),
+    }
+}
+
+/// Loads the part and computes the geometry, the initial field and its highlights.
+pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
+    prepare_with(s, stages, false)
+}
+
+/// [`prepare`], and when `layout` is true (the toolpaths need UVs) the part's UV layout is
+/// checked, or made, right after loading and before any long stage ([`ensure_layout`]).
+pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<Prepared> {
+    let part = load_stage(s, stages, layout)?;
+    prepare_part(s, part, stages)
+}
+
+/// The part as loaded, before any refinement for the edits: what [`prepare_part`] starts
+/// from. The editor keeps one and prepares it again for each set of edits it commits.
+#[derive(Clone)]
+pub struct LoadedPart {
+    /// The mesh as loaded (with the UV layout made for the toolpaths, if one was).
+    pub mesh: Mesh,
+    /// The mesh's source as written in the scene.
+    pub mesh_name: String,
+    /// The key light and the view for this mesh.
+    pub lighting: Lighting,
+    /// Directions read per vertex (`field.init: "directions"`).
+    pub directions: Option<Vec<Vector3<f64>>>,
+    /// The UV layout made for the part, if one was.
+    pub layout: Option<crate::layout::LayoutReport>,
+}
+
+/// The first half of [`prepare_with`]: loads the part (or meshes its outline), checks the
+/// work the scene asks for, makes the UV layout when `layout` is true and reads the per-vertex
+/// directions. Nothing here depends on the scene's edits.
+pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<LoadedPart> {
+    let scene = &s.scene;
+    let key = key_light(scene).map_err(|e| s.wrap(e))?;
+    if let KeyLight::Directional(d) = key {
+        // A bad direction is reported before the part is loaded, as it always was.
+        Lighting::new(d, scene.view.view())?;
+    }
+    stages.start("load");
+    let (mut mesh, mesh_name) = load_part(s)?;
+    // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
+    check_scene_work(scene, &mesh)?;
+    let lighting = key.lighting(scene.view.view(), &mesh)?;
+    // `field.init: "uv"` reads the part's own UVs, never a layout made for the toolpaths.
+    if matches!(scene.field.init, InitKind::Uv) && mesh.uv.is_none() {
+        return Err(s.wrap(Error::setting(
+            "field.init",
+            format!("\"uv\" needs UVs, and {mesh_name} has none"),
+        )));
+    }
+    let layout_report = if layout {
+        let options = scene.toolpaths.as_ref().map(|t| t.layout.clone()).unwrap_or_default();
+        ensure_layout(&mut mesh, &mesh_name, &options, stages)?
+    } else {
+        None
+    };
+    let directions = match (&scene.field.init, &scene.field.directions) {
+        (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),
+        _ => None,
+    };
+    Ok(LoadedPart { mesh, mesh_name, lighting, directions, layout: layout_report })
+}
+
+/// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
+/// (`mesh.refine`, [`refine_request`], [`crate::mesh::refine`]) and computes the geometry, the
+/// initial field and its highlights on the result.
+pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
+    let scene = &s.scene;
+    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout } = part;
+    let refinement = refine_for_edits(s, &mut mesh, stages)?;
+    if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
+        // A line or vector field read per vertex: each new vertex gets the mean of its edge's
+        // two directions (aligned first, so a line field's ±u do not cancel).
+        r.refined.extend(d, |a, b| {
+            let s = if a.dot(b) < 0.0 { a - b } else { a + b };
+            s.try_normalize(1e-300).unwrap_or(*a)
+        });
+    }
+    stages.start("field");
+    let mut field_options = FieldOptions::new(lighting);
+    field_options.init = scene.field.initial_field(directions);
+    field_options.symmetry = scene.field.symmetry.symmetry();
+    field_options.gradient_form = scene.field.gradient_form;
+    field_options.geometry.normals = scene.field.normals;
+    field_options.geometry.fit_radius = scene.field.fit_radius;
+    field_options.critical_threshold = scene.field.critical_threshold;
+    let field = compute_field(&mesh, &field_options)?;
+    let refinement = refinement.map(|r| r.report);
+    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement })
+}
+
+/// What [`refine_for_edits`] did.
+struct Refinement {
+    refined: crate::mesh::refine::Refined,
+    report: RefinementReport,
+}
+
+/// The mesh refinement made for the edits (`mesh.refine`, docs/math.md §12).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RefinementReport {
+    /// Vertices of the part as loaded.
+    pub vertices_before: usize,
+    /// Vertices added (appended after the part's own, which keep their indices).
+    pub vertices_added: usize,
+    /// Faces of the part that were split.
+    pub faces_split: usize,
+    /// Levels of splitting.
+    pub levels: usize,
+    /// The longest edge allowed inside the finest brush, scene units.
+    pub finest_edge: f64,
+}
+
+/// The edge length each face of `mesh` needs for the scene's edits
+/// ([`crate::edit::resolution::edit_resolution`] with `mesh.refine.edge`): the refinement's
+/// request. `None` when nothing would be refined (`mesh.refine.mode: "none"`, no edits, or no
+/// face asks for an edge). Two scenes whose requests are equal refine the part the same way.
+pub fn refine_request(
+    s: &LoadedScene,
+    mesh: &Mesh,
+) -> Result<Option<crate::edit::resolution::Resolution>> {
+    let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
+    if settings.mode == crate::scene::RefineMode::None || s.scene.edits.is_empty() {
+        return Ok(None);
+    }
+    let edits = super::optimize::resolved_edits(s);
+    let key = |e: Error| crate::scene::prefix("edits", e);
+    let target =
+        crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
+    Ok(target.finest().is_finite().then_some(target))
+}
+
+/// Refines the part inside the edits' brushes where its triangles are coarser than
+/// `mesh.refine.edge` × the brush radius ([`refine_request`], [`crate::mesh::refine`]).
+/// `None` when nothing was split (or `mesh.refine.mode: "none"`).
+fn refine_for_edits(
+    s: &LoadedScene,
+    mesh: &mut Mesh,
+    stages: &mut Stages,
+) -> Result<Option<Refinement>> {
+    let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
+    let Some(target) = refine_request(s, mesh)? else {
+        return Ok(None);
+    };
+    let finest = target.finest();
+    stages.start("refine");
+    let options = crate::mesh::refine::RefineOptions {
+        max_new_vertices: settings.max_vertices,
+        budget_key: "mesh.refine.max_vertices",
+        ..Default::default()
+    };
+    // The faces a split makes are asked again where they are (a sliver's far children are
+    // left alone: docs/math.md §12).
+    let retarget = |p: &[nalgebra::Vector3<f64>; 3], _: f64| target.child_target(p);
+    let refined = crate::mesh::refine::refine_with(mesh, &target.faces, &options, &retarget)?;
+    if refined.added() == 0 {
+        return Ok(None);
+    }
+    let report = RefinementReport {
+        vertices_before: mesh.num_vertices(),
+        vertices_added: refined.added(),
+        faces_split: refined.faces_split,
+        levels: refined.levels,
+        finest_edge: finest,
+    };
+    *mesh = refined.mesh.clone();
+    Ok(Some(Refinement { refined, report }))
+}
+
+/// Makes sure `mesh` has a UV layout the toolpaths can use, as `options.mode` says: `auto`
+/// makes one when the part has no UVs, `always` replaces them, `never` refuses a part without
+/// UVs. A part whose UVs are all degenerate is refused (unless `always`). Called right after
+/// loading, so a part that cannot get a layout is refused before the field, the solve or the
+/// preview run (issue 14, item 7). Returns the layout's report when one was made.
+pub fn ensure_layout(
+    mesh: &mut Mesh,
+    mesh_name: &str,
+    options: &crate::layout::LayoutOptions,
+    stages: &mut Stages,
+) -> Result<Option<crate::layout::LayoutReport>> {
+    use crate::layout::LayoutMode;
+    let key = |e: Error| crate::scene::prefix("toolpaths.layout", e);
+    options.validate().map_err(key)?;
+    match (options.mode, &mesh.uv) {
+        (LayoutMode::Never, None) => {
+            return Err(Error::setting(
+                "toolpaths",
+                format!(
+                    "{mesh_name} has no UV coordinates (OBJ `vt`); toolpaths need a UV layout: \
+                     remove `toolpaths.layout.mode: \"never\"` to have one made, or make one \
+                     with `grainline flatten`"
+                ),
+            ));
+        }
+        (LayoutMode::Auto | LayoutMode::Never, Some(uv)) => {
+            let any_area = (0..uv.corners.len()).any(|f| {
+                let [a, b, c] = uv.face(f);
+                (b - a).perp(&(c - a)) != 0.0
+            });
+            if !any_area {
+                return Err(Error::setting(
+                    "toolpaths",
+                    format!(
+                        "every face of {mesh_name} has zero area in UV: toolpaths need a UV \
+                         layout; `toolpaths.layout.mode: \"always\"` replaces it with one made \
+                         for the part"
+                    ),
+                ));
+            }
+            return Ok(None);
+        }
+        _ => {}
+    }
+    stages.start("layout");
+    let layout = crate::layout::flatten(mesh, options).map_err(|e| match e {
+        Error::Numerical { stage, message } => Error::Numerical {
+            stage,
+            message: format!("{message} (making a UV layout for {mesh_name})"),
+        },
+        e => e,
+    })?;
+    mesh.uv = Some(layout.uv);
+    Ok(Some(layout.report))
+}
+
+/// Loads the scene's mesh (or meshes its outline).
+pub fn load_part(s: &LoadedScene) -> Result<(Mesh, String)> {
+    let scene = &s.scene;
+    if let Some(m) = &scene.mesh {
+        let path = s.input(&m.0.path);
+        let loaded = crate::mesh::load::load_mesh(&path, &m.load_options(scene.units)).map_err(
+            |e| match e {
+                // Inside a scene the switch is a key, not the command-line flag.
+                Error::NonManifold { path, message } => Error::NonManifold {
+                    path,
+                    message: message.replace(
+                        crate::mesh::validate::NONMANIFOLD_HINT,
+                        "`mesh.allow_nonmanifold: true` in the scene accepts them",
+                    ),
+                },
+                e => e,
+            },
+        )?;
+        return Ok((loaded.mesh, m.0.path.clone()));
+    }
+    let o = scene.outline.as_ref().ok_or_else(|| Error::Scene {
+        path: s.path.clone(),
+        line: None,
+        message: "mesh: missing (give `mesh` or `outline`)".into(),
+    })?;
+    if scene.units != crate::mesh::Units::Mm {
+        return Err(Error::Scene {
+            path: s.path.clone(),
+            line: None,
+            message: "units: a panel from an outline is in millimetres; set `units` to \"mm\""
+                .into(),
+        });
+    }
+    let options = crate::panel::PanelOptions {
+        max_edge: o.max_edge,
+        min_angle_deg: o.min_angle,
+        ..crate::panel::PanelOptions::default()
+    };
+    let panel = crate::panel::panel_from_svg(&s.input(&o.path), &options).map_err(|e| match e {
+        // The panel's keys as the scene spells them.
+        Error::Setting { key, message } => {
+            let key = match key.as_str() {
+                "min_angle_deg" => "min_angle".to_string(),
+                k => k.to_string(),
+            };
+            crate::scene::prefix("outline", Error::Setting { key, message })
+        }
+        e => e,
+    })?;
+    Ok((panel.mesh, o.path.clone()))
+}

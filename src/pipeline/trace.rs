@@ -1,0 +1,181 @@
+//! The trace stage: the strokes of a field on the part's UV layout, the one way `grainline
+//! run`, `trace`, `render`, `export` and the editor trace them — the toolpaths section as the
+//! run reads it, the grain carried into the UV layout ([`field_mesh`]), the toolpaths crate's
+//! job, and on request the coverage gaps per vertex, the as-brushed grain and the stroke-level
+//! constraint figures.
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use crate::geometry::Geometry;
+use crate::highlight::Symmetry;
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use crate::uvfield::{
+    as_brushed, field_mesh, toolpath_error, AsBrushed, ToolpathSection, UvFieldReport,
+};
+use crate::Result;
+
+/// Figures of the toolpath stage.
+#[derive(Clone, Debug, Serialize)]
+pub struct ToolpathFigures {
+    /// The toolpaths crate's report (strokes, lengths, coverage, stop reasons).
+    pub job: grainline_toolpaths::Report,
+    /// UV triangles, flipped and degenerate faces, seams.
+    pub uv_vertices: usize,
+    /// Triangles handed to the toolpaths crate.
+    pub triangles: usize,
+    /// Faces left out (degenerate UV).
+    pub degenerate_faces: usize,
+    /// Mirrored or flipped UV triangles (kept, directions carried without turning over).
+    pub flipped_faces: usize,
+    /// Seam pairs.
+    pub seam_pairs: usize,
+    /// Scale from the mesh's UV layout to the flat SVG / G-code coordinates (scene units).
+    pub uv_scale: f64,
+    /// The scene's fabrication constraints (`solver.constraints`) measured on the traced
+    /// strokes: turning radius, spread between neighbours, deviation through each lock
+    /// (`grainline_toolpaths::check_strokes`; issue 17). Absent when the scene has none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stroke_constraints: Option<grainline_toolpaths::StrokeChecks>,
+}
+
+/// The toolpaths section a run traces with: the scene's (or the defaults), keeping the
+/// coverage map when `keep_map` (the gap effect), the tool's turning radius as the plan's
+/// (issue 17, item 4) unless the section sets its own, checked in the mesh's `units`.
+pub fn toolpath_section(
+    scene: &crate::scene::Scene,
+    units: crate::mesh::Units,
+    keep_map: bool,
+) -> Result<crate::uvfield::ToolpathSection> {
+    let mut section = scene.toolpaths.clone().unwrap_or_default();
+    if keep_map {
+        let mut c = section.coverage.clone().unwrap_or_default();
+        c.keep_map = true;
+        section.coverage = Some(c);
+    }
+    // The tool's turning radius also cuts back stroke ends that turn tighter near a
+    // boundary or a singularity, unless the section sets its own.
+    if section.plan.min_turning_radius.is_none() {
+        section.plan.min_turning_radius =
+            scene.solver.constraints.turning_radius.as_ref().map(|t| t.radius);
+    }
+    section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
+    Ok(section)
+}
+
+/// What [`trace`] traces: a field on a part, as a scene asks.
+pub struct TraceInput<'a> {
+    /// The scene (its `toolpaths` section, or the defaults, and its constraints).
+    pub scene: &'a Scene,
+    /// The part, with its UV layout.
+    pub mesh: &'a Mesh,
+    /// The part's geometry (frames).
+    pub geometry: &'a Geometry,
+    /// The grain angles in the geometry's frames.
+    pub phi: &'a [f64],
+    /// Line or vector field.
+    pub symmetry: Symmetry,
+    /// Keep the coverage map, for the gaps per vertex ([`Traced::gap`]).
+    pub keep_map: bool,
+    /// Keep the field mesh, for [`Traced::gap`] and [`Traced::as_brushed`].
+    pub keep_field_mesh: bool,
+}
+
+/// The traced strokes and what the later steps of the stage read.
+pub struct Traced {
+    /// The toolpaths section traced with ([`toolpath_section`]).
+    pub section: ToolpathSection,
+    /// The toolpaths crate's job: strokes, SVG, G-code, strokes JSON, report.
+    pub job: grainline_toolpaths::JobOutput,
+    /// The field mesh handed to the job, when [`TraceInput::keep_field_mesh`].
+    pub field_mesh: Option<grainline_toolpaths::FieldMesh>,
+    /// The UV field's report (UV vertices, seams, the UV → vertex map).
+    pub uv: UvFieldReport,
+    /// The strokes on the part, scene units.
+    pub strokes_3d: Vec<Vec<Vector3<f64>>>,
+}
+
+/// Traces the strokes of `input`'s field. Errors found while tracing name their key from the
+/// scene's top (`toolpaths.…`).
+pub fn trace(input: &TraceInput) -> Result<Traced> {
+    let units = input.mesh.units;
+    let section = toolpath_section(input.scene, units, input.keep_map)?;
+    let (fm, uv) =
+        field_mesh(input.mesh, input.geometry, input.phi, input.symmetry, &section.uv_field)?;
+    let field_mesh = if input.keep_field_mesh { Some(fm.clone()) } else { None };
+    let job = grainline_toolpaths::generate(fm, &section.job_options(units))
+        .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
+    let strokes_3d =
+        job.strokes_3d.iter().map(|s| s.iter().map(|p| Vector3::from(*p)).collect()).collect();
+    Ok(Traced { section, job, field_mesh, uv, strokes_3d })
+}
+
+impl Traced {
+    /// The files the section asks for with their text: SVG, G-code, strokes JSON.
+    pub fn outputs(&self) -> Vec<(&str, &str)> {
+        let s = &self.section;
+        let j = &self.job;
+        [(&s.svg, &j.svg), (&s.gcode, &j.gcode), (&s.strokes_json, &j.strokes_json)]
+            .into_iter()
+            .filter_map(|(p, t)| Some((p.as_deref()?, t.as_deref()?)))
+            .collect()
+    }
+
+    /// The coverage gap map sampled at each of the `vertices` mesh vertices' UV positions (the
+    /// nearest pixel; the largest distance where a vertex has several UV positions). `None`
+    /// without the map or the field mesh.
+    pub fn gap(&self, vertices: usize) -> Option<Vec<f64>> {
+        let map = self.job.coverage.as_ref().and_then(|c| c.map.as_ref())?;
+        let fm = self.field_mesh.as_ref()?;
+        let mut g = vec![0.0f64; vertices];
+        for (k, q) in fm.uv.iter().enumerate() {
+            let px = ((q[0] - map.origin[0]) / map.pixel).floor();
+            let py = ((q[1] - map.origin[1]) / map.pixel).floor();
+            let (px, py) = (
+                (px.max(0.0) as usize).min(map.width.saturating_sub(1)),
+                (py.max(0.0) as usize).min(map.height.saturating_sub(1)),
+            );
+            let d = f64::from(map.distance[py * map.width + px]).max(0.0);
+            let v = self.uv.uv_to_vertex[k] as usize;
+            g[v] = g[v].max(d);
+        }
+        Some(g)
+    }
+
+    /// The grain rebuilt from the strokes ([`as_brushed`]); `None` without the field mesh.
+    pub fn as_brushed(&self, input: &TraceInput) -> Result<Option<AsBrushed>> {
+        let Some(fm) = &self.field_mesh else { return Ok(None) };
+        let (m, g, phi, sym) = (input.mesh, input.geometry, input.phi, input.symmetry);
+        as_brushed(m, g, phi, sym, fm, &self.uv, &self.job.placement).map(Some)
+    }
+
+    /// The stage's figures for the run report, with the scene's fabrication constraints
+    /// measured on the strokes (`solver.constraints`; none when the scene has none).
+    pub fn figures(&self, input: &TraceInput) -> Result<ToolpathFigures> {
+        let stroke_constraints = match super::stroke_constraints::check_options(
+            input.mesh,
+            input.geometry,
+            &input.scene.solver.constraints,
+            &self.uv.uv_to_vertex,
+            input.symmetry.k(),
+        )? {
+            Some(o) => Some(
+                grainline_toolpaths::check_strokes(&self.job.domain, &self.job.placement, &o)
+                    .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?,
+            ),
+            None => None,
+        };
+        let uvr = &self.uv;
+        Ok(ToolpathFigures {
+            job: self.job.report.clone(),
+            uv_vertices: uvr.uv_vertices,
+            triangles: uvr.triangles,
+            degenerate_faces: uvr.degenerate_faces.len(),
+            flipped_faces: uvr.flipped_faces,
+            seam_pairs: uvr.seam_pairs,
+            uv_scale: uvr.uv_scale,
+            stroke_constraints,
+        })
+    }
+}
