@@ -17,13 +17,13 @@
 //! The caller writes the bytes atomically (`output::Staged`).
 
 pub mod glb;
+mod glb_build;
 pub mod material;
 pub mod orient;
 
 use nalgebra::Vector3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
 
 use crate::appearance::Material;
 use crate::highlight::Symmetry;
@@ -222,6 +222,47 @@ fn check_finite(what: &str, i: usize, v: &Vector3<f64>) -> Result<()> {
 /// The part as glTF 2.0 binary (module docs). Errors name the vertex or face of a bad input.
 pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<ExportOutput> {
     let nv = input.positions.len();
+    check_input(input)?;
+    // Unit normals and unit tangents in the tangent plane.
+    let UnitFrames { normals, tangents, fallback } = unit_frames(input)?;
+    let oriented = match input.symmetry {
+        Symmetry::Line => orient::orient_line_field(input.faces, &tangents, input.singular_faces),
+        Symmetry::Oriented => orient::identity(input.faces, nv),
+    };
+    let mut gltf = glb_build::Gltf::default();
+    let count = gltf.push_part_buffers(input, &oriented, &normals, &tangents);
+    let m = gltf_material(&options.material);
+    let scale = options.units.in_mm() / 1000.0;
+    let rotation = up_rotation(options.up);
+    let name = &options.name;
+    gltf.push_part(name, &m, scale, rotation);
+    let (n_strokes, n_segments) = match input.strokes {
+        Some(strokes) => gltf.push_strokes(strokes, scale, rotation)?,
+        None => (0, 0),
+    };
+    gltf.push_camera(options.camera, scale, rotation);
+    gltf.push_key_light(options.key_light, rotation);
+    let bytes = gltf.into_glb(name)?;
+    let report = ExportReport {
+        vertices: count,
+        mesh_vertices: nv,
+        triangles: oriented.faces.len(),
+        split_vertices: oriented.split_vertices,
+        isolated_faces: oriented.isolated_faces,
+        fallback_tangents: fallback,
+        strokes: n_strokes,
+        stroke_segments: n_segments,
+        scale,
+        rotation,
+        material: m,
+        bytes: bytes.len(),
+    };
+    Ok(ExportOutput { glb: bytes, report })
+}
+
+/// The checks of [`export_glb`]'s input sizes and face indices.
+fn check_input(input: &ExportInput) -> Result<()> {
+    let nv = input.positions.len();
     if input.normals.len() != nv || input.u.len() != nv {
         return Err(Error::invalid_arg(
             "export input",
@@ -243,7 +284,13 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
             ));
         }
     }
-    // Unit normals and unit tangents in the tangent plane.
+    Ok(())
+}
+
+/// Unit normals and unit tangents in the tangent plane, per vertex, and the number of
+/// fallback tangents. Refuses non-finite input and positions too large for f32.
+fn unit_frames(input: &ExportInput) -> Result<UnitFrames> {
+    let nv = input.positions.len();
     let mut normals = Vec::with_capacity(nv);
     let mut tangents = Vec::with_capacity(nv);
     let mut fallback = 0;
@@ -269,256 +316,20 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
         normals.push(n);
         tangents.push(t);
     }
-    let oriented = match input.symmetry {
-        Symmetry::Line => orient::orient_line_field(input.faces, &tangents, input.singular_faces),
-        Symmetry::Oriented => orient::identity(input.faces, nv),
-    };
-    let mut bin = glb::Bin::default();
-    let mut views: Vec<Value> = Vec::new();
-    let mut accessors: Vec<Value> = Vec::new();
-    let view = |bin_slice: (usize, usize), target: u32, views: &mut Vec<Value>| -> usize {
-        views.push(json!({
-            "buffer": 0, "byteOffset": bin_slice.0, "byteLength": bin_slice.1, "target": target
-        }));
-        views.len() - 1
-    };
-    const ARRAY_BUFFER: u32 = 34962;
-    const ELEMENT_ARRAY_BUFFER: u32 = 34963;
-    const FLOAT: u32 = 5126;
-    const UNSIGNED_INT: u32 = 5125;
-    let f32s = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
-    // POSITION with its bounds (required by the spec).
-    let pos: Vec<[f32; 3]> =
-        oriented.vertex.iter().map(|&v| f32s(&input.positions[v as usize])).collect();
-    let bounds = |p: &[[f32; 3]]| {
-        let mut lo = [f32::MAX; 3];
-        let mut hi = [f32::MIN; 3];
-        for q in p {
-            for k in 0..3 {
-                lo[k] = lo[k].min(q[k]);
-                hi[k] = hi[k].max(q[k]);
-            }
-        }
-        (lo, hi)
-    };
-    let (lo, hi) = bounds(&pos);
-    let count = pos.len();
-    let v_pos = view(bin.push_f32(pos.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
-    accessors.push(json!({
-        "bufferView": v_pos, "componentType": FLOAT, "count": count, "type": "VEC3",
-        "min": lo, "max": hi
-    }));
-    let unit32 = |v: &Vector3<f64>| {
-        // Renormalized in f32 so the stored vector is unit to f32 precision.
-        let w = f32s(v);
-        let l = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-        [w[0] / l, w[1] / l, w[2] / l]
-    };
-    let nrm: Vec<[f32; 3]> =
-        oriented.vertex.iter().map(|&v| unit32(&normals[v as usize])).collect();
-    let v_nrm = view(bin.push_f32(nrm.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
-    accessors.push(json!({
-        "bufferView": v_nrm, "componentType": FLOAT, "count": count, "type": "VEC3"
-    }));
-    let tan: Vec<[f32; 4]> = oriented
-        .vertex
-        .iter()
-        .zip(&oriented.sign)
-        .map(|(&v, &s)| {
-            let t = unit32(&(tangents[v as usize] * s));
-            [t[0], t[1], t[2], 1.0]
-        })
-        .collect();
-    let v_tan = view(bin.push_f32(tan.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
-    accessors.push(json!({
-        "bufferView": v_tan, "componentType": FLOAT, "count": count, "type": "VEC4"
-    }));
-    let v_idx = view(
-        bin.push_u32(oriented.faces.iter().flatten().copied()),
-        ELEMENT_ARRAY_BUFFER,
-        &mut views,
-    );
-    accessors.push(json!({
-        "bufferView": v_idx, "componentType": UNSIGNED_INT, "count": 3 * oriented.faces.len(),
-        "type": "SCALAR"
-    }));
-    let m = gltf_material(&options.material);
-    let scale = options.units.in_mm() / 1000.0;
-    let rotation = up_rotation(options.up);
-    let name = &options.name;
-    let mut materials = vec![json!({
-        "name": name,
-        "pbrMetallicRoughness": {
-            "baseColorFactor": [m.base_color[0], m.base_color[1], m.base_color[2], 1.0],
-            "metallicFactor": m.metallic,
-            "roughnessFactor": m.roughness
-        },
-        "extensions": { "KHR_materials_anisotropy": {
-            "anisotropyStrength": m.anisotropy_strength,
-            "anisotropyRotation": m.anisotropy_rotation
-        } }
-    })];
-    let mut meshes = vec![json!({
-        "name": name,
-        "primitives": [{
-            "attributes": { "POSITION": 0, "NORMAL": 1, "TANGENT": 2 },
-            "indices": 3, "material": 0, "mode": 4
-        }]
-    })];
-    let node = |mesh: usize, name: String| json!({ "name": name, "mesh": mesh, "scale": [scale, scale, scale], "rotation": rotation });
-    let mut nodes = vec![node(0, name.clone())];
-    let (mut n_strokes, mut n_segments) = (0, 0);
-    if let Some(strokes) = input.strokes {
-        let mut pts: Vec<[f32; 3]> = Vec::new();
-        let mut idx: Vec<u32> = Vec::new();
-        for (s, line) in strokes.iter().enumerate() {
-            let mut q: Vec<[f32; 3]> = Vec::with_capacity(line.len());
-            for (j, p) in line.iter().enumerate() {
-                if !p.iter().all(|c| c.is_finite()) {
-                    return Err(Error::invalid_arg(
-                        "export input",
-                        format!("stroke {s}, point {j} is not finite"),
-                    ));
-                }
-                // Repeated points would be left unused (a validator notes unused data).
-                if q.last() != Some(&f32s(p)) {
-                    q.push(f32s(p));
-                }
-            }
-            if q.len() < 2 {
-                continue;
-            }
-            let k0 = pts.len() as u32;
-            for j in 1..q.len() as u32 {
-                idx.extend([k0 + j - 1, k0 + j]);
-            }
-            pts.extend(q);
-            n_strokes += 1;
-        }
-        if !idx.is_empty() {
-            // Only the points the segments use are kept (a validator warns about unused ones).
-            let (lo, hi) = bounds(&pts);
-            let vp = view(bin.push_f32(pts.iter().flatten().copied()), ARRAY_BUFFER, &mut views);
-            accessors.push(json!({
-                "bufferView": vp, "componentType": FLOAT, "count": pts.len(), "type": "VEC3",
-                "min": lo, "max": hi
-            }));
-            let vi = view(bin.push_u32(idx.iter().copied()), ELEMENT_ARRAY_BUFFER, &mut views);
-            accessors.push(json!({
-                "bufferView": vi, "componentType": UNSIGNED_INT, "count": idx.len(),
-                "type": "SCALAR"
-            }));
-            n_segments = idx.len() / 2;
-            materials.push(json!({
-                "name": "strokes",
-                "pbrMetallicRoughness": {
-                    "baseColorFactor": [0.9, 0.35, 0.05, 1.0],
-                    "metallicFactor": 0.0,
-                    "roughnessFactor": 1.0
-                }
-            }));
-            let a = accessors.len();
-            meshes.push(json!({
-                "name": "strokes",
-                "primitives": [{
-                    "attributes": { "POSITION": a - 2 }, "indices": a - 1, "material": 1,
-                    "mode": 1
-                }]
-            }));
-            nodes.push(node(1, "strokes".into()));
-        } else {
-            n_strokes = 0;
-        }
-    }
-    // The camera and the key light, in glTF's world (metres, +Y up): the part node's transform
-    // applied to the scene's coordinates.
-    let world_dir = |v: [f64; 3]| rotate(rotation, Vector3::from(v));
-    let mut cameras = Vec::new();
-    if let Some(c) = options.camera.filter(|c| {
-        let f = Vector3::from(c.target) - Vector3::from(c.eye);
-        f.norm() > 0.0 && f.cross(&Vector3::from(c.up)).norm() > 1e-9 * f.norm()
-    }) {
-        let fwd = world_dir(c.target) - world_dir(c.eye);
-        let dist = fwd.norm() * scale;
-        let back = -fwd.normalize();
-        let right = fwd.cross(&world_dir(c.up)).normalize();
-        let up = back.cross(&right);
-        let eye = world_dir(c.eye) * scale;
-        cameras.push(json!({
-            "name": "view", "type": "perspective",
-            "perspective": { "yfov": c.fov_deg.to_radians(), "znear": 1e-3 * dist }
-        }));
-        nodes.push(json!({
-            "name": "view", "camera": 0, "translation": [eye.x, eye.y, eye.z],
-            "rotation": quaternion_of(right, up, back)
-        }));
-    }
-    let mut lights = Vec::new();
-    if let Some((d, irradiance)) = options
-        .key_light
-        .filter(|(d, e)| e.is_finite() && *e >= 0.0 && Vector3::from(*d).norm() > 0.0)
-    {
-        // The light shines along its node's −Z: +Z points towards the light.
-        let z = world_dir(d).normalize();
-        let x = perpendicular(&z);
-        let y = z.cross(&x);
-        lights.push(json!({
-            "name": "key", "type": "directional", "color": [1.0, 1.0, 1.0],
-            "intensity": irradiance
-        }));
-        nodes.push(json!({
-            "name": "key light", "rotation": quaternion_of(x, y, z),
-            "extensions": { "KHR_lights_punctual": { "light": 0 } }
-        }));
-    }
-    let node_ids: Vec<usize> = (0..nodes.len()).collect();
-    let mut used = vec!["KHR_materials_anisotropy"];
-    if !lights.is_empty() {
-        used.push("KHR_lights_punctual");
-    }
-    let mut doc = json!({
-        "asset": {
-            "version": "2.0",
-            "generator": concat!("grainline ", env!("CARGO_PKG_VERSION"))
-        },
-        "extensionsUsed": used,
-        "scene": 0,
-        "scenes": [{ "name": name, "nodes": node_ids }],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{ "byteLength": bin.bytes.len() }]
-    });
-    if !cameras.is_empty() {
-        doc["cameras"] = json!(cameras);
-    }
-    if !lights.is_empty() {
-        doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": lights } });
-    }
-    let text = serde_json::to_vec(&doc)
-        .map_err(|e| Error::Numerical { stage: "glTF JSON", message: e.to_string() })?;
-    let bytes = glb::container(&text, &bin.bytes);
-    let report = ExportReport {
-        vertices: count,
-        mesh_vertices: nv,
-        triangles: oriented.faces.len(),
-        split_vertices: oriented.split_vertices,
-        isolated_faces: oriented.isolated_faces,
-        fallback_tangents: fallback,
-        strokes: n_strokes,
-        stroke_segments: n_segments,
-        scale,
-        rotation,
-        material: m,
-        bytes: bytes.len(),
-    };
-    Ok(ExportOutput { glb: bytes, report })
+    Ok(UnitFrames { normals, tangents, fallback })
+}
+
+/// What [`unit_frames`] returns.
+struct UnitFrames {
+    normals: Vec<Vector3<f64>>,
+    tangents: Vec<Vector3<f64>>,
+    fallback: usize,
 }
 
 #[cfg(test)]
 mod tests {
+    use serde_json::{json, Value};
+
     use super::*;
 
     /// Shepperd's quaternion rotates the basis vectors onto the matrix's columns.

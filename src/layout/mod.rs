@@ -477,42 +477,126 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     let mut next_id = 0u32;
     let mut cuts = Cuts::default();
     let mut counters = Counters::default();
+    let charting = Charting {
+        mesh,
+        he: &he,
+        options,
+        normals: &normals,
+        smooth: &smooth,
+        crease_cos,
+        cone_cos,
+    };
+    let mut ctx = MergeContext { tag: &mut tag, pos_in: &mut pos_in, next_id: &mut next_id };
+    let mut accepted = charting.cut_into_charts(&mut ctx, &mut cuts, &mut counters)?;
 
-    // The mesh's edge-connected pieces.
-    let all: Vec<u32> = (0..nf as u32).collect();
-    tag.iter_mut().for_each(|t| *t = 0);
-    next_id += 1;
-    let mut queue: VecDeque<Region> = charts::pieces(&all, &he, &tag, 0, |_| true)
-        .into_iter()
-        .map(|faces| Region { faces, next_cut: 0 })
-        .collect();
-    let mut accepted: Vec<(ChartMesh, Vec<Vector2<f64>>)> = Vec::new();
-    while let Some(region) = queue.pop_front() {
-        let id = next_id;
-        next_id += 1;
-        for (i, &f) in region.faces.iter().enumerate() {
-            tag[f as usize] = id;
-            pos_in[f as usize] = i as u32;
-        }
-        let chart = ChartMesh::new(&region.faces, &he, mesh, &tag, &pos_in, id);
-        if worth_flattening(&chart, mesh) {
-            let pos = chart.positions(mesh);
-            if let Some(uv) = flatten_chart(&chart, &pos, options, &mut counters) {
-                accepted.push((chart, uv));
-                continue;
+    // Merge small charts into their neighbours while the unions flatten.
+    let cap = (MERGE_FRACTION * nf as f64) as usize;
+    cuts.merges = merge_charts(&mut accepted, mesh, &he, &mut ctx, options, &mut counters, cap);
+    // Pack at one scale, then measure.
+    let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
+    let factor = pack::pack(&mut uvs, options.gap);
+    let uv_scale = 1.0 / factor;
+    let m = measure(mesh, &accepted, &uvs, uv_scale);
+    let (seam_edges, seam_length) = seams(mesh, &he, &m.face_chart);
+    let cap = 1e12;
+    let report = LayoutReport {
+        method: options.method,
+        charts: accepted.len(),
+        largest_chart_faces: m.largest,
+        seam_edges,
+        seam_length,
+        area_distortion: Stat::of(&m.area_d, &m.weights, cap),
+        angle_distortion: Stat::of(&m.angle_d, &m.weights, cap),
+        angle_error_deg: Stat::of(&m.angle_e, &m.weights, 180.0),
+        edge_length_error: Stat::of(&m.edge_e, &m.edge_w, cap),
+        flipped_faces: m.flipped,
+        arap_fallbacks: counters.arap_fallbacks,
+        bff_fallbacks: counters.bff_fallbacks,
+        bff_not_disk: counters.bff_not_disk,
+        bff_harmonic: counters.bff_harmonic,
+        arap_iterations: counters.arap_iterations,
+        cuts,
+        uv_scale,
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    let Measures { values, corners, face_chart, .. } = m;
+    Ok(Layout { uv: CornerAttribute { values, corners }, face_chart, report })
+}
+
+/// What the chart cutting of [`flatten`] reads: the mesh, its face normals (for creases) and
+/// smoothed normals (for normal cones), and the two angles' cosines.
+struct Charting<'a> {
+    mesh: &'a Mesh,
+    he: &'a HalfEdges,
+    options: &'a LayoutOptions,
+    normals: &'a [Vector3<f64>],
+    smooth: &'a [Vector3<f64>],
+    crease_cos: f64,
+    cone_cos: f64,
+}
+
+impl Charting<'_> {
+    /// Cuts the mesh's edge-connected pieces into charts until each flattens: the charts and
+    /// their UVs, in the order accepted.
+    fn cut_into_charts(
+        &self,
+        ctx: &mut MergeContext,
+        cuts: &mut Cuts,
+        counters: &mut Counters,
+    ) -> Result<Vec<(ChartMesh, Vec<Vector2<f64>>)>> {
+        let (mesh, he, options) = (self.mesh, self.he, self.options);
+        let nf = mesh.num_faces();
+        // The mesh's edge-connected pieces.
+        let all: Vec<u32> = (0..nf as u32).collect();
+        ctx.tag.iter_mut().for_each(|t| *t = 0);
+        *ctx.next_id += 1;
+        let mut queue: VecDeque<Region> = charts::pieces(&all, he, ctx.tag, 0, |_| true)
+            .into_iter()
+            .map(|faces| Region { faces, next_cut: 0 })
+            .collect();
+        let mut accepted: Vec<(ChartMesh, Vec<Vector2<f64>>)> = Vec::new();
+        while let Some(region) = queue.pop_front() {
+            let id = *ctx.next_id;
+            *ctx.next_id += 1;
+            for (i, &f) in region.faces.iter().enumerate() {
+                ctx.tag[f as usize] = id;
+                ctx.pos_in[f as usize] = i as u32;
             }
+            let chart = ChartMesh::new(&region.faces, he, mesh, ctx.tag, ctx.pos_in, id);
+            if worth_flattening(&chart, mesh) {
+                let pos = chart.positions(mesh);
+                if let Some(uv) = flatten_chart(&chart, &pos, options, counters) {
+                    accepted.push((chart, uv));
+                    continue;
+                }
+            }
+            if region.faces.len() == 1 {
+                return Err(Error::Numerical {
+                    stage: "layout",
+                    message: format!("face {} cannot be flattened", region.faces[0]),
+                });
+            }
+            let (pieces, cut) = self.cut_region(&region, ctx.tag, id, cuts);
+            queue.extend(pieces.into_iter().map(|faces| Region { faces, next_cut: cut }));
         }
-        if region.faces.len() == 1 {
-            return Err(Error::Numerical {
-                stage: "layout",
-                message: format!("face {} cannot be flattened", region.faces[0]),
-            });
-        }
+        Ok(accepted)
+    }
+
+    /// Cuts the region tagged `id`: creases, then normal cones, then bisection (each only
+    /// when it splits), from the region's next cut on. The pieces and their next cut.
+    fn cut_region(
+        &self,
+        region: &Region,
+        tag: &[u32],
+        id: u32,
+        cuts: &mut Cuts,
+    ) -> (Vec<Vec<u32>>, u8) {
+        let (he, normals, crease_cos) = (self.he, self.normals, self.crease_cos);
         // Cut: creases, then normal cones, then bisection (each only when it splits).
         let mut cut = region.next_cut;
         let mut pieces = Vec::new();
         if cut == 0 {
-            pieces = charts::pieces(&region.faces, &he, &tag, id, |h| {
+            pieces = charts::pieces(&region.faces, he, tag, id, |h| {
                 let (f, g) = (h / 3, he.twin(h).map_or(h / 3, |t| t / 3));
                 normals[f as usize].dot(&normals[g as usize]) >= crease_cos
             });
@@ -522,28 +606,45 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
             }
         }
         if pieces.len() <= 1 && cut == 1 {
-            pieces = charts::cone_pieces(&region.faces, &he, &smooth, &tag, id, cone_cos);
+            pieces = charts::cone_pieces(&region.faces, he, self.smooth, tag, id, self.cone_cos);
             cut = 2;
             if pieces.len() > 1 {
                 cuts.cones += 1;
             }
         }
         if pieces.len() <= 1 {
-            pieces = charts::bisect(&region.faces, &he, &tag, id);
+            pieces = charts::bisect(&region.faces, he, tag, id);
             cut = 2;
             cuts.bisections += 1;
         }
-        queue.extend(pieces.into_iter().map(|faces| Region { faces, next_cut: cut }));
+        (pieces, cut)
     }
+}
 
-    // Merge small charts into their neighbours while the unions flatten.
-    let cap = (MERGE_FRACTION * nf as f64) as usize;
-    let mut ctx = MergeContext { tag: &mut tag, pos_in: &mut pos_in, next_id: &mut next_id };
-    cuts.merges = merge_charts(&mut accepted, mesh, &he, &mut ctx, options, &mut counters, cap);
-    // Pack at one scale, then measure.
-    let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
-    let factor = pack::pack(&mut uvs, options.gap);
-    let uv_scale = 1.0 / factor;
+/// The corner UVs of the packed charts and the per-face measures of [`measure`].
+struct Measures {
+    values: Vec<Vector2<f64>>,
+    corners: Vec<[u32; 3]>,
+    face_chart: Vec<u32>,
+    area_d: Vec<f64>,
+    angle_d: Vec<f64>,
+    angle_e: Vec<f64>,
+    weights: Vec<f64>,
+    edge_e: Vec<f64>,
+    edge_w: Vec<f64>,
+    flipped: usize,
+    largest: usize,
+}
+
+/// The charts' UVs (`uvs`, scaled by `uv_scale`) gathered as corner values, and every face's
+/// area and angle distortion, angle error and edges' length errors, chart by chart.
+fn measure(
+    mesh: &Mesh,
+    accepted: &[(ChartMesh, Vec<Vector2<f64>>)],
+    uvs: &[Vec<Vector2<f64>>],
+    uv_scale: f64,
+) -> Measures {
+    let nf = mesh.num_faces();
     let mut values = Vec::new();
     let mut corners = vec![[0u32; 3]; nf];
     let mut face_chart = vec![0u32; nf];
@@ -552,7 +653,7 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     let (mut edge_e, mut edge_w) = (Vec::new(), Vec::new());
     let mut flipped = 0;
     let mut largest = 0;
-    for (k, ((chart, _), uv)) in accepted.iter().zip(&uvs).enumerate() {
+    for (k, ((chart, _), uv)) in accepted.iter().zip(uvs).enumerate() {
         let offset = values.len() as u32;
         values.extend_from_slice(uv);
         largest = largest.max(chart.faces.len());
@@ -585,6 +686,24 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
             angle_e.push(err);
         }
     }
+    Measures {
+        values,
+        corners,
+        face_chart,
+        area_d,
+        angle_d,
+        angle_e,
+        weights,
+        edge_e,
+        edge_w,
+        flipped,
+        largest,
+    }
+}
+
+/// The seams: the number of edges between two charts and their total length.
+fn seams(mesh: &Mesh, he: &HalfEdges, face_chart: &[u32]) -> (usize, f64) {
+    let nf = mesh.num_faces();
     let (mut seam_edges, mut seam_length) = (0, 0.0);
     for h in 0..(3 * nf) as u32 {
         if let Some(t) = he.twin(h) {
@@ -596,26 +715,5 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
             }
         }
     }
-    let cap = 1e12;
-    let report = LayoutReport {
-        method: options.method,
-        charts: accepted.len(),
-        largest_chart_faces: largest,
-        seam_edges,
-        seam_length,
-        area_distortion: Stat::of(&area_d, &weights, cap),
-        angle_distortion: Stat::of(&angle_d, &weights, cap),
-        angle_error_deg: Stat::of(&angle_e, &weights, 180.0),
-        edge_length_error: Stat::of(&edge_e, &edge_w, cap),
-        flipped_faces: flipped,
-        arap_fallbacks: counters.arap_fallbacks,
-        bff_fallbacks: counters.bff_fallbacks,
-        bff_not_disk: counters.bff_not_disk,
-        bff_harmonic: counters.bff_harmonic,
-        arap_iterations: counters.arap_iterations,
-        cuts,
-        uv_scale,
-        seconds: start.elapsed().as_secs_f64(),
-    };
-    Ok(Layout { uv: CornerAttribute { values, corners }, face_chart, report })
+    (seam_edges, seam_length)
 }

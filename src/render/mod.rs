@@ -12,6 +12,7 @@ pub use crate::appearance::brdf;
 mod bvh;
 pub mod camera;
 pub mod env;
+mod frame;
 pub mod image;
 mod lic;
 mod overlay;
@@ -24,7 +25,6 @@ mod surface;
 use std::time::Instant;
 
 use nalgebra::Vector3;
-use rayon::prelude::*;
 
 pub use camera::Camera;
 pub use env::EnvMap;
@@ -38,7 +38,7 @@ use crate::highlight::Symmetry;
 use crate::{Error, Result};
 use camera::Projector;
 use overlay::{Canvas, Ctx, PointProjector};
-use shade::{Light, ShadeCount, Shader};
+use shade::{Light, Shader};
 use surface::MeshData;
 
 /// Brush supports and target tangents of the edits, for the edit overlay.
@@ -238,22 +238,9 @@ pub(crate) fn render_with(
     precision: Precision,
 ) -> Result<RenderOutput> {
     let start = Instant::now();
-    material.validate().map_err(|e| prefix(e, "material"))?;
-    validate_lights(lights).map_err(|e| prefix(e, "lights"))?;
-    settings.validate().map_err(|e| prefix(e, "render"))?;
-    camera.validate()?;
-    input.validate()?;
+    let (curve_lights, critical_lights) =
+        validate_render(input, material, lights, camera, settings)?;
     let fx = &settings.effects;
-    let (curve_lights, critical_lights) = effect_lights(fx, lights)?;
-    if fx.lic.is_some() && input.ell.is_none() {
-        return Err(Error::setting("render.effects.lic", "needs ℓ per vertex (RenderInput::ell)"));
-    }
-    if fx.as_brushed.is_some() && input.brushed_u.is_none() {
-        return Err(Error::setting(
-            "render.effects.as_brushed",
-            "needs the as-brushed grain (RenderInput::brushed_u)",
-        ));
-    }
 
     let (w, h, s) =
         (settings.width as usize, settings.height as usize, settings.supersample as usize);
@@ -269,19 +256,7 @@ pub(crate) fn render_with(
     let proj = Projector::new(camera, sw, sh);
     let mut timer = Timer { report: &mut report };
 
-    let (vis, rstats) =
-        timer.run("raster", || raster::rasterize(&proj, input.positions, input.faces, sw, sh));
-    counters.triangles_in = rstats.triangles_in as u64;
-    counters.triangles_culled = rstats.triangles_culled as u64;
-    counters.triangles_clipped = rstats.triangles_clipped as u64;
-    counters.screen_triangles = rstats.screen_triangles as u64;
-    counters.samples = (sw * sh) as u64;
-    counters.covered_samples =
-        vis.samples.iter().filter(|x| x.face != raster::EMPTY).count() as u64;
-    if counters.covered_samples == 0 {
-        warnings.push("the mesh covers no pixel: check the view".to_string());
-    }
-
+    let vis = frame::rasterize(&proj, input, (sw, sh), &mut counters, &mut warnings, &mut timer);
     let ctx = Ctx {
         mesh: MeshData {
             positions: input.positions,
@@ -300,22 +275,7 @@ pub(crate) fn render_with(
     } else {
         None
     };
-    let mut env_samples = Vec::new();
-    let has_env = lights.iter().any(|l| matches!(l, LightSpec::Environment { .. }));
-    if fx.shading && fx.environment && has_env {
-        env_samples = timer.run("environment", || -> Result<Vec<env::EnvSample>> {
-            let mut all = Vec::new();
-            for l in lights {
-                if let LightSpec::Environment { file, scale, samples, rotation_deg } = l {
-                    let map = EnvMap::load(std::path::Path::new(file))?;
-                    counters.env_texels += (map.width * map.height) as u64;
-                    all.extend(map.samples(*samples as usize, *scale, *rotation_deg));
-                }
-            }
-            Ok(all)
-        })?;
-        counters.env_samples = env_samples.len() as u64;
-    }
+    let env_samples = frame::environment(fx, lights, &mut counters, &mut timer)?;
     let brdf = brdf::from_material(material);
     let diag = bbox_diagonal(input.positions);
     let shade_lights: Vec<Light> = Light::prepare(lights).into_iter().flatten().collect();
@@ -327,210 +287,38 @@ pub(crate) fn render_with(
         bvh: bvh.as_ref(),
         eps: 1e-4 * diag,
     };
-
-    // Radiance of one grain field, per sample.
-    let radiance_of = |grain: &[Vector3<f64>], counters: &mut RenderCounters| -> Vec<[f32; 3]> {
-        let mut rad = vec![[0.0f32; 3]; sw * sh];
-        let w_ = sw;
-        let counts: Vec<ShadeCount> = rad
-            .par_chunks_mut(w_)
-            .enumerate()
-            .map(|(y, row)| {
-                let mut c = ShadeCount::default();
-                for (x, o) in row.iter_mut().enumerate() {
-                    if let Some(surf) = ctx.surf(y * w_ + x) {
-                        *o = if fx.shading {
-                            let u = ctx.grain(&surf, grain);
-                            match precision {
-                                Precision::Fast => shader.shade_f32(&surf, &u, &mut c),
-                                Precision::Reference => {
-                                    shader.shade(&surf, &u, &mut c).map(|v| v as f32)
-                                }
-                            }
-                        } else {
-                            // Clay: a grey Lambert surface lit from the eye.
-                            [(0.18 * surf.n.dot(&surf.wo).max(0.0)) as f32; 3]
-                        };
-                    }
-                }
-                c
-            })
-            .collect();
-        for c in counts {
-            counters.brdf_evals += c.brdf_evals;
-            counters.shadow_rays += c.shadow_rays;
-        }
-        rad
+    let frame = frame::Frame {
+        input,
+        settings,
+        fx,
+        camera,
+        ctx,
+        shader: &shader,
+        precision,
+        curve_lights,
+        critical_lights,
+        w,
+        h,
+        s,
+        sw,
+        sh,
     };
+
     let shading_name = if fx.shading { "shading" } else { "clay" };
-    let designed = timer.run(shading_name, || radiance_of(input.u, &mut counters));
+    let designed = timer.run(shading_name, || frame.radiance(input.u, &mut counters));
     let brushed = match (&fx.as_brushed, input.brushed_u) {
         (Some(_), Some(bu)) => {
             counters.as_brushed_shadings += 1;
-            Some(timer.run("as_brushed", || radiance_of(bu, &mut counters)))
+            Some(timer.run("as_brushed", || frame.radiance(bu, &mut counters)))
         }
         _ => None,
     };
+    let lic_values = frame.lic_values(&proj, &mut counters, &mut timer);
+    let halves = frame.halves(designed, brushed, &mut counters, &mut timer);
 
-    // Per-sample overlay layers of one half.
-    let overlays = |grain: &[Vector3<f64>], counters: &mut RenderCounters, timer: &mut Timer| {
-        let mut layer = vec![[0.0f32; 4]; sw * sh];
-        if let (Some(g), Some(values)) = (&fx.gap, input.gap) {
-            counters.gap_samples += timer.run("gap", || {
-                overlay::scalar_tint(&ctx, values, g.max, [1.0, 0.1, 0.1], 0.7, &mut layer)
-            });
-        }
-        if let (Some(_), Some(e)) = (&fx.edits, input.edits) {
-            if !e.support.is_empty() {
-                counters.support_samples += timer.run("edit_support", || {
-                    overlay::scalar_tint(&ctx, &e.support, 1.0, [0.2, 0.45, 1.0], 0.35, &mut layer)
-                });
-            }
-        }
-        if let Some(c) = &fx.critical_points {
-            counters.critical_samples += timer.run("critical_points", || {
-                overlay::critical(&ctx, &critical_lights, c.threshold, &mut layer)
-            });
-        }
-        if let Some(hc) = &fx.highlight_curves {
-            let half = 0.5 * hc.width_px * s as f64;
-            counters.highlight_curve_samples += timer.run("highlight_curves", || {
-                curve_lights
-                    .iter()
-                    .enumerate()
-                    .map(|(i, l)| {
-                        let col = overlay::CURVE_COLOURS[i % overlay::CURVE_COLOURS.len()];
-                        overlay::highlight_curves(&ctx, grain, l, col, half, &mut layer)
-                    })
-                    .sum::<u64>()
-            });
-        }
-        layer
-    };
-
-    let lic_values = match (&fx.lic, input.ell) {
-        (Some(l), Some(ell)) => {
-            let (vals, noise, steps) = timer.run("lic", || {
-                let field = lic_field(&ctx, &proj, ell);
-                lic::lic(&field, s, l.length_px, l.seed)
-            });
-            counters.lic_noise_values = noise;
-            counters.lic_steps = steps;
-            Some(image::downsample(&vals.iter().map(|v| [*v]).collect::<Vec<_>>(), w, h, s))
-        }
-        _ => None,
-    };
-
-    // Halves: the designed grain, and the as-brushed one side by side.
-    let side_by_side = matches!(&fx.as_brushed, Some(a) if a.mode == AsBrushedMode::SideBySide)
-        && brushed.is_some();
-    let mut halves: Vec<Half> = Vec::new();
-    let layer = overlays(input.u, &mut counters, &mut timer);
-    let main_rad = match (&fx.as_brushed, &brushed) {
-        (Some(a), Some(b)) if a.mode == AsBrushedMode::Difference => {
-            let gain = a.gain as f32;
-            designed
-                .iter()
-                .zip(b)
-                .map(|(x, y)| [0, 1, 2].map(|c| (x[c] - y[c]).abs() * gain))
-                .collect()
-        }
-        _ => designed,
-    };
-    halves.push((main_rad, layer));
-    if side_by_side {
-        if let (Some(b), Some(bu)) = (brushed, input.brushed_u) {
-            let layer = overlays(bu, &mut counters, &mut timer);
-            halves.push((b, layer));
-        }
-    }
-
-    // Resolve: box filter, tone map, LIC modulation, overlays, background. At supersample 1
-    // the buffers are used as they are (no copies); a covered pixel without overlay or LIC is
-    // encoded through the exact threshold table.
     let out_w = w * halves.len();
-    let want_linear = settings.linear.is_some();
-    let (rgb8, linear_px) = timer.run("resolve", || {
-        let boxed = |v: &[[f32; 1]]| image::downsample(v, w, h, s);
-        let coverage: Option<Vec<[f32; 1]>> = (s > 1).then(|| {
-            boxed(
-                &vis.samples
-                    .iter()
-                    .map(|x| [f32::from(u8::from(x.face != raster::EMPTY))])
-                    .collect::<Vec<_>>(),
-            )
-        });
-        let resolved: Vec<HalfRef> = halves
-            .iter()
-            .map(|(rad, layer)| {
-                if s == 1 {
-                    (rad[..].into(), layer[..].into())
-                } else {
-                    (
-                        image::downsample(rad, w, h, s).into(),
-                        image::downsample(layer, w, h, s).into(),
-                    )
-                }
-            })
-            .collect();
-        let table = image::Srgb8Table::new(settings.tone_map, settings.exposure);
-        let mut rgb8 = vec![[0u8; 3]; out_w * h];
-        let mut linear_px = vec![[0.0f32; 3]; if want_linear { out_w * h } else { 0 }];
-        let lin_row = if want_linear { out_w } else { 1 };
-        let mut lin_chunks: Vec<&mut [[f32; 3]]> = if want_linear {
-            linear_px.chunks_mut(lin_row).collect()
-        } else {
-            (0..h).map(|_| &mut [][..]).collect()
-        };
-        rgb8.par_chunks_mut(out_w).zip(lin_chunks.par_iter_mut()).enumerate().for_each(
-            |(y, (row8, rowl))| {
-                for (hi, (rad, layer)) in resolved.iter().enumerate() {
-                    for x in 0..w {
-                        let k = y * w + x;
-                        let o = hi * w + x;
-                        if want_linear {
-                            rowl[o] = rad[k];
-                        }
-                        let lic = lic_values.as_ref().filter(|_| hi == 0).map(|v| v[k][0]);
-                        let cov = match &coverage {
-                            Some(c) => c[k][0],
-                            None => f32::from(u8::from(vis.samples[k].face != raster::EMPTY)),
-                        };
-                        row8[o] = if cov == 1.0 && lic.is_none() && layer[k] == [0.0; 4] {
-                            rad[k].map(|v| table.encode(v))
-                        } else {
-                            resolve_pixel(rad[k], layer[k], cov, lic, settings)
-                        };
-                    }
-                }
-            },
-        );
-        drop(lin_chunks);
-        (rgb8, linear_px)
-    });
-
-    // Vector overlays.
-    let want_vectors = (fx.strokes.is_some() && input.strokes.is_some())
-        || (fx.edits.is_some() && input.edits.is_some_and(|e| !e.targets.is_empty()))
-        || (fx.critical_points.is_some() && input.critical.is_some());
-    let rgb8 = if want_vectors {
-        timer.run("vector_overlays", || -> Result<Vec<[u8; 3]>> {
-            let mut canvas = Canvas::new(&rgb8, out_w, h)
-                .ok_or_else(|| Error::setting("render.width", "image cannot be allocated"))?;
-            for hi in 0..halves.len() {
-                let pp = PointProjector {
-                    out: Projector::new(camera, w, h),
-                    vis: &vis,
-                    s,
-                    x0: (hi * w) as f64,
-                };
-                draw_vectors(&mut canvas, &pp, input, fx, &mut counters);
-            }
-            Ok(canvas.into_rgb())
-        })?
-    } else {
-        rgb8
-    };
+    let (rgb8, linear_px) = timer.run("resolve", || frame.resolve(&halves, lic_values.as_deref()));
+    let rgb8 = frame.vector_overlays(rgb8, halves.len(), &mut counters, &mut timer)?;
 
     let as_brushed = input
         .brushed_u
@@ -548,6 +336,35 @@ pub(crate) fn render_with(
     report.warnings = warnings;
     report.total_ms = start.elapsed().as_secs_f64() * 1e3;
     Ok(RenderOutput { png, linear, report })
+}
+
+/// The checks of [`render_with`] before any work: material, lights, settings, camera and
+/// input, the effects' lights (returned: the highlight-curve and critical-point lights), and
+/// the per-vertex fields the listed effects need.
+fn validate_render(
+    input: &RenderInput,
+    material: &Material,
+    lights: &[LightSpec],
+    camera: &Camera,
+    settings: &RenderSettings,
+) -> Result<(Vec<Light>, Vec<Light>)> {
+    material.validate().map_err(|e| prefix(e, "material"))?;
+    validate_lights(lights).map_err(|e| prefix(e, "lights"))?;
+    settings.validate().map_err(|e| prefix(e, "render"))?;
+    camera.validate()?;
+    input.validate()?;
+    let fx = &settings.effects;
+    let (curve_lights, critical_lights) = effect_lights(fx, lights)?;
+    if fx.lic.is_some() && input.ell.is_none() {
+        return Err(Error::setting("render.effects.lic", "needs ℓ per vertex (RenderInput::ell)"));
+    }
+    if fx.as_brushed.is_some() && input.brushed_u.is_none() {
+        return Err(Error::setting(
+            "render.effects.as_brushed",
+            "needs the as-brushed grain (RenderInput::brushed_u)",
+        ));
+    }
+    Ok((curve_lights, critical_lights))
 }
 
 /// The lights chosen by `effects.highlight_curves.lights` and `effects.critical_points.lights`

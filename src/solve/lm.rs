@@ -642,6 +642,77 @@ pub fn solve_cached(
             format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
         ));
     }
+    let w = match &options.cotan_weights {
+        Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
+        _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
+    };
+    let sys = build_system(mesh, term, free, options, &w);
+    let phi = phi.to_vec();
+    let initial_energy = sys.energy(&phi);
+    if !initial_energy.total().is_finite() {
+        return Err(numerical(format!("the initial energy is not finite: {initial_energy:?}")));
+    }
+    let n = sys.free.len();
+    if n == 0 {
+        return Ok(LmResult {
+            phi,
+            iterations: Vec::new(),
+            stop: StopReason::NothingToSolve,
+            initial_energy,
+        });
+    }
+    let matrix_free = match options.linear_solver {
+        LinearSolver::Direct => false,
+        LinearSolver::ConjugateGradient => true,
+        LinearSolver::Auto => n >= CG_THRESHOLD,
+    };
+    // The direct path's pattern: the cached one if it fits (checked in the first assembly).
+    let direct: Option<DirectSystem> = if matrix_free { None } else { cache.direct.take() };
+    let mut lm = Lm {
+        sys: &sys,
+        term,
+        w: &w,
+        options,
+        n,
+        matrix_free,
+        phi,
+        energy: initial_energy.total(),
+        direct,
+        checked: false,
+        acc: Assembler::new(&sys.col_of, n),
+        next: Assembler::new(&sys.col_of, n),
+        assembled: false,
+        product: None,
+        first_gradient: None,
+        lambda: options.initial_damping,
+        nu: 2.0,
+        iterations: Vec::new(),
+        delta: vec![0.0; n],
+        saved: vec![0.0; n],
+    };
+    let stop = lm.run()?;
+    if lm.direct.is_some() {
+        cache.direct = lm.direct;
+    }
+    Ok(LmResult { phi: lm.phi, iterations: lm.iterations, stop, initial_energy })
+}
+
+/// A numerical failure of the Levenberg–Marquardt solve.
+fn numerical(m: String) -> Error {
+    Error::Numerical { stage: "Levenberg–Marquardt", message: m }
+}
+
+/// The stacked system of [`solve_cached`] over the `free` vertices (out-of-range ones
+/// dropped): their columns, and a block per term that has rows touching them.
+fn build_system<'a>(
+    mesh: &Mesh,
+    term: &'a HighlightTerm,
+    free: &[u32],
+    options: &LmOptions,
+    w: &[f64],
+) -> System<'a> {
+    let g = term.geometry;
+    let nv = g.num_vertices();
     let mut col_of = vec![None; nv];
     let mut free_sorted: Vec<u32> = free.iter().copied().filter(|&v| (v as usize) < nv).collect();
     free_sorted.sort_unstable();
@@ -659,11 +730,7 @@ pub fn solve_cached(
         })
         .collect();
     let k = term.symmetry.k();
-    let w = match &options.cotan_weights {
-        Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
-        _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
-    };
-    let mut blocks: Vec<Box<dyn Block>> = Vec::new();
+    let mut blocks: Vec<Box<dyn Block + 'a>> = Vec::new();
     let rows = touched.iter().copied().filter(|&i| term.target_q[i as usize].is_some()).collect();
     blocks.push(Box::new(HighlightBlock { term, rows }));
     // A position row depends on its own angle only: the free vertices with a target.
@@ -685,6 +752,30 @@ pub fn solve_cached(
         }
         blocks.push(Box::new(SmoothnessBlock { edges, k }));
     }
+    blocks.extend(hinge_blocks(mesh, term, options, &col_of, &touched));
+    let locks: Vec<(u32, f64, f64)> = options
+        .soft_locks
+        .iter()
+        .filter(|l| (l.0 as usize) < nv && col_of[l.0 as usize].is_some() && l.2 > 0.0)
+        .map(|&(v, a, wl)| (v, a, (wl * g.areas[v as usize]).max(0.0).sqrt()))
+        .collect();
+    if !locks.is_empty() {
+        blocks.push(Box::new(LockBlock { locks, k }));
+    }
+    System { col_of, free: free_sorted, blocks }
+}
+
+/// The blocks of the vertex hinges (turning, splay: rows at the `touched` vertices) and of
+/// the face hinges (turning, splay: the faces with a free corner) that `options` switch on.
+fn hinge_blocks<'a>(
+    mesh: &Mesh,
+    term: &'a HighlightTerm,
+    options: &LmOptions,
+    col_of: &[Option<u32>],
+    touched: &[u32],
+) -> Vec<Box<dyn Block + 'a>> {
+    let g = term.geometry;
+    let mut blocks: Vec<Box<dyn Block + 'a>> = Vec::new();
     for (opt, kind) in [(options.turning, HingeKind::Turning), (options.splay, HingeKind::Splay)] {
         if let Some(h) = opt {
             if h.weight > 0.0 && h.bound > 0.0 && h.bound.is_finite() {
@@ -696,7 +787,7 @@ pub fn solve_cached(
                     bound: h.bound,
                     weight: h.weight,
                 };
-                blocks.push(Box::new(HingeBlock { hinge, rows: touched.clone() }));
+                blocks.push(Box::new(HingeBlock { hinge, rows: touched.to_vec() }));
             }
         }
     }
@@ -722,174 +813,228 @@ pub fn solve_cached(
             }
         }
     }
-    let locks: Vec<(u32, f64, f64)> = options
-        .soft_locks
-        .iter()
-        .filter(|l| (l.0 as usize) < nv && col_of[l.0 as usize].is_some() && l.2 > 0.0)
-        .map(|&(v, a, wl)| (v, a, (wl * g.areas[v as usize]).max(0.0).sqrt()))
-        .collect();
-    if !locks.is_empty() {
-        blocks.push(Box::new(LockBlock { locks, k }));
-    }
-    let sys = System { col_of, free: free_sorted, blocks };
-    let mut phi = phi.to_vec();
-    let initial_energy = sys.energy(&phi);
-    let numerical = |m: String| Error::Numerical { stage: "Levenberg–Marquardt", message: m };
-    if !initial_energy.total().is_finite() {
-        return Err(numerical(format!("the initial energy is not finite: {initial_energy:?}")));
-    }
-    let n = sys.free.len();
-    if n == 0 {
-        return Ok(LmResult {
-            phi,
-            iterations: Vec::new(),
-            stop: StopReason::NothingToSolve,
-            initial_energy,
-        });
-    }
-    let mut energy = initial_energy.total();
-    let matrix_free = match options.linear_solver {
-        LinearSolver::Direct => false,
-        LinearSolver::ConjugateGradient => true,
-        LinearSolver::Auto => n >= CG_THRESHOLD,
-    };
-    // The direct path's pattern: the cached one if it fits (checked in the first assembly).
-    let mut direct: Option<DirectSystem> = if matrix_free { None } else { cache.direct.take() };
-    let mut checked = false;
-    // `acc` holds the rows and Jᵀr at φ; each try assembles the trial point into `next` (its
-    // energies are the trial energy), and an accepted try's `next` becomes the next
-    // iteration's `acc` — so each accepted iteration evaluates its residuals once.
-    let mut acc = Assembler::new(&sys.col_of, n);
-    let mut next = Assembler::new(&sys.col_of, n);
-    let mut assembled = false;
-    let mut product: Option<NormalMatrix> = None;
-    let mut first_gradient: Option<f64> = None;
-    let mut lambda = options.initial_damping;
-    let mut nu = 2.0;
-    let mut iterations = Vec::new();
-    let mut stop = StopReason::IterationCap;
-    let mut delta = vec![0.0; n];
-    let mut saved = vec![0.0; n];
-    'outer: for _ in 0..options.max_iterations {
-        let t0 = Instant::now();
-        if !assembled {
-            sys.assemble(&phi, &mut acc);
-        }
-        let gmax = acc.g.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        if gmax.is_nan() || gmax <= options.gradient_tolerance {
-            stop = StopReason::Gradient;
-            break;
-        }
-        let diag = if matrix_free {
-            if !product.as_ref().is_some_and(|m| m.matches(&acc.rows, n)) {
-                product = Some(NormalMatrix::new(&acc.rows, n));
+    blocks
+}
+
+/// The Levenberg–Marquardt iterations of [`solve_cached`]: the system, the angles `phi`, the
+/// damping and the buffers kept from one iteration to the next.
+///
+/// `acc` holds the rows and Jᵀr at φ; each try assembles the trial point into `next` (its
+/// energies are the trial energy), and an accepted try's `next` becomes the next iteration's
+/// `acc` — so each accepted iteration evaluates its residuals once.
+struct Lm<'s, 'a> {
+    sys: &'s System<'a>,
+    term: &'s HighlightTerm<'s>,
+    w: &'s [f64],
+    options: &'s LmOptions,
+    /// Number of free angles.
+    n: usize,
+    /// The conjugate-gradient path (else the direct one).
+    matrix_free: bool,
+    phi: Vec<f64>,
+    /// The total energy at `phi`.
+    energy: f64,
+    /// The direct path's pattern (built or checked in the first assembly: `checked`).
+    direct: Option<DirectSystem>,
+    checked: bool,
+    acc: Assembler<'s>,
+    next: Assembler<'s>,
+    /// Whether `acc` holds the rows at `phi` already.
+    assembled: bool,
+    /// JᵀJ of the conjugate-gradient path.
+    product: Option<NormalMatrix>,
+    first_gradient: Option<f64>,
+    lambda: f64,
+    nu: f64,
+    iterations: Vec<Iteration>,
+    delta: Vec<f64>,
+    saved: Vec<f64>,
+}
+
+/// What [`Lm::linearize`] gives the tries of one iteration.
+struct Linearization {
+    /// The diagonal of JᵀJ.
+    diag: Vec<f64>,
+    /// The damping's scale: the diagonal, floored.
+    dscale: Vec<f64>,
+    /// The conjugate-gradient forcing term.
+    forcing: f64,
+}
+
+/// The outcome of one try.
+enum Try {
+    /// Accepted; iterate on.
+    Accepted,
+    /// Accepted with too small a relative decrease: stop.
+    Converged,
+    /// Rejected; the damping raised, try again.
+    Rejected,
+    /// Rejected with the damping out of range: stop.
+    NoProgress,
+}
+
+impl Lm<'_, '_> {
+    /// Iterates until a stop criterion or the iteration cap; why it stopped.
+    fn run(&mut self) -> Result<StopReason> {
+        let mut stop = StopReason::IterationCap;
+        'outer: for _ in 0..self.options.max_iterations {
+            let t0 = Instant::now();
+            if !self.assembled {
+                self.sys.assemble(&self.phi, &mut self.acc);
             }
-            let m = product.as_mut().expect("built above");
+            let gmax = self.acc.g.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            if gmax.is_nan() || gmax <= self.options.gradient_tolerance {
+                stop = StopReason::Gradient;
+                break;
+            }
+            let lin = self.linearize()?;
+            let assembly = t0.elapsed().as_secs_f64();
+            loop {
+                let t1 = Instant::now();
+                let predicted = self.step(&lin)?;
+                match self.try_step(predicted, assembly, t1) {
+                    Try::Accepted => break,
+                    Try::Converged => {
+                        stop = StopReason::RelativeDecrease;
+                        break 'outer;
+                    }
+                    Try::Rejected => {}
+                    Try::NoProgress => {
+                        stop = StopReason::NoProgress;
+                        break 'outer;
+                    }
+                }
+            }
+            if self.assembled {
+                std::mem::swap(&mut self.acc, &mut self.next);
+            }
+        }
+        Ok(stop)
+    }
+
+    /// JᵀJ refilled from the rows in `acc` (its pattern built or checked first), its
+    /// diagonal, the damping's scale and the forcing term.
+    fn linearize(&mut self) -> Result<Linearization> {
+        let n = self.n;
+        let acc = &self.acc;
+        let diag = if self.matrix_free {
+            if !self.product.as_ref().is_some_and(|m| m.matches(&acc.rows, n)) {
+                self.product = Some(NormalMatrix::new(&acc.rows, n));
+            }
+            let m = self.product.as_mut().expect("built above");
             m.fill(&acc.rows);
             m.diagonal().to_vec()
         } else {
-            if !checked {
-                checked = true;
-                if !direct.as_ref().is_some_and(|d| d.matches(&acc.rows, n)) {
-                    direct = Some(DirectSystem::new(&acc.rows, n).map_err(numerical)?);
+            if !self.checked {
+                self.checked = true;
+                if !self.direct.as_ref().is_some_and(|d| d.matches(&acc.rows, n)) {
+                    self.direct = Some(DirectSystem::new(&acc.rows, n).map_err(numerical)?);
                 }
             }
-            let ds = direct.as_mut().expect("built above");
+            let ds = self.direct.as_mut().expect("built above");
             ds.fill(&acc.rows);
             ds.diagonal()
         };
         let grad = &acc.g;
         let gnorm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
-        let g0 = *first_gradient.get_or_insert(gnorm);
+        let g0 = *self.first_gradient.get_or_insert(gnorm);
         let forcing = CG_FORCING.min(gnorm / g0.max(f64::MIN_POSITIVE));
         let dmax = diag.iter().fold(0.0f64, |a, &b| a.max(b)).max(1e-300);
         let dscale: Vec<f64> = diag.iter().map(|&d| d.max(1e-9 * dmax)).collect();
-        let assembly = t0.elapsed().as_secs_f64();
-        loop {
-            let t1 = Instant::now();
-            let predicted = if let Some(product) = &product {
-                let shift: Vec<f64> = dscale.iter().map(|&d| lambda * d).collect();
-                let precond: Vec<f64> = diag.iter().zip(&shift).map(|(d, s)| d + s).collect();
-                let b: Vec<f64> = grad.iter().map(|g| -g).collect();
-                delta = conjugate_gradient(product, &shift, &precond, &b, forcing).0;
-                // Predicted decrease of the Gauss–Newton model for an inexact step, on the
-                // scale of the direct branch's ½δᵀ(λDδ − g): ½(−2gᵀδ − δᵀJᵀJδ).
-                let mut jtj = vec![0.0; n];
-                product.apply(&delta, None, &mut jtj);
-                0.5 * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>()
-            } else {
-                let ds = direct.as_mut().expect("built in the assembly");
-                for (d, g) in delta.iter_mut().zip(grad) {
-                    *d = -g;
-                }
-                ds.solve_damped(lambda, &dscale, &mut delta).map_err(numerical)?;
-                // Predicted decrease of the quadratic model: ½δᵀ(λDδ − g).
-                0.5 * (0..n)
-                    .map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c]))
-                    .sum::<f64>()
-            };
-            // The trial point in place (the free angles saved to undo a rejected try).
-            for (c, &v) in sys.free.iter().enumerate() {
-                saved[c] = phi[v as usize];
-                phi[v as usize] += delta[c];
+        Ok(Linearization { diag, dscale, forcing })
+    }
+
+    /// The damped step into `delta` at the current λ; its predicted decrease.
+    fn step(&mut self, lin: &Linearization) -> Result<f64> {
+        let (n, lambda, grad) = (self.n, self.lambda, &self.acc.g);
+        let (diag, dscale, forcing) = (&lin.diag, &lin.dscale, lin.forcing);
+        let delta = &mut self.delta;
+        Ok(if let Some(product) = &self.product {
+            let shift: Vec<f64> = dscale.iter().map(|&d| lambda * d).collect();
+            let precond: Vec<f64> = diag.iter().zip(&shift).map(|(d, s)| d + s).collect();
+            let b: Vec<f64> = grad.iter().map(|g| -g).collect();
+            *delta = conjugate_gradient(product, &shift, &precond, &b, forcing).0;
+            // Predicted decrease of the Gauss–Newton model for an inexact step, on the
+            // scale of the direct branch's ½δᵀ(λDδ − g): ½(−2gᵀδ − δᵀJᵀJδ).
+            let mut jtj = vec![0.0; n];
+            product.apply(delta, None, &mut jtj);
+            0.5 * (0..n).map(|c| -2.0 * grad[c] * delta[c] - delta[c] * jtj[c]).sum::<f64>()
+        } else {
+            let ds = self.direct.as_mut().expect("built in the assembly");
+            for (d, g) in delta.iter_mut().zip(grad) {
+                *d = -g;
             }
-            let mut new = sys.assemble(&phi, &mut next);
-            let new_energy = new.total();
-            let rho = if predicted > 0.0 { (energy - new_energy) / predicted } else { -1.0 };
-            if new_energy.is_finite() && new_energy < energy && rho > 0.0 {
-                let step_norm = delta.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                let mut after = new_energy;
-                let mut smoothed = false;
-                assembled = true;
-                if options.interleaved_smoothing {
-                    for tau in [0.5, 0.25, 0.125] {
-                        let s = smoothing_pass(&phi, &sys.free, term, &w, tau);
-                        let es = sys.energy(&s);
-                        if es.total().is_finite() && es.total() <= after {
-                            phi = s;
-                            new = es;
-                            after = es.total();
-                            smoothed = true;
-                            assembled = false;
-                            break;
-                        }
-                    }
-                }
-                let decrease = (energy - after) / energy.max(f64::MIN_POSITIVE);
-                energy = after;
-                iterations.push(Iteration {
-                    stage: 0,
-                    energies: new,
-                    damping: lambda,
-                    step_norm,
-                    smoothed,
-                    assembly_seconds: assembly,
-                    solve_seconds: t1.elapsed().as_secs_f64(),
-                });
-                lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-                nu = 2.0;
-                if decrease < options.relative_decrease {
-                    stop = StopReason::RelativeDecrease;
-                    break 'outer;
-                }
-                break;
+            ds.solve_damped(lambda, dscale, delta).map_err(numerical)?;
+            // Predicted decrease of the quadratic model: ½δᵀ(λDδ − g).
+            0.5 * (0..n).map(|c| delta[c] * (lambda * dscale[c] * delta[c] - grad[c])).sum::<f64>()
+        })
+    }
+
+    /// Tries `phi + delta`: kept (recorded, λ lowered) if it lowers the energy and the model
+    /// agrees, else undone (λ raised).
+    fn try_step(&mut self, predicted: f64, assembly: f64, t1: Instant) -> Try {
+        let (sys, energy, lambda) = (self.sys, self.energy, self.lambda);
+        // The trial point in place (the free angles saved to undo a rejected try).
+        for (c, &v) in sys.free.iter().enumerate() {
+            self.saved[c] = self.phi[v as usize];
+            self.phi[v as usize] += self.delta[c];
+        }
+        let mut new = sys.assemble(&self.phi, &mut self.next);
+        let new_energy = new.total();
+        let rho = if predicted > 0.0 { (energy - new_energy) / predicted } else { -1.0 };
+        if new_energy.is_finite() && new_energy < energy && rho > 0.0 {
+            let step_norm = self.delta.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            let mut after = new_energy;
+            let mut smoothed = false;
+            self.assembled = true;
+            if let Some((s, es)) = self.smoothed(after) {
+                self.phi = s;
+                new = es;
+                after = es.total();
+                smoothed = true;
+                self.assembled = false;
             }
-            for (c, &v) in sys.free.iter().enumerate() {
-                phi[v as usize] = saved[c];
+            let decrease = (energy - after) / energy.max(f64::MIN_POSITIVE);
+            self.energy = after;
+            self.iterations.push(Iteration {
+                stage: 0,
+                energies: new,
+                damping: lambda,
+                step_norm,
+                smoothed,
+                assembly_seconds: assembly,
+                solve_seconds: t1.elapsed().as_secs_f64(),
+            });
+            self.lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+            self.nu = 2.0;
+            if decrease < self.options.relative_decrease {
+                return Try::Converged;
             }
-            lambda *= nu;
-            nu *= 2.0;
-            if lambda.is_nan() || lambda >= 1e16 {
-                stop = StopReason::NoProgress;
-                break 'outer;
+            return Try::Accepted;
+        }
+        for (c, &v) in sys.free.iter().enumerate() {
+            self.phi[v as usize] = self.saved[c];
+        }
+        self.lambda *= self.nu;
+        self.nu *= 2.0;
+        if self.lambda.is_nan() || self.lambda >= 1e16 {
+            return Try::NoProgress;
+        }
+        Try::Rejected
+    }
+
+    /// With interleaved smoothing: the first smoothing pass (τ = ½, ¼, ⅛) of `phi` whose
+    /// energy is finite and at most `after`, and its energies.
+    fn smoothed(&self, after: f64) -> Option<(Vec<f64>, Energies)> {
+        if self.options.interleaved_smoothing {
+            for tau in [0.5, 0.25, 0.125] {
+                let s = smoothing_pass(&self.phi, &self.sys.free, self.term, self.w, tau);
+                let es = self.sys.energy(&s);
+                if es.total().is_finite() && es.total() <= after {
+                    return Some((s, es));
+                }
             }
         }
-        if assembled {
-            std::mem::swap(&mut acc, &mut next);
-        }
+        None
     }
-    if direct.is_some() {
-        cache.direct = direct;
-    }
-    Ok(LmResult { phi, iterations, stop, initial_energy })
 }

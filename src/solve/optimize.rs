@@ -213,23 +213,9 @@ pub fn optimize_with(
     reuse: &OptimizeReuse,
 ) -> Result<OptimizeResult> {
     settings.validate()?;
+    check_inputs(mesh, term, phi, support)?;
     let g = term.geometry;
     let nv = g.num_vertices();
-    if mesh.num_vertices() != nv {
-        return Err(Error::invalid_arg(
-            "mesh",
-            format!("{} vertices, the geometry has {nv}", mesh.num_vertices()),
-        ));
-    }
-    if phi.len() != nv || support.len() != nv {
-        return Err(Error::invalid_arg(
-            "phi",
-            format!("{} angles and {} support flags for {nv} vertices", phi.len(), support.len()),
-        ));
-    }
-    if let Some(i) = phi.iter().position(|p| !p.is_finite()) {
-        return Err(Error::invalid_arg("phi", format!("angle of vertex {i} is not finite")));
-    }
     let k = term.symmetry.k();
     let c = &settings.constraints;
     let locks = resolve_locks(mesh, g, &c.locks, k, c.conflict_tolerance, "constraints.locks")?;
@@ -244,129 +230,26 @@ pub fn optimize_with(
         free[v as usize] = false;
     }
     let free_list: Vec<u32> = (0..nv as u32).filter(|&v| free[v as usize]).collect();
-    let area: f64 = g.areas.iter().filter(|a| a.is_finite() && **a > 0.0).sum();
-    let options = LmOptions {
-        smoothness: settings.smoothness * area,
-        max_iterations: settings.max_iterations,
-        relative_decrease: settings.relative_decrease,
-        gradient_tolerance: settings.gradient_tolerance,
-        initial_damping: settings.initial_damping,
-        turning: c
-            .turning_radius
-            .as_ref()
-            .map(|t| HingeOptions { bound: 1.0 / t.radius, weight: t.weight }),
-        splay: c.splay.as_ref().map(|s| HingeOptions { bound: s.max, weight: s.weight }),
-        turning_faces: c.turning_radius.as_ref().and_then(|t| {
-            let f = c.turning_in_triangles.clone().unwrap_or_default();
-            f.enabled.then(|| HingeOptions {
-                bound: (1.0 - f.margin) / t.radius,
-                weight: f.weight.unwrap_or(t.weight),
-            })
-        }),
-        splay_faces: c.splay.as_ref().and_then(|sp| {
-            let f = c.splay_in_triangles.clone().unwrap_or_default();
-            f.enabled.then(|| HingeOptions {
-                bound: sp.max * (1.0 - f.margin),
-                weight: f.weight.unwrap_or(sp.weight),
-            })
-        }),
-        soft_locks: locks.soft.clone(),
-        interleaved_smoothing: settings.smoothing_pass(),
-        linear_solver: LinearSolver::Auto,
-        cotan_weights: Some(match &reuse.cotan_weights {
-            Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
-            _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
-        }),
-    };
+    let options = lm_options(mesh, term, settings, &locks, reuse);
     let stages: Vec<f64> = if settings.continuation && settings.smoothness > 0.0 {
         vec![1000.0, 100.0, 10.0, 1.0]
     } else {
         vec![1.0]
     };
-    // One cache for every solve below: they share the free set, so the direct path's pattern,
-    // ordering and symbolic analysis are built once (rebuilt only if a stage's blocks differ).
-    let cache = std::cell::RefCell::new(SolveCache::default());
-    let run_from = |start: Vec<f64>| -> Result<Run> {
-        let mut run = Run {
-            phi: start,
-            iterations: Vec::new(),
-            initial: None,
-            stop: StopReason::IterationCap,
-        };
-        for (stage, factor) in stages.iter().enumerate() {
-            let last = stage + 1 == stages.len();
-            let left = settings.max_iterations.saturating_sub(run.iterations.len());
-            let opts = LmOptions {
-                smoothness: factor * options.smoothness,
-                max_iterations: if last { left } else { left.min(5) },
-                ..options.clone()
-            };
-            let lm =
-                solve_cached(mesh, term, &run.phi, &free_list, &opts, &mut cache.borrow_mut())?;
-            run.initial.get_or_insert(lm.initial_energy);
-            run.iterations.extend(lm.iterations.into_iter().map(|mut it| {
-                it.stage = stage;
-                it
-            }));
-            run.phi = lm.phi;
-            run.stop = lm.stop;
-        }
-        Ok(run)
+    let solves = Solves {
+        mesh,
+        term,
+        free_list: &free_list,
+        options: &options,
+        settings,
+        stages,
+        // One cache for every solve below: they share the free set, so the direct path's
+        // pattern, ordering and symbolic analysis are built once (rebuilt only if a stage's
+        // blocks differ).
+        cache: std::cell::RefCell::new(SolveCache::default()),
     };
-    // Candidate starts: the given field and, when asked, the harmonic fill; the one of lower
-    // energy first. The second runs only if the first does not reach (near) zero energy, and
-    // the run with the lower final energy is kept.
-    let mut candidates = vec![(StartChoice::Given, start)];
-    if settings.harmonic_start && !settings.whole_mesh && !free_list.is_empty() {
-        let w = options.cotan_weights.clone().expect("set above");
-        if let Some(fill) = harmonic_fill(g, &w, &candidates[0].1, &free_list, k) {
-            let probe = LmOptions { max_iterations: 0, ..options.clone() };
-            let e_given =
-                solve(mesh, term, &candidates[0].1, &free_list, &probe)?.initial_energy.total();
-            let e_fill = solve(mesh, term, &fill, &free_list, &probe)?.initial_energy.total();
-            let fill = (StartChoice::HarmonicFill, fill);
-            if e_fill < e_given {
-                candidates.insert(0, fill);
-            } else {
-                candidates.push(fill);
-            }
-        }
-    }
-    // The position energy's branch-coherent start (`super::branch`) goes first: it satisfies
-    // every position row, and the other starts can reach the same (zero) energy on mixed
-    // branches, which misplace the highlight. It is kept when its solve ends at a negligible
-    // energy relative to the given start's.
-    let probe = LmOptions { max_iterations: 0, ..options.clone() };
-    let given = candidates.iter().find(|(c, _)| *c == StartChoice::Given).expect("given");
-    let given_energy = solve(mesh, term, &given.1, &free_list, &probe)?.initial_energy.total();
-    if let Some(coherent) = coherent_start(term, &given.1, &free_list) {
-        candidates.insert(0, (StartChoice::CoherentBranch, coherent));
-    }
-    // The energy of a unit residual on every free row, Σ wᵢAᵢ: a run that ends below a
-    // negligible fraction of it has met its rows to round-off, however small the start's own
-    // energy was (an edit's designed grain starts the solve near zero energy).
-    let unit_energy: f64 = free_list
-        .iter()
-        .map(|&v| (term.weight[v as usize] * g.areas[v as usize]).max(0.0))
-        .filter(|e| e.is_finite())
-        .sum();
-    let mut best: Option<(StartChoice, Run)> = None;
-    let mut starts_tried = 0;
-    for (choice, start) in candidates {
-        let run = run_from(start)?;
-        starts_tried += 1;
-        let e0 = run.initial.map_or(0.0, |e| e.total());
-        let e1 = run.final_energy();
-        let coherent = choice == StartChoice::CoherentBranch;
-        if best.as_ref().is_none_or(|(_, b)| e1 < b.final_energy()) {
-            best = Some((choice, run));
-        }
-        let scale = if coherent { given_energy.max(e0) } else { e0 };
-        if e1 <= NEGLIGIBLE_ENERGY * scale || e1 <= NEGLIGIBLE_ENERGY * unit_energy {
-            break;
-        }
-    }
-    let (start_choice, run) = best.expect("at least the given start");
+    let (candidates, given_energy) = solves.candidates(start)?;
+    let (start_choice, run, starts_tried) = solves.best_run(candidates, given_energy)?;
     let Run { phi: mut out, iterations, initial: initial_energy, stop } = run;
     let initial_energy = initial_energy.unwrap_or_default();
     for p in out.iter_mut() {
@@ -400,6 +283,202 @@ pub fn optimize_with(
         },
     };
     Ok(OptimizeResult { phi: out, report })
+}
+
+/// The checks of [`optimize_with`]'s input sizes and angles.
+fn check_inputs(mesh: &Mesh, term: &HighlightTerm, phi: &[f64], support: &[bool]) -> Result<()> {
+    let nv = term.geometry.num_vertices();
+    if mesh.num_vertices() != nv {
+        return Err(Error::invalid_arg(
+            "mesh",
+            format!("{} vertices, the geometry has {nv}", mesh.num_vertices()),
+        ));
+    }
+    if phi.len() != nv || support.len() != nv {
+        return Err(Error::invalid_arg(
+            "phi",
+            format!("{} angles and {} support flags for {nv} vertices", phi.len(), support.len()),
+        ));
+    }
+    if let Some(i) = phi.iter().position(|p| !p.is_finite()) {
+        return Err(Error::invalid_arg("phi", format!("angle of vertex {i} is not finite")));
+    }
+    Ok(())
+}
+
+/// The absolute weights and hinges of the solves of [`optimize_with`], from the settings
+/// (relative to the mesh's area) and the resolved locks.
+fn lm_options(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    settings: &SolverSettings,
+    locks: &super::locks::ResolvedLocks,
+    reuse: &OptimizeReuse,
+) -> LmOptions {
+    let g = term.geometry;
+    let c = &settings.constraints;
+    let area: f64 = g.areas.iter().filter(|a| a.is_finite() && **a > 0.0).sum();
+    LmOptions {
+        smoothness: settings.smoothness * area,
+        max_iterations: settings.max_iterations,
+        relative_decrease: settings.relative_decrease,
+        gradient_tolerance: settings.gradient_tolerance,
+        initial_damping: settings.initial_damping,
+        turning: c
+            .turning_radius
+            .as_ref()
+            .map(|t| HingeOptions { bound: 1.0 / t.radius, weight: t.weight }),
+        splay: c.splay.as_ref().map(|s| HingeOptions { bound: s.max, weight: s.weight }),
+        turning_faces: c.turning_radius.as_ref().and_then(|t| {
+            let f = c.turning_in_triangles.clone().unwrap_or_default();
+            f.enabled.then(|| HingeOptions {
+                bound: (1.0 - f.margin) / t.radius,
+                weight: f.weight.unwrap_or(t.weight),
+            })
+        }),
+        splay_faces: c.splay.as_ref().and_then(|sp| {
+            let f = c.splay_in_triangles.clone().unwrap_or_default();
+            f.enabled.then(|| HingeOptions {
+                bound: sp.max * (1.0 - f.margin),
+                weight: f.weight.unwrap_or(sp.weight),
+            })
+        }),
+        soft_locks: locks.soft.clone(),
+        interleaved_smoothing: settings.smoothing_pass(),
+        linear_solver: LinearSolver::Auto,
+        cotan_weights: Some(match &reuse.cotan_weights {
+            Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
+            _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
+        }),
+    }
+}
+
+/// The starts to run, in order: each start's kind and angles.
+type Candidates = Vec<(StartChoice, Vec<f64>)>;
+
+/// What the solves of [`optimize_with`] share: the free vertices, the options, the
+/// continuation stages' smoothness factors and the direct path's cache.
+struct Solves<'a> {
+    mesh: &'a Mesh,
+    term: &'a HighlightTerm<'a>,
+    free_list: &'a [u32],
+    options: &'a LmOptions,
+    settings: &'a SolverSettings,
+    stages: Vec<f64>,
+    cache: std::cell::RefCell<SolveCache>,
+}
+
+impl Solves<'_> {
+    /// One run: every continuation stage from `start`.
+    fn run_from(&self, start: Vec<f64>) -> Result<Run> {
+        let (stages, options, cache) = (&self.stages, self.options, &self.cache);
+        let mut run = Run {
+            phi: start,
+            iterations: Vec::new(),
+            initial: None,
+            stop: StopReason::IterationCap,
+        };
+        for (stage, factor) in stages.iter().enumerate() {
+            let last = stage + 1 == stages.len();
+            let left = self.settings.max_iterations.saturating_sub(run.iterations.len());
+            let opts = LmOptions {
+                smoothness: factor * options.smoothness,
+                max_iterations: if last { left } else { left.min(5) },
+                ..options.clone()
+            };
+            let lm = solve_cached(
+                self.mesh,
+                self.term,
+                &run.phi,
+                self.free_list,
+                &opts,
+                &mut cache.borrow_mut(),
+            )?;
+            run.initial.get_or_insert(lm.initial_energy);
+            run.iterations.extend(lm.iterations.into_iter().map(|mut it| {
+                it.stage = stage;
+                it
+            }));
+            run.phi = lm.phi;
+            run.stop = lm.stop;
+        }
+        Ok(run)
+    }
+
+    /// The starts to run, in order, and the given start's energy.
+    fn candidates(&self, start: Vec<f64>) -> Result<(Candidates, f64)> {
+        let (mesh, term, free_list, options, settings) =
+            (self.mesh, self.term, self.free_list, self.options, self.settings);
+        let g = term.geometry;
+        let k = term.symmetry.k();
+        // Candidate starts: the given field and, when asked, the harmonic fill; the one of lower
+        // energy first. The second runs only if the first does not reach (near) zero energy, and
+        // the run with the lower final energy is kept.
+        let mut candidates = vec![(StartChoice::Given, start)];
+        if settings.harmonic_start && !settings.whole_mesh && !free_list.is_empty() {
+            let w = options.cotan_weights.clone().expect("set above");
+            if let Some(fill) = harmonic_fill(g, &w, &candidates[0].1, free_list, k) {
+                let probe = LmOptions { max_iterations: 0, ..options.clone() };
+                let e_given =
+                    solve(mesh, term, &candidates[0].1, free_list, &probe)?.initial_energy.total();
+                let e_fill = solve(mesh, term, &fill, free_list, &probe)?.initial_energy.total();
+                let fill = (StartChoice::HarmonicFill, fill);
+                if e_fill < e_given {
+                    candidates.insert(0, fill);
+                } else {
+                    candidates.push(fill);
+                }
+            }
+        }
+        // The position energy's branch-coherent start (`super::branch`) goes first: it satisfies
+        // every position row, and the other starts can reach the same (zero) energy on mixed
+        // branches, which misplace the highlight. It is kept when its solve ends at a negligible
+        // energy relative to the given start's.
+        let probe = LmOptions { max_iterations: 0, ..options.clone() };
+        let given = candidates.iter().find(|(c, _)| *c == StartChoice::Given).expect("given");
+        let given_energy = solve(mesh, term, &given.1, free_list, &probe)?.initial_energy.total();
+        if let Some(coherent) = coherent_start(term, &given.1, free_list) {
+            candidates.insert(0, (StartChoice::CoherentBranch, coherent));
+        }
+        Ok((candidates, given_energy))
+    }
+
+    /// Runs the `candidates` in order until one ends at a negligible energy; the run of the
+    /// lowest final energy, its start, and the number of starts run.
+    fn best_run(
+        &self,
+        candidates: Candidates,
+        given_energy: f64,
+    ) -> Result<(StartChoice, Run, usize)> {
+        let (term, g) = (self.term, self.term.geometry);
+        // The energy of a unit residual on every free row, Σ wᵢAᵢ: a run that ends below a
+        // negligible fraction of it has met its rows to round-off, however small the start's own
+        // energy was (an edit's designed grain starts the solve near zero energy).
+        let unit_energy: f64 = self
+            .free_list
+            .iter()
+            .map(|&v| (term.weight[v as usize] * g.areas[v as usize]).max(0.0))
+            .filter(|e| e.is_finite())
+            .sum();
+        let mut best: Option<(StartChoice, Run)> = None;
+        let mut starts_tried = 0;
+        for (choice, start) in candidates {
+            let run = self.run_from(start)?;
+            starts_tried += 1;
+            let e0 = run.initial.map_or(0.0, |e| e.total());
+            let e1 = run.final_energy();
+            let coherent = choice == StartChoice::CoherentBranch;
+            if best.as_ref().is_none_or(|(_, b)| e1 < b.final_energy()) {
+                best = Some((choice, run));
+            }
+            let scale = if coherent { given_energy.max(e0) } else { e0 };
+            if e1 <= NEGLIGIBLE_ENERGY * scale || e1 <= NEGLIGIBLE_ENERGY * unit_energy {
+                break;
+            }
+        }
+        let (start_choice, run) = best.expect("at least the given start");
+        Ok((start_choice, run, starts_tried))
+    }
 }
 
 /// The constraint violations of the field `out` over the whole mesh.

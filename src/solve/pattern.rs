@@ -75,147 +75,11 @@ impl DirectSystem {
     /// Jacobian's row structure.
     pub(crate) fn new(rows: &JacobianRows, n: usize) -> Result<Self, String> {
         let (ptr, col) = (&rows.ptr, &rows.col);
-        let blocks = ptr.len().saturating_sub(1);
-        let range = |b: usize| ptr[b] as usize..ptr[b + 1] as usize;
-        // Column → the row blocks that hold it (counting sort, blocks ascending).
-        let (cb_ptr, cb) = rows.blocks_by_column(n);
-        // Lower triangle of JᵀJ in the original numbering (diagonal always present): the
-        // columns sharing a row block, gathered with a marker.
-        let mut mark = vec![usize::MAX; n];
-        let mut lp = Vec::with_capacity(n + 1);
-        let mut li: Vec<usize> = Vec::with_capacity(8 * n + col.len());
-        lp.push(0usize);
-        for c in 0..n {
-            let start = li.len();
-            mark[c] = c;
-            li.push(c);
-            for &b in &cb[cb_ptr[c] as usize..cb_ptr[c + 1] as usize] {
-                for &a in &col[range(b as usize)] {
-                    let a = a as usize;
-                    if a > c && mark[a] != c {
-                        mark[a] = c;
-                        li.push(a);
-                    }
-                }
-            }
-            li[start..].sort_unstable();
-            lp.push(li.len());
-        }
-        // Fill-reducing order: reverse Cuthill–McKee for small systems (an edit's brush: a
-        // few µs instead of AMD's ~0.5 ms, and a band the supernodal factorization handles as
-        // fast as AMD's order despite ~20 % more fill), approximate minimum degree above.
-        let mut fwd = vec![0usize; n];
-        let mut new_of = vec![0usize; n];
-        if n <= RCM_MAX_UNKNOWNS {
-            let order = rcm(n, &lp, &li);
-            for (k, &c) in order.iter().enumerate() {
-                new_of[c] = k;
-            }
-        } else {
-            let a = SymbolicSparseColMatRef::new_checked(n, n, &lp, None, &li);
-            let mut mem = MemBuffer::try_new(amd::order_scratch::<usize>(n, li.len()))
-                .map_err(|_| "out of memory for the factorization workspace".to_string())?;
-            amd::order(&mut fwd, &mut new_of, a, amd::Control::default(), MemStack::new(&mut mem))
-                .map_err(|e| crate::error::describe_faer(&e))?;
-        }
-        // The same lower triangle in the new numbering.
-        let mut col_ptr = vec![0usize; n + 1];
-        for c in 0..n {
-            for &a in &li[lp[c]..lp[c + 1]] {
-                col_ptr[new_of[a].min(new_of[c]) + 1] += 1;
-            }
-        }
-        for c in 0..n {
-            col_ptr[c + 1] += col_ptr[c];
-        }
-        let mut next = col_ptr.clone();
-        let mut row_idx = vec![0usize; li.len()];
-        for c in 0..n {
-            for &a in &li[lp[c]..lp[c + 1]] {
-                let (r, k) = (new_of[a].max(new_of[c]), new_of[a].min(new_of[c]));
-                row_idx[next[k]] = r;
-                next[k] += 1;
-            }
-        }
-        for k in 0..n {
-            row_idx[col_ptr[k]..col_ptr[k + 1]].sort_unstable();
-        }
-        // The value slot of every product, in fill order: each product's (row, column) in the
-        // new numbering, bucketed by column, then looked up through a row → slot marker of
-        // that column.
-        let mut prod: Vec<(u32, u32)> = Vec::with_capacity(3 * li.len());
-        for b in 0..blocks {
-            let cols = &col[range(b)];
-            for &a in cols {
-                for &c in cols {
-                    if a >= c {
-                        let (na, nc) = (new_of[a as usize], new_of[c as usize]);
-                        prod.push((na.max(nc) as u32, na.min(nc) as u32));
-                    }
-                }
-            }
-        }
-        let mut bucket_ptr = vec![0usize; n + 1];
-        for &(_, k) in &prod {
-            bucket_ptr[k as usize + 1] += 1;
-        }
-        for k in 0..n {
-            bucket_ptr[k + 1] += bucket_ptr[k];
-        }
-        let mut next = bucket_ptr.clone();
-        let mut bucket = vec![0u32; prod.len()];
-        for (p, &(_, k)) in prod.iter().enumerate() {
-            bucket[next[k as usize]] = p as u32;
-            next[k as usize] += 1;
-        }
-        let mut at = vec![u32::MAX; n];
-        let mut slot = vec![0u32; prod.len()];
-        for k in 0..n {
-            for e in col_ptr[k]..col_ptr[k + 1] {
-                at[row_idx[e]] = e as u32;
-            }
-            for &p in &bucket[bucket_ptr[k]..bucket_ptr[k + 1]] {
-                let e = at[prod[p as usize].0 as usize];
-                debug_assert!(
-                    e != u32::MAX && row_idx[e as usize] == prod[p as usize].0 as usize,
-                    "a product outside the pattern"
-                );
-                slot[p as usize] = e;
-            }
-            for e in col_ptr[k]..col_ptr[k + 1] {
-                at[row_idx[e]] = u32::MAX;
-            }
-        }
-        // faer's symbolic analysis without a permutation reads the upper triangle as given:
-        // hand it the transpose of the pattern (the numeric factorization reads the lower one).
-        let mut up_ptr = vec![0usize; n + 1];
-        for &r in &row_idx {
-            up_ptr[r + 1] += 1;
-        }
-        for c in 0..n {
-            up_ptr[c + 1] += up_ptr[c];
-        }
-        let mut next = up_ptr.clone();
-        let mut up_idx = vec![0usize; row_idx.len()];
-        for k in 0..n {
-            for &r in &row_idx[col_ptr[k]..col_ptr[k + 1]] {
-                up_idx[next[r]] = k;
-                next[r] += 1;
-            }
-        }
-        let symbolic = factorize_symbolic_cholesky(
-            SymbolicSparseColMatRef::new_checked(n, n, &up_ptr, None, &up_idx),
-            Side::Upper,
-            SymmetricOrdering::Identity,
-            // Supernodal even where faer's flop-ratio heuristic picks the simplicial
-            // (up-looking) factorization: on the 2-ring pattern of a brush of 200–700 vertices
-            // it took the numeric factorization from ~1.0 to ~0.6 ms (bench_solver, Fig. 12a).
-            CholeskySymbolicParams {
-                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-                ..Default::default()
-            },
-        )
-        .map_err(|e| crate::error::describe_faer(&e))?;
+        let (lp, li) = lower_pattern(rows, n);
+        let new_of = fill_reducing_order(n, &lp, &li)?;
+        let (col_ptr, row_idx) = renumbered(n, &lp, &li, &new_of);
+        let slot = product_slots(rows, n, &new_of, &col_ptr, &row_idx);
+        let symbolic = symbolic_analysis(n, &col_ptr, &row_idx)?;
         // The factor's size is known here, before it is allocated (issue 15, item 12).
         crate::factor::check_factor_size("solve", symbolic.len_val(), 8)
             .map_err(|e| e.to_string())?;
@@ -319,6 +183,181 @@ impl DirectSystem {
         }
         Ok(())
     }
+}
+
+/// Lower triangle of JᵀJ in the original numbering (diagonal always present), column
+/// pointers and row indices: the columns sharing a row block, gathered with a marker.
+fn lower_pattern(rows: &JacobianRows, n: usize) -> (Vec<usize>, Vec<usize>) {
+    let (ptr, col) = (&rows.ptr, &rows.col);
+    let range = |b: usize| ptr[b] as usize..ptr[b + 1] as usize;
+    // Column → the row blocks that hold it (counting sort, blocks ascending).
+    let (cb_ptr, cb) = rows.blocks_by_column(n);
+    let mut mark = vec![usize::MAX; n];
+    let mut lp = Vec::with_capacity(n + 1);
+    let mut li: Vec<usize> = Vec::with_capacity(8 * n + col.len());
+    lp.push(0usize);
+    for c in 0..n {
+        let start = li.len();
+        mark[c] = c;
+        li.push(c);
+        for &b in &cb[cb_ptr[c] as usize..cb_ptr[c + 1] as usize] {
+            for &a in &col[range(b as usize)] {
+                let a = a as usize;
+                if a > c && mark[a] != c {
+                    mark[a] = c;
+                    li.push(a);
+                }
+            }
+        }
+        li[start..].sort_unstable();
+        lp.push(li.len());
+    }
+    (lp, li)
+}
+
+/// `new_of[c]`, the position of unknown c in the elimination order of the pattern `lp`, `li`.
+fn fill_reducing_order(n: usize, lp: &[usize], li: &[usize]) -> Result<Vec<usize>, String> {
+    // Fill-reducing order: reverse Cuthill–McKee for small systems (an edit's brush: a
+    // few µs instead of AMD's ~0.5 ms, and a band the supernodal factorization handles as
+    // fast as AMD's order despite ~20 % more fill), approximate minimum degree above.
+    let mut fwd = vec![0usize; n];
+    let mut new_of = vec![0usize; n];
+    if n <= RCM_MAX_UNKNOWNS {
+        let order = rcm(n, lp, li);
+        for (k, &c) in order.iter().enumerate() {
+            new_of[c] = k;
+        }
+    } else {
+        let a = SymbolicSparseColMatRef::new_checked(n, n, lp, None, li);
+        let mut mem = MemBuffer::try_new(amd::order_scratch::<usize>(n, li.len()))
+            .map_err(|_| "out of memory for the factorization workspace".to_string())?;
+        amd::order(&mut fwd, &mut new_of, a, amd::Control::default(), MemStack::new(&mut mem))
+            .map_err(|e| crate::error::describe_faer(&e))?;
+    }
+    Ok(new_of)
+}
+
+/// The same lower triangle in the new numbering: column pointers and (sorted) row indices.
+fn renumbered(n: usize, lp: &[usize], li: &[usize], new_of: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let mut col_ptr = vec![0usize; n + 1];
+    for c in 0..n {
+        for &a in &li[lp[c]..lp[c + 1]] {
+            col_ptr[new_of[a].min(new_of[c]) + 1] += 1;
+        }
+    }
+    for c in 0..n {
+        col_ptr[c + 1] += col_ptr[c];
+    }
+    let mut next = col_ptr.clone();
+    let mut row_idx = vec![0usize; li.len()];
+    for c in 0..n {
+        for &a in &li[lp[c]..lp[c + 1]] {
+            let (r, k) = (new_of[a].max(new_of[c]), new_of[a].min(new_of[c]));
+            row_idx[next[k]] = r;
+            next[k] += 1;
+        }
+    }
+    for k in 0..n {
+        row_idx[col_ptr[k]..col_ptr[k + 1]].sort_unstable();
+    }
+    (col_ptr, row_idx)
+}
+
+/// The value slot of every product, in fill order: each product's (row, column) in the
+/// new numbering, bucketed by column, then looked up through a row → slot marker of
+/// that column.
+fn product_slots(
+    rows: &JacobianRows,
+    n: usize,
+    new_of: &[usize],
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Vec<u32> {
+    let (ptr, col) = (&rows.ptr, &rows.col);
+    let blocks = ptr.len().saturating_sub(1);
+    let range = |b: usize| ptr[b] as usize..ptr[b + 1] as usize;
+    let mut prod: Vec<(u32, u32)> = Vec::with_capacity(3 * row_idx.len());
+    for b in 0..blocks {
+        let cols = &col[range(b)];
+        for &a in cols {
+            for &c in cols {
+                if a >= c {
+                    let (na, nc) = (new_of[a as usize], new_of[c as usize]);
+                    prod.push((na.max(nc) as u32, na.min(nc) as u32));
+                }
+            }
+        }
+    }
+    let mut bucket_ptr = vec![0usize; n + 1];
+    for &(_, k) in &prod {
+        bucket_ptr[k as usize + 1] += 1;
+    }
+    for k in 0..n {
+        bucket_ptr[k + 1] += bucket_ptr[k];
+    }
+    let mut next = bucket_ptr.clone();
+    let mut bucket = vec![0u32; prod.len()];
+    for (p, &(_, k)) in prod.iter().enumerate() {
+        bucket[next[k as usize]] = p as u32;
+        next[k as usize] += 1;
+    }
+    let mut at = vec![u32::MAX; n];
+    let mut slot = vec![0u32; prod.len()];
+    for k in 0..n {
+        for e in col_ptr[k]..col_ptr[k + 1] {
+            at[row_idx[e]] = e as u32;
+        }
+        for &p in &bucket[bucket_ptr[k]..bucket_ptr[k + 1]] {
+            let e = at[prod[p as usize].0 as usize];
+            debug_assert!(
+                e != u32::MAX && row_idx[e as usize] == prod[p as usize].0 as usize,
+                "a product outside the pattern"
+            );
+            slot[p as usize] = e;
+        }
+        for e in col_ptr[k]..col_ptr[k + 1] {
+            at[row_idx[e]] = u32::MAX;
+        }
+    }
+    slot
+}
+
+/// The symbolic Cholesky analysis of the renumbered lower triangle `col_ptr`, `row_idx`.
+fn symbolic_analysis(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Result<SymbolicCholesky<usize>, String> {
+    // faer's symbolic analysis without a permutation reads the upper triangle as given:
+    // hand it the transpose of the pattern (the numeric factorization reads the lower one).
+    let mut up_ptr = vec![0usize; n + 1];
+    for &r in row_idx {
+        up_ptr[r + 1] += 1;
+    }
+    for c in 0..n {
+        up_ptr[c + 1] += up_ptr[c];
+    }
+    let mut next = up_ptr.clone();
+    let mut up_idx = vec![0usize; row_idx.len()];
+    for k in 0..n {
+        for &r in &row_idx[col_ptr[k]..col_ptr[k + 1]] {
+            up_idx[next[r]] = k;
+            next[r] += 1;
+        }
+    }
+    factorize_symbolic_cholesky(
+        SymbolicSparseColMatRef::new_checked(n, n, &up_ptr, None, &up_idx),
+        Side::Upper,
+        SymmetricOrdering::Identity,
+        // Supernodal even where faer's flop-ratio heuristic picks the simplicial
+        // (up-looking) factorization: on the 2-ring pattern of a brush of 200–700 vertices
+        // it took the numeric factorization from ~1.0 to ~0.6 ms (bench_solver, Fig. 12a).
+        CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| crate::error::describe_faer(&e))
 }
 
 /// Reverse Cuthill–McKee order of the symmetric pattern given by its lower triangle.
