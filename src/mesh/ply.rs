@@ -399,9 +399,19 @@ fn vertex_layout(path: &Path, el: &Element) -> Result<VertexLayout> {
     Ok(VertexLayout { xyz, normal, uv })
 }
 
-/// Reads a PLY file's bytes. `scale` is the loader's scale (for the coordinate bound).
-pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
-    let header = read_header(path, bytes)?;
+/// The two elements a mesh is read from, and where their data sits in each entry.
+struct MeshElements {
+    /// Index of the `vertex` element.
+    vertex: usize,
+    /// Index of the `face` element.
+    face: usize,
+    /// The face element's property holding the vertex indices.
+    list: usize,
+    layout: VertexLayout,
+}
+
+/// Finds the `vertex` and `face` elements and checks their properties.
+fn mesh_elements(path: &Path, header: &Header) -> Result<MeshElements> {
     let vertex = header.elements.iter().position(|e| e.name == "vertex");
     let face = header.elements.iter().position(|e| e.name == "face");
     let (Some(vi), Some(fi)) = (vertex, face) else {
@@ -440,6 +450,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             ),
         ));
     }
+    Ok(MeshElements { vertex: vi, face: fi, list, layout })
+}
+
+/// Bounds the vertex and face counts by the limits, before anything is allocated for them.
+fn check_limits(path: &Path, velem: &Element, felem: &Element) -> Result<()> {
     if velem.count > MAX_FILE_VERTICES {
         return Err(parse_err(
             path,
@@ -462,7 +477,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             ),
         ));
     }
-    // Every element's count against the bytes left: the fewest bytes all elements can take.
+    Ok(())
+}
+
+/// Every element's count against the bytes left: the fewest bytes all elements can take.
+fn check_data_size(path: &Path, bytes: &[u8], header: &Header) -> Result<()> {
     let left = bytes.len() - header.data;
     let mut need: u128 = 0;
     for el in &header.elements {
@@ -482,149 +501,248 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             ));
         }
     }
-    let mut rd =
-        Reader { path, bytes, pos: header.data, line: header.data_line, encoding: header.encoding };
-    let mut raw = RawMesh::with_capacity(velem.count, felem.count);
-    let mut uv = layout.uv.map(|_| Vec::with_capacity(velem.count));
-    let mut normals = layout.normal.map(|_| Vec::with_capacity(velem.count));
-    // Face lists, kept until every vertex is read (faces may come first): the indices of all
-    // faces in one array, and per face (element, line, byte, start in that array).
-    let mut face_idx: Vec<u32> = Vec::new();
-    let mut face_meta: Vec<(u32, usize, usize, usize)> = Vec::with_capacity(felem.count);
-    let mut values = Vec::new();
-    for (e, el) in header.elements.iter().enumerate() {
-        for i in 0..el.count {
-            let at = rd.here();
-            values.clear();
-            let mut list_values: Vec<f64> = Vec::new();
-            for (j, p) in el.properties.iter().enumerate() {
-                let name = || format!("{} element {i}: property {:?}", el.name, p.name);
-                match p.kind {
-                    Kind::Scalar(t) => values.push(rd.value(t, &name)?),
-                    Kind::List(c, t) => {
-                        let n = rd.value(c, &|| format!("{}: list count", name()))?;
-                        if n < 0.0 || n > MAX_POLYGON_CORNERS as f64 {
-                            return Err(rd.error(
-                                at,
-                                format!(
-                                    "{}: list count {n} is not in [0, {MAX_POLYGON_CORNERS}] \
-                                     (limits::MAX_POLYGON_CORNERS)",
-                                    name()
-                                ),
-                            ));
-                        }
-                        let keep = e == fi && j == list;
-                        for k in 0..n as usize {
-                            let x = rd.value(t, &|| format!("{}: item {k}", name()))?;
-                            if keep {
-                                list_values.push(x);
-                            }
-                        }
-                        values.push(n);
-                    }
-                }
-            }
-            if e == vi {
-                let p = Vector3::new(
-                    values[layout.xyz[0]],
-                    values[layout.xyz[1]],
-                    values[layout.xyz[2]],
-                );
-                check_position(&p, scale).map_err(|err| {
-                    rd.error(at, format!("vertex element {i} {}", err.describe(scale)))
-                })?;
-                raw.positions.push(p);
-                if let (Some(uv), Some([a, b])) = (uv.as_mut(), layout.uv) {
-                    let t = Vector2::new(values[a], values[b]);
-                    if !t.iter().all(|x| x.is_finite()) {
-                        return Err(rd.error(
-                            at,
-                            format!("vertex element {i} has a non-finite (NaN or infinite) texture coordinate"),
-                        ));
-                    }
-                    uv.push(t);
-                }
-                if let (Some(ns), Some([a, b, c])) = (normals.as_mut(), layout.normal) {
-                    let n = Vector3::new(values[a], values[b], values[c]);
-                    if !n.iter().all(|x| x.is_finite()) {
-                        return Err(rd.error(
-                            at,
-                            format!("vertex element {i} has a non-finite (NaN or infinite) normal"),
-                        ));
-                    }
-                    ns.push(n);
-                }
-            } else if e == fi {
-                if list_values.len() < 3 {
+    Ok(())
+}
+
+/// One entry of an element in the data section: which, and where it starts.
+struct Entry<'e> {
+    el: &'e Element,
+    /// The entry's index within its element.
+    i: usize,
+    /// Where it starts: (line, byte).
+    at: (usize, usize),
+    /// The list property whose items are kept (the face element's indices).
+    keep: Option<usize>,
+}
+
+/// The values of one entry: a value per property (a list's count for a list), and the items of
+/// the kept list.
+#[derive(Default)]
+struct EntryValues {
+    values: Vec<f64>,
+    list: Vec<f64>,
+}
+
+/// Reads the values of one entry into `out`.
+fn read_entry(rd: &mut Reader, entry: &Entry, out: &mut EntryValues) -> Result<()> {
+    let (el, i, at) = (entry.el, entry.i, entry.at);
+    out.values.clear();
+    out.list.clear();
+    for (j, p) in el.properties.iter().enumerate() {
+        let name = || format!("{} element {i}: property {:?}", el.name, p.name);
+        match p.kind {
+            Kind::Scalar(t) => out.values.push(rd.value(t, &name)?),
+            Kind::List(c, t) => {
+                let n = rd.value(c, &|| format!("{}: list count", name()))?;
+                if n < 0.0 || n > MAX_POLYGON_CORNERS as f64 {
                     return Err(rd.error(
                         at,
                         format!(
-                            "face element {i} has {} vertex indices; a face needs at least 3",
-                            list_values.len()
+                            "{}: list count {n} is not in [0, {MAX_POLYGON_CORNERS}] \
+                             (limits::MAX_POLYGON_CORNERS)",
+                            name()
                         ),
                     ));
                 }
-                if face_idx.len() - 2 * face_meta.len() + list_values.len() > MAX_FILE_TRIANGLES + 2
-                {
-                    return Err(rd.error(
-                        at,
-                        format!(
-                            "face element {i}: more than {MAX_FILE_TRIANGLES} triangles \
-                             (limits::MAX_FILE_TRIANGLES)"
-                        ),
-                    ));
-                }
-                face_meta.push((i as u32, at.0, at.1, face_idx.len()));
-                face_idx.extend(list_values.iter().map(|&x| {
-                    if (0.0..u32::MAX as f64).contains(&x) {
-                        x as u32
-                    } else {
-                        u32::MAX
+                let keep = entry.keep == Some(j);
+                for k in 0..n as usize {
+                    let x = rd.value(t, &|| format!("{}: item {k}", name()))?;
+                    if keep {
+                        out.list.push(x);
                     }
-                }));
+                }
+                out.values.push(n);
             }
         }
     }
+    Ok(())
+}
+
+/// What the data section gives: the vertices, and the face lists, kept until every vertex is
+/// read (faces may come first).
+struct Collected {
+    layout: VertexLayout,
+    /// The loader's scale (for the coordinate bound).
+    scale: f64,
+    raw: RawMesh,
+    uv: Option<Vec<Vector2<f64>>>,
+    normals: Option<Vec<Vector3<f64>>>,
+    /// The indices of all faces in one array.
+    face_idx: Vec<u32>,
+    /// Per face: (element, line, byte, start in `face_idx`).
+    face_meta: Vec<(u32, usize, usize, usize)>,
+}
+
+impl Collected {
+    fn new(layout: VertexLayout, scale: f64, vertices: usize, faces: usize) -> Self {
+        let raw = RawMesh::with_capacity(vertices, faces);
+        let uv = layout.uv.map(|_| Vec::with_capacity(vertices));
+        let normals = layout.normal.map(|_| Vec::with_capacity(vertices));
+        let face_meta = Vec::with_capacity(faces);
+        Collected { layout, scale, raw, uv, normals, face_idx: Vec::new(), face_meta }
+    }
+
+    /// Keeps a vertex entry's position, UV and normal, checked.
+    fn push_vertex(&mut self, rd: &Reader, entry: &Entry, values: &[f64]) -> Result<()> {
+        let (i, at, layout, scale) = (entry.i, entry.at, &self.layout, self.scale);
+        let p = Vector3::new(values[layout.xyz[0]], values[layout.xyz[1]], values[layout.xyz[2]]);
+        check_position(&p, scale)
+            .map_err(|err| rd.error(at, format!("vertex element {i} {}", err.describe(scale))))?;
+        self.raw.positions.push(p);
+        if let (Some(uv), Some([a, b])) = (self.uv.as_mut(), layout.uv) {
+            let t = Vector2::new(values[a], values[b]);
+            if !t.iter().all(|x| x.is_finite()) {
+                return Err(rd.error(
+                    at,
+                    format!(
+                        "vertex element {i} has a non-finite (NaN or infinite) texture coordinate"
+                    ),
+                ));
+            }
+            uv.push(t);
+        }
+        if let (Some(ns), Some([a, b, c])) = (self.normals.as_mut(), layout.normal) {
+            let n = Vector3::new(values[a], values[b], values[c]);
+            if !n.iter().all(|x| x.is_finite()) {
+                return Err(rd.error(
+                    at,
+                    format!("vertex element {i} has a non-finite (NaN or infinite) normal"),
+                ));
+            }
+            ns.push(n);
+        }
+        Ok(())
+    }
+
+    /// Keeps a face entry's vertex indices (checked against the vertex count at the end).
+    fn push_face(&mut self, rd: &Reader, entry: &Entry, list_values: &[f64]) -> Result<()> {
+        let (i, at) = (entry.i, entry.at);
+        let (face_idx, face_meta) = (&mut self.face_idx, &mut self.face_meta);
+        if list_values.len() < 3 {
+            return Err(rd.error(
+                at,
+                format!(
+                    "face element {i} has {} vertex indices; a face needs at least 3",
+                    list_values.len()
+                ),
+            ));
+        }
+        if face_idx.len() - 2 * face_meta.len() + list_values.len() > MAX_FILE_TRIANGLES + 2 {
+            return Err(rd.error(
+                at,
+                format!(
+                    "face element {i}: more than {MAX_FILE_TRIANGLES} triangles \
+                     (limits::MAX_FILE_TRIANGLES)"
+                ),
+            ));
+        }
+        face_meta.push((i as u32, at.0, at.1, face_idx.len()));
+        face_idx.extend(list_values.iter().map(|&x| {
+            if (0.0..u32::MAX as f64).contains(&x) {
+                x as u32
+            } else {
+                u32::MAX
+            }
+        }));
+        Ok(())
+    }
+
+    /// Checks the faces' indices against the vertex count and splits the faces into the
+    /// fans of the mesh.
+    fn into_mesh(self, path: &Path, encoding: Encoding) -> Result<RawMesh> {
+        let Collected { mut raw, uv, normals, face_idx, face_meta, .. } = self;
+        let nv = raw.positions.len() as u32;
+        for (m, &(i, line, offset, start)) in face_meta.iter().enumerate() {
+            let end = face_meta.get(m + 1).map_or(face_idx.len(), |x| x.3);
+            let idx = &face_idx[start..end];
+            if let Some((k, &bad)) = idx.iter().enumerate().find(|(_, &v)| v >= nv) {
+                let shown = if bad == u32::MAX {
+                    "negative or too large".to_string()
+                } else {
+                    bad.to_string()
+                };
+                let message = format!(
+                    "face element {i}: vertex index {k} is {shown}; the file has {nv} vertices \
+                     (indices 0 to {})",
+                    nv.saturating_sub(1)
+                );
+                return Err(match encoding {
+                    Encoding::Ascii => {
+                        Error::IndexOutOfRange { path: path.to_owned(), line, message }
+                    }
+                    _ => {
+                        Error::BinaryFile { path: path.to_owned(), offset: offset as u64, message }
+                    }
+                });
+            }
+            if idx.len() > 3 {
+                raw.polygons_split += 1;
+            }
+            let line = if encoding == Encoding::Ascii { line as u32 } else { 0 };
+            for k in 1..idx.len() - 1 {
+                raw.push_face([idx[0], idx[k], idx[k + 1]], line, i);
+            }
+        }
+        raw.uv = uv;
+        raw.normals = normals;
+        Ok(raw)
+    }
+}
+
+/// Reads every element's entries, keeping the vertices and the face lists.
+fn read_data(
+    rd: &mut Reader,
+    header: &Header,
+    mesh: MeshElements,
+    scale: f64,
+) -> Result<Collected> {
+    let (velem, felem) = (&header.elements[mesh.vertex], &header.elements[mesh.face]);
+    let mut out = Collected::new(mesh.layout, scale, velem.count, felem.count);
+    let mut values = EntryValues::default();
+    for (e, el) in header.elements.iter().enumerate() {
+        let keep = (e == mesh.face).then_some(mesh.list);
+        for i in 0..el.count {
+            let at = rd.here();
+            let entry = Entry { el, i, at, keep };
+            read_entry(rd, &entry, &mut values)?;
+            if e == mesh.vertex {
+                out.push_vertex(rd, &entry, &values.values)?;
+            } else if e == mesh.face {
+                out.push_face(rd, &entry, &values.list)?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Refuses data after the last element (ASCII: other than blanks).
+fn check_no_trailing_data(rd: &mut Reader) -> Result<()> {
     if rd.encoding == Encoding::Ascii {
         rd.skip_blanks();
     }
-    if rd.pos < bytes.len() {
+    if rd.pos < rd.bytes.len() {
         let at = rd.here();
         return Err(rd.error(
             at,
             format!(
                 "{} byte(s) of data after the last element: the header's counts do not match the \
                  data",
-                bytes.len() - rd.pos
+                rd.bytes.len() - rd.pos
             ),
         ));
     }
-    let nv = raw.positions.len() as u32;
-    for (m, &(i, line, offset, start)) in face_meta.iter().enumerate() {
-        let end = face_meta.get(m + 1).map_or(face_idx.len(), |x| x.3);
-        let idx = &face_idx[start..end];
-        if let Some((k, &bad)) = idx.iter().enumerate().find(|(_, &v)| v >= nv) {
-            let shown =
-                if bad == u32::MAX { "negative or too large".to_string() } else { bad.to_string() };
-            let message = format!(
-                "face element {i}: vertex index {k} is {shown}; the file has {nv} vertices \
-                 (indices 0 to {})",
-                nv.saturating_sub(1)
-            );
-            return Err(match rd.encoding {
-                Encoding::Ascii => Error::IndexOutOfRange { path: path.to_owned(), line, message },
-                _ => Error::BinaryFile { path: path.to_owned(), offset: offset as u64, message },
-            });
-        }
-        if idx.len() > 3 {
-            raw.polygons_split += 1;
-        }
-        let line = if rd.encoding == Encoding::Ascii { line as u32 } else { 0 };
-        for k in 1..idx.len() - 1 {
-            raw.push_face([idx[0], idx[k], idx[k + 1]], line, i);
-        }
-    }
-    raw.uv = uv;
-    raw.normals = normals;
-    Ok(raw)
+    Ok(())
+}
+
+/// Reads a PLY file's bytes. `scale` is the loader's scale (for the coordinate bound).
+pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
+    let header = read_header(path, bytes)?;
+    let mesh = mesh_elements(path, &header)?;
+    check_limits(path, &header.elements[mesh.vertex], &header.elements[mesh.face])?;
+    check_data_size(path, bytes, &header)?;
+    let mut rd =
+        Reader { path, bytes, pos: header.data, line: header.data_line, encoding: header.encoding };
+    let collected = read_data(&mut rd, &header, mesh, scale)?;
+    check_no_trailing_data(&mut rd)?;
+    collected.into_mesh(path, rd.encoding)
 }
