@@ -135,8 +135,29 @@ pub fn read(text: &str, name: &Path, tolerance_px: f64) -> Result<Drawing> {
 
 /// [`read`] with options.
 pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
-    let xml = || usvg::roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let doc = usvg::roxmltree::Document::parse_with_options(text, xml())
+    let doc = parse_svg(text, name)?;
+    let root = doc.root_element();
+    let root_line = doc.text_pos_at(root.range().start).row as usize;
+    let root_map = RootMap::of(&root, o.stretch).map_err(|m| parse_error(name, root_line, m))?;
+    // Tag every shape element with an id (insertions into the text, applied back to front),
+    // check the sizes usvg would skip silently, and add the namespace where it is missing.
+    let mut edits = Edits::default();
+    let sources = tag_shapes(&doc, text, name, &mut edits)?;
+    root_edits(&root, text, &root_map, &mut edits);
+    let tagged = edits.apply(text);
+    drop(doc);
+    let tree = usvg_tree(&tagged, name)?;
+    flatten_tree(&tree, &root_map, &sources, o, name)
+}
+
+/// The XML parser's options: DTDs (entities) allowed.
+fn xml_options<'a>() -> usvg::roxmltree::ParsingOptions<'a> {
+    usvg::roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() }
+}
+
+/// Parses the document and checks its root: an `<svg>` with a viewBox or a width and height.
+fn parse_svg<'a>(text: &'a str, name: &Path) -> Result<usvg::roxmltree::Document<'a>> {
+    let doc = usvg::roxmltree::Document::parse_with_options(text, xml_options())
         .map_err(|e| parse_error(name, e.pos().row as usize, format!("not a readable SVG: {e}")))?;
     let root = doc.root_element();
     if root.tag_name().name() != "svg" {
@@ -156,12 +177,76 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
                 .into(),
         ));
     }
-    let root_line = doc.text_pos_at(root.range().start).row as usize;
-    let root_map = RootMap::of(&root, o.stretch).map_err(|m| parse_error(name, root_line, m))?;
-    // Tag every shape element with an id (insertions into the text, applied back to front),
-    // check the sizes usvg would skip silently, and add the namespace where it is missing.
-    let mut inserts: Vec<(usize, String)> = Vec::new();
-    let mut removals: Vec<std::ops::Range<usize>> = Vec::new();
+    Ok(doc)
+}
+
+/// Edits of the source text: insertions (offset, text) and removed ranges.
+#[derive(Default)]
+struct Edits {
+    inserts: Vec<(usize, String)>,
+    removals: Vec<std::ops::Range<usize>>,
+}
+
+impl Edits {
+    /// The text with the edits applied.
+    fn apply(self, text: &str) -> String {
+        // Back to front, so that earlier offsets stay valid (the ranges do not overlap: an
+        // insertion is at a tag's name, a removal covers a whole attribute).
+        let mut edits: Vec<(std::ops::Range<usize>, String)> =
+            self.inserts.into_iter().map(|(at, s)| (at..at, s)).collect();
+        edits.extend(self.removals.into_iter().map(|r| (r, String::new())));
+        edits.sort_by_key(|(r, _)| std::cmp::Reverse((r.start, r.end)));
+        let mut tagged = text.to_string();
+        for (r, s) in edits {
+            tagged.replace_range(r, &s);
+        }
+        tagged
+    }
+}
+
+/// How messages name a shape or `<use>` element on `line`.
+fn describe_element(node: &usvg::roxmltree::Node, tag: &str, line: usize) -> String {
+    let href = node.attributes().find(|a| a.name() == "href").map(|a| a.value());
+    match (node.attribute("id"), href) {
+        (_, Some(href)) if tag == "use" => {
+            format!("use element on line {line} (href {href:?})")
+        }
+        (Some(id), _) => format!("{tag} element on line {line} (id {id:?})"),
+        (None, _) => format!("{tag} element on line {line}"),
+    }
+}
+
+/// Refuses the negative sizes of a `rect`, `circle` or `ellipse`, which usvg would skip
+/// silently.
+fn check_sizes(
+    node: &usvg::roxmltree::Node,
+    tag: &str,
+    element: &str,
+    name: &Path,
+    line: usize,
+) -> Result<()> {
+    for k in ["width", "height", "r", "rx", "ry"] {
+        if let Some(v) = node.attribute(k).and_then(leading_number) {
+            if v < 0.0 && matches!(tag, "rect" | "circle" | "ellipse") {
+                return Err(parse_error(
+                    name,
+                    line,
+                    format!("{element}: {k}=\"{}\" is negative", node.attribute(k).unwrap_or("")),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Gives every shape element without one an id (an insertion into `edits`), checks the sizes,
+/// and returns the source of every id.
+fn tag_shapes(
+    doc: &usvg::roxmltree::Document,
+    text: &str,
+    name: &Path,
+    edits: &mut Edits,
+) -> Result<HashMap<String, Source>> {
     let mut sources: HashMap<String, Source> = HashMap::new();
     for node in doc.descendants().filter(|n| n.is_element()) {
         let tag = node.tag_name().name();
@@ -170,28 +255,8 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
         }
         let start = node.range().start;
         let line = doc.text_pos_at(start).row as usize;
-        let href = node.attributes().find(|a| a.name() == "href").map(|a| a.value());
-        let element = match (node.attribute("id"), href) {
-            (_, Some(href)) if tag == "use" => {
-                format!("use element on line {line} (href {href:?})")
-            }
-            (Some(id), _) => format!("{tag} element on line {line} (id {id:?})"),
-            (None, _) => format!("{tag} element on line {line}"),
-        };
-        for k in ["width", "height", "r", "rx", "ry"] {
-            if let Some(v) = node.attribute(k).and_then(leading_number) {
-                if v < 0.0 && matches!(tag, "rect" | "circle" | "ellipse") {
-                    return Err(parse_error(
-                        name,
-                        line,
-                        format!(
-                            "{element}: {k}=\"{}\" is negative",
-                            node.attribute(k).unwrap_or("")
-                        ),
-                    ));
-                }
-            }
-        }
+        let element = describe_element(&node, tag, line);
+        check_sizes(&node, tag, &element, name, line)?;
         let id = match node.attribute("id") {
             // An empty id cannot be replaced (a second `id` would be a syntax error): such an
             // element is read only as part of a `<use>` or a group with an id.
@@ -201,39 +266,38 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
             Some(id) => id.to_string(),
             None => {
                 let id = format!("{TAG}{start}");
-                inserts.push((after_name(text, start), format!(" id=\"{id}\"")));
+                edits.inserts.push((after_name(text, start), format!(" id=\"{id}\"")));
                 id
             }
         };
         sources.entry(id).or_insert(Source { element, line });
     }
+    Ok(sources)
+}
+
+/// The root's edits: the namespace where it is missing, and its size, viewBox, aspect ratio and
+/// transform replaced by a size in user units.
+fn root_edits(root: &usvg::roxmltree::Node, text: &str, root_map: &RootMap, edits: &mut Edits) {
     if root.tag_name().namespace().is_none() {
-        inserts.push((after_name(text, root.range().start), format!(" xmlns=\"{SVG_NS}\"")));
+        edits.inserts.push((after_name(text, root.range().start), format!(" xmlns=\"{SVG_NS}\"")));
     }
     // The root's size, viewBox, aspect ratio and transform are applied here in f64 (usvg
     // keeps transforms in f32): usvg sees a root of the viewBox's size in user units, so its
     // coordinates are the user units themselves.
     for k in ["width", "height", "viewBox", "preserveAspectRatio", "transform"] {
         if let Some(a) = root.attribute_node(k) {
-            removals.push(a.range());
+            edits.removals.push(a.range());
         }
     }
-    inserts.push((
+    edits.inserts.push((
         after_name(text, root.range().start),
         format!(" width=\"{}\" height=\"{}\"", root_map.view[2], root_map.view[3]),
     ));
-    // Back to front, so that earlier offsets stay valid (the ranges do not overlap: an
-    // insertion is at a tag's name, a removal covers a whole attribute).
-    let mut edits: Vec<(std::ops::Range<usize>, String)> =
-        inserts.into_iter().map(|(at, s)| (at..at, s)).collect();
-    edits.extend(removals.into_iter().map(|r| (r, String::new())));
-    edits.sort_by_key(|(r, _)| std::cmp::Reverse((r.start, r.end)));
-    let mut tagged = text.to_string();
-    for (r, s) in edits {
-        tagged.replace_range(r, &s);
-    }
-    drop(doc);
-    let doc = usvg::roxmltree::Document::parse_with_options(&tagged, xml())
+}
+
+/// usvg's tree of the tagged text.
+fn usvg_tree(tagged: &str, name: &Path) -> Result<usvg::Tree> {
+    let doc = usvg::roxmltree::Document::parse_with_options(tagged, xml_options())
         .map_err(|e| parse_error(name, 0, format!("not a readable SVG: {e}")))?;
     // No file is read on the document's behalf, and no embedded image decoded.
     let opt = usvg::Options {
@@ -244,7 +308,7 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
         },
         ..usvg::Options::default()
     };
-    let tree = usvg::Tree::from_xmltree(&doc, &opt).map_err(|e| {
+    usvg::Tree::from_xmltree(&doc, &opt).map_err(|e| {
         let message = match e {
             usvg::Error::InvalidSize => {
                 "the <svg> element's width, height or viewBox is not a positive size".to_string()
@@ -255,7 +319,17 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
             e => format!("not a readable SVG: {e}"),
         };
         parse_error(name, 1, message)
-    })?;
+    })
+}
+
+/// The drawing of usvg's tree: its shapes flattened to the tolerance, in canvas pixels.
+fn flatten_tree(
+    tree: &usvg::Tree,
+    root_map: &RootMap,
+    sources: &HashMap<String, Source>,
+    o: &ReadOptions,
+    name: &Path,
+) -> Result<Drawing> {
     let (w, h) = (root_map.width, root_map.height);
     let tolerance_px = match o.tolerance {
         Tolerance::Px(t) => t,
@@ -263,7 +337,7 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
     };
     let mut shapes = Vec::new();
     let mut left = crate::limits::MAX_SVG_POINTS;
-    collect(tree.root(), &root_map.to_canvas, &sources, None, tolerance_px, &mut left, &mut shapes);
+    collect(tree.root(), &root_map.to_canvas, sources, None, tolerance_px, &mut left, &mut shapes);
     if left == 0 {
         return Err(parse_error(
             name,

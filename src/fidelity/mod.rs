@@ -322,19 +322,8 @@ pub fn edit_fidelity(
     options: &FidelityOptions,
 ) -> Result<EditFidelity> {
     options.validate()?;
-    let n = mesh.num_vertices();
-    if h.len() != n || u_before.len() != n || u_after.len() != n || geometry.num_vertices() != n {
-        return Err(Error::invalid_arg(
-            "fidelity",
-            format!(
-                "the mesh has {n} vertices, but h {}, u_before {}, u_after {}, geometry {}",
-                h.len(),
-                u_before.len(),
-                u_after.len(),
-                geometry.num_vertices()
-            ),
-        ));
-    }
+    let fields = Fields { mesh, geometry, h, symmetry, u_before, u_after };
+    fields.check_vertex_counts()?;
     let radius = shape.radius();
     let mut fid = EditFidelity {
         index,
@@ -356,98 +345,232 @@ pub fn edit_fidelity(
     }
     let any = support_faces(mesh, shape.support());
     // Singular triangles inside the support.
-    let k = symmetry.k();
-    let count = |u: &[Vector3<f64>]| {
-        let phi = geometry.angles_of(u);
-        let sing = crate::solve::singularities(mesh, geometry, &phi, k);
-        sing.iter().filter(|s| any.binary_search(&(s.face as usize)).is_ok()).count()
-    };
-    fid.singular_before = count(u_before);
-    fid.singular_after = count(u_after);
+    fid.singular_before = fields.singular_in(&any, u_before);
+    fid.singular_after = fields.singular_in(&any, u_after);
 
     // Distances of the target samples, in units of r.
-    let (distances, empty_target, empty_c1) = match shape {
+    let target = target_distances(&fields, &any, shape, options);
+    fid.off_part = target.off_part;
+    let off_note = off_part_note(fid.off_part, target.distances.len());
+    if target.empty && fid.off_part > 0 {
+        fid.note = off_note;
+        return Ok(fid);
+    }
+    if target.empty {
+        fid.note = Some(empty_target_note(shape, options));
+        return Ok(fid);
+    }
+    score(&mut fid, &target, off_note, options);
+    Ok(fid)
+}
+
+/// The mesh and the fields an edit is measured on: `u_before`/`u_after` world-space unit grain
+/// vectors per vertex, `h` the key light's half vectors per vertex.
+struct Fields<'a> {
+    mesh: &'a Mesh,
+    geometry: &'a Geometry,
+    h: &'a [Vector3<f64>],
+    symmetry: Symmetry,
+    u_before: &'a [Vector3<f64>],
+    u_after: &'a [Vector3<f64>],
+}
+
+impl Fields<'_> {
+    /// Errors unless `h`, `u_before`, `u_after` and the geometry have the mesh's vertex count.
+    fn check_vertex_counts(&self) -> Result<()> {
+        let Fields { mesh, geometry, h, u_before, u_after, .. } = *self;
+        let n = mesh.num_vertices();
+        if h.len() != n || u_before.len() != n || u_after.len() != n || geometry.num_vertices() != n
+        {
+            return Err(Error::invalid_arg(
+                "fidelity",
+                format!(
+                    "the mesh has {n} vertices, but h {}, u_before {}, u_after {}, geometry {}",
+                    h.len(),
+                    u_before.len(),
+                    u_after.len(),
+                    geometry.num_vertices()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The singular triangles of the field `u` among the faces `any` (ascending).
+    fn singular_in(&self, any: &[usize], u: &[Vector3<f64>]) -> usize {
+        let k = self.symmetry.k();
+        let phi = self.geometry.angles_of(u);
+        let sing = crate::solve::singularities(self.mesh, self.geometry, &phi, k);
+        sing.iter().filter(|s| any.binary_search(&(s.face as usize)).is_ok()).count()
+    }
+}
+
+/// The distances of an edit's target samples to C1, in units of r.
+struct Target {
+    distances: Vec<f64>,
+    /// No target sample to compare.
+    empty: bool,
+    /// No C1 segment.
+    empty_c1: bool,
+    /// Samples left out as beyond the part (warps).
+    off_part: usize,
+}
+
+/// A bend or expand brush: the warp, the brush plane (origin, ex, ey), the brush chart and the
+/// radius.
+struct WarpBrush<'a> {
+    kind: WarpKind,
+    strength: f64,
+    plane: (&'a Vector3<f64>, &'a Vector3<f64>, &'a Vector3<f64>),
+    chart: &'a [(u32, [f64; 2])],
+    radius: f64,
+}
+
+/// The target of `shape` and its distances to C1 (the field after the solve) on the faces
+/// `any`.
+fn target_distances(
+    fields: &Fields,
+    any: &[usize],
+    shape: &EditShape,
+    options: &FidelityOptions,
+) -> Target {
+    let radius = shape.radius();
+    match shape {
         EditShape::Warp { kind, strength, origin, ex, ey, chart, .. } => {
-            // The support's faces in the brush chart (or, without one, those facing the
-            // plane, projected to it); C0 and C1 are cut from them there.
-            let chart_faces = brush_faces(mesh, geometry, &any, chart, (origin, ex, ey), radius);
-            let faces: Vec<usize> = chart_faces.iter().map(|x| x.0).collect();
-            let in_chart = |segs: Vec<(usize, [Vector3<f64>; 2])>| -> Vec<[Vector2<f64>; 2]> {
-                segs.iter().map(|&(k, s)| s.map(|p| chart_faces[k].1.at(&p))).collect()
+            let brush = WarpBrush {
+                kind: *kind,
+                strength: *strength,
+                plane: (origin, ex, ey),
+                chart,
+                radius,
             };
-            let c0 = in_chart(indexed_segments(mesh, h, u_before, symmetry, &faces));
-            let all_samples =
-                warp_samples(&c0, *kind, *strength, options.sample_spacing, options.compare_radius);
-            // Samples of W(C0) on none of the support's faces (in the brush chart) lie beyond
-            // the part's boundary: no grain the edit may change puts a highlight there. They
-            // are counted and left out.
-            let tris: Vec<[Vector2<f64>; 3]> = chart_faces.iter().map(|x| x.1.corners).collect();
-            let on_faces = TriangleGrid::new(&tris);
-            let samples: Vec<Vector2<f64>> =
-                all_samples.iter().copied().filter(|p| on_faces.contains(p)).collect();
-            fid.off_part = all_samples.len() - samples.len();
-            let c1: Vec<[Vector3<f64>; 2]> =
-                in_chart(indexed_segments(mesh, h, u_after, symmetry, &faces))
-                    .into_iter()
-                    .filter(|s| s[0].norm() <= 1.0 || s[1].norm() <= 1.0)
-                    .map(|s| s.map(|p| Vector3::new(p.x, p.y, 0.0)))
-                    .collect();
-            let empty_c1 = c1.is_empty();
-            let grid = SegmentGrid::new(c1, MAX_DISTANCE);
-            let d: Vec<f64> = samples
-                .iter()
-                .map(|p| grid.nearest(&Vector3::new(p.x, p.y, 0.0), MAX_DISTANCE))
-                .collect();
-            (d, samples.is_empty(), empty_c1)
+            warp_distances(fields, any, &brush, options)
         }
         EditShape::Curve { polylines, .. } => {
-            let samples = curve_samples(polylines, options.sample_spacing * radius, radius);
-            // Distances along the surface: in the plane of the face C1 crosses, leaving out
-            // an offset along its normal (the drawn curve lies on the part as it was drawn on,
-            // a refined mesh's new vertices a little off its facets; the tool itself measures
-            // the offset across the curve's tangent in the tangent plane).
-            let (c1, normals) = segments_with_normals(mesh, h, u_after, symmetry, &any);
-            let empty_c1 = c1.is_empty();
-            let cap = MAX_DISTANCE * radius;
-            let grid = SegmentGrid::in_planes(c1, normals, cap);
-            let d: Vec<f64> = samples.iter().map(|p| grid.nearest(p, cap) / radius).collect();
-            (d, samples.is_empty(), empty_c1)
+            curve_distances(fields, any, polylines, radius, options)
         }
+    }
+}
+
+/// bend / expand: the samples of W(C0) to the nearest C1 segment, in the brush chart.
+fn warp_distances(
+    fields: &Fields,
+    any: &[usize],
+    brush: &WarpBrush,
+    options: &FidelityOptions,
+) -> Target {
+    let Fields { mesh, geometry, h, symmetry, u_before, u_after } = *fields;
+    // The support's faces in the brush chart (or, without one, those facing the
+    // plane, projected to it); C0 and C1 are cut from them there.
+    let chart_faces = brush_faces(mesh, geometry, any, brush.chart, brush.plane, brush.radius);
+    let faces: Vec<usize> = chart_faces.iter().map(|x| x.0).collect();
+    let in_chart = |segs: Vec<(usize, [Vector3<f64>; 2])>| -> Vec<[Vector2<f64>; 2]> {
+        segs.iter().map(|&(k, s)| s.map(|p| chart_faces[k].1.at(&p))).collect()
     };
-    let off_note = (fid.off_part > 0).then(|| {
-        let all = fid.off_part + distances.len();
+    let c0 = in_chart(indexed_segments(mesh, h, u_before, symmetry, &faces));
+    let all_samples = warp_samples(
+        &c0,
+        brush.kind,
+        brush.strength,
+        options.sample_spacing,
+        options.compare_radius,
+    );
+    // Samples of W(C0) on none of the support's faces (in the brush chart) lie beyond
+    // the part's boundary: no grain the edit may change puts a highlight there. They
+    // are counted and left out.
+    let tris: Vec<[Vector2<f64>; 3]> = chart_faces.iter().map(|x| x.1.corners).collect();
+    let on_faces = TriangleGrid::new(&tris);
+    let samples: Vec<Vector2<f64>> =
+        all_samples.iter().copied().filter(|p| on_faces.contains(p)).collect();
+    let off_part = all_samples.len() - samples.len();
+    let c1: Vec<[Vector3<f64>; 2]> = in_chart(indexed_segments(mesh, h, u_after, symmetry, &faces))
+        .into_iter()
+        .filter(|s| s[0].norm() <= 1.0 || s[1].norm() <= 1.0)
+        .map(|s| s.map(|p| Vector3::new(p.x, p.y, 0.0)))
+        .collect();
+    let empty_c1 = c1.is_empty();
+    let grid = SegmentGrid::new(c1, MAX_DISTANCE);
+    let d: Vec<f64> =
+        samples.iter().map(|p| grid.nearest(&Vector3::new(p.x, p.y, 0.0), MAX_DISTANCE)).collect();
+    Target { distances: d, empty: samples.is_empty(), empty_c1, off_part }
+}
+
+/// curve: the samples of the drawn curves to the nearest C1 segment, in space, over r.
+fn curve_distances(
+    fields: &Fields,
+    any: &[usize],
+    polylines: &[Vec<Vector3<f64>>],
+    radius: f64,
+    options: &FidelityOptions,
+) -> Target {
+    let Fields { mesh, h, symmetry, u_after, .. } = *fields;
+    let samples = curve_samples(polylines, options.sample_spacing * radius, radius);
+    // Distances along the surface: in the plane of the face C1 crosses, leaving out
+    // an offset along its normal (the drawn curve lies on the part as it was drawn on,
+    // a refined mesh's new vertices a little off its facets; the tool itself measures
+    // the offset across the curve's tangent in the tangent plane).
+    let (c1, normals) = segments_with_normals(mesh, h, u_after, symmetry, any);
+    let empty_c1 = c1.is_empty();
+    let cap = MAX_DISTANCE * radius;
+    let grid = SegmentGrid::in_planes(c1, normals, cap);
+    let d: Vec<f64> = samples.iter().map(|p| grid.nearest(p, cap) / radius).collect();
+    Target { distances: d, empty: samples.is_empty(), empty_c1, off_part: 0 }
+}
+
+/// The note on the `off_part` samples left out of `kept` + `off_part`, if any.
+fn off_part_note(off_part: usize, kept: usize) -> Option<String> {
+    (off_part > 0).then(|| {
+        let all = off_part + kept;
         format!(
             "{} of {all} samples of the warped highlight ({:.0} %) lie beyond the part or out of \
              the brush's reach (on none of its faces in the brush chart) and are left out: no \
              grain can put a highlight there",
-            fid.off_part,
-            100.0 * fid.off_part as f64 / all as f64
+            off_part,
+            100.0 * off_part as f64 / all as f64
         )
-    });
-    if empty_target && fid.off_part > 0 {
-        fid.note = off_note;
-        return Ok(fid);
+    })
+}
+
+/// The note of an edit with no target sample.
+fn empty_target_note(shape: &EditShape, options: &FidelityOptions) -> String {
+    match shape {
+        EditShape::Warp { .. } => format!(
+            "nothing to compare: the field before the edit has no key highlight within \
+             {} r of the brush centre",
+            options.compare_radius
+        ),
+        EditShape::Curve { .. } => "nothing to compare: no curve is longer than two radii \
+                                    (UV curves: on the mesh's UV layout)"
+            .to_string(),
     }
-    if empty_target {
-        fid.note = Some(match shape {
-            EditShape::Warp { .. } => format!(
-                "nothing to compare: the field before the edit has no key highlight within \
-                 {} r of the brush centre",
-                options.compare_radius
-            ),
-            EditShape::Curve { .. } => "nothing to compare: no curve is longer than two radii \
-                                        (UV curves: on the mesh's UV layout)"
-                .to_string(),
-        });
-        return Ok(fid);
-    }
-    let mut sorted: Vec<f64> = distances.iter().map(|d| d.clamp(0.0, MAX_DISTANCE)).collect();
+}
+
+/// The figures of the target's distances, whether the edit landed, and the notes.
+fn score(
+    fid: &mut EditFidelity,
+    target: &Target,
+    off_note: Option<String>,
+    options: &FidelityOptions,
+) {
+    let mut sorted: Vec<f64> =
+        target.distances.iter().map(|d| d.clamp(0.0, MAX_DISTANCE)).collect();
     sorted.sort_unstable_by(f64::total_cmp);
     fid.samples = sorted.len();
     fid.within =
         sorted.iter().filter(|&&d| d <= options.tolerance).count() as f64 / sorted.len() as f64;
     fid.p95 = percentile(&sorted, 0.95);
     fid.median = percentile(&sorted, 0.5);
+    let missed = missed_goals(fid, target.empty_c1, options);
+    fid.landed = missed.is_empty();
+    let notes: Vec<String> =
+        off_note.into_iter().chain((!fid.landed).then(|| missed.join("; "))).collect();
+    if !notes.is_empty() {
+        fid.note = Some(notes.join("; "));
+    }
+}
+
+/// The goals the scored edit missed, each as a phrase for the note.
+fn missed_goals(fid: &EditFidelity, empty_c1: bool, options: &FidelityOptions) -> Vec<String> {
     let mut missed = Vec::new();
     if empty_c1 {
         missed.push("the solved field has no key highlight in the support".to_string());
@@ -474,13 +597,7 @@ pub fn edit_fidelity(
             100.0 * (1.0 - GOAL_WITHIN)
         ));
     }
-    fid.landed = missed.is_empty();
-    let notes: Vec<String> =
-        off_note.into_iter().chain((!fid.landed).then(|| missed.join("; "))).collect();
-    if !notes.is_empty() {
-        fid.note = Some(notes.join("; "));
-    }
-    Ok(fid)
+    missed
 }
 
 /// The fidelity of every edit with a shape (`reports[k].shape`), for the fields `phi_before`

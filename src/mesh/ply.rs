@@ -22,11 +22,13 @@
 
 use std::path::Path;
 
-use nalgebra::{Vector2, Vector3};
-
-use super::raw::{check_position, RawMesh};
-use crate::limits::{MAX_FILE_TRIANGLES, MAX_FILE_VERTICES, MAX_POLYGON_CORNERS};
+use super::raw::RawMesh;
+use crate::limits::{MAX_FILE_TRIANGLES, MAX_FILE_VERTICES};
 use crate::{Error, Result};
+
+mod data;
+
+use data::{check_no_trailing_data, read_data};
 
 /// The data layout after `end_header`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -399,9 +401,19 @@ fn vertex_layout(path: &Path, el: &Element) -> Result<VertexLayout> {
     Ok(VertexLayout { xyz, normal, uv })
 }
 
-/// Reads a PLY file's bytes. `scale` is the loader's scale (for the coordinate bound).
-pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
-    let header = read_header(path, bytes)?;
+/// The two elements a mesh is read from, and where their data sits in each entry.
+struct MeshElements {
+    /// Index of the `vertex` element.
+    vertex: usize,
+    /// Index of the `face` element.
+    face: usize,
+    /// The face element's property holding the vertex indices.
+    list: usize,
+    layout: VertexLayout,
+}
+
+/// Finds the `vertex` and `face` elements and checks their properties.
+fn mesh_elements(path: &Path, header: &Header) -> Result<MeshElements> {
     let vertex = header.elements.iter().position(|e| e.name == "vertex");
     let face = header.elements.iter().position(|e| e.name == "face");
     let (Some(vi), Some(fi)) = (vertex, face) else {
@@ -440,6 +452,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             ),
         ));
     }
+    Ok(MeshElements { vertex: vi, face: fi, list, layout })
+}
+
+/// Bounds the vertex and face counts by the limits, before anything is allocated for them.
+fn check_limits(path: &Path, velem: &Element, felem: &Element) -> Result<()> {
     if velem.count > MAX_FILE_VERTICES {
         return Err(parse_err(
             path,
@@ -462,7 +479,11 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             ),
         ));
     }
-    // Every element's count against the bytes left: the fewest bytes all elements can take.
+    Ok(())
+}
+
+/// Every element's count against the bytes left: the fewest bytes all elements can take.
+fn check_data_size(path: &Path, bytes: &[u8], header: &Header) -> Result<()> {
     let left = bytes.len() - header.data;
     let mut need: u128 = 0;
     for el in &header.elements {
@@ -482,149 +503,18 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             ));
         }
     }
+    Ok(())
+}
+
+/// Reads a PLY file's bytes. `scale` is the loader's scale (for the coordinate bound).
+pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
+    let header = read_header(path, bytes)?;
+    let mesh = mesh_elements(path, &header)?;
+    check_limits(path, &header.elements[mesh.vertex], &header.elements[mesh.face])?;
+    check_data_size(path, bytes, &header)?;
     let mut rd =
         Reader { path, bytes, pos: header.data, line: header.data_line, encoding: header.encoding };
-    let mut raw = RawMesh::with_capacity(velem.count, felem.count);
-    let mut uv = layout.uv.map(|_| Vec::with_capacity(velem.count));
-    let mut normals = layout.normal.map(|_| Vec::with_capacity(velem.count));
-    // Face lists, kept until every vertex is read (faces may come first): the indices of all
-    // faces in one array, and per face (element, line, byte, start in that array).
-    let mut face_idx: Vec<u32> = Vec::new();
-    let mut face_meta: Vec<(u32, usize, usize, usize)> = Vec::with_capacity(felem.count);
-    let mut values = Vec::new();
-    for (e, el) in header.elements.iter().enumerate() {
-        for i in 0..el.count {
-            let at = rd.here();
-            values.clear();
-            let mut list_values: Vec<f64> = Vec::new();
-            for (j, p) in el.properties.iter().enumerate() {
-                let name = || format!("{} element {i}: property {:?}", el.name, p.name);
-                match p.kind {
-                    Kind::Scalar(t) => values.push(rd.value(t, &name)?),
-                    Kind::List(c, t) => {
-                        let n = rd.value(c, &|| format!("{}: list count", name()))?;
-                        if n < 0.0 || n > MAX_POLYGON_CORNERS as f64 {
-                            return Err(rd.error(
-                                at,
-                                format!(
-                                    "{}: list count {n} is not in [0, {MAX_POLYGON_CORNERS}] \
-                                     (limits::MAX_POLYGON_CORNERS)",
-                                    name()
-                                ),
-                            ));
-                        }
-                        let keep = e == fi && j == list;
-                        for k in 0..n as usize {
-                            let x = rd.value(t, &|| format!("{}: item {k}", name()))?;
-                            if keep {
-                                list_values.push(x);
-                            }
-                        }
-                        values.push(n);
-                    }
-                }
-            }
-            if e == vi {
-                let p = Vector3::new(
-                    values[layout.xyz[0]],
-                    values[layout.xyz[1]],
-                    values[layout.xyz[2]],
-                );
-                check_position(&p, scale).map_err(|err| {
-                    rd.error(at, format!("vertex element {i} {}", err.describe(scale)))
-                })?;
-                raw.positions.push(p);
-                if let (Some(uv), Some([a, b])) = (uv.as_mut(), layout.uv) {
-                    let t = Vector2::new(values[a], values[b]);
-                    if !t.iter().all(|x| x.is_finite()) {
-                        return Err(rd.error(
-                            at,
-                            format!("vertex element {i} has a non-finite (NaN or infinite) texture coordinate"),
-                        ));
-                    }
-                    uv.push(t);
-                }
-                if let (Some(ns), Some([a, b, c])) = (normals.as_mut(), layout.normal) {
-                    let n = Vector3::new(values[a], values[b], values[c]);
-                    if !n.iter().all(|x| x.is_finite()) {
-                        return Err(rd.error(
-                            at,
-                            format!("vertex element {i} has a non-finite (NaN or infinite) normal"),
-                        ));
-                    }
-                    ns.push(n);
-                }
-            } else if e == fi {
-                if list_values.len() < 3 {
-                    return Err(rd.error(
-                        at,
-                        format!(
-                            "face element {i} has {} vertex indices; a face needs at least 3",
-                            list_values.len()
-                        ),
-                    ));
-                }
-                if face_idx.len() - 2 * face_meta.len() + list_values.len() > MAX_FILE_TRIANGLES + 2
-                {
-                    return Err(rd.error(
-                        at,
-                        format!(
-                            "face element {i}: more than {MAX_FILE_TRIANGLES} triangles \
-                             (limits::MAX_FILE_TRIANGLES)"
-                        ),
-                    ));
-                }
-                face_meta.push((i as u32, at.0, at.1, face_idx.len()));
-                face_idx.extend(list_values.iter().map(|&x| {
-                    if (0.0..u32::MAX as f64).contains(&x) {
-                        x as u32
-                    } else {
-                        u32::MAX
-                    }
-                }));
-            }
-        }
-    }
-    if rd.encoding == Encoding::Ascii {
-        rd.skip_blanks();
-    }
-    if rd.pos < bytes.len() {
-        let at = rd.here();
-        return Err(rd.error(
-            at,
-            format!(
-                "{} byte(s) of data after the last element: the header's counts do not match the \
-                 data",
-                bytes.len() - rd.pos
-            ),
-        ));
-    }
-    let nv = raw.positions.len() as u32;
-    for (m, &(i, line, offset, start)) in face_meta.iter().enumerate() {
-        let end = face_meta.get(m + 1).map_or(face_idx.len(), |x| x.3);
-        let idx = &face_idx[start..end];
-        if let Some((k, &bad)) = idx.iter().enumerate().find(|(_, &v)| v >= nv) {
-            let shown =
-                if bad == u32::MAX { "negative or too large".to_string() } else { bad.to_string() };
-            let message = format!(
-                "face element {i}: vertex index {k} is {shown}; the file has {nv} vertices \
-                 (indices 0 to {})",
-                nv.saturating_sub(1)
-            );
-            return Err(match rd.encoding {
-                Encoding::Ascii => Error::IndexOutOfRange { path: path.to_owned(), line, message },
-                _ => Error::BinaryFile { path: path.to_owned(), offset: offset as u64, message },
-            });
-        }
-        if idx.len() > 3 {
-            raw.polygons_split += 1;
-        }
-        let line = if rd.encoding == Encoding::Ascii { line as u32 } else { 0 };
-        for k in 1..idx.len() - 1 {
-            raw.push_face([idx[0], idx[k], idx[k + 1]], line, i);
-        }
-    }
-    raw.uv = uv;
-    raw.normals = normals;
-    Ok(raw)
+    let collected = read_data(&mut rd, &header, mesh, scale)?;
+    check_no_trailing_data(&mut rd)?;
+    collected.into_mesh(path, rd.encoding)
 }

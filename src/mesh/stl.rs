@@ -192,31 +192,154 @@ fn show(t: &[u8]) -> String {
     format!("{s:?}")
 }
 
-fn read_ascii(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
-    let err = |line: usize, message: String| Error::Parse { path: path.to_owned(), line, message };
-    let mut tk = Tokens::new(bytes);
-    let mut raw = RawMesh::default();
-    let mut triangles = 0u32;
-    // Expects keyword `kw` as the next token.
-    let expect = |tk: &mut Tokens, kw: &str, ctx: &str| -> Result<usize> {
-        match tk.next() {
+/// An ASCII STL being read: its tokens, and the file for messages.
+struct Ascii<'a> {
+    path: &'a Path,
+    tk: Tokens<'a>,
+}
+
+impl Ascii<'_> {
+    fn err(&self, line: usize, message: String) -> Error {
+        Error::Parse { path: self.path.to_owned(), line, message }
+    }
+
+    /// Expects keyword `kw` as the next token.
+    fn expect(&mut self, kw: &str, ctx: &str) -> Result<usize> {
+        match self.tk.next() {
             Some((t, l)) if t.eq_ignore_ascii_case(kw.as_bytes()) => Ok(l),
-            Some((t, l)) => Err(err(l, format!("expected `{kw}` {ctx}, found {}", show(t)))),
-            None => Err(err(tk.line, format!("unexpected end of file: expected `{kw}` {ctx}"))),
+            Some((t, l)) => Err(self.err(l, format!("expected `{kw}` {ctx}, found {}", show(t)))),
+            None => {
+                Err(self
+                    .err(self.tk.line, format!("unexpected end of file: expected `{kw}` {ctx}")))
+            }
         }
-    };
-    let number = |tk: &mut Tokens, ctx: &str| -> Result<f64> {
-        match tk.next() {
+    }
+
+    fn number(&mut self, ctx: &str) -> Result<f64> {
+        match self.tk.next() {
             Some((t, l)) => std::str::from_utf8(t)
                 .ok()
                 .and_then(|s| s.parse::<f64>().ok())
-                .ok_or_else(|| err(l, format!("expected a number {ctx}, found {}", show(t)))),
-            None => Err(err(tk.line, format!("unexpected end of file: expected a number {ctx}"))),
+                .ok_or_else(|| self.err(l, format!("expected a number {ctx}, found {}", show(t)))),
+            None => {
+                Err(self
+                    .err(self.tk.line, format!("unexpected end of file: expected a number {ctx}")))
+            }
         }
-    };
+    }
+
+    /// After `facet`: the optional `normal nx ny nz` (ignored), then `outer loop`.
+    fn facet_header(&mut self, ctx: &str) -> Result<()> {
+        // `normal nx ny nz` (ignored) is optional.
+        let mut next = self.tk.next();
+        if let Some((t, _)) = next {
+            if t.eq_ignore_ascii_case(b"normal") {
+                for _ in 0..3 {
+                    self.number(&format!("(facet normal) {ctx}"))?;
+                }
+                next = self.tk.next();
+            }
+        }
+        match next {
+            Some((t, _)) if t.eq_ignore_ascii_case(b"outer") => {}
+            Some((t, l)) => {
+                return Err(self.err(l, format!("expected `outer loop` {ctx}, found {}", show(t))))
+            }
+            None => {
+                return Err(self
+                    .err(self.tk.line, format!("unexpected end of file: expected `outer` {ctx}")))
+            }
+        }
+        self.expect("loop", ctx)?;
+        Ok(())
+    }
+
+    /// The `vertex x y z` lines of facet `triangles` up to its `endloop`, pushed to `raw`;
+    /// returns their number (at least 3).
+    fn facet_vertices(
+        &mut self,
+        raw: &mut RawMesh,
+        triangles: u32,
+        ctx: &str,
+        scale: f64,
+    ) -> Result<u32> {
+        let mut corners = 0u32;
+        loop {
+            match self.tk.next() {
+                Some((t, l)) if t.eq_ignore_ascii_case(b"vertex") => {
+                    let mut p = Vector3::zeros();
+                    for k in 0..3 {
+                        p[k] = self.number(&format!("(vertex {}) {ctx}", corners + 1))? + 0.0;
+                    }
+                    check_position(&p, scale).map_err(|e| {
+                        let message = format!(
+                            "facet {triangles}: vertex {} {}",
+                            corners + 1,
+                            e.describe(scale)
+                        );
+                        Error::NonFinite { path: self.path.to_owned(), line: l, message }
+                    })?;
+                    raw.positions.push(p);
+                    corners += 1;
+                }
+                Some((t, l)) if t.eq_ignore_ascii_case(b"endloop") => {
+                    if corners < 3 {
+                        return Err(self.err(
+                            l,
+                            format!("facet {triangles} has {corners} vertices; a facet needs 3"),
+                        ));
+                    }
+                    return Ok(corners);
+                }
+                Some((t, l)) => {
+                    return Err(self.err(
+                        l,
+                        format!("expected `vertex` or `endloop` {ctx}, found {}", show(t)),
+                    ))
+                }
+                None => {
+                    return Err(self.err(
+                        self.tk.line,
+                        format!("unexpected end of file {ctx} (truncated file?)"),
+                    ))
+                }
+            }
+        }
+    }
+
+    /// Facet `triangles` (its `facet` keyword on `line` read), from its normal to its
+    /// `endfacet`, split into the fan of its vertices.
+    fn facet(&mut self, raw: &mut RawMesh, triangles: u32, line: usize, scale: f64) -> Result<()> {
+        let ctx = format!("in facet {triangles}");
+        self.facet_header(&ctx)?;
+        let first = raw.positions.len() as u32;
+        let corners = self.facet_vertices(raw, triangles, &ctx, scale)?;
+        self.expect("endfacet", &ctx)?;
+        if corners > 3 {
+            raw.polygons_split += 1;
+        }
+        for k in 1..corners - 1 {
+            if raw.faces.len() >= MAX_FILE_TRIANGLES {
+                return Err(self.err(
+                    line,
+                    format!(
+                        "more than {MAX_FILE_TRIANGLES} triangles (limits::MAX_FILE_TRIANGLES)"
+                    ),
+                ));
+            }
+            raw.push_face([first, first + k, first + k + 1], line as u32, triangles);
+        }
+        Ok(())
+    }
+}
+
+fn read_ascii(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
+    let mut rd = Ascii { path, tk: Tokens::new(bytes) };
+    let mut raw = RawMesh::default();
+    let mut triangles = 0u32;
     let mut in_solid = false;
     loop {
-        let Some((t, line)) = tk.next() else {
+        let Some((t, line)) = rd.tk.next() else {
             if raw.faces.is_empty() {
                 return Err(Error::EmptyMesh {
                     path: path.to_owned(),
@@ -227,105 +350,27 @@ fn read_ascii(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
             return Ok(raw);
         };
         if t.eq_ignore_ascii_case(b"solid") && !in_solid {
-            tk.skip_line();
+            rd.tk.skip_line();
             in_solid = true;
             continue;
         }
         if t.eq_ignore_ascii_case(b"endsolid") && in_solid {
-            tk.skip_line();
+            rd.tk.skip_line();
             in_solid = false;
             continue;
         }
         if !t.eq_ignore_ascii_case(b"facet") || !in_solid {
             let want = if in_solid { "`facet` or `endsolid`" } else { "`solid`" };
-            return Err(err(line, format!("expected {want}, found {}", show(t))));
+            return Err(rd.err(line, format!("expected {want}, found {}", show(t))));
         }
         triangles += 1;
         if raw.faces.len() >= MAX_FILE_TRIANGLES {
-            return Err(err(
+            return Err(rd.err(
                 line,
                 format!("more than {MAX_FILE_TRIANGLES} triangles (limits::MAX_FILE_TRIANGLES)"),
             ));
         }
-        let ctx = format!("in facet {triangles}");
-        // `normal nx ny nz` (ignored) is optional.
-        let mut next = tk.next();
-        if let Some((t, _)) = next {
-            if t.eq_ignore_ascii_case(b"normal") {
-                for _ in 0..3 {
-                    number(&mut tk, &format!("(facet normal) {ctx}"))?;
-                }
-                next = tk.next();
-            }
-        }
-        match next {
-            Some((t, _)) if t.eq_ignore_ascii_case(b"outer") => {}
-            Some((t, l)) => {
-                return Err(err(l, format!("expected `outer loop` {ctx}, found {}", show(t))))
-            }
-            None => {
-                return Err(err(tk.line, format!("unexpected end of file: expected `outer` {ctx}")))
-            }
-        }
-        expect(&mut tk, "loop", &ctx)?;
-        let first = raw.positions.len() as u32;
-        let mut corners = 0u32;
-        loop {
-            match tk.next() {
-                Some((t, l)) if t.eq_ignore_ascii_case(b"vertex") => {
-                    let mut p = Vector3::zeros();
-                    for k in 0..3 {
-                        p[k] = number(&mut tk, &format!("(vertex {}) {ctx}", corners + 1))? + 0.0;
-                    }
-                    check_position(&p, scale).map_err(|e| {
-                        let message = format!(
-                            "facet {triangles}: vertex {} {}",
-                            corners + 1,
-                            e.describe(scale)
-                        );
-                        Error::NonFinite { path: path.to_owned(), line: l, message }
-                    })?;
-                    raw.positions.push(p);
-                    corners += 1;
-                }
-                Some((t, l)) if t.eq_ignore_ascii_case(b"endloop") => {
-                    if corners < 3 {
-                        return Err(err(
-                            l,
-                            format!("facet {triangles} has {corners} vertices; a facet needs 3"),
-                        ));
-                    }
-                    break;
-                }
-                Some((t, l)) => {
-                    return Err(err(
-                        l,
-                        format!("expected `vertex` or `endloop` {ctx}, found {}", show(t)),
-                    ))
-                }
-                None => {
-                    return Err(err(
-                        tk.line,
-                        format!("unexpected end of file {ctx} (truncated file?)"),
-                    ))
-                }
-            }
-        }
-        expect(&mut tk, "endfacet", &ctx)?;
-        if corners > 3 {
-            raw.polygons_split += 1;
-        }
-        for k in 1..corners - 1 {
-            if raw.faces.len() >= MAX_FILE_TRIANGLES {
-                return Err(err(
-                    line,
-                    format!(
-                        "more than {MAX_FILE_TRIANGLES} triangles (limits::MAX_FILE_TRIANGLES)"
-                    ),
-                ));
-            }
-            raw.push_face([first, first + k, first + k + 1], line as u32, triangles);
-        }
+        rd.facet(&mut raw, triangles, line, scale)?;
     }
 }
 

@@ -35,7 +35,8 @@ use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 use spade::handles::FixedVertexHandle;
 use spade::{
-    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+    AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, RefinementResult,
+    Triangulation,
 };
 
 use crate::mesh::{CornerAttribute, Mesh, Units};
@@ -265,6 +266,40 @@ fn even_odd_area(loops: &[Loop]) -> f64 {
 
 /// Meshes closed loops (in mm; even-odd inside) into a flat panel.
 pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<PanelResult> {
+    check_loops(loops, name, opts)?;
+    let mut cdt: Cdt = ConstrainedDelaunayTriangulation::new();
+    let max_edge = opts.max_edge.unwrap_or(f64::INFINITY);
+    insert_boundaries(&mut cdt, loops, max_edge)?;
+    let (result, complete) = refine_to_max_edge(&mut cdt, opts, max_edge)?;
+    let PanelTriangles { positions, uvs, faces, min_angle, longest } =
+        panel_triangles(&cdt, &result);
+    if faces.is_empty() {
+        return Err(numerical("the outline produced no triangles".into()));
+    }
+    let mut mesh = Mesh::from_triangles(positions, faces.clone());
+    mesh.uv = Some(CornerAttribute { values: uvs, corners: faces });
+    mesh.units = Units::Mm;
+    Ok(PanelResult {
+        mesh,
+        loops: loops.len(),
+        outline_area: even_odd_area(loops),
+        min_angle_deg: min_angle,
+        max_edge: longest,
+        refinement_complete: complete,
+    })
+}
+
+/// The triangulation of a panel.
+type Cdt = ConstrainedDelaunayTriangulation<Point2<f64>>;
+
+/// An error of the triangulation.
+fn numerical(m: String) -> Error {
+    Error::Numerical { stage: "panel triangulation", message: m }
+}
+
+/// Checks the options and the loops before anything is triangulated: at least one loop, within
+/// the budget, none crossing, each enclosing an area.
+fn check_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<()> {
     opts.validate()?;
     if loops.is_empty() {
         return Err(Error::Parse {
@@ -282,10 +317,12 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
             message: format!("{}: a subpath encloses no area", l.element),
         });
     }
-    let numerical = |m: String| Error::Numerical { stage: "panel triangulation", message: m };
-    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
-        ConstrainedDelaunayTriangulation::new();
-    let max_edge = opts.max_edge.unwrap_or(f64::INFINITY);
+    Ok(())
+}
+
+/// Inserts every loop's boundary, its segments split to at most `max_edge`, as constraint
+/// edges.
+fn insert_boundaries(cdt: &mut Cdt, loops: &[Loop], max_edge: f64) -> Result<()> {
     for l in loops {
         let n = l.points.len();
         let mut handles: Vec<FixedVertexHandle> = Vec::new();
@@ -312,17 +349,31 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
             cdt.add_constraint(a, b);
         }
     }
-    let params = || {
-        let mut p = RefinementParameters::<f64>::new()
-            .exclude_outer_faces(true)
-            .with_angle_limit(AngleLimit::from_deg(opts.min_angle_deg))
-            .with_max_additional_vertices(opts.max_added_vertices);
-        if max_edge.is_finite() {
-            p = p.with_max_allowed_area(0.5 * 3f64.sqrt() / 4.0 * max_edge * max_edge);
-        }
-        p
-    };
-    let mut result = cdt.refine(params());
+    Ok(())
+}
+
+/// The refinement's parameters: outer faces excluded, the angle limit, the vertex budget, and
+/// with a `max_edge` an area bound of ½ · √3/4 · max_edge².
+fn refinement_params(opts: &PanelOptions, max_edge: f64) -> RefinementParameters<f64> {
+    let mut p = RefinementParameters::<f64>::new()
+        .exclude_outer_faces(true)
+        .with_angle_limit(AngleLimit::from_deg(opts.min_angle_deg))
+        .with_max_additional_vertices(opts.max_added_vertices);
+    if max_edge.is_finite() {
+        p = p.with_max_allowed_area(0.5 * 3f64.sqrt() / 4.0 * max_edge * max_edge);
+    }
+    p
+}
+
+/// Refines the triangulation; with a `max_edge`, inserts the midpoints of the interior edges
+/// still longer and refines again (at most 50 rounds). Returns the last refinement's result and
+/// whether every refinement completed.
+fn refine_to_max_edge(
+    cdt: &mut Cdt,
+    opts: &PanelOptions,
+    max_edge: f64,
+) -> Result<(RefinementResult, bool)> {
+    let mut result = cdt.refine(refinement_params(opts, max_edge));
     let mut complete = result.refinement_complete;
     for _ in 0..50 {
         if !max_edge.is_finite() {
@@ -348,9 +399,26 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
         for p in mids {
             cdt.insert(p).map_err(|e| numerical(insertion(&e)))?;
         }
-        result = cdt.refine(params());
+        result = cdt.refine(refinement_params(opts, max_edge));
         complete &= result.refinement_complete;
     }
+    Ok((result, complete))
+}
+
+/// The panel's triangles, counter-clockwise, with their vertices (UV = XY) and figures.
+struct PanelTriangles {
+    positions: Vec<Vector3<f64>>,
+    uvs: Vec<Vector2<f64>>,
+    faces: Vec<[u32; 3]>,
+    /// Smallest angle, degrees.
+    min_angle: f64,
+    /// Longest edge, mm.
+    longest: f64,
+}
+
+/// The inner faces the refinement did not exclude, their vertices numbered in order of first
+/// use.
+fn panel_triangles(cdt: &Cdt, result: &RefinementResult) -> PanelTriangles {
     let outer: HashSet<_> = result.excluded_faces.iter().copied().collect();
     let mut index = vec![u32::MAX; cdt.num_vertices()];
     let mut positions: Vec<Vector3<f64>> = Vec::new();
@@ -388,20 +456,7 @@ pub fn mesh_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<Pa
         }
         faces.push(t);
     }
-    if faces.is_empty() {
-        return Err(numerical("the outline produced no triangles".into()));
-    }
-    let mut mesh = Mesh::from_triangles(positions, faces.clone());
-    mesh.uv = Some(CornerAttribute { values: uvs, corners: faces });
-    mesh.units = Units::Mm;
-    Ok(PanelResult {
-        mesh,
-        loops: loops.len(),
-        outline_area: even_odd_area(loops),
-        min_angle_deg: min_angle,
-        max_edge: longest,
-        refinement_complete: complete,
-    })
+    PanelTriangles { positions, uvs, faces, min_angle, longest }
 }
 
 /// The panel's size, estimated from its loops before any triangle is built.
