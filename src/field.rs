@@ -169,6 +169,11 @@ pub struct FieldFile {
     /// `grainline optimize`: the target highlight tangent ℓ* per vertex (null where none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_ell: Option<Vec<Option<[f64; 3]>>>,
+    /// The part cut into smooth patches (`mesh.patches`): for each vertex appended after the
+    /// part's own `n` (index `n + k`), the part's vertex it copies. Absent when no vertex was
+    /// split; vertices after these are the refinement's (`mesh.refine`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patch_copies: Option<Vec<u32>>,
 }
 
 /// A short name for an initial field.
@@ -249,6 +254,7 @@ impl FieldFile {
             phi_before: None,
             phi: None,
             target_ell: None,
+            patch_copies: None,
         };
         file.check_finite()?;
         Ok(file)

@@ -161,8 +161,17 @@ fn isolated_vertex_and_zero_area_face_in_memory() {
 fn world_direction_along_the_normal_falls_back() {
     let mesh = generate::icosphere(1.0, 2);
     let r = all_finite(&mesh, InitialField::World(Vector3::z()), Symmetry::Oriented);
-    // The two poles have z ∥ n: both use the documented fallback.
-    assert_eq!(r.fallback_vertices.len(), 2, "{:?}", r.fallback_vertices);
+    // The two poles have z ∥ n: both take the second direction (x, the axis least aligned with
+    // z, projected), so none needs the neighbours' fallback.
+    assert!(r.fallback_vertices.is_empty(), "{:?}", r.fallback_vertices);
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let poles: Vec<usize> =
+        (0..mesh.num_vertices()).filter(|&i| g.frames[i].n.z.abs() > 0.9999).collect();
+    assert_eq!(poles.len(), 2);
+    for i in poles {
+        let u = g.frames[i].direction(r.phi[i]);
+        assert!(u.x.abs() > 0.9999, "pole {i}: u {u:?}");
+    }
 }
 
 #[test]

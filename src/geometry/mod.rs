@@ -12,6 +12,7 @@ pub mod frames;
 pub mod gradient;
 pub mod laplacian;
 pub mod normals;
+pub mod patches;
 pub mod quality;
 pub mod rings;
 

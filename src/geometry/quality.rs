@@ -22,6 +22,8 @@ impl QualityReport {
         let vf = crate::mesh::VertexFaces::new(mesh);
         let vn = vec![nalgebra::Vector3::zeros(); mesh.num_vertices()];
         let c = normals::corner_normals(mesh, &vf, &fd, &vn, DEFAULT_CREASE_ANGLE_DEG);
+        let patches = super::patches::patches(mesh, DEFAULT_CREASE_ANGLE_DEG);
+        let split = super::patches::split_patches(mesh, &patches);
         QualityReport {
             min_angle_deg: if min.0.is_finite() { min.0 } else { 0.0 },
             min_angle_face: face_name(&loaded.report, min.1),
@@ -30,6 +32,8 @@ impl QualityReport {
             crease_angle_deg: DEFAULT_CREASE_ANGLE_DEG,
             crease_edges: c.crease_edges,
             split_vertices: c.split_vertices,
+            patches: patches.count,
+            patch_copies: split.map_or(0, |s| s.copies_of.len()),
         }
     }
 }

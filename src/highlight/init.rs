@@ -69,7 +69,10 @@ const VANISHING: f64 = 1e-6;
 
 /// Builds the initial field.
 ///
-/// Fallbacks: for `World` and `Uv`, a vertex whose direction vanishes takes the sum of its
+/// Fallbacks: for `World`, a vertex where the direction is (within 2°, [`NEARLY_NORMAL`])
+/// normal to the surface takes
+/// [`second_direction`] projected instead. For `World` and `Uv`, a vertex whose direction
+/// still vanishes takes the sum of its
 /// neighbours' (non-fallback) directions projected onto its tangent plane, or, if that vanishes
 /// too, its frame's t axis. `Directions` errors instead, naming the vertex.
 pub fn initial_field(
@@ -95,7 +98,15 @@ pub fn initial_field(
                 .collect();
             return Ok(InitialFieldResult { phi, fallback_vertices: Vec::new() });
         }
-        InitialField::World(w) => (0..n).map(|i| project(geom, i, w)).collect(),
+        InitialField::World(w) => {
+            let second = second_direction(w);
+            (0..n)
+                .map(|i| match project_at_least(geom, i, w, NEARLY_NORMAL) {
+                    Some(u) => Some(u),
+                    None => project(geom, i, &second).or_else(|| project(geom, i, w)),
+                })
+                .collect()
+        }
         InitialField::Directions(d) => {
             if d.len() != n {
                 return Err(Error::invalid_arg(
@@ -165,6 +176,40 @@ fn sum_directions(
 }
 
 /// `w` projected onto the tangent plane of vertex `i` and normalized, unless it vanishes there.
+/// The grain where a world direction `w` is normal to the surface (a flat face that faces
+/// it, where its projection vanishes): the world axis least aligned with `w` (the first of a
+/// tie: x, then y, then z), made perpendicular to `w`. On such a face every vertex takes the
+/// same direction, so the grain stays straight across it.
+pub fn second_direction(w: &Vector3<f64>) -> Vector3<f64> {
+    let mut k = 0;
+    for j in 1..3 {
+        if w[j].abs() < w[k].abs() {
+            k = j;
+        }
+    }
+    let a = Vector3::ith(k, 1.0);
+    let w2 = w.norm_squared();
+    if w2 > 0.0 && w2.is_finite() {
+        a - w * (w.dot(&a) / w2)
+    } else {
+        a
+    }
+}
+
+/// The sine of the angle between a world direction and the surface normal under which the
+/// direction counts as normal to the surface (2°): its projection there is mostly the
+/// normal's error (a CAD export's coordinates are `f32`, and a flat face's slivers tilt their
+/// normals by up to about 10⁻³), so [`second_direction`] is used instead.
+pub const NEARLY_NORMAL: f64 = 0.035;
+
+/// `w` projected onto vertex `i`'s tangent plane and normalized, if at least `min` × |w| long.
+fn project_at_least(geom: &Geometry, i: usize, w: &Vector3<f64>, min: f64) -> Option<Vector3<f64>> {
+    let n = geom.frames[i].n;
+    let p = w - n * n.dot(w);
+    let len = p.norm();
+    (len > min * w.norm() && len.is_finite()).then(|| p / len)
+}
+
 fn project(geom: &Geometry, i: usize, w: &Vector3<f64>) -> Option<Vector3<f64>> {
     let n = geom.frames[i].n;
     let p = w - n * n.dot(w);

@@ -203,6 +203,11 @@ pub struct QualityReport {
     pub crease_edges: usize,
     /// Vertices where the preview's normal is split.
     pub split_vertices: usize,
+    /// Smooth patches: faces joined across every edge that is not sharp (docs/math.md §3,
+    /// "Patches"). Each is brushed as its own sheet.
+    pub patches: usize,
+    /// Copies of vertices made when the part is split into its patches (`mesh.patches`).
+    pub patch_copies: usize,
 }
 
 /// The name of mesh face `f` in the file's own terms.

@@ -22,7 +22,7 @@ use serde::Serialize;
 pub use plan::{check_scene_work, output_path, StagePlan};
 pub use prepare::{
     ensure_layout, key_light, load_part, load_stage, prepare, prepare_part, prepare_with,
-    refine_request, KeyLight, LoadedPart, Prepared, RefinementReport,
+    refine_request, KeyLight, LoadedPart, PatchReport, Prepared, RefinementReport,
 };
 
 /// One timed stage.

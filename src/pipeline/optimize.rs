@@ -211,6 +211,7 @@ pub fn optimized_field_file(p: &Prepared, o: &Optimized) -> Result<FieldFile> {
     file.u_before = Some(p.field.geometry.directions_of(&p.field.phi).iter().map(arr).collect());
     file.phi = Some(o.phi.clone());
     file.target_ell = Some(o.target_ell.iter().map(|t| t.as_ref().map(arr)).collect());
+    file.patch_copies = p.patches.as_ref().map(|r| r.copies_of.clone());
     file.check_finite()?;
     Ok(file)
 }

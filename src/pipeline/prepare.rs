@@ -26,6 +26,8 @@ pub struct Prepared {
     pub layout: Option<crate::layout::LayoutReport>,
     /// The refinement made inside the edits' brushes (`mesh.refine`), if any.
     pub refinement: Option<RefinementReport>,
+    /// The part's split into smooth patches (`mesh.patches`), if any vertex was split.
+    pub patches: Option<PatchReport>,
 }
 
 /// The highlight model's key light as the scene gives it.
@@ -93,6 +95,8 @@ pub struct LoadedPart {
     pub directions: Option<Vec<Vector3<f64>>>,
     /// The UV layout made for the part, if one was.
     pub layout: Option<crate::layout::LayoutReport>,
+    /// The part's split into smooth patches (`mesh.patches`), if any vertex was split.
+    pub patches: Option<PatchReport>,
 }
 
 /// The first half of [`prepare_with`]: loads the part (or meshes its outline), checks the
@@ -109,6 +113,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
     let (mut mesh, mesh_name) = load_part(s)?;
     // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
     check_scene_work(scene, &mesh)?;
+    let patches = split_into_patches(s, &mut mesh);
     let lighting = key.lighting(scene.view.view(), &mesh)?;
     // `field.init: "uv"` reads the part's own UVs, never a layout made for the toolpaths.
     if matches!(scene.field.init, InitKind::Uv) && mesh.uv.is_none() {
@@ -124,10 +129,19 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
         None
     };
     let directions = match (&scene.field.init, &scene.field.directions) {
-        (InitKind::Directions, Some(p)) => Some(read_directions(&s.input(p), mesh.num_vertices())?),
+        (InitKind::Directions, Some(p)) => {
+            // Read per vertex of the file; a patch's copy of a vertex takes its direction.
+            let own = patches.as_ref().map_or(mesh.num_vertices(), |r| r.vertices_before);
+            let mut d = read_directions(&s.input(p), own)?;
+            if let Some(r) = &patches {
+                let copies: Vec<_> = r.copies_of.iter().map(|&v| d[v as usize]).collect();
+                d.extend(copies);
+            }
+            Some(d)
+        }
         _ => None,
     };
-    Ok(LoadedPart { mesh, mesh_name, lighting, directions, layout: layout_report })
+    Ok(LoadedPart { mesh, mesh_name, lighting, directions, layout: layout_report, patches })
 }
 
 /// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
@@ -135,7 +149,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
 /// initial field and its highlights on the result.
 pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
-    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout } = part;
+    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout, patches } = part;
     let refinement = refine_for_edits(s, &mut mesh, stages)?;
     if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
         // A line or vector field read per vertex: each new vertex gets the mean of its edge's
@@ -155,7 +169,53 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     field_options.critical_threshold = scene.field.critical_threshold;
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
-    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement })
+    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement, patches })
+}
+
+/// The part cut into smooth patches along its sharp edges (`mesh.patches`, docs/math.md §3,
+/// "Patches").
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PatchReport {
+    /// Vertices of the part as loaded (they keep their indices).
+    pub vertices_before: usize,
+    /// Smooth patches.
+    pub patches: usize,
+    /// Sharp edges between two patches.
+    pub sharp_edges: usize,
+    /// For each vertex appended after the part's own, the part's vertex it copies (in
+    /// FIELD.json as `patch_copies`).
+    #[serde(skip)]
+    pub copies_of: Vec<u32>,
+    /// Vertices appended: one per extra patch a vertex of the part lies on.
+    pub vertices_added: usize,
+}
+
+/// Cuts `mesh` into its smooth patches (`mesh.patches: "split"`, the default, at
+/// `mesh.crease_angle`); `None` when nothing was split (a smooth part, an outline's panel, or
+/// `mesh.patches: "none"`).
+fn split_into_patches(s: &LoadedScene, mesh: &mut Mesh) -> Option<PatchReport> {
+    let m = s.scene.mesh.as_ref()?;
+    if m.0.patches == crate::scene::PatchMode::None {
+        return None;
+    }
+    let patches = crate::geometry::patches::patches(mesh, m.crease_angle());
+    let split = crate::geometry::patches::split_patches(mesh, &patches)?;
+    let report = PatchReport {
+        vertices_before: mesh.num_vertices(),
+        patches: patches.count,
+        sharp_edges: patches.sharp_edges,
+        vertices_added: split.copies_of.len(),
+        copies_of: split.copies_of,
+    };
+    *mesh = split.mesh;
+    Some(report)
+}
+
+/// FIELD.json of the initial field of `p`, with its patches' copies.
+pub fn initial_field_file(p: &Prepared) -> Result<crate::field::FieldFile> {
+    let mut file = crate::field::FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field)?;
+    file.patch_copies = p.patches.as_ref().map(|r| r.copies_of.clone());
+    Ok(file)
 }
 
 /// What [`refine_for_edits`] did.

@@ -60,6 +60,10 @@ pub struct RunReport {
     /// The UV layout made for a part without one (charts, seams, distortion); absent when
     /// the part's own UVs were used or no toolpaths were traced.
     pub layout: Option<crate::layout::LayoutReport>,
+    /// The part cut into smooth patches along its sharp edges (`mesh.patches`); absent when
+    /// no vertex was split.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub patches: Option<super::PatchReport>,
     /// Edits and the solve (iterations, energies, constraint violations, singularities).
     pub optimize: Option<OptimizeStageReport>,
     /// Strokes, coverage, lengths.
@@ -173,6 +177,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         faces: prepared.mesh.num_faces(),
         critical_points,
         layout: prepared.layout.clone(),
+        patches: prepared.patches.clone(),
         optimize: optimized.map(|o| o.report),
         toolpaths: traced.map(|t| t.figures),
         as_brushed: as_brushed_figures,
@@ -342,12 +347,7 @@ fn write_field(
 ) -> Result<()> {
     let file = match optimized {
         Some(o) => optimized_field_file(prepared, o)?,
-        None => FieldFile::new(
-            &prepared.mesh,
-            &prepared.mesh_name,
-            &prepared.field_options,
-            &prepared.field,
-        )?,
+        None => super::prepare::initial_field_file(prepared)?,
     };
     out.write(p, &json_compact(&file)?)
 }

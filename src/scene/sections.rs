@@ -39,10 +39,34 @@ pub struct MeshFull {
     /// "Creases"); 180 turns it off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub crease_angle: Option<f64>,
+    /// `split` (the default) cuts the part along its sharp edges (those above `crease_angle`)
+    /// into smooth patches, each with its own vertices, normals, frames and grain
+    /// (docs/math.md §3, "Patches"); `none` keeps the part whole, averaging across sharp edges.
+    #[serde(default, skip_serializing_if = "PatchMode::is_default")]
+    pub patches: PatchMode,
     /// Refinement of the part inside the edits' brushes (default: where an edit needs it;
     /// docs/math.md §12).
     #[serde(default, skip_serializing_if = "RefineSettings::is_default")]
     pub refine: RefineSettings,
+}
+
+/// `mesh.patches`: whether the part is cut into smooth patches along its sharp edges.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum PatchMode {
+    /// Cut along every sharp edge that separates two patches (the default).
+    #[default]
+    Split,
+    /// Keep the part whole.
+    None,
+}
+
+impl PatchMode {
+    fn is_default(&self) -> bool {
+        *self == PatchMode::Split
+    }
 }
 
 /// `mesh.refine`: a brush or a drawn curve finer than the part's triangles cannot be followed

@@ -9,7 +9,6 @@ use std::time::Instant;
 use crate::edit::Edit;
 use crate::editor::drag::DragBase;
 use crate::fidelity::{highlight_segments, EditFidelity};
-use crate::field::FieldFile;
 use crate::pipeline::optimize::{optimize_stage, optimized_field_file, Optimized};
 use crate::pipeline::{Silent, Stages};
 use crate::{Error, Result};
@@ -215,7 +214,7 @@ impl Session {
         let made = solved.field_json.get_or_init(|| {
             let file = match (&solved.optimized, solved.edits.is_empty()) {
                 (Some(o), _) => optimized_field_file(p, o),
-                (None, true) => FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field),
+                (None, true) => crate::pipeline::prepare::initial_field_file(p),
                 // A drag step: the whole stage, as `grainline run` makes it, when asked for.
                 (None, false) => self.with_edits(&solved.base, &solved.edits).and_then(|s| {
                     let o = optimize_stage(&s, p, &mut Stages::new(&Silent))?;
