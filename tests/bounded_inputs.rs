@@ -1,0 +1,93 @@
+//! Issue 30: every input bounded, every message exact. One test per item, named after it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use grainline::generate;
+use grainline::mesh::write::obj_string;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("grainline-bounded-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn grainline(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A scene in `d` around a small vase of revolution, with `extra` (JSON members, each starting
+/// with a comma; `"field": {"init": "uv"}` unless it has a `field`) and `lights` (a JSON
+/// array).
+fn scene_with(d: &Path, lights: &str, extra: &str) -> PathBuf {
+    let mesh =
+        generate::revolve(|t| (30.0 + 8.0 * (std::f64::consts::PI * t).sin(), 60.0 * t), 48, 24);
+    std::fs::write(d.join("vase.obj"), obj_string(&mesh, "test vase")).unwrap();
+    let field = if extra.contains(r#""field""#) { "" } else { r#", "field": {"init": "uv"}"# };
+    let s = format!(
+        r#"{{
+  "mesh": "vase.obj",
+  "lights": {lights},
+  "view": {{"eye": [0, -200, 80], "target": [0, 0, 30]}}{field}{extra}
+}}"#
+    );
+    let p = d.join("scene.json");
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn scene(d: &Path, extra: &str) -> PathBuf {
+    scene_with(d, r#"[{"type": "directional", "direction": [0.3, -0.5, 1]}]"#, extra)
+}
+
+fn run(scene: &Path, out_dir: Option<&Path>) -> Output {
+    let mut args = vec!["run".to_string(), scene.display().to_string(), "-q".into()];
+    if let Some(o) = out_dir {
+        args.extend(["--out-dir".into(), o.display().to_string()]);
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    grainline(&args)
+}
+
+// Item 6: a relative output never leaves `--out-dir` (or the scene's directory).
+#[test]
+fn item_6_outputs_stay_inside_out_dir() {
+    let d = dir("item6");
+    let sd = d.join("scene");
+    std::fs::create_dir_all(&sd).unwrap();
+    let out = d.join("out");
+    // Climbing out of --out-dir: refused naming the key, nothing written outside (or inside).
+    let s = scene(&sd, r#", "render": {"output": "../../escape.png", "width": 64, "height": 48}"#);
+    let o = run(&s, Some(&out));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("render.output") && e.contains("--out-dir"), "{e}");
+    assert!(!d.join("escape.png").exists() && !std::env::temp_dir().join("escape.png").exists());
+    // A `..` hidden behind a directory name still counts.
+    let s = scene(&sd, r#", "field": {"init": "uv", "output": "a/../../field.json"}"#);
+    let e = stderr(&run(&s, Some(&out)));
+    assert!(e.contains("field.output") && e.contains("a/../../field.json"), "{e}");
+    assert!(!d.join("field.json").exists());
+    // Without --out-dir the scene's directory is the bound.
+    let s = scene(&sd, r#", "field": {"init": "uv", "output": "../field.json"}"#);
+    let e = stderr(&run(&s, None));
+    assert!(e.contains("field.output") && e.contains("the scene file's directory"), "{e}");
+    assert!(!d.join("field.json").exists());
+    // Inside: written under --out-dir, `a/..` included.
+    let s = scene(&sd, r#", "field": {"init": "uv", "output": "a/../field.json"}"#);
+    let o = run(&s, Some(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("field.json").exists());
+    // Absolute paths stay allowed, wherever they point.
+    let abs = d.join("elsewhere").join("field.json");
+    let s = scene(&sd, &format!(r#", "field": {{"init": "uv", "output": {:?}}}"#, abs.display()));
+    let o = run(&s, Some(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(abs.exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
