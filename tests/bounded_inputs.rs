@@ -91,3 +91,44 @@ fn item_6_outputs_stay_inside_out_dir() {
     assert!(abs.exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+// Item 7: the examples name plain files, so `--out-dir out` writes out/NAME.svg, as the README
+// says.
+#[test]
+fn item_7_examples_and_readme_agree_on_output_paths() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seen = 0;
+    for e in std::fs::read_dir(root.join("examples")).unwrap() {
+        let scene = e.unwrap().path().join("scene.json");
+        if !scene.exists() {
+            continue;
+        }
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        for key in [
+            "/field/output",
+            "/toolpaths/svg",
+            "/toolpaths/gcode",
+            "/toolpaths/strokes_json",
+            "/render/output",
+            "/render/linear",
+            "/export/glb",
+        ] {
+            if let Some(p) = v.pointer(key).and_then(|p| p.as_str()) {
+                assert!(
+                    !p.contains('/'),
+                    "{}: {key} is {p:?}, not a plain file name",
+                    scene.display()
+                );
+                seen += 1;
+            }
+        }
+    }
+    assert!(seen >= 15, "only {seen} outputs in the examples");
+    for doc in ["README.md", "examples/README.md", "docs/guide.md", "docs/scene.md"] {
+        let text = std::fs::read_to_string(root.join(doc)).unwrap();
+        assert!(!text.contains("out/out"), "{doc} still names out/out");
+    }
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(readme.contains("--out-dir out") && readme.contains("`out/kettle.svg`"));
+}
