@@ -132,3 +132,52 @@ fn item_7_examples_and_readme_agree_on_output_paths() {
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     assert!(readme.contains("--out-dir out") && readme.contains("`out/kettle.svg`"));
 }
+
+fn scene_error(text: &str) -> String {
+    match grainline::scene::Scene::from_str(text, Path::new("scene.json")) {
+        Ok(_) => panic!("accepted: {text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+const BASE: &str = r#""mesh": "part.obj", "view": {"eye": [0, -200, 80]}"#;
+
+// Item 12: two key lights are refused, naming the second one's `key`.
+#[test]
+fn item_12_two_key_lights_are_refused() {
+    let e = scene_error(&format!(
+        r#"{{{BASE}, "lights": [
+            {{"type": "directional", "direction": [0, 0, 1], "key": true}},
+            {{"type": "directional", "direction": [1, 0, 1]}},
+            {{"type": "point", "position": [0, 0, 500], "key": true}}]}}"#
+    ));
+    assert!(e.contains("lights[2].key") && e.contains("lights[0]"), "{e}");
+    // One key light among several is fine.
+    let ok = format!(
+        r#"{{{BASE}, "lights": [{{"type": "directional", "direction": [0, 0, 1]}},
+            {{"type": "point", "position": [0, 0, 500], "key": true}}]}}"#
+    );
+    grainline::scene::Scene::from_str(&ok, Path::new("scene.json")).unwrap();
+}
+
+// Item 8, first part: a point key light at the part's centre is refused at its position.
+#[test]
+fn item_8_point_key_light_at_the_centre_names_its_position() {
+    let d = dir("item8-centre");
+    scene(&d, "");
+    let mesh =
+        grainline::mesh::load::load_mesh(&d.join("vase.obj"), &Default::default()).unwrap().mesh;
+    let c = grainline::highlight::lighting::centre_of(&mesh.positions);
+    let lights = format!(
+        r#"[{{"type": "directional", "direction": [0, 0, 1]}},
+            {{"type": "point", "position": [{:?}, {:?}, {:?}], "key": true}}]"#,
+        c.x, c.y, c.z
+    );
+    let s = scene_with(&d, &lights, "");
+    let o = run(&s, Some(&d.join("out")));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("lights[1].position") && e.contains("centre"), "{e}");
+    assert!(!e.contains("part centre: direction"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
