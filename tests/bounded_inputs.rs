@@ -181,3 +181,41 @@ fn item_8_point_key_light_at_the_centre_names_its_position() {
     assert!(!e.contains("part centre: direction"), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+// Item 8: the solver's smoothness and turning radius are bounded, named when refused, and
+// huge numbers and paths are printed short.
+#[test]
+fn item_8_bounded_solver_numbers_and_short_messages() {
+    let lights = r#""lights": [{"type": "directional", "direction": [0, 0, 1]}]"#;
+    let e = scene_error(&format!(r#"{{{BASE}, {lights}, "solver": {{"smoothness": 1e300}}}}"#));
+    assert!(
+        e.contains("solver.smoothness") && e.contains("1e300") && e.contains("1000000]"),
+        "{e}"
+    );
+    assert!(e.len() < 200, "{e}");
+    let e = scene_error(&format!(
+        r#"{{{BASE}, {lights},
+            "solver": {{"constraints": {{"turning_radius": {{"radius": 1e300}}}}}}}}"#
+    ));
+    assert!(
+        e.contains("solver.constraints.turning_radius.radius") && e.contains("≤ 1000000000"),
+        "{e}"
+    );
+    assert!(e.contains("1e300") && e.len() < 200, "{e}");
+    // At the documented limits: accepted.
+    let ok = format!(
+        r#"{{{BASE}, {lights}, "solver": {{"smoothness": 1e6,
+            "constraints": {{"turning_radius": {{"radius": 1e9}}}}}}}}"#
+    );
+    grainline::scene::Scene::from_str(&ok, Path::new("scene.json")).unwrap();
+    // An output path past 4096 bytes: refused naming the key, echoed shortened.
+    let d = dir("item8-path");
+    let long = "x/".repeat(50_000) + "a.svg";
+    let s = scene(&d, &format!(r#", "field": {{"init": "uv", "output": "{long}"}}"#));
+    let o = run(&s, Some(&d.join("out")));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("field.output") && e.contains("4096") && e.contains("100005 bytes"), "{e}");
+    assert!(e.len() < 1000, "{} bytes of stderr", e.len());
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -151,8 +151,19 @@ pub fn check_scene_work(scene: &crate::scene::Scene, mesh: &crate::mesh::Mesh) -
 /// Where an output of the scene goes: under `out_dir` when given, else relative to the scene
 /// file. An absolute path is taken as it is; a relative one must stay inside that directory:
 /// a `..` that climbs out of it (`../x.svg`, `a/../../x.svg`) is refused, naming `key` (the
-/// scene key, e.g. `render.output`).
+/// scene key, e.g. `render.output`), and so is a path longer than
+/// [`crate::limits::MAX_OUTPUT_PATH_BYTES`] (echoed shortened).
 pub fn output_path(s: &LoadedScene, out_dir: Option<&Path>, key: &str, p: &str) -> Result<PathBuf> {
+    if p.len() > crate::limits::MAX_OUTPUT_PATH_BYTES {
+        return Err(crate::Error::setting(
+            key,
+            format!(
+                "{:?} is longer than {} bytes, the longest path an output may have",
+                crate::error::shorten(p),
+                crate::limits::MAX_OUTPUT_PATH_BYTES
+            ),
+        ));
+    }
     let path = Path::new(p);
     if path.is_absolute() {
         return Ok(path.to_path_buf());
