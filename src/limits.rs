@@ -68,6 +68,15 @@ pub const MAX_TURNING_RADIUS: f64 = 1e9;
 /// refused naming its key, and echoed shortened ([`crate::error::shorten`]).
 pub const MAX_OUTPUT_PATH_BYTES: usize = 4096;
 
+/// Most lights a scene may have: 64. Every light is evaluated at every preview sample (an
+/// environment light at `samples` directions), so 10⁴ lights keep a render busy for minutes.
+pub const MAX_LIGHTS: usize = 64;
+
+/// Most points one curve edit may hold (`uv` or `points` inline, or an SVG's flattened paths):
+/// 10⁵. Each point's segment is searched against the part, so 10⁶ points take tens of seconds
+/// and hundreds of MB.
+pub const MAX_CURVE_POINTS: usize = 100_000;
+
 /// `--threads` is capped at this many worker threads per available core.
 pub const THREADS_PER_CORE: usize = 4;
 

@@ -219,3 +219,26 @@ fn item_8_bounded_solver_numbers_and_short_messages() {
     assert!(e.len() < 1000, "{} bytes of stderr", e.len());
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+// Item 4: at most 64 lights and 10⁵ points per curve edit, refused naming the key.
+#[test]
+fn item_4_lights_and_curve_points_are_bounded() {
+    use grainline::limits::{MAX_CURVE_POINTS, MAX_LIGHTS};
+    let light = r#"{"type": "directional", "direction": [0, 0, 1]}"#;
+    let lights = |n: usize| vec![light; n].join(", ");
+    let e = scene_error(&format!(r#"{{{BASE}, "lights": [{}]}}"#, lights(MAX_LIGHTS + 1)));
+    assert!(e.contains("lights:") && e.contains("65 lights") && e.contains("64"), "{e}");
+    let ok = format!(r#"{{{BASE}, "lights": [{}]}}"#, lights(MAX_LIGHTS));
+    grainline::scene::Scene::from_str(&ok, Path::new("scene.json")).unwrap();
+    let curve = |n: usize| {
+        let pts: Vec<String> = (0..n).map(|i| format!("[{}, 0.5]", i as f64 / n as f64)).collect();
+        format!(
+            r#"{{{BASE}, "lights": [{light}],
+                "edits": [{{"tool": "curve", "uv": [[{}]], "radius": 2}}]}}"#,
+            pts.join(", ")
+        )
+    };
+    let e = scene_error(&curve(MAX_CURVE_POINTS + 1));
+    assert!(e.contains("edits[0]") && e.contains("uv") && e.contains("100000"), "{e}");
+    grainline::scene::Scene::from_str(&curve(MAX_CURVE_POINTS), Path::new("scene.json")).unwrap();
+}

@@ -297,8 +297,16 @@ impl LightSpec {
 }
 
 /// Validates a `lights` list, naming the entry (`[2].irradiance`). At most one light may be
-/// marked `"key": true` (a second one is refused at its `[i].key`).
+/// marked `"key": true` (a second one is refused at its `[i].key`), and the list holds at most
+/// [`crate::limits::MAX_LIGHTS`].
 pub fn validate_lights(lights: &[LightSpec]) -> Result<()> {
+    let max = crate::limits::MAX_LIGHTS;
+    if lights.len() > max {
+        return Err(Error::setting(
+            "",
+            format!("holds {} lights, more than the {max} a scene may have", lights.len()),
+        ));
+    }
     let mut first_key: Option<usize> = None;
     for (i, l) in lights.iter().enumerate() {
         l.validate().map_err(|e| match e {
