@@ -242,3 +242,65 @@ fn item_4_lights_and_curve_points_are_bounded() {
     assert!(e.contains("edits[0]") && e.contains("uv") && e.contains("100000"), "{e}");
     grainline::scene::Scene::from_str(&curve(MAX_CURVE_POINTS), Path::new("scene.json")).unwrap();
 }
+
+/// `grainline ARGS`, killed (and the test failed) if it runs past 30 s.
+fn grainline_within_30s(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed().as_secs() > 30 {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("grainline {args:?} blocked");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+// Item 3: a FIFO given as the mesh is refused at once, naming the file, instead of blocking.
+#[cfg(unix)]
+#[test]
+fn item_3_fifo_mesh_is_refused_without_blocking() {
+    let d = dir("item3");
+    let fifo = d.join("part.obj");
+    let ok = Command::new("mkfifo").arg(&fifo).status().unwrap().success();
+    assert!(ok, "mkfifo failed");
+    // The library refuses it from its metadata (on a thread: a regression would block).
+    let (tx, rx) = std::sync::mpsc::channel();
+    let f2 = fifo.clone();
+    std::thread::spawn(move || {
+        let r = grainline::mesh::load::load_mesh(&f2, &Default::default());
+        tx.send(r.err().map(|e| e.to_string())).ok();
+    });
+    let e = rx.recv_timeout(std::time::Duration::from_secs(30)).expect("load_mesh blocked");
+    let e = e.expect("a FIFO loaded as a mesh");
+    assert!(e.contains("part.obj") && e.contains("FIFO"), "{e}");
+    // `inspect`, `field` and a scene's mesh: each refused, naming the file.
+    let f = fifo.display().to_string();
+    let out = d.join("f.json").display().to_string();
+    std::fs::write(
+        d.join("scene.json"),
+        r#"{"mesh": "part.obj", "view": {"eye": [0, -200, 80]},
+            "lights": [{"type": "directional", "direction": [0, 0, 1]}]}"#,
+    )
+    .unwrap();
+    let scene = d.join("scene.json").display().to_string();
+    let out_dir = d.join("out").display().to_string();
+    for args in [
+        vec!["inspect", &f],
+        vec!["field", &f, "--light", "0,0,1", "--view", "0,-1,0", "--out", &out],
+        vec!["run", &scene, "--out-dir", &out_dir],
+    ] {
+        let o = grainline_within_30s(&args);
+        assert!(!o.status.success());
+        let e = stderr(&o);
+        assert!(e.contains("part.obj") && e.contains("FIFO"), "{args:?}: {e}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
