@@ -182,6 +182,25 @@ pub fn fmt_num(x: f64) -> String {
     }
 }
 
+/// A long text (a path) as messages echo it: whole when it has at most 80 characters, else
+/// its first 48 and last 24 characters around `…`, with its length in bytes.
+///
+/// ```
+/// use grainline::error::shorten;
+/// assert_eq!(shorten("out/x.svg"), "out/x.svg");
+/// let long = "a/".repeat(3000);
+/// assert_eq!(shorten(&long).chars().count(), 48 + 1 + 24 + " (6000 bytes)".len());
+/// ```
+pub fn shorten(text: &str) -> String {
+    let n = text.chars().count();
+    if n <= 80 {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(48).collect();
+    let tail: String = text.chars().skip(n - 24).collect();
+    format!("{head}…{tail} ({} bytes)", text.len())
+}
+
 /// Three numbers as messages print them: `(x, y, z)` with [`fmt_num`].
 pub fn fmt_vec3(v: &[f64; 3]) -> String {
     format!("({}, {}, {})", fmt_num(v[0]), fmt_num(v[1]), fmt_num(v[2]))

@@ -54,6 +54,29 @@ pub use grainline_toolpaths::budget::MAX_STROKE_SAMPLES;
 /// Largest `toolpaths.plan.order.neighbours`.
 pub use grainline_toolpaths::budget::MAX_NEIGHBOURS;
 
+/// Largest `solver.smoothness` λ_s: 10⁶. λ_s is relative (the Dirichlet energy is multiplied by
+/// λ_s × the surface area, and by up to 1000 × that with `continuation`); past 10⁶ the edits
+/// have long stopped mattering, and at 10³⁰⁰ the energy overflows to infinity mid-solve.
+pub const MAX_SMOOTHNESS: f64 = 1e6;
+
+/// Largest `solver.constraints.turning_radius.radius`: 10⁹ scene units (1000 km in mm). The
+/// hinge divides the streamlines' curvature by the bound 1/R, so a radius far beyond any part
+/// only turns the hinge's residuals into infinity.
+pub const MAX_TURNING_RADIUS: f64 = 1e9;
+
+/// Longest output path a scene may give: 4096 bytes (Linux's `PATH_MAX`). A longer one is
+/// refused naming its key, and echoed shortened ([`crate::error::shorten`]).
+pub const MAX_OUTPUT_PATH_BYTES: usize = 4096;
+
+/// Most lights a scene may have: 64. Every light is evaluated at every preview sample (an
+/// environment light at `samples` directions), so 10⁴ lights keep a render busy for minutes.
+pub const MAX_LIGHTS: usize = 64;
+
+/// Most points one curve edit may hold (`uv` or `points` inline, or an SVG's flattened paths):
+/// 10⁵. Each point's segment is searched against the part, so 10⁶ points take tens of seconds
+/// and hundreds of MB.
+pub const MAX_CURVE_POINTS: usize = 100_000;
+
 /// `--threads` is capped at this many worker threads per available core.
 pub const THREADS_PER_CORE: usize = 4;
 

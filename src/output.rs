@@ -93,6 +93,19 @@ pub fn check_output_target(path: &Path) -> Result<()> {
     Err(refuse(path, format!("is {kind}, not a regular file; an output must be a regular file")))
 }
 
+/// Checks that the input `path` is a regular file (links followed), from its metadata and
+/// before it is opened: opening a FIFO blocks until something writes into it, and a device may
+/// never end. Directories, FIFOs, devices and sockets are refused, naming the file.
+pub fn check_input_file(path: &Path) -> Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| io_error(path, e))?;
+    let ft = meta.file_type();
+    if ft.is_file() {
+        return Ok(());
+    }
+    let kind = if ft.is_dir() { "a directory" } else { special_kind(&ft) };
+    Err(refuse(path, format!("is {kind}, not a regular file; an input must be a regular file")))
+}
+
 #[cfg(unix)]
 fn special_kind(ft: &std::fs::FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
@@ -211,13 +224,21 @@ impl OutputPlan {
         self.outputs.iter().map(|(_, p)| p.as_path())
     }
 
-    /// Refuses an input that cannot be opened, a non-regular or symlinked output
+    /// Refuses an input that is not a regular file ([`check_input_file`]) or cannot be opened,
+    /// a non-regular or symlinked output
     /// ([`check_output_target`]), two outputs on one file, and an output on an input, naming
     /// the keys and the path.
     pub fn check(&self) -> Result<()> {
         for (what, p) in &self.inputs {
-            if let Err(e) = std::fs::File::open(p) {
-                return Err(refuse(p, format!("{what}: {e}")));
+            // Checked before it is opened: opening a FIFO would block.
+            if let Err(e) = check_input_file(p)
+                .and_then(|_| std::fs::File::open(p).map(drop).map_err(|e| io_error(p, e)))
+            {
+                let why = match e {
+                    Error::Io { source, .. } => source.to_string(),
+                    e => e.to_string(),
+                };
+                return Err(refuse(p, format!("{what}: {why}")));
             }
         }
         for (what, p) in &self.outputs {

@@ -86,22 +86,22 @@ fn check_gcode(name: &str, ngc: &std::path::Path, canon: &std::path::Path) {
 
 #[test]
 fn kettle_bend() {
-    run_example("kettle", &["out/kettle.svg", "out/kettle.ngc", "out/kettle.png"]);
+    run_example("kettle", &["kettle.svg", "kettle.ngc", "kettle.png"]);
 }
 
 #[test]
 fn panel_curve() {
-    run_example("panel", &["out/panel.svg", "out/panel.ngc", "out/panel.png"]);
+    run_example("panel", &["panel.svg", "panel.ngc", "panel.png"]);
 }
 
 #[test]
 fn dome_bend() {
-    run_example("dome", &["out/dome.svg", "out/dome.ngc", "out/dome.png"]);
+    run_example("dome", &["dome.svg", "dome.ngc", "dome.png"]);
 }
 
 #[test]
 fn light_tool() {
-    run_example("light", &["out/light.svg", "out/light.ngc", "out/light.png"]);
+    run_example("light", &["light.svg", "light.ngc", "light.png"]);
 }
 
 #[test]
@@ -112,5 +112,5 @@ fn spot_stencil() {
         eprintln!("skipping: {} not found (../shared is absent)", mesh.display());
         return;
     }
-    run_example("spot", &["out/spot.svg", "out/spot.ngc", "out/spot.png"]);
+    run_example("spot", &["spot.svg", "spot.ngc", "spot.png"]);
 }

@@ -296,28 +296,52 @@ impl LightSpec {
     }
 }
 
-/// Validates a `lights` list, naming the entry (`[2].irradiance`).
+/// Validates a `lights` list, naming the entry (`[2].irradiance`). At most one light may be
+/// marked `"key": true` (a second one is refused at its `[i].key`), and the list holds at most
+/// [`crate::limits::MAX_LIGHTS`].
 pub fn validate_lights(lights: &[LightSpec]) -> Result<()> {
+    let max = crate::limits::MAX_LIGHTS;
+    if lights.len() > max {
+        return Err(Error::setting(
+            "",
+            format!("holds {} lights, more than the {max} a scene may have", lights.len()),
+        ));
+    }
+    let mut first_key: Option<usize> = None;
     for (i, l) in lights.iter().enumerate() {
         l.validate().map_err(|e| match e {
             Error::Setting { key, message } => Error::setting(format!("[{i}].{key}"), message),
             e => e,
         })?;
+        if is_keyed(l) {
+            if let Some(j) = first_key {
+                return Err(Error::setting(
+                    format!("[{i}].key"),
+                    format!(
+                        "lights[{j}] is already the key light; the highlight model uses one \
+                         light: mark only one `\"key\": true`"
+                    ),
+                ));
+            }
+            first_key = Some(i);
+        }
     }
     Ok(())
+}
+
+/// Whether `l` is a directional or point light marked `"key": true`.
+fn is_keyed(l: &LightSpec) -> bool {
+    matches!(l, LightSpec::Directional { key: true, .. } | LightSpec::Point { key: true, .. })
 }
 
 /// The light of the highlight model: the first directional or point light with `key: true`,
 /// else the first directional light, else the first point light.
 pub fn key_light_index(lights: &[LightSpec]) -> Option<usize> {
-    let keyed = |l: &LightSpec| {
-        matches!(l, LightSpec::Directional { key: true, .. } | LightSpec::Point { key: true, .. })
-    };
     let dir = |l: &LightSpec| matches!(l, LightSpec::Directional { .. });
     let point = |l: &LightSpec| matches!(l, LightSpec::Point { .. });
     lights
         .iter()
-        .position(keyed)
+        .position(is_keyed)
         .or_else(|| lights.iter().position(dir))
         .or_else(|| lights.iter().position(point))
 }

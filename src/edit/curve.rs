@@ -107,6 +107,7 @@ fn check_polylines<const N: usize>(key: &str, lines: &[Vec<[f64; N]>]) -> Result
     if lines.is_empty() {
         return Err(Error::setting(key, "holds no polyline"));
     }
+    check_point_count(key, lines.iter().map(Vec::len).sum())?;
     for (k, l) in lines.iter().enumerate() {
         if l.len() < 2 {
             return Err(Error::setting(format!("{key}[{k}]"), "needs at least two points"));
@@ -114,6 +115,18 @@ fn check_polylines<const N: usize>(key: &str, lines: &[Vec<[f64; N]>]) -> Result
         if let Some(j) = l.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(Error::setting(format!("{key}[{k}][{j}]"), "coordinates must be finite"));
         }
+    }
+    Ok(())
+}
+
+/// Refuses a curve of more than [`crate::limits::MAX_CURVE_POINTS`] points, naming `key`.
+fn check_point_count(key: &str, n: usize) -> Result<()> {
+    let max = crate::limits::MAX_CURVE_POINTS;
+    if n > max {
+        return Err(Error::setting(
+            key,
+            format!("holds {n} points, more than the {max} a curve edit may have"),
+        ));
     }
     Ok(())
 }
@@ -222,7 +235,11 @@ pub(crate) fn apply(
         (space_targets(ctx, &lines, reach), lines)
     } else {
         let lines: Vec<Vec<Vector2<f64>>> = match (&e.svg, &e.uv) {
-            (Some(path), _) => read_svg_polylines(Path::new(path), e.tolerance)?,
+            (Some(path), _) => {
+                let lines = read_svg_polylines(Path::new(path), e.tolerance)?;
+                check_point_count("svg", lines.iter().map(Vec::len).sum())?;
+                lines
+            }
             (None, Some(uv)) => {
                 uv.iter().map(|l| l.iter().map(|p| Vector2::new(p[0], p[1])).collect()).collect()
             }

@@ -157,6 +157,8 @@ impl MeshFormat {
 /// error).
 pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
     check_options(options)?;
+    // A FIFO or a device is refused before it is opened (opening a FIFO would block).
+    crate::output::check_input_file(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
     let format = MeshFormat::detect(path, &bytes);
     if format == MeshFormat::Obj {
@@ -271,6 +273,8 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
 /// errors (the parallel parser is only faster).
 pub fn load_obj_with(path: &Path, options: &LoadOptions, parser: ObjParser) -> Result<LoadedMesh> {
     check_options(options)?;
+    // A FIFO or a device is refused before it is opened (opening a FIFO would block).
+    crate::output::check_input_file(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
     // BOM, CR-only line ends, `\` continuations and trailing comments, for both readers.
     let bytes = scan::normalize(bytes);

@@ -1,7 +1,7 @@
 //! The plan: which stages a scene needs, the files a run writes and reads, where its outputs
 //! go, and the work it asks for, checked before any of it starts.
 
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use serde::Serialize;
 
@@ -63,13 +63,14 @@ impl StagePlan {
 
 /// The files a run of `s` writes (with their scene keys) and the files it reads, for
 /// [`OutputPlan::check`]: no output may be a directory, a device, a FIFO or a link, two
-/// outputs may not share a file, and no output may overwrite an input.
-pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> OutputPlan {
+/// outputs may not share a file, and no output may overwrite an input. A relative output that
+/// climbs out of its directory is refused here ([`output_path`]).
+pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> Result<OutputPlan> {
     let scene = &s.scene;
-    let out = |p: &str| output_path(s, options.out_dir.as_deref(), p);
+    let out = |key: &str, p: &str| output_path(s, options.out_dir.as_deref(), key, p);
     let mut plan = OutputPlan::new();
     if let Some(p) = &scene.field.output {
-        plan.output("field.output", out(p));
+        plan.output("field.output", out("field.output", p)?);
     }
     let needs = StagePlan::of(scene);
     if let Some(t) = scene.toolpaths.as_ref().filter(|_| needs.trace) {
@@ -79,18 +80,18 @@ pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> OutputPlan {
             ("toolpaths.strokes_json", &t.strokes_json),
         ] {
             if let Some(p) = p {
-                plan.output(key, out(p));
+                plan.output(key, out(key, p)?);
             }
         }
     }
     if let Some(r) = &scene.render {
-        plan.output("render.output", out(&r.output));
+        plan.output("render.output", out("render.output", &r.output)?);
         if let Some(p) = &r.linear {
-            plan.output("render.linear", out(p));
+            plan.output("render.linear", out("render.linear", p)?);
         }
     }
     if let Some(p) = scene.export.as_ref().and_then(|e| e.glb.as_ref()) {
-        plan.output("export.glb", out(p));
+        plan.output("export.glb", out("export.glb", p)?);
     }
     if let Some(p) = &options.report {
         plan.output("the run report", p.clone());
@@ -99,7 +100,7 @@ pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> OutputPlan {
     if let Some(p) = &options.field {
         plan.input("--field", p.clone());
     }
-    plan
+    Ok(plan)
 }
 
 /// Adds the files a scene reads to `plan`: the scene file, the mesh or outline, the
@@ -148,14 +149,57 @@ pub fn check_scene_work(scene: &crate::scene::Scene, mesh: &crate::mesh::Mesh) -
 }
 
 /// Where an output of the scene goes: under `out_dir` when given, else relative to the scene
-/// file.
-pub fn output_path(s: &LoadedScene, out_dir: Option<&Path>, p: &str) -> PathBuf {
-    let p = Path::new(p);
-    if p.is_absolute() {
-        return p.to_path_buf();
+/// file. An absolute path is taken as it is; a relative one must stay inside that directory:
+/// a `..` that climbs out of it (`../x.svg`, `a/../../x.svg`) is refused, naming `key` (the
+/// scene key, e.g. `render.output`), and so is a path longer than
+/// [`crate::limits::MAX_OUTPUT_PATH_BYTES`] (echoed shortened).
+pub fn output_path(s: &LoadedScene, out_dir: Option<&Path>, key: &str, p: &str) -> Result<PathBuf> {
+    if p.len() > crate::limits::MAX_OUTPUT_PATH_BYTES {
+        return Err(crate::Error::setting(
+            key,
+            format!(
+                "{:?} is longer than {} bytes, the longest path an output may have",
+                crate::error::shorten(p),
+                crate::limits::MAX_OUTPUT_PATH_BYTES
+            ),
+        ));
     }
-    match out_dir {
-        Some(d) => d.join(p),
-        None => s.base.join(p),
+    let path = Path::new(p);
+    if path.is_absolute() {
+        return Ok(path.to_path_buf());
     }
+    if leaves(path) {
+        let (dir, which) = match out_dir {
+            Some(d) => (d, "--out-dir"),
+            None => (s.base.as_path(), "the scene file's directory"),
+        };
+        return Err(crate::Error::setting(
+            key,
+            format!(
+                "{p:?} leaves {} ({which}) through `..`; a relative output must stay inside \
+                 it: give a path below it, or an absolute path",
+                dir.display()
+            ),
+        ));
+    }
+    Ok(match out_dir {
+        Some(d) => d.join(path),
+        None => s.base.join(path),
+    })
+}
+
+/// Whether the relative path `p`, read component by component, climbs above its start.
+fn leaves(p: &Path) -> bool {
+    let mut depth = 0usize;
+    for c in p.components() {
+        match c {
+            Component::ParentDir if depth == 0 => return true,
+            Component::ParentDir => depth -= 1,
+            Component::Normal(_) => depth += 1,
+            Component::CurDir => {}
+            // A prefix or root makes the path absolute (handled by the caller).
+            Component::Prefix(_) | Component::RootDir => return false,
+        }
+    }
+    false
 }

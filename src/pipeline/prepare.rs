@@ -69,6 +69,25 @@ pub fn key_light(scene: &crate::scene::Scene) -> Result<KeyLight> {
     }
 }
 
+/// A point key light at `position` that gives no direction from the part's centre (the
+/// centre of its bounding box, where the nominal direction is taken from), named at its
+/// `lights[i].position`.
+fn point_key_error(scene: &crate::scene::Scene, position: Vector3<f64>, mesh: &Mesh) -> Error {
+    let i = crate::render::key_light_index(&scene.lights).unwrap_or(0);
+    let c = crate::highlight::lighting::centre_of(&mesh.positions);
+    let at = crate::error::fmt_vec3(&position.into());
+    let centre = crate::error::fmt_vec3(&c.into());
+    let message = if position == c {
+        format!(
+            "{at} is the centre of the part's bounding box, where a point key light gives no \
+             direction; move the light away from the part's centre"
+        )
+    } else {
+        format!("{at} is too far from the part's centre {centre} for a finite direction")
+    };
+    Error::setting(format!("lights[{i}].position"), message)
+}
+
 /// Loads the part and computes the geometry, the initial field and its highlights.
 pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
     prepare_with(s, stages, false)
@@ -114,7 +133,14 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
     // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
     check_scene_work(scene, &mesh)?;
     let patches = split_into_patches(s, &mut mesh);
-    let lighting = key.lighting(scene.view.view(), &mesh)?;
+    let lighting = key.lighting(scene.view.view(), &mesh).map_err(|e| match (key, e) {
+        (KeyLight::Point(p), Error::InvalidArgument { name, .. })
+            if name == "light position − part centre" =>
+        {
+            s.wrap(point_key_error(scene, p, &mesh))
+        }
+        (_, e) => e,
+    })?;
     // `field.init: "uv"` reads the part's own UVs, never a layout made for the toolpaths.
     if matches!(scene.field.init, InitKind::Uv) && mesh.uv.is_none() {
         return Err(s.wrap(Error::setting(

@@ -117,7 +117,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     if given.is_some() {
         plan.solve = false;
     }
-    output_plan(s, options).check()?;
+    output_plan(s, options)?.check()?;
     let mut stages = Stages::new(observer);
     let mut staged = Staged::new();
     let prepared = prepare_for_field(s, given.as_ref(), plan.trace, &mut stages)?;
@@ -200,8 +200,9 @@ struct Outputs<'a> {
 }
 
 impl Outputs<'_> {
-    fn write(&mut self, p: &str, bytes: &[u8]) -> Result<()> {
-        let path = output_path(self.s, self.options.out_dir.as_deref(), p);
+    /// Stages `bytes` for the output `key` at the scene's path `p`.
+    fn write(&mut self, key: &str, p: &str, bytes: &[u8]) -> Result<()> {
+        let path = output_path(self.s, self.options.out_dir.as_deref(), key, p)?;
         self.staged.add(&path, bytes)
     }
 }
@@ -323,8 +324,8 @@ fn trace_stage(
     };
     let t = trace(&input)?;
     stages.start("write toolpaths");
-    for (p, text) in t.outputs() {
-        out.write(p, text.as_bytes())?;
+    for (key, p, text) in t.outputs() {
+        out.write(key, p, text.as_bytes())?;
     }
     let gap = if want_gap { t.gap(prepared.mesh.num_vertices()) } else { None };
     let brushed = if plan.as_brushed {
@@ -349,7 +350,7 @@ fn write_field(
         Some(o) => optimized_field_file(prepared, o)?,
         None => super::prepare::initial_field_file(prepared)?,
     };
-    out.write(p, &json_compact(&file)?)
+    out.write("field.output", p, &json_compact(&file)?)
 }
 
 /// The field a run shows and what its trace stage made.
@@ -389,9 +390,9 @@ fn render_stage(out: &mut Outputs, f: &Field, stages: &mut Stages) -> Result<Opt
         gap: f.traced.and_then(|t| t.gap.as_deref()),
     })?;
     stages.start("write render");
-    out.write(&settings.output, &r.png)?;
+    out.write("render.output", &settings.output, &r.png)?;
     if let (Some(path), Some(bytes)) = (&settings.linear, &r.linear) {
-        out.write(path, bytes)?;
+        out.write("render.linear", path, bytes)?;
     }
     Ok(Some(r.report))
 }
@@ -416,6 +417,6 @@ fn export_stage(
         strokes_3d: f.strokes_3d(),
         brushed_u: f.brushed_u(),
     })?;
-    out.write(path, &x.glb)?;
+    out.write("export.glb", path, &x.glb)?;
     Ok(Some(x.report))
 }

@@ -112,14 +112,19 @@ pub fn trace(input: &TraceInput) -> Result<Traced> {
 }
 
 impl Traced {
-    /// The files the section asks for with their text: SVG, G-code, strokes JSON.
-    pub fn outputs(&self) -> Vec<(&str, &str)> {
+    /// The files the section asks for, with their scene keys and text: SVG, G-code, strokes
+    /// JSON.
+    pub fn outputs(&self) -> Vec<(&'static str, &str, &str)> {
         let s = &self.section;
         let j = &self.job;
-        [(&s.svg, &j.svg), (&s.gcode, &j.gcode), (&s.strokes_json, &j.strokes_json)]
-            .into_iter()
-            .filter_map(|(p, t)| Some((p.as_deref()?, t.as_deref()?)))
-            .collect()
+        [
+            ("toolpaths.svg", &s.svg, &j.svg),
+            ("toolpaths.gcode", &s.gcode, &j.gcode),
+            ("toolpaths.strokes_json", &s.strokes_json, &j.strokes_json),
+        ]
+        .into_iter()
+        .filter_map(|(k, p, t)| Some((k, p.as_deref()?, t.as_deref()?)))
+        .collect()
     }
 
     /// The coverage gap map sampled at each of the `vertices` mesh vertices' UV positions (the

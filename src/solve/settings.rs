@@ -4,6 +4,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::locks::LockSpec;
+use crate::error::fmt_num;
 use crate::{Error, Result};
 
 /// The tool's minimum turning radius: |ūᵀ∇φ| ≤ 1/radius (math.md §4).
@@ -192,14 +193,17 @@ fn check(key: &str, value: f64, ok: bool, what: &str) -> Result<()> {
     if value.is_finite() && ok {
         Ok(())
     } else {
-        Err(Error::setting(key, format!("must be a finite number {what}, got {value}")))
+        let got = crate::error::fmt_num(value);
+        Err(Error::setting(key, format!("must be a finite number {what}, got {got}")))
     }
 }
 
 impl SolverSettings {
     /// Range-checks every number; errors name the key relative to the section.
     pub fn validate(&self) -> Result<()> {
-        check("smoothness", self.smoothness, self.smoothness >= 0.0, "≥ 0")?;
+        let max_s = crate::limits::MAX_SMOOTHNESS;
+        let in_range = (0.0..=max_s).contains(&self.smoothness);
+        check("smoothness", self.smoothness, in_range, &format!("in [0, {}]", fmt_num(max_s)))?;
         if self.max_iterations == 0 {
             return Err(Error::setting("max_iterations", "must be ≥ 1, got 0"));
         }
@@ -220,7 +224,13 @@ impl SolverSettings {
         }
         let c = &self.constraints;
         if let Some(t) = &c.turning_radius {
-            check("constraints.turning_radius.radius", t.radius, t.radius > 0.0, "> 0")?;
+            let max_r = crate::limits::MAX_TURNING_RADIUS;
+            check(
+                "constraints.turning_radius.radius",
+                t.radius,
+                t.radius > 0.0 && t.radius <= max_r,
+                &format!("> 0 and ≤ {}", fmt_num(max_r)),
+            )?;
             check("constraints.turning_radius.weight", t.weight, t.weight > 0.0, "> 0")?;
         }
         if let Some(t) = &c.turning_in_triangles {

@@ -1,0 +1,306 @@
+//! Issue 30: every input bounded, every message exact. One test per item, named after it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use grainline::generate;
+use grainline::mesh::write::obj_string;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("grainline-bounded-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn grainline(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A scene in `d` around a small vase of revolution, with `extra` (JSON members, each starting
+/// with a comma; `"field": {"init": "uv"}` unless it has a `field`) and `lights` (a JSON
+/// array).
+fn scene_with(d: &Path, lights: &str, extra: &str) -> PathBuf {
+    let mesh =
+        generate::revolve(|t| (30.0 + 8.0 * (std::f64::consts::PI * t).sin(), 60.0 * t), 48, 24);
+    std::fs::write(d.join("vase.obj"), obj_string(&mesh, "test vase")).unwrap();
+    let field = if extra.contains(r#""field""#) { "" } else { r#", "field": {"init": "uv"}"# };
+    let s = format!(
+        r#"{{
+  "mesh": "vase.obj",
+  "lights": {lights},
+  "view": {{"eye": [0, -200, 80], "target": [0, 0, 30]}}{field}{extra}
+}}"#
+    );
+    let p = d.join("scene.json");
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn scene(d: &Path, extra: &str) -> PathBuf {
+    scene_with(d, r#"[{"type": "directional", "direction": [0.3, -0.5, 1]}]"#, extra)
+}
+
+fn run(scene: &Path, out_dir: Option<&Path>) -> Output {
+    let mut args = vec!["run".to_string(), scene.display().to_string(), "-q".into()];
+    if let Some(o) = out_dir {
+        args.extend(["--out-dir".into(), o.display().to_string()]);
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    grainline(&args)
+}
+
+// Item 6: a relative output never leaves `--out-dir` (or the scene's directory).
+#[test]
+fn item_6_outputs_stay_inside_out_dir() {
+    let d = dir("item6");
+    let sd = d.join("scene");
+    std::fs::create_dir_all(&sd).unwrap();
+    let out = d.join("out");
+    // Climbing out of --out-dir: refused naming the key, nothing written outside (or inside).
+    let s = scene(&sd, r#", "render": {"output": "../../escape.png", "width": 64, "height": 48}"#);
+    let o = run(&s, Some(&out));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("render.output") && e.contains("--out-dir"), "{e}");
+    assert!(!d.join("escape.png").exists() && !std::env::temp_dir().join("escape.png").exists());
+    // A `..` hidden behind a directory name still counts.
+    let s = scene(&sd, r#", "field": {"init": "uv", "output": "a/../../field.json"}"#);
+    let e = stderr(&run(&s, Some(&out)));
+    assert!(e.contains("field.output") && e.contains("a/../../field.json"), "{e}");
+    assert!(!d.join("field.json").exists());
+    // Without --out-dir the scene's directory is the bound.
+    let s = scene(&sd, r#", "field": {"init": "uv", "output": "../field.json"}"#);
+    let e = stderr(&run(&s, None));
+    assert!(e.contains("field.output") && e.contains("the scene file's directory"), "{e}");
+    assert!(!d.join("field.json").exists());
+    // Inside: written under --out-dir, `a/..` included.
+    let s = scene(&sd, r#", "field": {"init": "uv", "output": "a/../field.json"}"#);
+    let o = run(&s, Some(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("field.json").exists());
+    // Absolute paths stay allowed, wherever they point.
+    let abs = d.join("elsewhere").join("field.json");
+    let s = scene(&sd, &format!(r#", "field": {{"init": "uv", "output": {:?}}}"#, abs.display()));
+    let o = run(&s, Some(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(abs.exists());
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// Item 7: the examples name plain files, so `--out-dir out` writes out/NAME.svg, as the README
+// says.
+#[test]
+fn item_7_examples_and_readme_agree_on_output_paths() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seen = 0;
+    for e in std::fs::read_dir(root.join("examples")).unwrap() {
+        let scene = e.unwrap().path().join("scene.json");
+        if !scene.exists() {
+            continue;
+        }
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+        for key in [
+            "/field/output",
+            "/toolpaths/svg",
+            "/toolpaths/gcode",
+            "/toolpaths/strokes_json",
+            "/render/output",
+            "/render/linear",
+            "/export/glb",
+        ] {
+            if let Some(p) = v.pointer(key).and_then(|p| p.as_str()) {
+                assert!(
+                    !p.contains('/'),
+                    "{}: {key} is {p:?}, not a plain file name",
+                    scene.display()
+                );
+                seen += 1;
+            }
+        }
+    }
+    assert!(seen >= 15, "only {seen} outputs in the examples");
+    for doc in ["README.md", "examples/README.md", "docs/guide.md", "docs/scene.md"] {
+        let text = std::fs::read_to_string(root.join(doc)).unwrap();
+        assert!(!text.contains("out/out"), "{doc} still names out/out");
+    }
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(readme.contains("--out-dir out") && readme.contains("`out/kettle.svg`"));
+}
+
+fn scene_error(text: &str) -> String {
+    match grainline::scene::Scene::from_str(text, Path::new("scene.json")) {
+        Ok(_) => panic!("accepted: {text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+const BASE: &str = r#""mesh": "part.obj", "view": {"eye": [0, -200, 80]}"#;
+
+// Item 12: two key lights are refused, naming the second one's `key`.
+#[test]
+fn item_12_two_key_lights_are_refused() {
+    let e = scene_error(&format!(
+        r#"{{{BASE}, "lights": [
+            {{"type": "directional", "direction": [0, 0, 1], "key": true}},
+            {{"type": "directional", "direction": [1, 0, 1]}},
+            {{"type": "point", "position": [0, 0, 500], "key": true}}]}}"#
+    ));
+    assert!(e.contains("lights[2].key") && e.contains("lights[0]"), "{e}");
+    // One key light among several is fine.
+    let ok = format!(
+        r#"{{{BASE}, "lights": [{{"type": "directional", "direction": [0, 0, 1]}},
+            {{"type": "point", "position": [0, 0, 500], "key": true}}]}}"#
+    );
+    grainline::scene::Scene::from_str(&ok, Path::new("scene.json")).unwrap();
+}
+
+// Item 8, first part: a point key light at the part's centre is refused at its position.
+#[test]
+fn item_8_point_key_light_at_the_centre_names_its_position() {
+    let d = dir("item8-centre");
+    scene(&d, "");
+    let mesh =
+        grainline::mesh::load::load_mesh(&d.join("vase.obj"), &Default::default()).unwrap().mesh;
+    let c = grainline::highlight::lighting::centre_of(&mesh.positions);
+    let lights = format!(
+        r#"[{{"type": "directional", "direction": [0, 0, 1]}},
+            {{"type": "point", "position": [{:?}, {:?}, {:?}], "key": true}}]"#,
+        c.x, c.y, c.z
+    );
+    let s = scene_with(&d, &lights, "");
+    let o = run(&s, Some(&d.join("out")));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("lights[1].position") && e.contains("centre"), "{e}");
+    assert!(!e.contains("part centre: direction"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// Item 8: the solver's smoothness and turning radius are bounded, named when refused, and
+// huge numbers and paths are printed short.
+#[test]
+fn item_8_bounded_solver_numbers_and_short_messages() {
+    let lights = r#""lights": [{"type": "directional", "direction": [0, 0, 1]}]"#;
+    let e = scene_error(&format!(r#"{{{BASE}, {lights}, "solver": {{"smoothness": 1e300}}}}"#));
+    assert!(
+        e.contains("solver.smoothness") && e.contains("1e300") && e.contains("1000000]"),
+        "{e}"
+    );
+    assert!(e.len() < 200, "{e}");
+    let e = scene_error(&format!(
+        r#"{{{BASE}, {lights},
+            "solver": {{"constraints": {{"turning_radius": {{"radius": 1e300}}}}}}}}"#
+    ));
+    assert!(
+        e.contains("solver.constraints.turning_radius.radius") && e.contains("≤ 1000000000"),
+        "{e}"
+    );
+    assert!(e.contains("1e300") && e.len() < 200, "{e}");
+    // At the documented limits: accepted.
+    let ok = format!(
+        r#"{{{BASE}, {lights}, "solver": {{"smoothness": 1e6,
+            "constraints": {{"turning_radius": {{"radius": 1e9}}}}}}}}"#
+    );
+    grainline::scene::Scene::from_str(&ok, Path::new("scene.json")).unwrap();
+    // An output path past 4096 bytes: refused naming the key, echoed shortened.
+    let d = dir("item8-path");
+    let long = "x/".repeat(50_000) + "a.svg";
+    let s = scene(&d, &format!(r#", "field": {{"init": "uv", "output": "{long}"}}"#));
+    let o = run(&s, Some(&d.join("out")));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("field.output") && e.contains("4096") && e.contains("100005 bytes"), "{e}");
+    assert!(e.len() < 1000, "{} bytes of stderr", e.len());
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// Item 4: at most 64 lights and 10⁵ points per curve edit, refused naming the key.
+#[test]
+fn item_4_lights_and_curve_points_are_bounded() {
+    use grainline::limits::{MAX_CURVE_POINTS, MAX_LIGHTS};
+    let light = r#"{"type": "directional", "direction": [0, 0, 1]}"#;
+    let lights = |n: usize| vec![light; n].join(", ");
+    let e = scene_error(&format!(r#"{{{BASE}, "lights": [{}]}}"#, lights(MAX_LIGHTS + 1)));
+    assert!(e.contains("lights:") && e.contains("65 lights") && e.contains("64"), "{e}");
+    let ok = format!(r#"{{{BASE}, "lights": [{}]}}"#, lights(MAX_LIGHTS));
+    grainline::scene::Scene::from_str(&ok, Path::new("scene.json")).unwrap();
+    let curve = |n: usize| {
+        let pts: Vec<String> = (0..n).map(|i| format!("[{}, 0.5]", i as f64 / n as f64)).collect();
+        format!(
+            r#"{{{BASE}, "lights": [{light}],
+                "edits": [{{"tool": "curve", "uv": [[{}]], "radius": 2}}]}}"#,
+            pts.join(", ")
+        )
+    };
+    let e = scene_error(&curve(MAX_CURVE_POINTS + 1));
+    assert!(e.contains("edits[0]") && e.contains("uv") && e.contains("100000"), "{e}");
+    grainline::scene::Scene::from_str(&curve(MAX_CURVE_POINTS), Path::new("scene.json")).unwrap();
+}
+
+/// `grainline ARGS`, killed (and the test failed) if it runs past 30 s.
+fn grainline_within_30s(args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed().as_secs() > 30 {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("grainline {args:?} blocked");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+// Item 3: a FIFO given as the mesh is refused at once, naming the file, instead of blocking.
+#[cfg(unix)]
+#[test]
+fn item_3_fifo_mesh_is_refused_without_blocking() {
+    let d = dir("item3");
+    let fifo = d.join("part.obj");
+    let ok = Command::new("mkfifo").arg(&fifo).status().unwrap().success();
+    assert!(ok, "mkfifo failed");
+    // The library refuses it from its metadata (on a thread: a regression would block).
+    let (tx, rx) = std::sync::mpsc::channel();
+    let f2 = fifo.clone();
+    std::thread::spawn(move || {
+        let r = grainline::mesh::load::load_mesh(&f2, &Default::default());
+        tx.send(r.err().map(|e| e.to_string())).ok();
+    });
+    let e = rx.recv_timeout(std::time::Duration::from_secs(30)).expect("load_mesh blocked");
+    let e = e.expect("a FIFO loaded as a mesh");
+    assert!(e.contains("part.obj") && e.contains("FIFO"), "{e}");
+    // `inspect`, `field` and a scene's mesh: each refused, naming the file.
+    let f = fifo.display().to_string();
+    let out = d.join("f.json").display().to_string();
+    std::fs::write(
+        d.join("scene.json"),
+        r#"{"mesh": "part.obj", "view": {"eye": [0, -200, 80]},
+            "lights": [{"type": "directional", "direction": [0, 0, 1]}]}"#,
+    )
+    .unwrap();
+    let scene = d.join("scene.json").display().to_string();
+    let out_dir = d.join("out").display().to_string();
+    for args in [
+        vec!["inspect", &f],
+        vec!["field", &f, "--light", "0,0,1", "--view", "0,-1,0", "--out", &out],
+        vec!["run", &scene, "--out-dir", &out_dir],
+    ] {
+        let o = grainline_within_30s(&args);
+        assert!(!o.status.success());
+        let e = stderr(&o);
+        assert!(e.contains("part.obj") && e.contains("FIFO"), "{args:?}: {e}");
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
