@@ -41,7 +41,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
-use crate::mesh::{Mesh, Units};
+use crate::mesh::{CornerAttribute, Mesh, Units};
 use crate::{Error, Result};
 
 /// Options of [`field_mesh`].
@@ -140,15 +140,14 @@ fn corner_angle(p: [Vector3<f64>; 3], c: usize) -> f64 {
     }
 }
 
-/// Builds the toolpaths crate's [`FieldMesh`] from a UV-mapped mesh and its grain field
-/// (angles `phi` in the `geometry` frames). See the module documentation.
-pub fn field_mesh(
-    mesh: &Mesh,
+/// The mesh's UV layout, once `opts` are range-checked and the grain angles `phi` checked
+/// against `mesh` and `geometry` (one finite angle and one frame per vertex).
+fn checked_uv<'m>(
+    mesh: &'m Mesh,
     geometry: &Geometry,
     phi: &[f64],
-    symmetry: Symmetry,
     opts: &UvFieldOptions,
-) -> Result<(FieldMesh, UvFieldReport)> {
+) -> Result<&'m CornerAttribute<Vector2<f64>>> {
     opts.validate()?;
     let uv = mesh.uv.as_ref().ok_or_else(|| {
         Error::setting(
@@ -174,29 +173,93 @@ pub fn field_mesh(
             message: format!("grain angle of vertex {i} is not finite"),
         });
     }
-    let u3: Vec<Vector3<f64>> = geometry.directions_of(phi);
-    let k2 = symmetry == Symmetry::Line;
+    Ok(uv)
+}
 
+/// The degeneracy threshold on a UV triangle's area: `degenerate_ratio` × the squared diagonal
+/// of the UV bounding box.
+fn degenerate_area(values: &[Vector2<f64>], degenerate_ratio: f64) -> f64 {
     // UV bounding box diagonal for the degeneracy threshold.
     let (mut lo, mut hi) = (Vector2::repeat(f64::INFINITY), Vector2::repeat(f64::NEG_INFINITY));
-    for t in &uv.values {
+    for t in values {
         lo = lo.inf(t);
         hi = hi.sup(t);
     }
     let diag2 = (hi - lo).norm_squared();
-    let min_area = opts.degenerate_ratio * diag2;
+    degenerate_ratio * diag2
+}
 
-    let mut report = UvFieldReport::default();
+/// What [`scan_faces`] gathers from the mesh's faces, in face order.
+struct FaceScan {
+    /// Position of each UV vertex.
+    uv_pos: Vec<[f64; 2]>,
+    /// For each UV vertex, the mesh vertex it lifts to.
+    uv_to_vertex: Vec<u32>,
+    /// The kept triangles, in UV vertex ids.
+    tris: Vec<[u32; 3]>,
+    /// First fundamental form of each kept triangle.
+    metrics: Vec<Metric>,
+    /// Per face: its UV vertex ids (None when skipped), for the seams.
+    face_uv: Vec<Option<[u32; 3]>>,
+    /// Per UV vertex: the sum of its corners' weighted UV directions (angle-doubled for k = 2).
+    acc: Vec<Vector2<f64>>,
+    /// 3D area of the kept triangles.
+    surface_area: f64,
+    /// UV area of the kept triangles.
+    uv_area: f64,
+    /// Faces skipped as degenerate.
+    degenerate_faces: Vec<u32>,
+    /// Kept triangles with negative signed UV area.
+    flipped_faces: usize,
+}
+
+/// The contribution of corner `c` of a triangle (3D positions `p`, lift Jacobian `j`) to its UV
+/// vertex's direction sum: the vertex's grain `u` carried into UV, normalized and weighted by
+/// the corner's 3D angle (angle-doubled when `k2`); `None` when it has no UV direction.
+fn corner_direction(
+    j: &[Vector3<f64>; 2],
+    u: &Vector3<f64>,
+    p: [Vector3<f64>; 3],
+    c: usize,
+    k2: bool,
+) -> Option<Vector2<f64>> {
+    // u carried into UV through this triangle: d = J⁺u.
+    let d = pseudo_inverse(j, u)?;
+    let n = d.norm();
+    if n > 0.0 {
+        let d = d / n;
+        let wgt = corner_angle(p, c);
+        let contrib = if k2 { Vector2::new(d.x * d.x - d.y * d.y, 2.0 * d.x * d.y) } else { d };
+        Some(contrib * wgt)
+    } else {
+        None
+    }
+}
+
+/// Scans the faces in order: skips (and lists) the degenerate ones, numbers the UV vertices
+/// of the others in order of first appearance and sums their corners' grain directions `u3`
+/// carried into UV.
+fn scan_faces(
+    mesh: &Mesh,
+    uv: &CornerAttribute<Vector2<f64>>,
+    u3: &[Vector3<f64>],
+    k2: bool,
+    min_area: f64,
+) -> FaceScan {
+    let mut s = FaceScan {
+        uv_pos: Vec::new(),
+        uv_to_vertex: Vec::new(),
+        tris: Vec::new(),
+        metrics: Vec::new(),
+        face_uv: vec![None; mesh.num_faces()],
+        acc: Vec::new(),
+        surface_area: 0.0,
+        uv_area: 0.0,
+        degenerate_faces: Vec::new(),
+        flipped_faces: 0,
+    };
     let mut ids: HashMap<(u32, u64, u64), u32> = HashMap::new();
-    let mut uv_pos: Vec<[f64; 2]> = Vec::new();
-    let mut uv_to_vertex: Vec<u32> = Vec::new();
-    let mut tris: Vec<[u32; 3]> = Vec::new();
-    let mut metrics: Vec<Metric> = Vec::new();
     let mut jacobians: Vec<[Vector3<f64>; 2]> = Vec::new();
-    // Per face: its UV vertex ids (None when skipped), for the seams.
-    let mut face_uv: Vec<Option<[u32; 3]>> = vec![None; mesh.num_faces()];
-    let mut acc: Vec<Vector2<f64>> = Vec::new();
-    let (mut surface_area, mut uv_area) = (0.0f64, 0.0f64);
 
     #[allow(clippy::needless_range_loop)] // f indexes the mesh, its UVs and face_uv
     for f in 0..mesh.num_faces() {
@@ -209,59 +272,48 @@ pub fn field_mesh(
             m.is_valid().then_some(m)
         });
         let (Some(j), Some(metric)) = (j, metric) else {
-            report.degenerate_faces.push(f as u32);
+            s.degenerate_faces.push(f as u32);
             continue;
         };
         if 0.5 * area2.abs() <= min_area {
-            report.degenerate_faces.push(f as u32);
+            s.degenerate_faces.push(f as u32);
             continue;
         }
-        report.flipped_faces += (area2 < 0.0) as usize;
+        s.flipped_faces += (area2 < 0.0) as usize;
         let mut t = [0u32; 3];
         for c in 0..3 {
             let v = mesh.faces[f][c];
             let key = (v, w[c].x.to_bits(), w[c].y.to_bits());
             let id = *ids.entry(key).or_insert_with(|| {
-                uv_pos.push([w[c].x, w[c].y]);
-                uv_to_vertex.push(v);
-                acc.push(Vector2::zeros());
-                (uv_pos.len() - 1) as u32
+                s.uv_pos.push([w[c].x, w[c].y]);
+                s.uv_to_vertex.push(v);
+                s.acc.push(Vector2::zeros());
+                (s.uv_pos.len() - 1) as u32
             });
             t[c] = id;
-            // u carried into UV through this triangle: d = J⁺u.
-            if let Some(d) = pseudo_inverse(&j, &u3[v as usize]) {
-                let n = d.norm();
-                if n > 0.0 {
-                    let d = d / n;
-                    let wgt = corner_angle(p, c);
-                    let contrib =
-                        if k2 { Vector2::new(d.x * d.x - d.y * d.y, 2.0 * d.x * d.y) } else { d };
-                    acc[id as usize] += contrib * wgt;
-                }
+            if let Some(contrib) = corner_direction(&j, &u3[v as usize], p, c, k2) {
+                s.acc[id as usize] += contrib;
             }
         }
-        face_uv[f] = Some(t);
-        surface_area += 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
-        uv_area += 0.5 * area2.abs();
-        tris.push(t);
-        metrics.push(metric);
+        s.face_uv[f] = Some(t);
+        s.surface_area += 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
+        s.uv_area += 0.5 * area2.abs();
+        s.tris.push(t);
+        s.metrics.push(metric);
         jacobians.push(j);
     }
-    if tris.is_empty() {
-        return Err(Error::InvalidMesh {
-            path: "toolpaths".into(),
-            message: format!(
-                "every one of the {} faces is degenerate in UV; nothing to brush",
-                mesh.num_faces()
-            ),
-        });
-    }
-    let dirs: Vec<[f64; 2]> = acc
-        .iter()
+    s
+}
+
+/// The direction of each UV vertex from its corners' sum `acc` (for k = 2 the doubled angle
+/// halved back); the magnitude is kept as the coherence. A vanishing sum gives the zero
+/// vector and is counted in `vanishing`.
+fn uv_directions(acc: &[Vector2<f64>], k2: bool, vanishing: &mut usize) -> Vec<[f64; 2]> {
+    acc.iter()
         .map(|a| {
             let n = a.norm();
             if n.is_nan() || n <= 1e-9 {
-                report.vanishing_directions += 1;
+                *vanishing += 1;
                 return [0.0, 0.0];
             }
             if k2 {
@@ -272,43 +324,54 @@ pub fn field_mesh(
                 [a.x, a.y]
             }
         })
-        .collect();
+        .collect()
+}
 
-    // Seams: manifold mesh edges whose faces disagree on the UV vertex of an end.
+/// The UV seams: manifold mesh edges between kept faces (`face_uv`) that disagree on the UV
+/// vertex of an end.
+fn seam_pairs(mesh: &Mesh, face_uv: &[Option<[u32; 3]>]) -> Vec<SeamPair> {
     let mut seams = Vec::new();
-    if opts.seams {
-        let mut edges: BTreeMap<(u32, u32), Vec<(usize, usize)>> = BTreeMap::new();
-        for (f, t) in mesh.faces.iter().enumerate() {
-            if face_uv[f].is_none() {
-                continue;
-            }
-            for c in 0..3 {
-                let (a, b) = (t[c], t[(c + 1) % 3]);
-                edges.entry((a.min(b), a.max(b))).or_default().push((f, c));
-            }
+    let mut edges: BTreeMap<(u32, u32), Vec<(usize, usize)>> = BTreeMap::new();
+    for (f, t) in mesh.faces.iter().enumerate() {
+        if face_uv[f].is_none() {
+            continue;
         }
-        for ((a, _), list) in &edges {
-            if list.len() != 2 {
-                continue;
-            }
-            let side = |(f, c): (usize, usize)| {
-                let t = mesh.faces[f];
-                let u = face_uv[f].expect("kept face");
-                let (i, j) = (c, (c + 1) % 3);
-                // UV ids of the edge, ordered so that [0] lifts to mesh vertex `a`.
-                if t[i] == *a {
-                    [u[i], u[j]]
-                } else {
-                    [u[j], u[i]]
-                }
-            };
-            let (s0, s1) = (side(list[0]), side(list[1]));
-            if s0 != s1 {
-                seams.push(SeamPair { a: s0, b: s1 });
-            }
+        for c in 0..3 {
+            let (a, b) = (t[c], t[(c + 1) % 3]);
+            edges.entry((a.min(b), a.max(b))).or_default().push((f, c));
         }
     }
-    report.seam_pairs = seams.len();
+    for ((a, _), list) in &edges {
+        if list.len() != 2 {
+            continue;
+        }
+        let side = |(f, c): (usize, usize)| {
+            let t = mesh.faces[f];
+            let u = face_uv[f].expect("kept face");
+            let (i, j) = (c, (c + 1) % 3);
+            // UV ids of the edge, ordered so that [0] lifts to mesh vertex `a`.
+            if t[i] == *a {
+                [u[i], u[j]]
+            } else {
+                [u[j], u[i]]
+            }
+        };
+        let (s0, s1) = (side(list[0]), side(list[1]));
+        if s0 != s1 {
+            seams.push(SeamPair { a: s0, b: s1 });
+        }
+    }
+    seams
+}
+
+/// Scales the UV layout (`uv_pos`, and the `metrics` with it) so one UV unit is about one
+/// scene unit on the part; returns the factor.
+fn normalize_uv_scale(
+    surface_area: f64,
+    uv_area: f64,
+    uv_pos: &mut [[f64; 2]],
+    metrics: &mut [Metric],
+) -> f64 {
     // One UV unit ≈ one scene unit on the part: a [0, 1]² layout would otherwise give a flat
     // SVG / G-code of about a millimetre. The area-preserving scale keeps the metric exact
     // (M' = M / s²), so spacing on the part is unchanged; UV = XY panels keep s = 1.
@@ -317,17 +380,62 @@ pub fn field_mesh(
         scale = 1.0;
     }
     if scale != 1.0 {
-        for q in &mut uv_pos {
+        for q in uv_pos.iter_mut() {
             q[0] *= scale;
             q[1] *= scale;
         }
         let s2 = scale * scale;
-        for m in &mut metrics {
+        for m in metrics.iter_mut() {
             m.e /= s2;
             m.f /= s2;
             m.g /= s2;
         }
     }
+    scale
+}
+
+/// Builds the toolpaths crate's [`FieldMesh`] from a UV-mapped mesh and its grain field
+/// (angles `phi` in the `geometry` frames). See the module documentation.
+pub fn field_mesh(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    phi: &[f64],
+    symmetry: Symmetry,
+    opts: &UvFieldOptions,
+) -> Result<(FieldMesh, UvFieldReport)> {
+    let uv = checked_uv(mesh, geometry, phi, opts)?;
+    let u3: Vec<Vector3<f64>> = geometry.directions_of(phi);
+    let k2 = symmetry == Symmetry::Line;
+    let min_area = degenerate_area(&uv.values, opts.degenerate_ratio);
+
+    let FaceScan {
+        mut uv_pos,
+        uv_to_vertex,
+        tris,
+        mut metrics,
+        face_uv,
+        acc,
+        surface_area,
+        uv_area,
+        degenerate_faces,
+        flipped_faces,
+    } = scan_faces(mesh, uv, &u3, k2, min_area);
+    let mut report = UvFieldReport { degenerate_faces, flipped_faces, ..Default::default() };
+    if tris.is_empty() {
+        return Err(Error::InvalidMesh {
+            path: "toolpaths".into(),
+            message: format!(
+                "every one of the {} faces is degenerate in UV; nothing to brush",
+                mesh.num_faces()
+            ),
+        });
+    }
+    let dirs = uv_directions(&acc, k2, &mut report.vanishing_directions);
+
+    // Seams: manifold mesh edges whose faces disagree on the UV vertex of an end.
+    let seams = if opts.seams { seam_pairs(mesh, &face_uv) } else { Vec::new() };
+    report.seam_pairs = seams.len();
+    let scale = normalize_uv_scale(surface_area, uv_area, &mut uv_pos, &mut metrics);
     report.uv_scale = scale;
     report.uv_vertices = uv_pos.len();
     report.triangles = tris.len();
