@@ -1,5 +1,5 @@
 //! `grainline run`: every stage the scene's outputs need, and only those — the sequencer
-//! of the stages in [`super::plan`], [`super::prepare`], [`super::optimize`],
+//! of the stages in [`super::plan`], [`mod@super::prepare`], [`super::optimize`],
 //! [`super::trace`], [`super::preview`] and [`super::export`].
 
 use std::path::Path;
