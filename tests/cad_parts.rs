@@ -98,7 +98,8 @@ fn run_plate(name: &str, patches: &str) -> std::path::PathBuf {
             "lights": [{{"type": "directional", "direction": [0.3, -0.5, 1]}}],
             "view": {{"eye": [50, -150, 200], "target": [50, 30, 5]}},
             "field": {{"init": "world", "world": [0, 1, 0], "output": "FIELD.json"}},
-            "toolpaths": {{"strokes_json": "strokes.json", "placement": {{"width": 4}}}}}}"#
+            "toolpaths": {{"strokes_json": "strokes.json", "placement": {{"width": 4}}}},
+            "export": {{"glb": "plate.glb"}}}}"#
     );
     std::fs::write(dir.join("scene.json"), scene).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
@@ -189,5 +190,56 @@ fn strokes_on_the_plates_top_run_straight_along_the_grain() {
     let dir = run_plate("whole", "none");
     let share = straight_share(&dir);
     assert!(share < 0.9, "{:.1} % straight without patches", 100.0 * share);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The share of the top face's area, in the glb, whose three corners carry the plane's normal
+/// (within 1°) and the grain as their tangent (within 0.5°). The buffers are in the part's
+/// coordinates (the node's transform turns them to glTF's +Y up).
+fn glb_flat_share(dir: &Path) -> f64 {
+    let bytes = std::fs::read(dir.join("plate.glb")).unwrap();
+    let g = gltf::Gltf::from_slice(&bytes).unwrap();
+    let blob = g.blob.as_deref().unwrap();
+    let prim = g.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(|_| Some(blob));
+    let p: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+    let n: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+    let t: Vec<[f32; 4]> = reader.read_tangents().unwrap().collect();
+    let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+    let d = |v: [f32; 3]| v.map(f64::from);
+    let (mut good, mut total) = (0.0, 0.0);
+    for tri in idx.chunks(3) {
+        let q: Vec<[f64; 3]> = tri.iter().map(|&i| d(p[i as usize])).collect();
+        if q.iter().any(|v| (v[2] - T).abs() > 1e-3) {
+            continue;
+        }
+        let (a, b) =
+            ([q[1][0] - q[0][0], q[1][1] - q[0][1]], [q[2][0] - q[0][0], q[2][1] - q[0][1]]);
+        let area = 0.5 * (a[0] * b[1] - a[1] * b[0]).abs();
+        total += area;
+        let ok = tri.iter().all(|&i| {
+            let (n, t) = (d(n[i as usize]), t[i as usize]);
+            angle_deg(n, [0.0, 0.0, 1.0], false) < 1.0
+                && angle_deg(d([t[0], t[1], t[2]]), [0.0, 1.0, 0.0], true) < 0.5
+        });
+        if ok {
+            good += area;
+        }
+    }
+    assert!(total > 0.0);
+    good / total
+}
+
+#[test]
+fn the_glb_carries_the_plates_normal_and_grain_on_its_top() {
+    let dir = run_plate("glb", "split");
+    let share = glb_flat_share(&dir);
+    eprintln!("glb: {:.1} % of the top's area flat and along the grain", 100.0 * share);
+    assert!(share >= 0.99, "{:.1} %", 100.0 * share);
+    std::fs::remove_dir_all(&dir).ok();
+    let dir = run_plate("glb-whole", "none");
+    let share = glb_flat_share(&dir);
+    eprintln!("glb, kept whole: {:.1} %", 100.0 * share);
+    assert!(share < 0.5, "{:.1} % without patches", 100.0 * share);
     std::fs::remove_dir_all(&dir).ok();
 }
