@@ -355,7 +355,14 @@ fn identical_bytes_with_one_and_two_threads() {
     let (pos, faces, normals, u, ell) = torus_input();
     let mut input = RenderInput::new(&pos, &faces, &normals, &u, Symmetry::Line);
     input.ell = Some(&ell);
-    let lights = [dir_light([0.3, -0.5, 1.0], 1.5), dir_light([-1.0, 0.2, 0.3], 0.7)];
+    // One key light (two are refused), one fill light.
+    let fill = LightSpec::Directional {
+        direction: [-1.0, 0.2, 0.3],
+        irradiance: 0.7,
+        colour: [1.0; 3],
+        key: false,
+    };
+    let lights = [dir_light([0.3, -0.5, 1.0], 1.5), fill];
     let mut st = settings(96, 72, 2);
     st.tone_map = ToneMap::Reinhard;
     st.effects.shadows = true;
