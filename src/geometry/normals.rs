@@ -8,6 +8,7 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::mesh::planar::{planar_regions, TANGENT_COS};
 use crate::mesh::refine::{FLAT_COS, MIN_FLAT_FACES};
 use crate::mesh::Mesh;
 pub use crate::mesh::VertexFaces;
@@ -306,9 +307,6 @@ fn sector_normals(
     (Some(normals), sharp)
 }
 
-/// Beyond this angle from a flat region's plane, a face meets it at a crease, not tangentially.
-const TANGENT_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
-
 /// Sets the normal of the vertices that flat faces fix, and says which (math.md §3, "Flat
 /// regions"): an interior vertex with at least three faces, all coplanar (within 1e-4 rad), is
 /// *flat*, and its normal is their plane's, which the jet fit does not tilt; a vertex on the
@@ -316,7 +314,9 @@ const TANGENT_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
 /// vertex, all of those lie in one plane, and its other faces lean less than 30° from it (a
 /// fillet or a gently curved face meeting the plane tangentially, as CAD parts are made) — gets
 /// the plane's normal too. Weighted averages leaned such a rim towards the curved side by half
-/// its first step, so the flat face shaded as if it curved up to its rim.
+/// its first step, so the flat face shaded as if it curved up to its rim. A CAD export's flat
+/// face has no vertex inside it: a vertex on several planar regions takes the plane of the
+/// widest when that one dominates ([`crate::mesh::planar`]).
 pub fn pin_flat_normals(
     mesh: &Mesh,
     vf: &VertexFaces,
@@ -341,6 +341,8 @@ pub fn pin_flat_normals(
             it.all(|n| n.norm_squared() == 0.0 || n.dot(&first) >= FLAT_COS).then_some(first)
         })
         .collect();
+    let regions = planar_regions(mesh);
+    let region_plane = regions.vertex_planes(mesh, vf);
     normals
         .par_iter_mut()
         .enumerate()
@@ -349,7 +351,8 @@ pub fn pin_flat_normals(
             // grown past the rim (a low-valence vertex's 2-ring) reaches the curved side.
             let target = match plane[v] {
                 Some(p) => Some(p),
-                None => rim_plane(mesh, vf, faces, &plane, v),
+                None => rim_plane(mesh, vf, faces, &plane, v)
+                    .or_else(|| region_plane[v].map(|r| regions.normal[r as usize])),
             };
             // The plane's normal, on the side the vertex's own normal is.
             target.map(|p| *n = if p.dot(n) < 0.0 { -p } else { p }).is_some()

@@ -15,6 +15,7 @@
 
 use nalgebra::Vector3;
 
+use crate::mesh::planar::{planar_regions, NO_REGION};
 use crate::mesh::Mesh;
 
 /// The patches of a mesh.
@@ -72,7 +73,8 @@ pub fn patches(mesh: &Mesh, crease_angle_deg: f64) -> Patches {
             }
         }
     }
-    join_small_patches(mesh, &mut parent, &sharp);
+    let feature = planar_faces(mesh);
+    join_small_patches(mesh, &mut parent, &sharp, &feature);
     let mut label = vec![u32::MAX; mesh.num_faces()];
     let mut face_patch = vec![0u32; mesh.num_faces()];
     let mut count = 0u32;
@@ -89,9 +91,30 @@ pub fn patches(mesh: &Mesh, crease_angle_deg: f64) -> Patches {
     Patches { face_patch, count: count as usize, sharp_edges }
 }
 
+/// Per face, whether it lies in a planar region of at least two faces
+/// ([`crate::mesh::planar`]): a face of a CAD part (a flat face, a strip of a cylinder or a
+/// fillet meshed as quads) rather than of a scan, whose neighbouring triangles are never
+/// coplanar to 10⁻⁴ rad.
+fn planar_faces(mesh: &Mesh) -> Vec<bool> {
+    let regions = planar_regions(mesh);
+    regions
+        .face_region
+        .iter()
+        .map(|&r| r != NO_REGION && regions.faces[r as usize] >= 2)
+        .collect()
+}
+
 /// Joins every patch (root in `parent`) of less than [`MIN_PATCH_AREA_SHARE`] of the part's
-/// area to the neighbour across the greatest length of `sharp` edges, smallest patch first.
-fn join_small_patches(mesh: &Mesh, parent: &mut [u32], sharp: &[(u32, u32, f64)]) {
+/// area to the neighbour across the greatest length of `sharp` edges, smallest patch first —
+/// unless every face of the patch is `feature` (a small face of a CAD part: a chamfer, a
+/// notch, a small hole's wall, which a shop brushes as a face of its own; joined, it would
+/// bend its neighbour's normals across the sharp edge between them).
+fn join_small_patches(
+    mesh: &Mesh,
+    parent: &mut [u32],
+    sharp: &[(u32, u32, f64)],
+    feature: &[bool],
+) {
     let area = |f: usize| {
         let [a, b, c] = mesh.faces[f].map(|v| mesh.positions[v as usize]);
         0.5 * (b - a).cross(&(c - a)).norm()
@@ -103,9 +126,15 @@ fn join_small_patches(mesh: &Mesh, parent: &mut [u32], sharp: &[(u32, u32, f64)]
         patch_area[find(parent, f as u32) as usize] += a;
         total += a;
     }
+    let mut all_feature = vec![true; mesh.num_faces()];
+    for (f, &is) in feature.iter().enumerate() {
+        all_feature[find(parent, f as u32) as usize] &= is;
+    }
     let mut small: Vec<(f64, u32)> = (0..mesh.num_faces() as u32)
         .filter(|&f| {
-            parent[f as usize] == f && patch_area[f as usize] < MIN_PATCH_AREA_SHARE * total
+            parent[f as usize] == f
+                && patch_area[f as usize] < MIN_PATCH_AREA_SHARE * total
+                && !all_feature[f as usize]
         })
         .map(|f| (patch_area[f as usize], f))
         .collect();

@@ -9,6 +9,7 @@ pub mod adjacency;
 pub mod halfedge;
 pub mod load;
 mod parse;
+pub mod planar;
 mod ply;
 mod raw;
 pub mod refine;

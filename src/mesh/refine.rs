@@ -80,9 +80,7 @@ impl Refined {
 /// Angle between the vertex normals of an edge beyond which its midpoint is not curved.
 const CREASE_COS: f64 = 0.866_025_403_784_438_6; // cos 30°
 
-/// Faces whose unit normals agree this closely (within 1e-4 rad) lie in one plane (here and
-/// in the geometry's flat regions, [`crate::geometry::normals::pin_flat_normals`]).
-pub const FLAT_COS: f64 = 1.0 - 5e-9;
+pub use super::planar::FLAT_COS;
 
 /// Fewest faces around a flat vertex: a corner of a curved quad grid has one quad's two
 /// coplanar triangles.

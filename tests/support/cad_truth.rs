@@ -1,0 +1,264 @@
+//! Truth about CAD parts computed from their STL files alone, without grainline: the large
+//! planar faces (faces of the part, not triangles), the grain a world direction gives on each
+//! (docs/scene.md, `field.init: "world"`: the direction projected onto the plane; on a face
+//! within 2° of facing it, the world axis least aligned with it, made perpendicular to it,
+//! projected), and two figures measured on grainline's outputs against them: the share of
+//! the strokes' length on a face that runs within 1° of that grain, and the share of a face's
+//! area whose three corners in the glb carry the plane's normal (1°) and the grain as tangent
+//! (0.5°).
+#![allow(dead_code)]
+
+use std::collections::HashMap;
+use std::path::Path;
+
+pub type P = [f64; 3];
+
+pub fn sub(a: P, b: P) -> P {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub fn dot(a: P, b: P) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub fn cross(a: P, b: P) -> P {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+pub fn norm(a: P) -> f64 {
+    dot(a, a).sqrt()
+}
+pub fn unit(a: P) -> P {
+    let n = norm(a);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+/// The angle between two directions in degrees (as lines when `line`).
+pub fn angle_deg(a: P, b: P, line: bool) -> f64 {
+    let c = dot(a, b) / (norm(a) * norm(b));
+    let c = if line { c.abs() } else { c };
+    c.clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+/// The triangles of a binary or ASCII STL file.
+pub fn read_stl(path: &Path) -> Vec<[P; 3]> {
+    let b = std::fs::read(path).unwrap();
+    let binary = b.len() >= 84 && {
+        let n = u32::from_le_bytes([b[80], b[81], b[82], b[83]]) as usize;
+        b.len() == 84 + 50 * n
+    };
+    if binary {
+        let n = (b.len() - 84) / 50;
+        let f = |o: usize| f32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]) as f64;
+        (0..n)
+            .map(|i| {
+                let o = 84 + 50 * i + 12;
+                [0, 1, 2].map(|k| [0, 1, 2].map(|c| f(o + 12 * k + 4 * c)))
+            })
+            .collect()
+    } else {
+        let text = String::from_utf8_lossy(&b);
+        let v: Vec<P> = text
+            .lines()
+            .filter_map(|l| {
+                let mut w = l.split_whitespace();
+                (w.next() == Some("vertex")).then(|| {
+                    let mut c = w.map(|x| x.parse::<f32>().unwrap() as f64);
+                    [c.next().unwrap(), c.next().unwrap(), c.next().unwrap()]
+                })
+            })
+            .collect();
+        v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+    }
+}
+
+/// A planar face of a part: the triangles of one plane joined across shared edges.
+pub struct PlanarFace {
+    pub normal: P,
+    pub offset: f64,
+    pub tris: Vec<[P; 3]>,
+    pub area: f64,
+}
+
+impl PlanarFace {
+    /// Whether `p` lies on the face (within `tol` of its plane and inside a triangle).
+    pub fn contains(&self, p: P, tol: f64) -> bool {
+        if (dot(self.normal, p) - self.offset).abs() > tol {
+            return false;
+        }
+        self.tris.iter().any(|t| {
+            let s = |a: P, b: P| dot(cross(sub(b, a), sub(p, a)), self.normal);
+            let (x, y, z) = (s(t[0], t[1]), s(t[1], t[2]), s(t[2], t[0]));
+            let e = tol * tol;
+            (x >= -e && y >= -e && z >= -e) || (x <= e && y <= e && z <= e)
+        })
+    }
+
+    /// The grain `field.init: "world"` with direction `w` gives on this plane.
+    pub fn world_grain(&self, w: P) -> P {
+        let n = self.normal;
+        let wu = unit(w);
+        let d = if dot(wu, n).abs() > 2f64.to_radians().cos() {
+            // The world axis least aligned with w, made perpendicular to w.
+            let mut k = 0;
+            for j in 1..3 {
+                if w[j].abs() < w[k].abs() {
+                    k = j;
+                }
+            }
+            let mut a = [0.0; 3];
+            a[k] = 1.0;
+            let s = dot(w, a) / dot(w, w);
+            [a[0] - w[0] * s, a[1] - w[1] * s, a[2] - w[2] * s]
+        } else {
+            w
+        };
+        let s = dot(d, n);
+        unit([d[0] - n[0] * s, d[1] - n[1] * s, d[2] - n[2] * s])
+    }
+}
+
+/// The part's planar faces of at least `share` of its area, largest first. Triangles are in
+/// one face when they share an edge (exactly welded vertices) and their normals agree within
+/// 10⁻³ rad.
+pub fn large_planar_faces(tris: &[[P; 3]], share: f64) -> Vec<PlanarFace> {
+    let key = |p: P| p.map(f64::to_bits);
+    let mut edges: HashMap<([u64; 3], [u64; 3]), Vec<usize>> = HashMap::new();
+    for (f, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+            edges.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let normal = |t: &[P; 3]| {
+        let c = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+        (norm(c) > 0.0).then(|| unit(c))
+    };
+    let area = |t: &[P; 3]| 0.5 * norm(cross(sub(t[1], t[0]), sub(t[2], t[0])));
+    let total: f64 = tris.iter().map(area).sum();
+    let mut seen = vec![false; tris.len()];
+    let mut faces = Vec::new();
+    for seed in 0..tris.len() {
+        let Some(n) = normal(&tris[seed]) else { continue };
+        if seen[seed] {
+            continue;
+        }
+        seen[seed] = true;
+        let mut stack = vec![seed];
+        let mut members = Vec::new();
+        while let Some(f) = stack.pop() {
+            members.push(f);
+            let t = &tris[f];
+            for k in 0..3 {
+                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+                for &g in &edges[&(a.min(b), a.max(b))] {
+                    if !seen[g] && normal(&tris[g]).is_some_and(|m| dot(m, n) > 1.0 - 5e-7) {
+                        seen[g] = true;
+                        stack.push(g);
+                    }
+                }
+            }
+        }
+        let a: f64 = members.iter().map(|&f| area(&tris[f])).sum();
+        if a >= share * total {
+            let ft: Vec<[P; 3]> = members.iter().map(|&f| tris[f]).collect();
+            let offset = ft.iter().flatten().map(|p| dot(n, *p)).sum::<f64>() / (3 * ft.len()) as f64;
+            faces.push(PlanarFace { normal: n, offset, tris: ft, area: a });
+        }
+    }
+    faces.sort_by(|a, b| b.area.total_cmp(&a.area));
+    faces
+}
+
+/// The diagonal of the triangles' bounding box.
+pub fn diagonal(tris: &[[P; 3]]) -> f64 {
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for p in tris.iter().flatten() {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    norm(sub(hi, lo))
+}
+
+/// Per face: (length of strokes on the face, of which within 1° of its grain) from a strokes
+/// JSON (`toolpaths.strokes_json`).
+pub fn stroke_straightness(strokes: &Path, faces: &[PlanarFace], w: P, tol: f64) -> Vec<(f64, f64)> {
+    let s: serde_json::Value = serde_json::from_slice(&std::fs::read(strokes).unwrap()).unwrap();
+    let v3 = |v: &serde_json::Value| [0, 1, 2].map(|k| v[k].as_f64().unwrap());
+    let grains: Vec<P> = faces.iter().map(|f| f.world_grain(w)).collect();
+    let mut out = vec![(0.0, 0.0); faces.len()];
+    for stroke in s["strokes"].as_array().unwrap() {
+        for piece in stroke["xyz"].as_array().unwrap() {
+            let xyz: Vec<P> = piece.as_array().unwrap().iter().map(v3).collect();
+            for seg in xyz.windows(2) {
+                let d = sub(seg[1], seg[0]);
+                let len = norm(d);
+                if len == 0.0 {
+                    continue;
+                }
+                let m = [0, 1, 2].map(|c| 0.5 * (seg[0][c] + seg[1][c]));
+                for (k, f) in faces.iter().enumerate() {
+                    let on = |p: P| (dot(f.normal, p) - f.offset).abs() <= tol;
+                    if on(seg[0]) && on(seg[1]) && f.contains(m, tol) {
+                        out[k].0 += len;
+                        if angle_deg(d, grains[k], true) < 1.0 {
+                            out[k].1 += len;
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Per face: (area of the glb's triangles on the face, of which with the plane's normal
+/// within 1° and the grain as tangent within 0.5° at all three corners).
+pub fn glb_flatness(glb: &Path, faces: &[PlanarFace], w: P, tol: f64) -> Vec<(f64, f64)> {
+    let bytes = std::fs::read(glb).unwrap();
+    let g = gltf::Gltf::from_slice(&bytes).unwrap();
+    let blob = g.blob.as_deref().unwrap();
+    let prim = g.meshes().next().unwrap().primitives().next().unwrap();
+    let reader = prim.reader(|_| Some(blob));
+    let p: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+    let n: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
+    let t: Vec<[f32; 4]> = reader.read_tangents().unwrap().collect();
+    let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+    let d = |v: [f32; 3]| v.map(f64::from);
+    let grains: Vec<P> = faces.iter().map(|f| f.world_grain(w)).collect();
+    let mut out = vec![(0.0, 0.0); faces.len()];
+    for tri in idx.chunks(3) {
+        let q: Vec<P> = tri.iter().map(|&i| d(p[i as usize])).collect();
+        let c = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+        // A triangle on the face faces the way it does: a part touching another (a lid on
+        // its box) has coplanar faces facing each other.
+        let facing = cross(sub(q[1], q[0]), sub(q[2], q[0]));
+        let Some(k) = faces.iter().position(|f| {
+            dot(facing, f.normal) > 0.0
+                && q.iter().all(|v| (dot(f.normal, *v) - f.offset).abs() <= tol)
+                && f.contains(c, tol)
+        }) else {
+            continue;
+        };
+        let area = 0.5 * norm(cross(sub(q[1], q[0]), sub(q[2], q[0])));
+        out[k].0 += area;
+        let ok = tri.iter().all(|&i| {
+            let (nv, tv) = (d(n[i as usize]), t[i as usize]);
+            angle_deg(nv, faces[k].normal, false) < 1.0
+                && angle_deg(d([tv[0], tv[1], tv[2]]), grains[k], true) < 0.5
+        });
+        if ok {
+            out[k].1 += area;
+        } else if std::env::var("CAD_DEBUG").is_ok() {
+            for &i in tri {
+                let (nv, tv) = (d(n[i as usize]), t[i as usize]);
+                eprintln!(
+                    "  face {k} corner {:?}: normal off {:.3}°, tangent off {:.3}°",
+                    p[i as usize],
+                    angle_deg(nv, faces[k].normal, false),
+                    angle_deg(d([tv[0], tv[1], tv[2]]), grains[k], true)
+                );
+            }
+        }
+    }
+    out
+}
