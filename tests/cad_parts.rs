@@ -243,3 +243,112 @@ fn the_glb_carries_the_plates_normal_and_grain_on_its_top() {
     assert!(share < 0.5, "{:.1} % without patches", 100.0 * share);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `field.init: "smooth"` on the plate: on each flat face the smoothest field is one
+/// direction, holes or not (a parallel field has zero Dirichlet energy on a plane, and the
+/// patches do not couple the faces).
+#[test]
+fn the_smoothest_field_on_a_flat_face_with_a_hole_is_parallel() {
+    let dir = std::env::temp_dir().join(format!("grainline-cad-smooth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write_stl(&dir.join("plate.stl"), &plate());
+    let scene = r#"{"mesh": "plate.stl", "units": "mm",
+        "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+        "view": {"eye": [50, -150, 200], "target": [50, 30, 5]},
+        "field": {"init": "smooth", "output": "FIELD.json"}}"#;
+    std::fs::write(dir.join("scene.json"), scene).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let f: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("FIELD.json")).unwrap()).unwrap();
+    let (pos, nrm, u) = (
+        f["position"].as_array().unwrap(),
+        f["normal"].as_array().unwrap(),
+        f["u"].as_array().unwrap(),
+    );
+    for (z, nz) in [(T, 1.0), (0.0, -1.0)] {
+        let on: Vec<[f64; 3]> = (0..u.len())
+            .filter(|&i| {
+                (vec3(&pos[i])[2] - z).abs() < 1e-4
+                    && angle_deg(vec3(&nrm[i]), [0.0, 0.0, nz], false) < 1e-3
+            })
+            .map(|i| vec3(&u[i]))
+            .collect();
+        assert_eq!(on.len(), 4 + SEGMENTS, "vertices of the face z = {z}");
+        let spread = on.iter().map(|v| angle_deg(*v, on[0], true)).fold(0.0, f64::max);
+        assert!(spread < 0.01, "face z = {z}: the grain turns by {spread}°");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A round bar as CAD writes it (the side as 40 strips of two triangles, the end disks fanned
+/// from one rim vertex): with `field.init: "world"` every vertex of the side carries the world
+/// direction projected onto the cylinder's tangent plane there, w − (w·n)n with n radial.
+#[test]
+fn a_world_grain_on_a_cylinder_is_the_analytic_projection() {
+    const R: f64 = 12.5;
+    const L: f64 = 80.0;
+    const N: usize = 40;
+    let ring: Vec<[f64; 2]> = (0..N)
+        .map(|i| {
+            let a = 2.0 * PI * i as f64 / N as f64;
+            [R * a.cos(), R * a.sin()]
+        })
+        .collect();
+    let mut tris: Vec<[P; 3]> = Vec::new();
+    for i in 0..N {
+        let (p, q) = (ring[i], ring[(i + 1) % N]);
+        tris.push([[p[0], p[1], 0.0], [q[0], q[1], 0.0], [q[0], q[1], L]]);
+        tris.push([[p[0], p[1], 0.0], [q[0], q[1], L], [p[0], p[1], L]]);
+    }
+    for i in 1..N - 1 {
+        let (a, b, c) = (ring[0], ring[i], ring[i + 1]);
+        tris.push([[a[0], a[1], L], [b[0], b[1], L], [c[0], c[1], L]]);
+        tris.push([[a[0], a[1], 0.0], [c[0], c[1], 0.0], [b[0], b[1], 0.0]]);
+    }
+    let dir = std::env::temp_dir().join(format!("grainline-cad-bar-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    write_stl(&dir.join("bar.stl"), &tris);
+    let w = [0.3, 0.4, 1.0];
+    let scene = format!(
+        r#"{{"mesh": "bar.stl", "units": "mm",
+            "lights": [{{"type": "directional", "direction": [0.3, -0.5, 1]}}],
+            "view": {{"eye": [0, -200, 40], "target": [0, 0, 40]}},
+            "field": {{"init": "world", "world": [{}, {}, {}], "output": "FIELD.json"}}}}"#,
+        w[0], w[1], w[2]
+    );
+    std::fs::write(dir.join("scene.json"), scene).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let f: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("FIELD.json")).unwrap()).unwrap();
+    let (pos, nrm, u) = (
+        f["position"].as_array().unwrap(),
+        f["normal"].as_array().unwrap(),
+        f["u"].as_array().unwrap(),
+    );
+    let mut side = 0;
+    for i in 0..u.len() {
+        let (p, n) = (vec3(&pos[i]), vec3(&nrm[i]));
+        let radial = [p[0] / R, p[1] / R, 0.0];
+        if angle_deg(n, radial, false) > 45.0 {
+            continue; // an end disk's copy of a rim vertex
+        }
+        side += 1;
+        assert!(angle_deg(n, radial, false) < 1e-3, "vertex {i}: normal {n:?}");
+        let s = w[0] * radial[0] + w[1] * radial[1];
+        let expected = [w[0] - s * radial[0], w[1] - s * radial[1], w[2]];
+        let off = angle_deg(vec3(&u[i]), expected, true);
+        assert!(off < 1e-3, "vertex {i} at {p:?}: the grain is {off}° off the projection");
+    }
+    assert_eq!(side, 2 * N);
+    std::fs::remove_dir_all(&dir).ok();
+}
