@@ -5,9 +5,9 @@
 //! normal (1°) and that direction as tangent (0.5°) at all three corners. The faces and
 //! their grain are found from the STL alone (tests/support/cad_truth.rs), not by grainline.
 
-mod common;
 #[path = "support/cad_truth.rs"]
 mod cad_truth;
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -30,7 +30,8 @@ const PARTS: [(&str, &str, bool); 5] = [
 fn run(stl: &Path, units: &str, nonmanifold: bool, tag: &str) -> PathBuf {
     let tris = read_stl(stl);
     let d = diagonal(&tris);
-    let dir = std::env::temp_dir().join(format!("grainline-cadcorpus-{tag}-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("grainline-cadcorpus-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let scene = serde_json::json!({
         "mesh": {"path": stl, "allow_nonmanifold": nonmanifold},
@@ -68,13 +69,24 @@ fn every_large_flat_face_of_the_cad_corpus_is_brushed_straight_and_exported_flat
                 "{file} face {k} (n {:.3?}, {:.1} % of the area): strokes {:.1} % of {:.3} \
                  within 1°, glb {:.1} % flat",
                 f.normal,
-                100.0 * f.area / tris.iter().map(|t| cad_truth::norm(cad_truth::cross(cad_truth::sub(t[1], t[0]), cad_truth::sub(t[2], t[0]))) / 2.0).sum::<f64>(),
+                100.0 * f.area
+                    / tris
+                        .iter()
+                        .map(|t| cad_truth::norm(cad_truth::cross(
+                            cad_truth::sub(t[1], t[0]),
+                            cad_truth::sub(t[2], t[0])
+                        )) / 2.0)
+                        .sum::<f64>(),
                 100.0 * s,
                 straight[k].0,
                 100.0 * g
             );
             if !(s >= 0.99 && g >= 0.99) {
-                failures.push(format!("{file} face {k}: strokes {:.1} %, glb {:.1} %", 100.0 * s, 100.0 * g));
+                failures.push(format!(
+                    "{file} face {k}: strokes {:.1} %, glb {:.1} %",
+                    100.0 * s,
+                    100.0 * g
+                ));
             }
         }
         std::fs::remove_dir_all(&dir).ok();

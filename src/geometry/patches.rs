@@ -97,11 +97,7 @@ pub fn patches(mesh: &Mesh, crease_angle_deg: f64) -> Patches {
 /// coplanar to 10⁻⁴ rad.
 fn planar_faces(mesh: &Mesh) -> Vec<bool> {
     let regions = planar_regions(mesh);
-    regions
-        .face_region
-        .iter()
-        .map(|&r| r != NO_REGION && regions.faces[r as usize] >= 2)
-        .collect()
+    regions.face_region.iter().map(|&r| r != NO_REGION && regions.faces[r as usize] >= 2).collect()
 }
 
 /// Joins every patch (root in `parent`) of less than [`MIN_PATCH_AREA_SHARE`] of the part's

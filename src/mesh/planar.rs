@@ -198,7 +198,8 @@ mod tests {
             let (x, z) = (10.0 + a.sin(), a.cos() - 1.0);
             p.push(Vector3::new(x, 0.0, z));
             p.push(Vector3::new(x, 4.0, z));
-            let (a0, a1, b0, b1) = (2 * s as u32, 2 * s as u32 + 1, 2 * s as u32 + 2, 2 * s as u32 + 3);
+            let (a0, a1, b0, b1) =
+                (2 * s as u32, 2 * s as u32 + 1, 2 * s as u32 + 2, 2 * s as u32 + 3);
             faces.push([a0, b0, b1]);
             faces.push([a0, b1, a1]);
         }

@@ -158,7 +158,8 @@ pub fn large_planar_faces(tris: &[[P; 3]], share: f64) -> Vec<PlanarFace> {
         let a: f64 = members.iter().map(|&f| area(&tris[f])).sum();
         if a >= share * total {
             let ft: Vec<[P; 3]> = members.iter().map(|&f| tris[f]).collect();
-            let offset = ft.iter().flatten().map(|p| dot(n, *p)).sum::<f64>() / (3 * ft.len()) as f64;
+            let offset =
+                ft.iter().flatten().map(|p| dot(n, *p)).sum::<f64>() / (3 * ft.len()) as f64;
             faces.push(PlanarFace { normal: n, offset, tris: ft, area: a });
         }
     }
@@ -180,7 +181,12 @@ pub fn diagonal(tris: &[[P; 3]]) -> f64 {
 
 /// Per face: (length of strokes on the face, of which within 1° of its grain) from a strokes
 /// JSON (`toolpaths.strokes_json`).
-pub fn stroke_straightness(strokes: &Path, faces: &[PlanarFace], w: P, tol: f64) -> Vec<(f64, f64)> {
+pub fn stroke_straightness(
+    strokes: &Path,
+    faces: &[PlanarFace],
+    w: P,
+    tol: f64,
+) -> Vec<(f64, f64)> {
     let s: serde_json::Value = serde_json::from_slice(&std::fs::read(strokes).unwrap()).unwrap();
     let v3 = |v: &serde_json::Value| [0, 1, 2].map(|k| v[k].as_f64().unwrap());
     let grains: Vec<P> = faces.iter().map(|f| f.world_grain(w)).collect();
@@ -261,4 +267,80 @@ pub fn glb_flatness(glb: &Path, faces: &[PlanarFace], w: P, tol: f64) -> Vec<(f6
         }
     }
     out
+}
+
+impl PlanarFace {
+    /// The face's boundary edges: edges of one of its triangles only.
+    pub fn boundary(&self) -> Vec<[P; 2]> {
+        let key = |p: P| p.map(f64::to_bits);
+        let mut count: HashMap<([u64; 3], [u64; 3]), ([P; 2], usize)> = HashMap::new();
+        for t in &self.tris {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let e =
+                    count.entry((key(a).min(key(b)), key(a).max(key(b)))).or_insert(([a, b], 0));
+                e.1 += 1;
+            }
+        }
+        let mut out: Vec<[P; 2]> =
+            count.into_values().filter(|(_, n)| *n == 1).map(|(e, _)| e).collect();
+        out.sort_by(|x, y| x[0].partial_cmp(&y[0]).unwrap().then(x[1].partial_cmp(&y[1]).unwrap()));
+        out
+    }
+
+    /// A point of the face far from its boundary (the best of a 48 × 48 grid over the face's
+    /// extent) and its distance to the boundary.
+    pub fn deep_point(&self) -> (P, f64) {
+        let n = self.normal;
+        let a = unit(if n[0].abs() < 0.9 {
+            cross(n, [1.0, 0.0, 0.0])
+        } else {
+            cross(n, [0.0, 1.0, 0.0])
+        });
+        let b = cross(n, a);
+        let pts: Vec<P> = self.tris.iter().flatten().copied().collect();
+        let (mut lo, mut hi) = ([f64::MAX; 2], [f64::MIN; 2]);
+        for p in &pts {
+            let c = [dot(*p, a), dot(*p, b)];
+            for k in 0..2 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        let edges = self.boundary();
+        let tol = 1e-9 * norm(sub([hi[0], hi[1], 0.0], [lo[0], lo[1], 0.0]));
+        let mut best = (pts[0], 0.0);
+        for i in 0..48 {
+            for j in 0..48 {
+                let (s, t) = ((i as f64 + 0.5) / 48.0, (j as f64 + 0.5) / 48.0);
+                let (x, y) = (lo[0] + s * (hi[0] - lo[0]), lo[1] + t * (hi[1] - lo[1]));
+                let p = [0, 1, 2].map(|k| a[k] * x + b[k] * y + n[k] * self.offset);
+                if !self.contains(p, tol) {
+                    continue;
+                }
+                let d =
+                    edges.iter().map(|e| segment_distance(p, e[0], e[1])).fold(f64::MAX, f64::min);
+                if d > best.1 {
+                    best = (p, d);
+                }
+            }
+        }
+        best
+    }
+}
+
+/// The distance from `p` to the segment `a`–`b`.
+pub fn segment_distance(p: P, a: P, b: P) -> f64 {
+    let ab = sub(b, a);
+    let t = (dot(sub(p, a), ab) / dot(ab, ab).max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+    norm(sub(p, [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]]))
+}
+
+/// An eye `dist` from `p0` that puts the key highlight of a grain `u` (unit, tangent at `p0`)
+/// through `p0` under a directional light `l` (unit, above the surface): the view direction is
+/// `l` mirrored across the plane normal to `u`, so (l + v)·u = 0 there and h·u = 0.
+pub fn eye_on_highlight(p0: P, u: P, l: P, dist: f64) -> P {
+    let s = 2.0 * dot(l, u);
+    let v = [l[0] - s * u[0], l[1] - s * u[1], l[2] - s * u[2]];
+    [p0[0] + dist * v[0], p0[1] + dist * v[1], p0[2] + dist * v[2]]
 }
