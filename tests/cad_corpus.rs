@@ -59,24 +59,27 @@ fn every_large_flat_face_of_the_cad_corpus_is_brushed_straight_and_exported_flat
         let Some(stl) = common::shared_mesh(&format!("cad/{file}")) else { return };
         let tris = read_stl(&stl);
         let faces = large_planar_faces(&tris, 0.05);
+        let total: f64 = tris
+            .iter()
+            .map(|t| {
+                0.5 * cad_truth::norm(cad_truth::cross(
+                    cad_truth::sub(t[1], t[0]),
+                    cad_truth::sub(t[2], t[0]),
+                ))
+            })
+            .sum();
         let tol = 1e-4 * diagonal(&tris);
         let dir = run(&stl, units, nonmanifold, file);
         let straight = stroke_straightness(&dir.join("strokes.json"), &faces, WORLD, tol);
         let flat = glb_flatness(&dir.join("part.glb"), &faces, WORLD, tol);
         for (k, f) in faces.iter().enumerate() {
             let (s, g) = (straight[k].1 / straight[k].0, flat[k].1 / flat[k].0);
+            let share = f.area / total;
             eprintln!(
                 "{file} face {k} (n {:.3?}, {:.1} % of the area): strokes {:.1} % of {:.3} \
                  within 1°, glb {:.1} % flat",
                 f.normal,
-                100.0 * f.area
-                    / tris
-                        .iter()
-                        .map(|t| cad_truth::norm(cad_truth::cross(
-                            cad_truth::sub(t[1], t[0]),
-                            cad_truth::sub(t[2], t[0])
-                        )) / 2.0)
-                        .sum::<f64>(),
+                100.0 * share,
                 100.0 * s,
                 straight[k].0,
                 100.0 * g

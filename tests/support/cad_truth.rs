@@ -13,6 +13,9 @@ use std::path::Path;
 
 pub type P = [f64; 3];
 
+/// An edge keyed by its two ends' bits (smaller first).
+type EdgeKey = ([u64; 3], [u64; 3]);
+
 pub fn sub(a: P, b: P) -> P {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
@@ -119,7 +122,7 @@ impl PlanarFace {
 /// 10⁻³ rad.
 pub fn large_planar_faces(tris: &[[P; 3]], share: f64) -> Vec<PlanarFace> {
     let key = |p: P| p.map(f64::to_bits);
-    let mut edges: HashMap<([u64; 3], [u64; 3]), Vec<usize>> = HashMap::new();
+    let mut edges: HashMap<EdgeKey, Vec<usize>> = HashMap::new();
     for (f, t) in tris.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
@@ -273,7 +276,7 @@ impl PlanarFace {
     /// The face's boundary edges: edges of one of its triangles only.
     pub fn boundary(&self) -> Vec<[P; 2]> {
         let key = |p: P| p.map(f64::to_bits);
-        let mut count: HashMap<([u64; 3], [u64; 3]), ([P; 2], usize)> = HashMap::new();
+        let mut count: HashMap<EdgeKey, ([P; 2], usize)> = HashMap::new();
         for t in &self.tris {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
