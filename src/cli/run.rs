@@ -48,6 +48,9 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
             super::progress::warn_missed(o);
         }
     }
+    if let Some(n) = report.patches.as_ref().and_then(|p| p.narrow.as_ref()) {
+        eprintln!("grainline: warning: {}", n.warning());
+    }
     // Warnings (an empty G-code program written with `allow_empty`) are printed even with
     // --quiet; the run report carries them too.
     for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {

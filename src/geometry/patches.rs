@@ -29,6 +29,53 @@ pub struct Patches {
     pub sharp_edges: usize,
 }
 
+/// The size of each patch: what a brush of a given width can reach.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatchSizes {
+    /// Per patch, its area.
+    pub area: Vec<f64>,
+    /// Per patch, its width w = 2A/P: its area over half its perimeter (the sharp edges and
+    /// boundary edges around it). A strip of width w has this width; a disk of radius ρ has
+    /// ρ; a brush wider than w finds no room on the patch for a stroke.
+    pub width: Vec<f64>,
+}
+
+impl Patches {
+    /// The area and width of each patch of `mesh` (whose faces these patches number).
+    pub fn sizes(&self, mesh: &Mesh) -> PatchSizes {
+        let mut area = vec![0.0; self.count];
+        let mut perimeter = vec![0.0; self.count];
+        let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * mesh.num_faces());
+        for (f, t) in mesh.faces.iter().enumerate() {
+            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+            area[self.face_patch[f] as usize] += 0.5 * (b - a).cross(&(c - a)).norm();
+            for k in 0..3 {
+                let (u, v) = (t[k], t[(k + 1) % 3]);
+                edges.push((u.min(v), u.max(v), f as u32));
+            }
+        }
+        edges.sort_unstable();
+        for run in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+            let len =
+                (mesh.positions[run[0].1 as usize] - mesh.positions[run[0].0 as usize]).norm();
+            // Each patch on this edge with no other face of its own there has it on its rim.
+            for e in run {
+                let p = self.face_patch[e.2 as usize];
+                let own = run.iter().filter(|x| self.face_patch[x.2 as usize] == p).count();
+                if own == 1 {
+                    perimeter[p as usize] += len;
+                }
+            }
+        }
+        let width = area
+            .iter()
+            .zip(&perimeter)
+            .map(|(a, p)| if *p > 0.0 { 2.0 * a / p } else { f64::INFINITY })
+            .collect();
+        PatchSizes { area, width }
+    }
+}
+
 /// A patch whose area is below this share of the part's is not a face of the part but a
 /// fold in its tessellation (a scan's noise, a dent): it joins the neighbour it shares the
 /// most sharp edge length with.
@@ -277,6 +324,10 @@ mod tests {
         for (k, &v) in s.copies_of.iter().enumerate() {
             assert_eq!(s.mesh.positions[8 + k], m.positions[v as usize]);
         }
+        // Each side: area 1, perimeter 4, width 2·1/4.
+        let sizes = p.sizes(&m);
+        assert!(sizes.area.iter().all(|a| (a - 1.0).abs() < 1e-12), "{:?}", sizes.area);
+        assert!(sizes.width.iter().all(|w| (w - 0.5).abs() < 1e-12), "{:?}", sizes.width);
     }
 
     #[test]

@@ -214,11 +214,86 @@ pub struct PatchReport {
     pub copies_of: Vec<u32>,
     /// Vertices appended: one per extra patch a vertex of the part lies on.
     pub vertices_added: usize,
+    /// The patches narrower than the brush (`toolpaths.placement.width`), which no stroke can
+    /// brush; absent when the scene traces no strokes or every patch is wide enough.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub narrow: Option<NarrowPatches>,
+}
+
+/// Patches narrower than the brush ([`PatchReport::narrow`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct NarrowPatches {
+    /// The brush width they are compared with (scene units).
+    pub brush_width: f64,
+    /// How many patches are narrower than it.
+    pub count: usize,
+    /// Their share of the part's area.
+    pub area_share: f64,
+    /// The largest of them: its number (patches are numbered in the order of their first
+    /// faces), area and width (twice its area over its perimeter).
+    pub largest: NarrowPatch,
+}
+
+/// One patch narrower than the brush.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct NarrowPatch {
+    /// The patch's number.
+    pub patch: usize,
+    /// Its area, scene units².
+    pub area: f64,
+    /// Its width, scene units.
+    pub width: f64,
+}
+
+impl NarrowPatches {
+    /// The patches of `sizes` narrower than `brush_width`, or `None` when there are none.
+    fn of(sizes: &crate::geometry::patches::PatchSizes, brush_width: f64) -> Option<Self> {
+        let total: f64 = sizes.area.iter().sum();
+        let narrow: Vec<usize> =
+            (0..sizes.area.len()).filter(|&p| sizes.width[p] < brush_width).collect();
+        let largest = narrow
+            .iter()
+            .copied()
+            .max_by(|&a, &b| sizes.area[a].total_cmp(&sizes.area[b]).then(b.cmp(&a)))?;
+        let area: f64 = narrow.iter().map(|&p| sizes.area[p]).sum();
+        Some(NarrowPatches {
+            brush_width,
+            count: narrow.len(),
+            area_share: if total > 0.0 { area / total } else { 0.0 },
+            largest: NarrowPatch {
+                patch: largest,
+                area: sizes.area[largest],
+                width: sizes.width[largest],
+            },
+        })
+    }
+
+    /// The warning `grainline run` prints.
+    pub fn warning(&self) -> String {
+        // Four significant digits: a size, not a coordinate.
+        let short = |x: f64| {
+            let k = 3 - x.abs().log10().floor() as i32;
+            let scale = 10f64.powi(k.clamp(-300, 300));
+            crate::error::fmt_num((x * scale).round() / scale)
+        };
+        format!(
+            "{} patch(es), {:.1} % of the part's area, are narrower than the brush ({}): the \
+             strokes may miss them; the largest is patch {} (area {}, width {}); a narrower \
+             `toolpaths.placement.width` reaches them",
+            self.count,
+            100.0 * self.area_share,
+            short(self.brush_width),
+            self.largest.patch,
+            short(self.largest.area),
+            short(self.largest.width)
+        )
+    }
 }
 
 /// Cuts `mesh` into its smooth patches (`mesh.patches: "split"`, the default, at
 /// `mesh.crease_angle`); `None` when nothing was split (a smooth part, an outline's panel, or
-/// `mesh.patches: "none"`).
+/// `mesh.patches: "none"`). With a `toolpaths` section, the patches narrower than its brush
+/// are reported.
 fn split_into_patches(s: &LoadedScene, mesh: &mut Mesh) -> Option<PatchReport> {
     let m = s.scene.mesh.as_ref()?;
     if m.0.patches == crate::scene::PatchMode::None {
@@ -226,12 +301,18 @@ fn split_into_patches(s: &LoadedScene, mesh: &mut Mesh) -> Option<PatchReport> {
     }
     let patches = crate::geometry::patches::patches(mesh, m.crease_angle());
     let split = crate::geometry::patches::split_patches(mesh, &patches)?;
+    let narrow = s
+        .scene
+        .toolpaths
+        .as_ref()
+        .and_then(|t| NarrowPatches::of(&patches.sizes(mesh), t.placement.width));
     let report = PatchReport {
         vertices_before: mesh.num_vertices(),
         patches: patches.count,
         sharp_edges: patches.sharp_edges,
         vertices_added: split.copies_of.len(),
         copies_of: split.copies_of,
+        narrow,
     };
     *mesh = split.mesh;
     Some(report)
