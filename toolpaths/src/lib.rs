@@ -91,7 +91,7 @@ pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, Vertex
 pub use order::{order_strokes, tour_length, Direction, Ends, OrderOptions, Ordering};
 pub use place::{place_strokes, Placement, PlacementOptions};
 pub use plan::{
-    ordering_ends, plan_toolpath, MoveKind, Pass, Plan, PlanOptions, TiltPolicy, ZMode,
+    ordering_ends, plan_toolpath, MoveKind, Pass, Plan, PlanOptions, Sheets, TiltPolicy, ZMode,
 };
 pub use report::{PhaseTime, Report};
 pub use simplify::{fit_moves, rdp_indices, Segment};

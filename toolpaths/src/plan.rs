@@ -22,7 +22,7 @@ use crate::order::{order_strokes, Direction, Ends};
 use crate::passes::{make_pass, Item};
 pub use crate::passes::{MoveKind, Pass};
 use crate::place::Placement;
-pub use crate::plan_options::{PlanOptions, TiltPolicy, ZMode};
+pub use crate::plan_options::{PlanOptions, Sheets, TiltPolicy, ZMode};
 use crate::trace::{StopReason, Stroke};
 
 /// The ordered passes.
@@ -168,11 +168,12 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
     let (items, skipped_tilt) = plan_items(dom, placement, opts)?;
     // Sheets: in flat mode (XY = UV) charts that overlap in UV cannot be cut on one sheet;
     // each sheet is ordered on its own, from home, and cut in sheet order.
-    let sheet_of_chart = match opts.z_mode {
-        ZMode::Flat { .. } => sheets(dom),
-        ZMode::SurfaceFollowing { .. } => vec![0; dom.chart_count()],
+    let sheet_of_chart = match (opts.z_mode, opts.sheets) {
+        (ZMode::Flat { .. }, Sheets::Overlap) => sheets(dom),
+        (ZMode::Flat { .. }, Sheets::Chart) => (0..dom.chart_count()).collect(),
+        (ZMode::SurfaceFollowing { .. }, _) => vec![0; dom.chart_count()],
     };
-    let item_sheet: Vec<usize> = items
+    let mut item_sheet: Vec<usize> = items
         .iter()
         .map(|it| {
             it.faces
@@ -182,6 +183,15 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
                 .map_or(0, |&f| sheet_of_chart[dom.chart[f as usize] as usize])
         })
         .collect();
+    if opts.sheets == Sheets::Chart {
+        // One sheet per chart that holds strokes, numbered 0, 1, … in chart order.
+        let mut used: Vec<usize> = item_sheet.clone();
+        used.sort_unstable();
+        used.dedup();
+        for s in &mut item_sheet {
+            *s = used.binary_search(s).expect("listed");
+        }
+    }
     let n_sheets = item_sheet.iter().copied().max().map_or(1, |m| m + 1);
     let mut passes = Vec::with_capacity(items.len());
     let (mut travel, mut travel_between, mut travel_greedy) = (0.0, 0.0, 0.0);

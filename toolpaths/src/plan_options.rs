@@ -39,6 +39,19 @@ pub enum ZMode {
     },
 }
 
+/// How the charts are grouped into sheets (set-ups) in flat mode.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
+pub enum Sheets {
+    /// One sheet, except where charts overlap in UV (greedy colouring of the overlap graph).
+    #[default]
+    Overlap,
+    /// Every chart that holds strokes is a sheet of its own, in chart order: each face of a
+    /// part cut into patches (a CAD part's flat faces) brushed as the shop fixtures it.
+    Chart,
+}
+
 /// Options of [`plan_toolpath`](crate::plan_toolpath). Lengths in mm.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -67,6 +80,9 @@ pub struct PlanOptions {
     pub overtravel: f64,
     /// Ordering options.
     pub order: OrderOptions,
+    /// How charts are grouped into sheets in flat mode. Default `overlap`; surface following
+    /// is always one sheet.
+    pub sheets: Sheets,
     /// The tool's minimum turning radius, mm (> 0; default none): stroke ends at a boundary or
     /// a singularity's exclusion zone that turn tighter within two brush widths of the end are
     /// cut back before coverage and planning ([`crate::cut_tight_ends`]; the report counts
@@ -89,6 +105,7 @@ impl Default for PlanOptions {
             ramp_height: 0.0,
             overtravel: 0.0,
             order: OrderOptions::default(),
+            sheets: Sheets::Overlap,
             min_turning_radius: None,
         }
     }

@@ -701,3 +701,55 @@ fn mirrored_and_overlapping_charts_all_get_strokes() {
     let (ok, text) = common::run_tool(&tool, &[&path]);
     assert!(ok, "{text}");
 }
+
+/// Two faces of a part laid side by side (a 30 × 20 and a 20 × 20 mm chart, 10 mm apart in
+/// U, no overlap) with the grain along U: by default one sheet; with `plan.sheets: chart` each
+/// face is a sheet of its own, cut whole before the next, its own SVG layer, and one `M0`
+/// between the two in the G-code, which rs274 accepts.
+#[test]
+fn sheets_chart_cuts_each_chart_as_its_own_sheet() {
+    let (mut uv, mut tris) = (Vec::new(), Vec::new());
+    for (w, u0) in [(30.0, 0.0), (20.0, 40.0)] {
+        let (g, t) = common::rect_mesh(w, 20.0, 30, 20);
+        let base = uv.len() as u32;
+        uv.extend(g.iter().map(|p| [p[0] + u0, p[1]]));
+        tris.extend(t.iter().map(|tr| tr.map(|v| v + base)));
+    }
+    let n = uv.len();
+    let mesh = FieldMesh::new(uv, tris, Directions::Vectors(vec![[1.0, 0.0]; n]), Symmetry::Line);
+    let job = |sheets: Sheets| JobOptions {
+        placement: PlacementOptions::new(2.0, 0.0),
+        plan: PlanOptions { sheets, ..Default::default() },
+        svg: Some(SvgOptions::default()),
+        gcode: Some(GcodeOptions::default()),
+        ..Default::default()
+    };
+    let one = generate(mesh.clone(), &job(Sheets::Overlap)).unwrap();
+    assert!(one.plan.passes.iter().all(|p| p.sheet == 0));
+    assert_eq!(one.gcode.unwrap().lines().filter(|l| l.trim() == "M0").count(), 0);
+    let out = generate(mesh, &job(Sheets::Chart)).unwrap();
+    assert_eq!(out.report.charts_with_strokes, 2);
+    // Sheets in order, each pass on its own chart: sheet 0 at u < 30, sheet 1 at u > 40.
+    assert!(out.plan.passes.windows(2).all(|w| w[0].sheet <= w[1].sheet));
+    for p in &out.plan.passes {
+        let on_first = p.uv.iter().flatten().all(|q| q[0] <= 30.0 + 1e-9);
+        let on_second = p.uv.iter().flatten().all(|q| q[0] >= 40.0 - 1e-9);
+        assert!(
+            if p.sheet == 0 { on_first } else { p.sheet == 1 && on_second },
+            "sheet {}",
+            p.sheet
+        );
+    }
+    assert!(out.plan.passes.iter().any(|p| p.sheet == 1));
+    let svg = out.svg.unwrap();
+    assert!(svg.contains("id=\"strokes\"") && svg.contains("strokes-sheet-1"));
+    assert!(!svg.contains("strokes-sheet-2"));
+    let gcode = out.gcode.unwrap();
+    assert_eq!(gcode.lines().filter(|l| l.trim() == "M0").count(), 1);
+    let Some(tool) = common::shared_tool("check-gcode") else { return };
+    let dir = common::scratch("any-layout-chart-sheets");
+    let path = dir.join("sheets.ngc");
+    std::fs::write(&path, gcode).unwrap();
+    let (ok, text) = common::run_tool(&tool, &[&path]);
+    assert!(ok, "{text}");
+}
