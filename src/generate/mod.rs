@@ -4,6 +4,8 @@
 //! generated mesh is also a UV-mapped part. Closed directions (a cylinder's circumference, a
 //! torus) share vertices across the wrap and carry a UV seam there.
 
+pub mod cad;
+
 use nalgebra::{Vector2, Vector3};
 
 use crate::mesh::{CornerAttribute, Mesh};
