@@ -63,7 +63,7 @@ pub struct HousingOptions {
     pub pocket_depth: f64,
     /// Radius of the pocket's vertical corner fillets.
     pub pocket_corner_radius: f64,
-    /// Radii of the two holes through the pocket's floor, at x = ∓pocket[0]/4, y = 0.
+    /// Radii of the two holes through the pocket's floor, at x = ∓`pocket[0]`/4, y = 0.
     pub hole_radii: [f64; 2],
     /// Chordal step of the curved faces, degrees.
     pub step_deg: f64,
