@@ -2,7 +2,10 @@
 //!
 //! Every surface is a parametric grid whose (s, t) ∈ [0, 1]² parameters are its UVs, so each
 //! generated mesh is also a UV-mapped part. Closed directions (a cylinder's circumference, a
-//! torus) share vertices across the wrap and carry a UV seam there.
+//! torus) share vertices across the wrap and carry a UV seam there. [`cad`] makes closed
+//! CAD-like parts instead: no UVs, tessellated as CAD exports STL, with their analytic faces.
+
+pub mod cad;
 
 use nalgebra::{Vector2, Vector3};
 
