@@ -31,6 +31,10 @@ pub struct FieldOptions {
     pub geometry: GeometryOptions,
     /// hᵀn above which a vertex is a critical point.
     pub critical_threshold: f64,
+    /// The normals of the first vertices, kept as given ([`Geometry::compute_keeping`]): a
+    /// part refined inside the brushes keeps its own vertices' normals from before the
+    /// refinement. Empty: every normal computed.
+    pub kept_normals: Vec<Vector3<f64>>,
 }
 
 impl FieldOptions {
@@ -43,6 +47,7 @@ impl FieldOptions {
             gradient_form: GradientForm::Angle,
             geometry: GeometryOptions::default(),
             critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
+            kept_normals: Vec::new(),
         }
     }
 }
@@ -72,7 +77,7 @@ pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult>
     if !(options.critical_threshold.is_finite() && options.critical_threshold <= 1.0) {
         return Err(Error::invalid_arg("critical-threshold", "must be a finite number ≤ 1"));
     }
-    let geometry = Geometry::compute(mesh, &options.geometry);
+    let geometry = Geometry::compute_keeping(mesh, &options.geometry, &options.kept_normals).0;
     let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
     let normals: Vec<Vector3<f64>> = geometry.frames.par_iter().map(|f| f.n).collect();
     let h = half_vectors(&options.lighting, &mesh.positions, &normals);

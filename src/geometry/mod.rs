@@ -151,6 +151,18 @@ impl Geometry {
         mesh: &Mesh,
         options: &GeometryOptions,
     ) -> (Self, Vec<(&'static str, f64)>) {
+        Self::compute_keeping(mesh, options, &[])
+    }
+
+    /// [`Geometry::compute_timed`] with the first `kept.len()` vertices' normals given (their
+    /// jet fits do not tilt them): a part refined inside the brushes keeps its own vertices'
+    /// normals as they were before the refinement (docs/math.md §12), however the split faces
+    /// around them now lie.
+    pub fn compute_keeping(
+        mesh: &Mesh,
+        options: &GeometryOptions,
+        kept: &[Vector3<f64>],
+    ) -> (Self, Vec<(&'static str, f64)>) {
         let mut timings = Vec::with_capacity(7);
         let mut clock = std::time::Instant::now();
         let mut lap = |name: &'static str| {
@@ -167,11 +179,15 @@ impl Geometry {
             normals::vertex_normals_from_faces(mesh, &vf, &face_n, options.normals);
         // Vertices whose normal the flat faces around them fix (math.md §3, "Flat regions"):
         // their normal is that plane's and the jet fit does not tilt it.
-        let pinned = if options.normals == NormalSource::File && mesh.normals.is_some() {
+        let mut pinned = if options.normals == NormalSource::File && mesh.normals.is_some() {
             vec![false; normals.len()]
         } else {
             normals::pin_flat_normals(mesh, &vf, &adjacency, &face_n, &mut normals)
         };
+        for (i, n) in kept.iter().enumerate().take(normals.len()) {
+            normals[i] = *n;
+            pinned[i] = true;
+        }
         drop(face_n);
         lap("normals");
         let refinements = if options.normals == NormalSource::File && mesh.normals.is_some() {

@@ -115,12 +115,14 @@ pub fn refine_with(
             format!("{} targets for {} faces", target.len(), mesh.num_faces()),
         ));
     }
+    let (nrm, face_plane) = face_planes(mesh);
     let mut state = State {
         pos: mesh.positions.clone(),
-        nrm: vertex_normals(mesh),
+        nrm,
         plane: flat_planes(mesh),
         rim: Vec::new(),
         faces: mesh.faces.clone(),
+        face_plane,
         origin: (0..mesh.num_faces() as u32).collect(),
         target: target.to_vec(),
         uv: mesh.uv.clone(),
@@ -249,6 +251,35 @@ fn rim_planes(
     seen.into_iter().map(|s| s.and_then(|(n, p, ok)| ok.then_some((n, p)))).collect()
 }
 
+/// The planes of a CAD export's flat faces ([`super::planar`]): the vertex normals
+/// ([`vertex_normals`]) with the vertices a planar region fixes set to its plane's normal, and
+/// per input face the plane of its region when that region fixes some vertex (a face of the
+/// part, not a strip of a fillet). An edge inside such a region splits on the plane (the Phong
+/// point of normals that lean towards a tangent fillet would lift the flat face), and so does
+/// an edge between two of its fixed vertices (their normals are the plane's).
+fn face_planes(mesh: &Mesh) -> (Vec<Vector3<f64>>, Vec<Option<Vector3<f64>>>) {
+    let mut nrm = vertex_normals(mesh);
+    let regions = super::planar::planar_regions(mesh);
+    let vf = super::VertexFaces::new(mesh);
+    let mut is_face = vec![false; regions.normal.len()];
+    for (v, r) in regions.vertex_planes(mesh, &vf).into_iter().enumerate() {
+        if let Some(r) = r {
+            let p = regions.normal[r as usize];
+            nrm[v] = if p.dot(&nrm[v]) < 0.0 { -p } else { p };
+            is_face[r as usize] = true;
+        }
+    }
+    let face_plane = regions
+        .face_region
+        .iter()
+        .map(|&r| {
+            (r != super::planar::NO_REGION && is_face[r as usize])
+                .then(|| regions.normal[r as usize])
+        })
+        .collect();
+    (nrm, face_plane)
+}
+
 /// Vertex normals with Max's weights (Max 1999, "Weights for computing vertex normals from
 /// facet normals"): each incident face adds (e₁ × e₂)/(|e₁|²|e₂|²) for its two edges e₁, e₂
 /// out of the vertex, which is exact when the vertex and its neighbours lie on a sphere —
@@ -281,6 +312,8 @@ struct State {
     /// along the rim keeps its new vertex on the plane ([`rim_planes`]).
     rim: Vec<Option<(Vector3<f64>, Vector3<f64>)>>,
     faces: Vec<[u32; 3]>,
+    /// Per input face, the plane of the CAD face it lies in ([`face_planes`]).
+    face_plane: Vec<Option<Vector3<f64>>>,
     /// The input face each face descends from.
     origin: Vec<u32>,
     target: Vec<f64>,
@@ -435,13 +468,44 @@ impl State {
         }
     }
 
+    /// Per edge of `plan`, the plane of the CAD face both its faces lie in, if they do
+    /// ([`face_planes`]); `None` on a boundary edge.
+    fn edge_planes(&self, plan: &Plan) -> Vec<Option<Vector3<f64>>> {
+        let mut first: Vec<Option<Option<Vector3<f64>>>> = vec![None; plan.edges.len()];
+        let mut out = vec![None; plan.edges.len()];
+        for (f, fe) in plan.face_edges.iter().enumerate() {
+            let q = self.face_plane[self.origin[f] as usize];
+            for &e in fe {
+                match first[e as usize] {
+                    None => first[e as usize] = Some(q),
+                    Some(p) => {
+                        out[e as usize] = match (p, q) {
+                            (Some(p), Some(q)) if p.dot(&q) >= FLAT_COS => Some(p),
+                            _ => None,
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
     fn split(&mut self, plan: &Plan, retarget: Retarget<'_>) {
         let mut mid = vec![u32::MAX; plan.edges.len()];
+        let edge_plane = self.edge_planes(plan);
         for (e, &[a, b]) in plan.edges.iter().enumerate() {
             if !plan.marked[e] {
                 continue;
             }
-            let (mut p, n, plane) = self.midpoint(a as usize, b as usize);
+            let (mut p, n, plane) = match edge_plane[e] {
+                // Inside a CAD face: on the segment, which lies in its plane.
+                Some(q) => {
+                    let (na, nb) = (self.nrm[a as usize], self.nrm[b as usize]);
+                    let n = if q.dot(&(na + nb)) < 0.0 { -q } else { q };
+                    ((self.pos[a as usize] + self.pos[b as usize]) * 0.5, n, Some(q))
+                }
+                None => self.midpoint(a as usize, b as usize),
+            };
             // Along a flat region's rim the Phong point follows the rim's curve in the plane
             // but not the rim's normals out of it (they lean towards the curved side).
             let rim = if plane.is_none() { self.rim_of(a as usize, b as usize) } else { None };
@@ -639,6 +703,7 @@ mod tests {
             plane: vec![None, None],
             rim: vec![None, None],
             faces: vec![],
+            face_plane: vec![],
             origin: vec![],
             target: vec![],
             uv: None,

@@ -193,6 +193,9 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     field_options.geometry.normals = scene.field.normals;
     field_options.geometry.fit_radius = scene.field.fit_radius;
     field_options.critical_threshold = scene.field.critical_threshold;
+    if let Some(r) = &refinement {
+        field_options.kept_normals = r.kept_normals.clone();
+    }
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
     Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement, patches })
@@ -329,6 +332,8 @@ pub fn initial_field_file(p: &Prepared) -> Result<crate::field::FieldFile> {
 struct Refinement {
     refined: crate::mesh::refine::Refined,
     report: RefinementReport,
+    /// The normals of the part's own vertices before the refinement.
+    kept_normals: Vec<nalgebra::Vector3<f64>>,
 }
 
 /// The mesh refinement made for the edits (`mesh.refine`, docs/math.md §12).
@@ -398,8 +403,17 @@ fn refine_for_edits(
         levels: refined.levels,
         finest_edge: finest,
     };
+    // The part's own vertices keep the normals they have without the refinement: a sliver
+    // split near a brush must not turn the normal, and so the grain, of its far end.
+    let geometry = crate::geometry::GeometryOptions {
+        normals: s.scene.field.normals,
+        fit_radius: s.scene.field.fit_radius,
+        ..Default::default()
+    };
+    let kept_normals =
+        crate::geometry::Geometry::compute(mesh, &geometry).frames.iter().map(|f| f.n).collect();
     *mesh = refined.mesh.clone();
-    Ok(Some(Refinement { refined, report }))
+    Ok(Some(Refinement { refined, report, kept_normals }))
 }
 
 /// Makes sure `mesh` has a UV layout the toolpaths can use, as `options.mode` says: `auto`

@@ -151,9 +151,29 @@ pub struct OptimizeResult {
     pub report: OptimizeReport,
 }
 
-/// The vertices within `rings` graph steps of a `true` entry of `support`.
-pub fn dilate(term: &HighlightTerm, support: &[bool], rings: u32) -> Vec<bool> {
+/// How many times longer than the support's longest inner edge an edge may be and still free
+/// its far end as a margin vertex ([`dilate`]).
+pub const MARGIN_EDGE_FACTOR: f64 = 4.0;
+
+/// The vertices within `rings` graph steps of a `true` entry of `support`, each step along an
+/// edge at most [`MARGIN_EDGE_FACTOR`] times the longest edge between two support vertices
+///. A margin is a few rings *near* the brush: a CAD face's
+/// sliver or strip joins a refined brush to a vertex across the face, whose grain — and the
+/// grain of every triangle it spans — the solve would otherwise turn. On a mesh whose edges
+/// are of one size this is the plain ring dilation.
+pub fn dilate(mesh: &Mesh, term: &HighlightTerm, support: &[bool], rings: u32) -> Vec<bool> {
     let adj = &term.geometry.adjacency;
+    let p = &mesh.positions;
+    let mut longest: f64 = 0.0;
+    for v in (0..support.len()).filter(|&v| support[v]) {
+        for &j in adj.neighbors(v) {
+            if support[j as usize] {
+                longest = longest.max((p[j as usize] - p[v]).norm());
+            }
+        }
+    }
+    // A support of one vertex has no inner edge: its ring is the margin, whatever its length.
+    let reach = if longest > 0.0 { MARGIN_EDGE_FACTOR * longest } else { f64::INFINITY };
     let mut inside = support.to_vec();
     let mut frontier: Vec<u32> =
         (0..support.len() as u32).filter(|&v| support[v as usize]).collect();
@@ -161,7 +181,7 @@ pub fn dilate(term: &HighlightTerm, support: &[bool], rings: u32) -> Vec<bool> {
         let mut next = Vec::new();
         for &v in &frontier {
             for &j in adj.neighbors(v as usize) {
-                if !inside[j as usize] {
+                if !inside[j as usize] && (p[j as usize] - p[v as usize]).norm() <= reach {
                     inside[j as usize] = true;
                     next.push(j);
                 }
@@ -223,7 +243,7 @@ pub fn optimize_with(
     let mut free = if settings.whole_mesh {
         vec![true; nv]
     } else {
-        dilate(term, support, settings.margin_rings)
+        dilate(mesh, term, support, settings.margin_rings)
     };
     for &(v, a) in &locks.hard {
         start[v as usize] = a;
