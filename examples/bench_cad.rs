@@ -75,9 +75,24 @@ fn parts(out: &Path) -> Vec<Part> {
     parts
 }
 
-/// The generated CAD parts, written as binary STL under `out`.
-fn generated(_out: &Path) -> Vec<Part> {
-    Vec::new()
+/// The generated CAD parts (`grainline::generate::cad`), written as binary STL under `out`.
+fn generated(out: &Path) -> Vec<Part> {
+    use grainline::generate::cad;
+    let parts = [
+        cad::housing(&Default::default()),
+        cad::plate(&Default::default()),
+        cad::bracket(&Default::default()),
+        cad::turned(&Default::default()),
+    ];
+    parts
+        .into_iter()
+        .map(|p| {
+            let p = p.expect("a generated part");
+            let stl = out.join(format!("{}.stl", p.name));
+            std::fs::write(&stl, p.stl_binary()).unwrap();
+            Part { name: format!("generated {}", p.name), stl, units: p.units.as_str().to_string() }
+        })
+        .collect()
 }
 
 /// Runs `scene` from `dir`; returns the run report and the wall time.
