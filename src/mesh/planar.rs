@@ -143,10 +143,29 @@ impl PlanarRegions {
     /// Per vertex, the region whose plane fixes its normal (module docs), or `None`: the
     /// widest of the regions its faces lie in, when it holds at least two faces, is [`WIDER`]
     /// times wider than every region not coplanar with it, and no face at the vertex leans
-    /// more than 30° from its plane. A vertex on one region only gets `None` (its faces'
-    /// normals are that plane's already).
+    /// more than 30° from its plane; and a vertex whose faces all lie in a region that fixes
+    /// some vertex by that rule (a face of the part, not a strip of a curved face).
     pub fn vertex_planes(&self, mesh: &Mesh, vf: &VertexFaces) -> Vec<Option<u32>> {
-        (0..mesh.num_vertices()).into_par_iter().map(|v| self.vertex_plane(vf, v)).collect()
+        let mut planes: Vec<Option<u32>> =
+            (0..mesh.num_vertices()).into_par_iter().map(|v| self.vertex_plane(vf, v)).collect();
+        // A region that fixes a vertex is a face of the part, not a strip: it fixes the
+        // vertices on it alone too, whose jet fit would otherwise reach past its rim (a
+        // flat face's corner fanned to the far side of a tangent bend) and tilt them.
+        let mut is_face = vec![false; self.normal.len()];
+        for r in planes.iter().flatten() {
+            is_face[*r as usize] = true;
+        }
+        for (v, p) in planes.iter_mut().enumerate() {
+            if p.is_none() {
+                let mut regions = vf.of(v).iter().map(|&(f, _)| self.face_region[f as usize]);
+                if let Some(r) = regions.next() {
+                    if r != NO_REGION && is_face[r as usize] && regions.all(|q| q == r) {
+                        *p = Some(r);
+                    }
+                }
+            }
+        }
+        planes
     }
 
     fn vertex_plane(&self, vf: &VertexFaces, v: usize) -> Option<u32> {
@@ -216,11 +235,13 @@ mod tests {
         assert_eq!(r.faces[0], 2);
         assert!((r.width[0] - 2.0 * 40.0 / 28.0).abs() < 1e-12);
         let planes = r.vertex_planes(&m, &vf);
-        // The rim x = 10 takes the plane; the plane's far side is on the plane alone; the
-        // fillet's inner vertices are on two strips of one width.
+        // The rim x = 10 takes the plane; the fillet's inner vertices are on two strips of one
+        // width.
         assert_eq!(planes[2], Some(0));
         assert_eq!(planes[3], Some(0));
-        assert_eq!(planes[0], None);
+        // The plane's far side lies on the plane alone, a plane that fixes its rim.
+        assert_eq!(planes[0], Some(0));
+        assert_eq!(planes[1], Some(0));
         assert!(planes[4..].iter().all(|p| p.is_none()));
     }
 
