@@ -313,3 +313,56 @@ fn a_bend_and_a_curve_land_on_a_cylinder() {
     );
     edits_land(&turned, collar, "turned-collar");
 }
+
+/// A geodesic brush stops at a sharp edge: a bend on the housing's top whose ball reaches over
+/// the 90° edge onto the front wall leaves every vertex of the wall (its own and those the
+/// refinement adds there) with the world grain projected onto the wall's plane; the same bend
+/// measured in straight lines (`metric: "euclidean"`) reaches the wall and turns it.
+#[test]
+fn a_geodesic_brush_stops_at_a_sharp_edge() {
+    let housing = cad::housing(&Default::default()).unwrap();
+    // The top (z = 40) 3 mm in from the front wall (y = −40), with a 6 mm brush.
+    let (p0, r) = ([-30.0, -37.0, 40.0], 6.0);
+    let (u, l) = (grain([0.0, 0.0, 1.0], WORLD), unit([0.3, -0.5, 1.0]));
+    let eye = eye_on_highlight(p0, u, l, 300.0);
+    let wall = grain([0.0, -1.0, 0.0], WORLD);
+    let wall_turn = |metric: &str| {
+        let dir = scratch(&format!("edge-{metric}"));
+        let edits = serde_json::json!([{"tool": "bend", "centre": {"point": p0}, "radius": r,
+                                        "strength": 0.8, "direction": u, "metric": metric}]);
+        let report = run(&housing, &dir, eye, p0, l, edits, 1.0);
+        let support = report["optimize"]["edited_vertices"].as_u64().unwrap();
+        let f: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("FIELD.json")).unwrap()).unwrap();
+        let v3 = |x: &serde_json::Value| [0, 1, 2].map(|k| x[k].as_f64().unwrap());
+        let (pos, nrm, us) = (
+            f["position"].as_array().unwrap(),
+            f["normal"].as_array().unwrap(),
+            f["u"].as_array().unwrap(),
+        );
+        let mut worst: f64 = 0.0;
+        let mut count = 0;
+        for i in 0..us.len() {
+            let (p, n) = (v3(&pos[i]), v3(&nrm[i]));
+            if (p[1] + 40.0).abs() < 1e-9
+                && angle_deg(n, [0.0, -1.0, 0.0], false) < 1e-3
+                && norm(sub(p, p0)) < 2.0 * r
+            {
+                count += 1;
+                worst = worst.max(angle_deg(v3(&us[i]), wall, true));
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+        (worst, count, support)
+    };
+    let (geodesic, n_wall, s_geo) = wall_turn("geodesic");
+    let (euclidean, _, s_euc) = wall_turn("euclidean");
+    eprintln!(
+        "the wall's grain near the brush: {geodesic}° off (geodesic, support {s_geo}), \
+         {euclidean}° off (euclidean, support {s_euc}); {n_wall} wall vertices"
+    );
+    assert!(n_wall > 10, "the refinement put no vertex on the wall near the brush");
+    assert!(geodesic < 1e-3, "a geodesic brush turned the wall's grain by {geodesic}°");
+    // The straight-line ball does reach the wall: its support holds the wall's vertices too.
+    assert!(s_euc > s_geo, "supports: {s_euc} (euclidean) ≤ {s_geo} (geodesic)");
+}
