@@ -14,6 +14,7 @@
 //! `grainline::generate::cad` (written as binary STL), and any `--stl FILE UNITS`. The faces and
 //! their grain are found from the STL alone (tests/support/cad_truth.rs). 2-core machine,
 //! release build; the scenes run through the library's `pipeline::run`, as `grainline run`.
+//! `BENCH_CAD_KEEP=1` keeps the scenes and their outputs (the directory is printed).
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -188,7 +189,11 @@ fn main() {
     for r in edit_rows {
         println!("{r}");
     }
-    std::fs::remove_dir_all(&out).ok();
+    if std::env::var_os("BENCH_CAD_KEEP").is_some() {
+        eprintln!("scenes and outputs kept in {}", out.display());
+    } else {
+        std::fs::remove_dir_all(&out).ok();
+    }
 }
 
 /// A bend or a drawn curve at the deepest point of `face`, seen so that the key highlight
@@ -205,6 +210,8 @@ fn edit_row(part: &Part, tris: &[[P; 3]], face: &PlanarFace, tool: &str, out: &P
         l = unit([0.8 * n[0] + 0.6 * s[0], 0.8 * n[1] + 0.6 * s[1], 0.8 * n[2] + 0.6 * s[2]]);
     }
     let eye = eye_on_highlight(p0, u, l, 1.5 * d);
+    // A bend pushes across the key highlight, as the corpus's bends do.
+    let push = across_highlight(p0, n, u, l, eye, 1e-3 * d);
     let mut scene = base_scene(part, d, eye, p0, l);
     scene["toolpaths"]["placement"]["width"] = serde_json::json!(r / 6.0);
     let along = |a: P, s: f64| [p0[0] + a[0] * s, p0[1] + a[1] * s, p0[2] + a[2] * s];
@@ -220,7 +227,7 @@ fn edit_row(part: &Part, tris: &[[P; 3]], face: &PlanarFace, tool: &str, out: &P
         .collect();
     scene["edits"] = match tool {
         "bend" => serde_json::json!([{"tool": "bend", "centre": {"point": p0}, "radius": r,
-                                       "strength": 0.8, "direction": u}]),
+                                       "strength": 0.8, "direction": push}]),
         _ => serde_json::json!([{"tool": "curve", "points": [curve], "radius": r / 3.0}]),
     };
     let dir = out.join(format!("{}-{tool}", part.name));

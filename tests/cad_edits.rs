@@ -14,7 +14,9 @@ mod cad_truth;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use cad_truth::{angle_deg, cross, dot, eye_on_highlight, norm, segment_distance, sub, unit, P};
+use cad_truth::{
+    across_highlight, angle_deg, cross, dot, eye_on_highlight, norm, segment_distance, sub, unit, P,
+};
 use grainline::generate::cad::{self, AnalyticFace, CadPart};
 use nalgebra::Vector3;
 
@@ -186,6 +188,8 @@ fn edits_land(part: &CadPart, face: usize, tag: &str) {
         l = unit([0.8 * n[0] + 0.6 * s[0], 0.8 * n[1] + 0.6 * s[1], 0.8 * n[2] + 0.6 * s[2]]);
     }
     let eye = eye_on_highlight(p0, u, l, 1.5 * d);
+    // A bend pushes across the key highlight, as the corpus's bends do.
+    let push = across_highlight(p0, n, u, l, eye, 1e-3 * d);
     let s = cross(n, u);
     let across = unit([u[0] + s[0], u[1] + s[1], u[2] + s[2]]);
     let b = cross(n, across);

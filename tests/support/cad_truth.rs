@@ -347,3 +347,19 @@ pub fn eye_on_highlight(p0: P, u: P, l: P, dist: f64) -> P {
     let v = [l[0] - s * u[0], l[1] - s * u[1], l[2] - s * u[2]];
     [p0[0] + dist * v[0], p0[1] + dist * v[1], p0[2] + dist * v[2]]
 }
+
+/// The direction across the key highlight at `p0` on a surface of normal `n` with a uniform
+/// grain `u`: the tangential gradient of g(p) = h(p)·u, h = normalize(l + normalize(eye − p))
+/// (a directional light `l`, a point eye), by central differences in the tangent plane.
+pub fn across_highlight(p0: P, n: P, u: P, l: P, eye: P, step: f64) -> P {
+    let g = |p: P| {
+        let v = unit(sub(eye, p));
+        dot(unit([l[0] + v[0], l[1] + v[1], l[2] + v[2]]), u)
+    };
+    let a =
+        unit(if n[0].abs() < 0.9 { cross(n, [1.0, 0.0, 0.0]) } else { cross(n, [0.0, 1.0, 0.0]) });
+    let b = cross(n, a);
+    let at = |d: P, s: f64| [p0[0] + d[0] * s, p0[1] + d[1] * s, p0[2] + d[2] * s];
+    let (ga, gb) = ((g(at(a, step)) - g(at(a, -step))), (g(at(b, step)) - g(at(b, -step))));
+    unit([a[0] * ga + b[0] * gb, a[1] * ga + b[1] * gb, a[2] * ga + b[2] * gb])
+}
