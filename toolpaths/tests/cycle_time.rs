@@ -42,7 +42,10 @@ fn hand_options(unit: LengthUnit) -> GcodeOptions {
         rapid_rate: Some(6000.0 / k),
         safe_z: 5.0 / k,
         clearance: 1.0 / k,
-        spindle: Spindle::Snippet { on: "M3 S9000\nG4 P1.5 (spin up)".into(), off: "M5 G4 P0.5".into() },
+        spindle: Spindle::Snippet {
+            on: "M3 S9000\nG4 P1.5 (spin up)".into(),
+            off: "M5 G4 P0.5".into(),
+        },
         units: unit,
         ..Default::default()
     }
@@ -57,7 +60,8 @@ fn one_straight_pass_is_timed_exactly() {
         let plan = one_pass(unit.in_mm());
         let o = hand_options(unit);
         let t = cycle_time(&plan, &o).unwrap();
-        let want = [(t.rapid_s, 0.05 + 0.052), (t.plunge_s, 1.04), (t.cut_s, 0.6), (t.dwell_s, 2.0)];
+        let want =
+            [(t.rapid_s, 0.05 + 0.052), (t.plunge_s, 1.04), (t.cut_s, 0.6), (t.dwell_s, 2.0)];
         for (got, w) in want {
             assert!((got - w).abs() < 1e-9, "{unit:?}: {t:?}");
         }
@@ -181,8 +185,7 @@ fn plan(arcs: bool, z_mode: ZMode) -> PlanOptions {
 fn cycle_time_matches_rs274_canonical_moves() {
     let flat = ZMode::Flat { surface_z: 0.0 };
     let surface = ZMode::SurfaceFollowing { max_tilt_deg: 60.0, on_tilt: TiltPolicy::Error };
-    let annulus =
-        field_mesh(annulus_mesh(3.0, 9.0, 12, 96), Symmetry::Vector, |p| [-p[1], p[0]]);
+    let annulus = field_mesh(annulus_mesh(3.0, 9.0, 12, 96), Symmetry::Vector, |p| [-p[1], p[0]]);
     let snippet = Spindle::Snippet { on: "M3 S12000\nG4 P2".into(), off: "M5\nG4 P1".into() };
     let cases = [
         ("sheets", two_sheets(), plan(false, flat), Some(4000.0), snippet),
