@@ -268,7 +268,7 @@ fn the_smoothest_field_on_a_flat_face_with_a_hole_is_parallel() {
         "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
         "view": {"eye": [50, -150, 200], "target": [50, 30, 5]},
         "field": {"init": "smooth", "output": "FIELD.json"}}"#;
-    let f = run_for_field(&dir, &scene);
+    let f = run_for_field(&dir, scene);
     let (pos, nrm, u) = (
         f["position"].as_array().unwrap(),
         f["normal"].as_array().unwrap(),
