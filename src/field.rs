@@ -353,9 +353,7 @@ impl FieldFile {
         f.check_finite().map_err(|e| bad(e.to_string()))?;
         Ok(f)
     }
-}
 
-impl FieldFile {
     /// `version` is 1 or 2; version 2 has `faces`, and every face names three distinct
     /// vertices of the file. The message names the key.
     fn check_version_and_faces(&self) -> std::result::Result<(), String> {
