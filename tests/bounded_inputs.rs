@@ -304,3 +304,48 @@ fn item_3_fifo_mesh_is_refused_without_blocking() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// An OBJ of three vertices and `n` lines of `f 1 2 3`.
+fn repeated_faces(n: usize) -> String {
+    format!("v 0 0 0\nv 1 0 0\nv 0 1 0\n{}", "f 1 2 3\n".repeat(n))
+}
+
+// Item 1: `inspect` on one face repeated N times (or one polygon of N corners over three
+// vertices) compared the faces along an edge pairwise: N² work. An edge joins at most 64 faces
+// (limits::MAX_EDGE_FACES) and a face lists at most 10⁶ corners (limits::MAX_POLYGON_CORNERS),
+// refused naming the file (and the line) even where non-manifold edges are tolerated.
+#[test]
+fn item_1_inspect_is_linear_in_repeated_faces() {
+    use grainline::limits::{MAX_EDGE_FACES, MAX_POLYGON_CORNERS};
+    let d = dir("item1");
+    let p = d.join("rep.obj");
+    let path = p.display().to_string();
+    let out = d.join("f.json").display().to_string();
+    let field = ["field", &path, "--allow-nonmanifold", "--light", "0,0,1", "--view", "0,-1,0"];
+    let field: Vec<&str> = field.into_iter().chain(["--out", &out]).collect();
+    // At the budget: inspected, the edges reported as non-manifold.
+    std::fs::write(&p, repeated_faces(MAX_EDGE_FACES)).unwrap();
+    let o = grainline(&["inspect", &path]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("3 edges, 64 triangles"), "{text}");
+    // One past it, and 10⁵ past it: refused, naming the file, the budget and a few lines.
+    for n in [MAX_EDGE_FACES + 1, 100_000] {
+        std::fs::write(&p, repeated_faces(n)).unwrap();
+        for args in [vec!["inspect", &path], field.clone()] {
+            let o = grainline(&args);
+            assert!(!o.status.success(), "{args:?}");
+            let e = stderr(&o);
+            assert!(e.contains("rep.obj") && e.contains("limits::MAX_EDGE_FACES"), "{e}");
+            assert!(e.contains(&format!("shared by {n} faces (line 4, line 5")), "{e}");
+            assert!(e.len() < 400, "{e}");
+        }
+    }
+    // A face line one corner past the budget: refused at its line, before it is split.
+    let corners = vec!["1 2 3"; MAX_POLYGON_CORNERS / 3 + 1].join(" ");
+    std::fs::write(&p, format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf {corners}\n")).unwrap();
+    let o = grainline(&["inspect", &path]);
+    let e = stderr(&o);
+    assert!(e.contains("rep.obj:4:") && e.contains("limits::MAX_POLYGON_CORNERS"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
