@@ -349,3 +349,58 @@ fn item_1_inspect_is_linear_in_repeated_faces() {
     assert!(e.contains("rep.obj:4:") && e.contains("limits::MAX_POLYGON_CORNERS"), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// An OBJ of one convex polygon of `n` corners on the unit circle (split into a fan).
+fn polygon(n: usize) -> String {
+    let mut s = String::new();
+    for i in 0..n {
+        let t = std::f64::consts::TAU * i as f64 / n as f64;
+        s += &format!("v {} {} {}\n", t.cos(), t.sin(), 0.1 * t.cos() * t.sin());
+    }
+    let corners: Vec<String> = (1..=n).map(|i| i.to_string()).collect();
+    s + "f " + &corners.join(" ") + "\n"
+}
+
+// Item 2: every rim vertex of a fan (a polygon of n corners is split into one) gathered the
+// hub's n neighbours into its 2-ring for the jet fit and ∇φ: n² work. Rings past the 1-ring
+// do not pass through a vertex of more than 128 neighbours and stop at 512 vertices
+// (docs/math.md §5.6, "Bounded rings"); the work is counted, not timed.
+#[test]
+fn item_2_field_is_linear_on_one_huge_polygon_and_fans() {
+    use grainline::geometry::rings::{gather_ring, MAX_RING_POINTS, MAX_RING_VALENCE};
+    use grainline::mesh::Adjacency;
+    let n = 20_000;
+    // A fan of n triangles around vertex 0: the rings of all vertices hold O(n) vertices in all.
+    let faces: Vec<[u32; 3]> = (0..n as u32).map(|k| [0, k + 1, k + 2]).collect();
+    let adj = Adjacency::from_faces(n + 2, &faces);
+    let (mut ring, mut scratch) = (Vec::new(), Vec::new());
+    for depth in 2..=4 {
+        let total: usize = (0..n + 2)
+            .map(|i| {
+                gather_ring(&adj, i, depth, &mut ring, &mut scratch);
+                assert!(i == 0 || ring.len() <= MAX_RING_POINTS);
+                ring.len()
+            })
+            .sum();
+        // The hub's own ring is its n neighbours; each rim vertex's runs along the rim.
+        assert!(total <= n + 1 + (2 * depth + 1) * (n + 1), "depth {depth}: {total}");
+    }
+    // A vertex of at most MAX_RING_VALENCE neighbours is still passed through: a fan of 128.
+    let faces: Vec<[u32; 3]> = (0..MAX_RING_VALENCE as u32 - 1).map(|k| [0, k + 1, k + 2]).collect();
+    let adj = Adjacency::from_faces(MAX_RING_VALENCE + 1, &faces);
+    gather_ring(&adj, 1, 2, &mut ring, &mut scratch);
+    assert_eq!(ring.len(), MAX_RING_VALENCE, "the plain 2-ring: all of the hub's neighbours");
+    // `field` on one polygon of 20,000 corners computes a field for every vertex.
+    let d = dir("item2");
+    let p = d.join("polygon.obj");
+    std::fs::write(&p, polygon(n)).unwrap();
+    let out = d.join("f.json");
+    let (path, out_s) = (p.display().to_string(), out.display().to_string());
+    let args = ["--quiet", "field", &path, "--light", "0.3,0.2,1", "--view", "0,-1,1"];
+    let o = grainline(&[&args[..], &["--out", &out_s]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let field: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(field["u"].as_array().map(Vec::len), Some(n));
+    std::fs::remove_dir_all(&d).unwrap();
+}
