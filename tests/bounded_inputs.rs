@@ -404,3 +404,21 @@ fn item_2_field_is_linear_on_one_huge_polygon_and_fans() {
     assert_eq!(field["u"].as_array().map(Vec::len), Some(n));
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+// Item 8, the rest: `lead_in`, `lead_out`, `ramp_height`, `overtravel` and `contact_depth` are
+// at most 10⁶ scene units, refused when the scene is read naming their key, printed short (1e300
+// used to print a 300-digit number and blame `gcode_options.safe_z`).
+#[test]
+fn item_8_leads_and_ramps_are_bounded_and_named() {
+    let d = dir("item8b");
+    for key in ["lead_in", "lead_out", "ramp_height", "overtravel", "contact_depth"] {
+        let plan = format!(r#", "toolpaths": {{"gcode": "x.ngc", "plan": {{"{key}": 1e300}}}}"#);
+        let o = run(&scene(&d, &plan), Some(&d.join("out")));
+        assert!(!o.status.success(), "{key}");
+        let e = stderr(&o);
+        assert!(e.contains(&format!("toolpaths.plan.{key}")) && e.contains("got 1e300"), "{e}");
+        assert!(!e.contains("safe_z") && e.len() < 300, "{e}");
+        assert!(!d.join("out").join("x.ngc").exists());
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -18,6 +18,11 @@ use crate::place::PlacementOptions;
 /// 5.4 × 10⁶.
 pub const MAX_STROKE_SAMPLES: f64 = 2e7;
 
+/// Largest `plan.lead_in`, `lead_out`, `ramp_height`, `overtravel` and `contact_depth`: 10⁶
+/// scene units (1 km in mm), far beyond any machine's travel. 1e300 used to pass and print a
+/// 300-digit coordinate, or fail as a `gcode.safe_z` error.
+pub const MAX_LEAD_LENGTH: f64 = 1e6;
+
 /// Largest `plan.order.neighbours` (candidate neighbours per stroke end). Default 10.
 pub const MAX_NEIGHBOURS: usize = 256;
 
