@@ -11,6 +11,11 @@
 /// false zero-area ones.
 pub const MAX_COORDINATE: f64 = 1e75;
 
+/// The range of `mesh.scale` (`--scale`): [10⁻¹², 10¹²]. Areas multiply two scaled
+/// coordinates, so a scale of 1e-300 made every area underflow to zero (and was reported as
+/// faces degenerate in UV); unit conversions need factors of 10⁻⁶…10⁶ at most.
+pub const MESH_SCALE_RANGE: (f64, f64) = (1e-12, 1e12);
+
 /// Most triangles (after splitting polygons) a mesh file may hold: 1e9. Corners are indexed by
 /// `u32` and the half-edge structure needs 3·F < 2³² − 1, so 1.43e9 is the hard ceiling; 1e9
 /// keeps a margin (and is 50 GB of binary STL). STL and PLY counts are checked against it, and

@@ -422,3 +422,46 @@ fn item_8_leads_and_ramps_are_bounded_and_named() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+// Item 9: each failure names the key that caused it.
+#[test]
+fn item_9_messages_name_the_key_that_caused_them() {
+    let d = dir("item9");
+    let out = d.join("out");
+    let err = |extra: &str| {
+        let o = run(&scene(&d, extra), Some(&out));
+        assert!(!o.status.success(), "{extra}");
+        stderr(&o)
+    };
+    let mesh_err = |mesh: &str| {
+        let s = scene(&d, "");
+        let text = std::fs::read_to_string(&s).unwrap().replace(r#""vase.obj""#, mesh);
+        std::fs::write(&s, text).unwrap();
+        stderr(&run(&s, Some(&out)))
+    };
+    let e = mesh_err(r#"{"path": "vase.obj", "scale": 1e-300}"#);
+    assert!(e.contains("mesh.scale") && e.contains("1e-300"), "{e}");
+    let e = mesh_err(r#"{"path": "vase.obj", "weld": 1e30}"#);
+    assert!(e.contains("zero area") && e.contains("mesh.weld") && e.contains("1e30"), "{e}");
+    let e = err(r#", "toolpaths": {"svg": "x.svg", "placement": {"test_ratio": 1e-12}}"#);
+    assert!(e.contains("placement.test_ratio") && !e.contains("placement.width:"), "{e}");
+    let e = err(r#", "toolpaths": {"svg": "x.svg", "placement": {"trace": {"max_step": 1e-9}}}"#);
+    assert!(e.contains("trace.max_step") && e.contains("got 1e-9"), "{e}");
+    let edit = r#"{"tool": "bend", "centre": {"point": [0, -30, 30], "bogus": 1}, "radius": 20}"#;
+    let e = err(&format!(r#", "edits": [{edit}]"#));
+    assert!(e.contains("edits[0]") && e.contains("unknown field `bogus`"), "{e}");
+    // A UTF-8 byte-order mark is read past.
+    let s = scene(&d, "");
+    let text = std::fs::read_to_string(&s).unwrap();
+    std::fs::write(&s, format!("\u{feff}{text}")).unwrap();
+    let o = run(&s, Some(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    // An environment light pointing at a mesh: "not an image", without a line 0.
+    let lights = r#"[{"type": "directional", "direction": [0.3, -0.5, 1], "key": true},
+                     {"type": "environment", "file": "vase.obj"}]"#;
+    let render = r#", "render": {"width": 32, "height": 24, "output": "x.png"}"#;
+    let o = run(&scene_with(&d, lights, render), Some(&out));
+    let e = stderr(&o);
+    assert!(e.contains("vase.obj: not an image") && !e.contains(":0:"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}

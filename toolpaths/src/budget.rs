@@ -64,10 +64,17 @@ impl PlacementOptions {
         if e.samples.is_finite() && e.samples <= MAX_STROKE_SAMPLES {
             return Ok(e);
         }
-        // The key to change: the step cap when it alone is below d_test / 2, else overlap
-        // when it shrinks d_sep more than half, else the width.
+        // The key to change: the step cap when it alone is below d_test / 2, else test_ratio
+        // when below its default it alone makes the step so fine, else overlap when it shrinks
+        // d_sep more than half, else the width.
+        let default_ratio = PlacementOptions::default().test_ratio;
+        let at_default_ratio = PlacementOptions { test_ratio: default_ratio, ..self.clone() };
         let key = if self.trace.max_step < 0.5 * self.d_test() {
             "placement.trace.max_step"
+        } else if self.test_ratio < default_ratio
+            && at_default_ratio.estimate(area).samples <= MAX_STROKE_SAMPLES
+        {
+            "placement.test_ratio"
         } else if self.overlap >= 0.5 {
             "placement.overlap"
         } else {
@@ -78,8 +85,8 @@ impl PlacementOptions {
             message: format!(
                 "placing strokes {} mm apart (width {} × (1 − overlap {})) sampled every {} mm \
                  over {} mm² is about {} mm of strokes in {:.2e} samples, beyond the budget of \
-                 {:.0e} samples; widen placement.width, lower placement.overlap, or brush a \
-                 smaller part",
+                 {:.0e} samples; widen placement.width, lower placement.overlap, raise \
+                 placement.test_ratio, or brush a smaller part",
                 g(e.d_sep),
                 g(self.width),
                 g(self.overlap),
