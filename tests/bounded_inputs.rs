@@ -386,7 +386,8 @@ fn item_2_field_is_linear_on_one_huge_polygon_and_fans() {
         assert!(total <= n + 1 + (2 * depth + 1) * (n + 1), "depth {depth}: {total}");
     }
     // A vertex of at most MAX_RING_VALENCE neighbours is still passed through: a fan of 128.
-    let faces: Vec<[u32; 3]> = (0..MAX_RING_VALENCE as u32 - 1).map(|k| [0, k + 1, k + 2]).collect();
+    let faces: Vec<[u32; 3]> =
+        (0..MAX_RING_VALENCE as u32 - 1).map(|k| [0, k + 1, k + 2]).collect();
     let adj = Adjacency::from_faces(MAX_RING_VALENCE + 1, &faces);
     gather_ring(&adj, 1, 2, &mut ring, &mut scratch);
     assert_eq!(ring.len(), MAX_RING_VALENCE, "the plain 2-ring: all of the hub's neighbours");

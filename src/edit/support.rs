@@ -70,7 +70,9 @@ impl TryFrom<CentreKeys> for Centre {
         match (k.vertex, k.point) {
             (Some(v), None) => Ok(Centre::Vertex(v)),
             (None, Some(p)) => Ok(Centre::Point(p)),
-            _ => Err("centre: give exactly one of `vertex` (an index) or `point` ([x, y, z])".into()),
+            _ => {
+                Err("centre: give exactly one of `vertex` (an index) or `point` ([x, y, z])".into())
+            }
         }
     }
 }
