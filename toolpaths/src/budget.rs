@@ -100,6 +100,16 @@ impl PlacementOptions {
     }
 }
 
+/// Check that `value` is finite, ≥ 0 and at most [`MAX_LEAD_LENGTH`].
+pub(crate) fn lead_length(name: &'static str, value: f64) -> Result<f64> {
+    if (0.0..=MAX_LEAD_LENGTH).contains(&value) {
+        Ok(value)
+    } else {
+        let reason = "must be in [0, 1e6] scene units (budget::MAX_LEAD_LENGTH)";
+        Err(ToolpathError::InvalidOption { name, value, reason })
+    }
+}
+
 /// Refuses `plan.order.neighbours` above [`MAX_NEIGHBOURS`].
 pub(crate) fn check_neighbours(k: usize) -> Result<()> {
     if k > MAX_NEIGHBOURS {

@@ -183,16 +183,6 @@ pub(crate) fn exact(x: f64) -> String {
     }
 }
 
-/// Check that `value` is finite, ≥ 0 and at most [`crate::budget::MAX_LEAD_LENGTH`].
-pub(crate) fn lead_length(name: &'static str, value: f64) -> Result<f64> {
-    if (0.0..=crate::budget::MAX_LEAD_LENGTH).contains(&value) {
-        Ok(value)
-    } else {
-        let reason = "must be in [0, 1e6] scene units (budget::MAX_LEAD_LENGTH)";
-        Err(ToolpathError::InvalidOption { name, value, reason })
-    }
-}
-
 /// Check that `value` is finite and ≥ 0.
 pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64> {
     if value.is_finite() && value >= 0.0 {

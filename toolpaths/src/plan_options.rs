@@ -3,7 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{finite, lead_length, positive, Result, ToolpathError};
+use crate::budget::lead_length;
+use crate::error::{finite, positive, Result, ToolpathError};
 use crate::geom::Vec2;
 use crate::order::{Direction, OrderOptions};
 
