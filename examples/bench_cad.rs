@@ -204,27 +204,9 @@ fn edit_row(part: &Part, tris: &[[P; 3]], face: &PlanarFace, tool: &str, out: &P
     let r = (0.04 * d).min(0.6 * clearance);
     let n = face.normal;
     let u = face.world_grain(WORLD);
-    let mut l = unit([0.3, -0.5, 1.0]);
-    if dot(l, n) < 0.2 {
-        let s = cross(n, u);
-        l = unit([0.8 * n[0] + 0.6 * s[0], 0.8 * n[1] + 0.6 * s[1], 0.8 * n[2] + 0.6 * s[2]]);
-    }
-    let eye = eye_on_highlight(p0, u, l, 1.5 * d);
-    // A bend pushes across the key highlight, as the corpus's bends do.
-    let push = across_highlight(p0, n, u, l, eye, 1e-3 * d);
+    let EditSite { light: l, eye, push, curve } = edit_site(p0, n, u, r, d);
     let mut scene = base_scene(part, d, eye, p0, l);
     scene["toolpaths"]["placement"]["width"] = serde_json::json!(r / 6.0);
-    let along = |a: P, s: f64| [p0[0] + a[0] * s, p0[1] + a[1] * s, p0[2] + a[2] * s];
-    let a = unit([u[0] + cross(n, u)[0], u[1] + cross(n, u)[1], u[2] + cross(n, u)[2]]);
-    let b = cross(n, a);
-    let curve: Vec<P> = (0..=40)
-        .map(|i| {
-            let t = i as f64 / 20.0 - 1.0;
-            let q = along(a, 1.25 * r * t);
-            let w = 0.2 * r * (std::f64::consts::PI * t).sin();
-            [q[0] + b[0] * w, q[1] + b[1] * w, q[2] + b[2] * w]
-        })
-        .collect();
     scene["edits"] = match tool {
         "bend" => serde_json::json!([{"tool": "bend", "centre": {"point": p0}, "radius": r,
                                        "strength": 0.8, "direction": push}]),

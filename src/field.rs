@@ -136,18 +136,28 @@ pub struct FieldMeta {
     pub grainline_version: String,
 }
 
-/// FIELD.json: one array per quantity, one entry per vertex, world coordinates.
+/// The FIELD.json version [`FieldFile::new`] writes: 2, which added `faces` to version 1.
+/// [`FieldFile::read`] reads both.
+pub const FIELD_VERSION: u32 = 2;
+
+/// FIELD.json: one array per quantity, one entry per vertex, world coordinates, and the
+/// triangles the field lives on.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FieldFile {
     /// Always `"grainline-field"`.
     pub format: String,
-    /// Format version (1).
+    /// Format version: [`FIELD_VERSION`] when written; 1 (no `faces`) or 2 when read.
     pub version: u32,
     /// Where the data came from.
     pub meta: FieldMeta,
     /// Vertex positions.
     pub position: Vec<[f64; 3]>,
+    /// Version 2: the triangles of the mesh the field lives on (after the patch split and the
+    /// refinement), as vertex indices counter-clockwise around the outward normal. Absent in
+    /// a version-1 file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub faces: Option<Vec<[u32; 3]>>,
     /// Unit vertex normals (jet-refined).
     pub normal: Vec<[f64; 3]>,
     /// Unit grain directions.
@@ -231,7 +241,7 @@ impl FieldFile {
         };
         let file = FieldFile {
             format: "grainline-field".into(),
-            version: 1,
+            version: FIELD_VERSION,
             meta: FieldMeta {
                 mesh: mesh_name.into(),
                 units: mesh.units.as_str().into(),
@@ -248,6 +258,7 @@ impl FieldFile {
                 grainline_version: env!("CARGO_PKG_VERSION").into(),
             },
             position: mesh.positions.iter().map(arr).collect(),
+            faces: Some(mesh.faces.clone()),
             normal: g.frames.iter().map(|f| arr(&f.n)).collect(),
             u: g.directions_of(&r.phi).iter().map(arr).collect(),
             ell: r.highlight.ell.iter().map(arr).collect(),
@@ -319,13 +330,16 @@ impl FieldFile {
         Ok(())
     }
 
-    /// Reads a FIELD.json, checking its format, its array lengths and that every number is finite.
+    /// Reads a FIELD.json of version 1 or 2, checking its format, its version, its array
+    /// lengths, its faces (version 2: present, every index a vertex) and that every number is
+    /// finite.
     pub fn read(path: &Path) -> Result<Self> {
         let f: FieldFile = crate::output::read_json(path)?;
         let bad = |message: String| Error::Parse { path: path.to_path_buf(), line: 0, message };
         if f.format != "grainline-field" {
             return Err(bad(format!("format is {:?}, expected \"grainline-field\"", f.format)));
         }
+        f.check_version_and_faces().map_err(bad)?;
         let n = f.position.len();
         let lens = [
             ("normal", f.normal.len()),
@@ -343,6 +357,31 @@ impl FieldFile {
         }
         f.check_finite().map_err(|e| bad(e.to_string()))?;
         Ok(f)
+    }
+
+    /// `version` is 1 or 2; version 2 has `faces`, and every face names three distinct
+    /// vertices of the file. The message names the key.
+    fn check_version_and_faces(&self) -> std::result::Result<(), String> {
+        match (self.version, &self.faces) {
+            (1, _) | (2, Some(_)) => {}
+            (2, None) => return Err("version 2 needs `faces` (the mesh's triangles)".into()),
+            (v, _) => {
+                return Err(format!(
+                    "version is {v}; this grainline reads versions 1 and {FIELD_VERSION}"
+                ))
+            }
+        }
+        let n = self.position.len();
+        let faces = self.faces.as_deref().unwrap_or_default();
+        for (k, face) in faces.iter().enumerate() {
+            if let Some(&v) = face.iter().find(|&&v| v as usize >= n) {
+                return Err(format!("faces[{k}] names vertex {v}, position has {n}"));
+            }
+            if face[0] == face[1] || face[1] == face[2] || face[0] == face[2] {
+                return Err(format!("faces[{k}] repeats a vertex: {face:?}"));
+            }
+        }
+        Ok(())
     }
 }
 

@@ -11,6 +11,11 @@
 /// false zero-area ones.
 pub const MAX_COORDINATE: f64 = 1e75;
 
+/// The range of `mesh.scale` (`--scale`): [10⁻¹², 10¹²]. Areas multiply two scaled
+/// coordinates, so a scale of 1e-300 made every area underflow to zero (and was reported as
+/// faces degenerate in UV); unit conversions need factors of 10⁻⁶…10⁶ at most.
+pub const MESH_SCALE_RANGE: (f64, f64) = (1e-12, 1e12);
+
 /// Most triangles (after splitting polygons) a mesh file may hold: 1e9. Corners are indexed by
 /// `u32` and the half-edge structure needs 3·F < 2³² − 1, so 1.43e9 is the hard ceiling; 1e9
 /// keeps a margin (and is 50 GB of binary STL). STL and PLY counts are checked against it, and
@@ -21,9 +26,18 @@ pub const MAX_FILE_TRIANGLES: usize = 1_000_000_000;
 /// triangle), below `u32::MAX` so every vertex has a `u32` index.
 pub const MAX_FILE_VERTICES: usize = 3 * MAX_FILE_TRIANGLES;
 
-/// Most corners one PLY face may list: 1e6 (a polygon is split into triangles; a list count
-/// beyond this is taken for a corrupt file rather than read).
+/// Most corners one face may list: 1e6, in a PLY face list or an OBJ `f` line (a polygon is
+/// split into triangles; a count beyond this is taken for a corrupt file rather than read, and
+/// an OBJ line is refused at its 10⁶+1-th corner).
 pub const MAX_POLYGON_CORNERS: usize = 1_000_000;
+
+/// Most faces one edge of a mesh may join: 64 (a manifold edge has two, a fin three or four).
+/// The crease-aware normals compare the faces along each edge pairwise, so an edge shared by
+/// N faces (a file repeating `f 1 2 3` N times, or one polygon of N corners over three
+/// vertices) costs N²: 20,000 such faces took 8 s. With at most 64 per edge that work is at
+/// most 32 comparisons per face. Checked when the edges are classified (linear), before any
+/// geometry, for every mesh file (also under `--allow-nonmanifold` and in `inspect`).
+pub const MAX_EDGE_FACES: usize = 64;
 
 /// Most triangles a panel (`outline`, `grainline panel`) may be estimated to get:
 /// 4 × 10⁶ (the refinement's own guard adds at most 2 × 10⁶ vertices, about as many

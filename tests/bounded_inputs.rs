@@ -304,3 +304,165 @@ fn item_3_fifo_mesh_is_refused_without_blocking() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// An OBJ of three vertices and `n` lines of `f 1 2 3`.
+fn repeated_faces(n: usize) -> String {
+    format!("v 0 0 0\nv 1 0 0\nv 0 1 0\n{}", "f 1 2 3\n".repeat(n))
+}
+
+// Item 1: `inspect` on one face repeated N times (or one polygon of N corners over three
+// vertices) compared the faces along an edge pairwise: N² work. An edge joins at most 64 faces
+// (limits::MAX_EDGE_FACES) and a face lists at most 10⁶ corners (limits::MAX_POLYGON_CORNERS),
+// refused naming the file (and the line) even where non-manifold edges are tolerated.
+#[test]
+fn item_1_inspect_is_linear_in_repeated_faces() {
+    use grainline::limits::{MAX_EDGE_FACES, MAX_POLYGON_CORNERS};
+    let d = dir("item1");
+    let p = d.join("rep.obj");
+    let path = p.display().to_string();
+    let out = d.join("f.json").display().to_string();
+    let field = ["field", &path, "--allow-nonmanifold", "--light", "0,0,1", "--view", "0,-1,0"];
+    let field: Vec<&str> = field.into_iter().chain(["--out", &out]).collect();
+    // At the budget: inspected, the edges reported as non-manifold.
+    std::fs::write(&p, repeated_faces(MAX_EDGE_FACES)).unwrap();
+    let o = grainline(&["inspect", &path]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("3 edges, 64 triangles"), "{text}");
+    // One past it, and 10⁵ past it: refused, naming the file, the budget and a few lines.
+    for n in [MAX_EDGE_FACES + 1, 100_000] {
+        std::fs::write(&p, repeated_faces(n)).unwrap();
+        for args in [vec!["inspect", &path], field.clone()] {
+            let o = grainline(&args);
+            assert!(!o.status.success(), "{args:?}");
+            let e = stderr(&o);
+            assert!(e.contains("rep.obj") && e.contains("limits::MAX_EDGE_FACES"), "{e}");
+            assert!(e.contains(&format!("shared by {n} faces (line 4, line 5")), "{e}");
+            assert!(e.len() < 400, "{e}");
+        }
+    }
+    // A face line one corner past the budget: refused at its line, before it is split.
+    let corners = vec!["1 2 3"; MAX_POLYGON_CORNERS / 3 + 1].join(" ");
+    std::fs::write(&p, format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nf {corners}\n")).unwrap();
+    let o = grainline(&["inspect", &path]);
+    let e = stderr(&o);
+    assert!(e.contains("rep.obj:4:") && e.contains("limits::MAX_POLYGON_CORNERS"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// An OBJ of one convex polygon of `n` corners on the unit circle (split into a fan).
+fn polygon(n: usize) -> String {
+    let mut s = String::new();
+    for i in 0..n {
+        let t = std::f64::consts::TAU * i as f64 / n as f64;
+        s += &format!("v {} {} {}\n", t.cos(), t.sin(), 0.1 * t.cos() * t.sin());
+    }
+    let corners: Vec<String> = (1..=n).map(|i| i.to_string()).collect();
+    s + "f " + &corners.join(" ") + "\n"
+}
+
+// Item 2: every rim vertex of a fan (a polygon of n corners is split into one) gathered the
+// hub's n neighbours into its 2-ring for the jet fit and ∇φ: n² work. Rings past the 1-ring
+// do not pass through a vertex of more than 128 neighbours and stop at 512 vertices
+// (docs/math.md §5.6, "Bounded rings"); the work is counted, not timed.
+#[test]
+fn item_2_field_is_linear_on_one_huge_polygon_and_fans() {
+    use grainline::geometry::rings::{gather_ring, MAX_RING_POINTS, MAX_RING_VALENCE};
+    use grainline::mesh::Adjacency;
+    let n = 20_000;
+    // A fan of n triangles around vertex 0: the rings of all vertices hold O(n) vertices in all.
+    let faces: Vec<[u32; 3]> = (0..n as u32).map(|k| [0, k + 1, k + 2]).collect();
+    let adj = Adjacency::from_faces(n + 2, &faces);
+    let (mut ring, mut scratch) = (Vec::new(), Vec::new());
+    for depth in 2..=4 {
+        let total: usize = (0..n + 2)
+            .map(|i| {
+                gather_ring(&adj, i, depth, &mut ring, &mut scratch);
+                assert!(i == 0 || ring.len() <= MAX_RING_POINTS);
+                ring.len()
+            })
+            .sum();
+        // The hub's own ring is its n neighbours; each rim vertex's runs along the rim.
+        assert!(total <= n + 1 + (2 * depth + 1) * (n + 1), "depth {depth}: {total}");
+    }
+    // A vertex of at most MAX_RING_VALENCE neighbours is still passed through: a fan of 128.
+    let faces: Vec<[u32; 3]> =
+        (0..MAX_RING_VALENCE as u32 - 1).map(|k| [0, k + 1, k + 2]).collect();
+    let adj = Adjacency::from_faces(MAX_RING_VALENCE + 1, &faces);
+    gather_ring(&adj, 1, 2, &mut ring, &mut scratch);
+    assert_eq!(ring.len(), MAX_RING_VALENCE, "the plain 2-ring: all of the hub's neighbours");
+    // `field` on one polygon of 20,000 corners computes a field for every vertex.
+    let d = dir("item2");
+    let p = d.join("polygon.obj");
+    std::fs::write(&p, polygon(n)).unwrap();
+    let out = d.join("f.json");
+    let (path, out_s) = (p.display().to_string(), out.display().to_string());
+    let args = ["--quiet", "field", &path, "--light", "0.3,0.2,1", "--view", "0,-1,1"];
+    let o = grainline(&[&args[..], &["--out", &out_s]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let field: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(field["u"].as_array().map(Vec::len), Some(n));
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// Item 8, the rest: `lead_in`, `lead_out`, `ramp_height`, `overtravel` and `contact_depth` are
+// at most 10⁶ scene units, refused when the scene is read naming their key, printed short (1e300
+// used to print a 300-digit number and blame `gcode_options.safe_z`).
+#[test]
+fn item_8_leads_and_ramps_are_bounded_and_named() {
+    let d = dir("item8b");
+    for key in ["lead_in", "lead_out", "ramp_height", "overtravel", "contact_depth"] {
+        let plan = format!(r#", "toolpaths": {{"gcode": "x.ngc", "plan": {{"{key}": 1e300}}}}"#);
+        let o = run(&scene(&d, &plan), Some(&d.join("out")));
+        assert!(!o.status.success(), "{key}");
+        let e = stderr(&o);
+        assert!(e.contains(&format!("toolpaths.plan.{key}")) && e.contains("got 1e300"), "{e}");
+        assert!(!e.contains("safe_z") && e.len() < 300, "{e}");
+        assert!(!d.join("out").join("x.ngc").exists());
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// Item 9: each failure names the key that caused it.
+#[test]
+fn item_9_messages_name_the_key_that_caused_them() {
+    let d = dir("item9");
+    let out = d.join("out");
+    let err = |extra: &str| {
+        let o = run(&scene(&d, extra), Some(&out));
+        assert!(!o.status.success(), "{extra}");
+        stderr(&o)
+    };
+    let mesh_err = |mesh: &str| {
+        let s = scene(&d, "");
+        let text = std::fs::read_to_string(&s).unwrap().replace(r#""vase.obj""#, mesh);
+        std::fs::write(&s, text).unwrap();
+        stderr(&run(&s, Some(&out)))
+    };
+    let e = mesh_err(r#"{"path": "vase.obj", "scale": 1e-300}"#);
+    assert!(e.contains("mesh.scale") && e.contains("1e-300"), "{e}");
+    let e = mesh_err(r#"{"path": "vase.obj", "weld": 1e30}"#);
+    assert!(e.contains("zero area") && e.contains("mesh.weld") && e.contains("1e30"), "{e}");
+    let e = err(r#", "toolpaths": {"svg": "x.svg", "placement": {"test_ratio": 1e-12}}"#);
+    assert!(e.contains("placement.test_ratio") && !e.contains("placement.width:"), "{e}");
+    let e = err(r#", "toolpaths": {"svg": "x.svg", "placement": {"trace": {"max_step": 1e-9}}}"#);
+    assert!(e.contains("trace.max_step") && e.contains("got 1e-9"), "{e}");
+    let edit = r#"{"tool": "bend", "centre": {"point": [0, -30, 30], "bogus": 1}, "radius": 20}"#;
+    let e = err(&format!(r#", "edits": [{edit}]"#));
+    assert!(e.contains("edits[0]") && e.contains("unknown field `bogus`"), "{e}");
+    // A UTF-8 byte-order mark is read past.
+    let s = scene(&d, "");
+    let text = std::fs::read_to_string(&s).unwrap();
+    std::fs::write(&s, format!("\u{feff}{text}")).unwrap();
+    let o = run(&s, Some(&out));
+    assert!(o.status.success(), "{}", stderr(&o));
+    // An environment light pointing at a mesh: "not an image", without a line 0.
+    let lights = r#"[{"type": "directional", "direction": [0.3, -0.5, 1], "key": true},
+                     {"type": "environment", "file": "vase.obj"}]"#;
+    let render = r#", "render": {"width": 32, "height": 24, "output": "x.png"}"#;
+    let o = run(&scene_with(&d, lights, render), Some(&out));
+    let e = stderr(&o);
+    assert!(e.contains("vase.obj: not an image") && !e.contains(":0:"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}

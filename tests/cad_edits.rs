@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use cad_truth::{
-    across_highlight, angle_deg, cross, dot, eye_on_highlight, norm, segment_distance, sub, unit, P,
+    angle_deg, dot, edit_site, eye_on_highlight, norm, segment_distance, sub, unit, P,
 };
 use grainline::generate::cad::{self, AnalyticFace, CadPart};
 use nalgebra::Vector3;
@@ -182,25 +182,9 @@ fn edits_land(part: &CadPart, face: usize, tag: &str) {
     let r = (0.04 * d).min(0.6 * clearance);
     let n = outward(part, face, p0);
     let u = grain(n, WORLD);
-    let mut l = unit([0.3, -0.5, 1.0]);
-    if dot(l, n) < 0.2 {
-        let s = cross(n, u);
-        l = unit([0.8 * n[0] + 0.6 * s[0], 0.8 * n[1] + 0.6 * s[1], 0.8 * n[2] + 0.6 * s[2]]);
-    }
-    let eye = eye_on_highlight(p0, u, l, 1.5 * d);
-    // A bend pushes across the key highlight, as the corpus's bends do.
-    let push = across_highlight(p0, n, u, l, eye, 1e-3 * d);
-    let s = cross(n, u);
-    let across = unit([u[0] + s[0], u[1] + s[1], u[2] + s[2]]);
-    let b = cross(n, across);
-    let curve: Vec<P> = (0..=40)
-        .map(|i| {
-            let t = i as f64 / 20.0 - 1.0;
-            let w = 0.2 * r * (std::f64::consts::PI * t).sin();
-            let q = [0, 1, 2].map(|k| p0[k] + across[k] * 1.25 * r * t + b[k] * w);
-            onto(&part.faces[face], q)
-        })
-        .collect();
+    let site = edit_site(p0, n, u, r, d);
+    let (l, eye, push) = (site.light, site.eye, site.push);
+    let curve: Vec<P> = site.curve.iter().map(|&q| onto(&part.faces[face], q)).collect();
     let edit = Edit { p0, r, curve };
     // The same scene without the edit: the strokes and grain the edit must leave alone.
     let base = scratch(&format!("{tag}-base"));
@@ -210,7 +194,7 @@ fn edits_land(part: &CadPart, face: usize, tag: &str) {
         let edits = match tool {
             "bend" => {
                 serde_json::json!([{"tool": "bend", "centre": {"point": edit.p0}, "radius": edit.r,
-                                           "strength": 0.8, "direction": u}])
+                                           "strength": 0.8, "direction": push}])
             }
             _ => {
                 serde_json::json!([{"tool": "curve", "points": [edit.curve], "radius": edit.r / 3.0}])

@@ -88,6 +88,18 @@ fn angle_deg(a: [f64; 3], b: [f64; 3], line: bool) -> f64 {
     c.clamp(-1.0, 1.0).acos().to_degrees()
 }
 
+/// Runs `scene` from `dir`; returns its FIELD.json (`field.output`).
+fn run_for_field(dir: &Path, scene: &str) -> serde_json::Value {
+    std::fs::write(dir.join("scene.json"), scene).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&std::fs::read(dir.join("FIELD.json")).unwrap()).unwrap()
+}
+
 /// Runs the plate's scene; returns the directory with its outputs.
 fn run_plate(name: &str, patches: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("grainline-cad-{name}-{}", std::process::id()));
@@ -256,15 +268,7 @@ fn the_smoothest_field_on_a_flat_face_with_a_hole_is_parallel() {
         "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
         "view": {"eye": [50, -150, 200], "target": [50, 30, 5]},
         "field": {"init": "smooth", "output": "FIELD.json"}}"#;
-    std::fs::write(dir.join("scene.json"), scene).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(dir.join("scene.json"))
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let f: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("FIELD.json")).unwrap()).unwrap();
+    let f = run_for_field(&dir, scene);
     let (pos, nrm, u) = (
         f["position"].as_array().unwrap(),
         f["normal"].as_array().unwrap(),
@@ -321,15 +325,7 @@ fn a_world_grain_on_a_cylinder_is_the_analytic_projection() {
             "field": {{"init": "world", "world": [{}, {}, {}], "output": "FIELD.json"}}}}"#,
         w[0], w[1], w[2]
     );
-    std::fs::write(dir.join("scene.json"), scene).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(dir.join("scene.json"))
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let f: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.join("FIELD.json")).unwrap()).unwrap();
+    let f = run_for_field(&dir, &scene);
     let (pos, nrm, u) = (
         f["position"].as_array().unwrap(),
         f["normal"].as_array().unwrap(),

@@ -52,8 +52,11 @@ pub fn run(args: RenderArgs, quiet: bool) -> anyhow::Result<()> {
     if let Some(p) = &args.linear {
         settings.linear = Some(absolute(p)?);
     }
-    // Only the preview is written: the toolpath exports are dropped (the strokes are still
-    // traced when an effect needs them).
+    // Only the preview is written: the toolpath exports and FIELD.json are dropped (the
+    // strokes are still traced when an effect needs them; a `--field` render of the scene
+    // whose `field.output` wrote that file would otherwise be refused, or overwrite it with
+    // the initial field).
+    scene.scene.field.output = None;
     if let Some(t) = scene.scene.toolpaths.as_mut() {
         t.svg = None;
         t.gcode = None;

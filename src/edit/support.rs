@@ -39,13 +39,42 @@ use crate::geometry::Frame;
 use crate::{Error, Result};
 
 /// Where a brush is centred: `{"vertex": 12}` or `{"point": [x, y, z]}`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[derive(Clone, Debug, PartialEq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Centre {
     /// A vertex index.
     Vertex(u32),
     /// A point in scene units, projected to the closest point of the surface.
     Point([f64; 3]),
+}
+
+/// `centre` as written: read as a map so an unknown key is named (an enum read inside an edit
+/// only said "expected map with a single key").
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CentreKeys {
+    vertex: Option<u32>,
+    point: Option<[f64; 3]>,
+}
+
+impl<'de> Deserialize<'de> for Centre {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        Centre::try_from(CentreKeys::deserialize(d)?).map_err(serde::de::Error::custom)
+    }
+}
+
+impl TryFrom<CentreKeys> for Centre {
+    type Error = String;
+
+    fn try_from(k: CentreKeys) -> std::result::Result<Self, String> {
+        match (k.vertex, k.point) {
+            (Some(v), None) => Ok(Centre::Vertex(v)),
+            (None, Some(p)) => Ok(Centre::Point(p)),
+            _ => {
+                Err("centre: give exactly one of `vertex` (an index) or `point` ([x, y, z])".into())
+            }
+        }
+    }
 }
 
 impl Centre {

@@ -46,6 +46,8 @@ pub struct HalfEdges {
     kind: Vec<u8>,
     num_edges: usize,
     steps: u64,
+    /// The edge with the most half-edges along it: (its representative, that count).
+    widest: (u32, u32),
 }
 
 impl HalfEdges {
@@ -63,8 +65,9 @@ impl HalfEdges {
         }
         let mut he = HalfEdges { faces: faces.to_vec(), ..Default::default() };
         he.build_out_lists(num_vertices);
-        let (twin, kind, num_edges, steps) = he.classify_all(num_vertices);
-        (he.twin, he.kind, he.num_edges, he.steps) = (twin, kind, num_edges, steps);
+        let (twin, kind, num_edges, steps, widest) = he.classify_all(num_vertices);
+        (he.twin, he.kind, he.num_edges, he.steps, he.widest) =
+            (twin, kind, num_edges, steps, widest);
         Ok(he)
     }
 
@@ -95,7 +98,8 @@ impl HalfEdges {
         (self.out_offsets, self.out_edges, self.out_dest) = (offsets, edges, dest);
     }
 
-    /// Twins, kinds (with the representative bit) and the number of undirected edges.
+    /// Twins, kinds (with the representative bit), the number of undirected edges, the loop
+    /// iterations and the widest edge (its representative and its number of half-edges).
     ///
     /// The half-edges are ordered by their undirected key `(min, max)` of end vertices with two
     /// stable counting sorts (by `max`, then by `min`): O(V + H) work whatever the vertex
@@ -103,7 +107,7 @@ impl HalfEdges {
     /// undirected edge; a half-edge along it is classified by how many of the run's half-edges
     /// run its way (`same`) and the other way (`opp`). A degenerate edge `a → a` counts every
     /// half-edge of its run both ways, as a scan of `a`'s outgoing list would.
-    fn classify_all(&self, nv: usize) -> (Vec<u32>, Vec<u8>, usize, u64) {
+    fn classify_all(&self, nv: usize) -> (Vec<u32>, Vec<u8>, usize, u64, (u32, u32)) {
         let nh = 3 * self.faces.len();
         let ends = |h: u32| (self.origin(h), self.dest(h));
         let key = |h: u32| {
@@ -136,6 +140,7 @@ impl HalfEdges {
         drop(by_max);
         let (mut twin, mut kind) = (vec![NO_HALFEDGE; nh], vec![0u8; nh]);
         let mut num_edges = 0;
+        let mut widest = (NO_HALFEDGE, 0u32);
         let mut i = 0;
         while i < nh {
             let k = key(order[i]);
@@ -150,6 +155,9 @@ impl HalfEdges {
             let (a0, _) = ends(run[0]);
             let along_a0 = run.iter().filter(|&&h| ends(h).0 == a0).count() as u32;
             let total = run.len() as u32;
+            if total > widest.1 {
+                widest = (min_id, total);
+            }
             for &h in run {
                 let (a, b) = ends(h);
                 let (same, opp) = if a == b {
@@ -175,7 +183,7 @@ impl HalfEdges {
             }
             i = j;
         }
-        (twin, kind, num_edges, steps)
+        (twin, kind, num_edges, steps, widest)
     }
 
     fn out_range(&self, v: u32) -> std::ops::Range<usize> {
@@ -187,6 +195,12 @@ impl HalfEdges {
     /// bound, which no wall-clock test could check reliably.
     pub fn classify_steps(&self) -> u64 {
         self.steps
+    }
+
+    /// The edge with the most faces along it (the first such, by half-edge index): one of its
+    /// half-edges and its number of faces; `None` for a mesh without faces.
+    pub fn widest_edge(&self) -> Option<(u32, usize)> {
+        (self.widest.1 > 0).then_some((self.widest.0, self.widest.1 as usize))
     }
 
     /// Number of vertices.

@@ -363,8 +363,15 @@ fn scanned_models(scan: &Scan) -> Vec<Model> {
 }
 
 fn check_options(o: &LoadOptions) -> Result<()> {
-    if !(o.scale.is_finite() && o.scale > 0.0) {
-        return Err(Error::invalid_arg("scale", format!("{} is not a positive number", o.scale)));
+    let (lo, hi) = crate::limits::MESH_SCALE_RANGE;
+    if !(o.scale.is_finite() && (lo..=hi).contains(&o.scale)) {
+        return Err(Error::invalid_arg(
+            "scale",
+            format!(
+                "{} is not in [1e-12, 1e12] (limits::MESH_SCALE_RANGE)",
+                crate::error::fmt_num(o.scale)
+            ),
+        ));
     }
     if let Some(t) = o.weld {
         if !(t.is_finite() && t >= 0.0) {
@@ -592,7 +599,7 @@ impl Builder<'_> {
 
     fn empty(&self, dropped: usize) -> Error {
         let message = if dropped > 0 {
-            format!("no faces left: all {dropped} faces have zero area")
+            zero_area_message(dropped, self.options)
         } else if self.options.object.is_some() {
             "the selected object has no faces".to_string()
         } else {
@@ -752,6 +759,20 @@ impl Builder<'_> {
             self.options.allow_inconsistent_orientation,
         )
     }
+}
+
+/// "no faces left: all N faces have zero area", naming the weld tolerance when one was given
+/// (a tolerance beyond the part's size merges every vertex into one).
+pub(super) fn zero_area_message(dropped: usize, options: &LoadOptions) -> String {
+    let weld = match options.weld {
+        Some(t) if t > 0.0 => format!(
+            " after welding vertices within {} (mesh.weld, --weld): is the tolerance larger \
+             than the part's edges?",
+            crate::error::fmt_num(t)
+        ),
+        _ => String::new(),
+    };
+    format!("no faces left: all {dropped} faces have zero area{weld}")
 }
 
 trait AllFinite {

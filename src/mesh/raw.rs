@@ -116,7 +116,7 @@ pub(crate) fn build(
     }
     if tris.is_empty() {
         let message = if dropped > 0 {
-            format!("no faces left: all {dropped} faces have zero area")
+            super::load::zero_area_message(dropped, options)
         } else {
             "no faces: empty mesh".to_string()
         };

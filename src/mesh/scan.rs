@@ -13,6 +13,7 @@
 
 use std::path::Path;
 
+use crate::limits::MAX_POLYGON_CORNERS;
 use crate::{Error, Result};
 
 /// Marks a corner without a texture coordinate or normal.
@@ -298,6 +299,16 @@ impl Scanner<'_> {
     ) -> Result<()> {
         self.corners.clear();
         for tok in toks {
+            if self.corners.len() == MAX_POLYGON_CORNERS {
+                return Err(parse_err(
+                    self.path,
+                    line_no,
+                    format!(
+                        "face with more than {MAX_POLYGON_CORNERS} corners \
+                         (limits::MAX_POLYGON_CORNERS)"
+                    ),
+                ));
+            }
             let c = self.corner(line_no, tok)?;
             self.corners.push(c);
         }

@@ -108,6 +108,11 @@ impl<'a> Lines<'a> {
                 if tok != usize::MAX {
                     toks.push((tok - start, i - start));
                     tok = usize::MAX;
+                    // A line past the corner budget: the sequential scanner refuses it.
+                    if toks.len() > crate::limits::MAX_POLYGON_CORNERS + 1 {
+                        (self.bad, self.at) = (true, bytes.len());
+                        return None;
+                    }
                 }
             } else if tok == usize::MAX {
                 tok = i;

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::halfedge::{EdgeKind, HalfEdges};
 use super::topology::{nonmanifold_vertices_from_flags, vertex_flags};
 use super::VertexId;
+use crate::limits::MAX_EDGE_FACES;
 use crate::{Error, Result};
 
 /// The structural problems of a mesh.
@@ -99,6 +100,28 @@ fn few(shown: &[String], total: usize) -> String {
     }
 }
 
+/// Refuses an edge shared by more than [`MAX_EDGE_FACES`] faces (whatever is allowed).
+fn check_edge_faces(path: &Path, he: &HalfEdges, names: &FileNames<'_>) -> Result<()> {
+    match he.widest_edge() {
+        Some((h, n)) if n > MAX_EDGE_FACES => {
+            let faces = he.edge_faces(h);
+            let lines: Vec<String> =
+                faces.iter().take(FACES_LISTED).map(|f| names.face(f.0)).collect();
+            Err(Error::NonManifold {
+                path: path.to_owned(),
+                message: format!(
+                    "the edge between vertices {} and {} is shared by {n} faces ({}); at most \
+                     {MAX_EDGE_FACES} faces may share an edge (limits::MAX_EDGE_FACES)",
+                    names.vertex(he.origin(h)),
+                    names.vertex(he.dest(h)),
+                    few(&lines, n),
+                ),
+            })
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Finds every structural problem.
 pub(crate) fn find_problems(he: &HalfEdges) -> Problems {
     let flags: Vec<u8> =
@@ -110,7 +133,8 @@ pub(crate) fn find_problems(he: &HalfEdges) -> Problems {
     }
 }
 
-/// Refuses the mesh for the first problem found, unless allowed.
+/// Refuses the mesh for the first problem found, unless allowed; an edge of more than
+/// [`MAX_EDGE_FACES`] faces also when non-manifold edges are allowed.
 pub(crate) fn check(
     path: &Path,
     he: &HalfEdges,
@@ -138,6 +162,7 @@ pub(crate) fn check(
             });
         }
     }
+    check_edge_faces(path, he, names)?;
     if !allow_inconsistent {
         if let Some(&h) = p.inconsistent_edges.first() {
             let faces = he.edge_faces(h);

@@ -14,7 +14,7 @@ pub use super::trace::{toolpath_section, ToolpathFigures};
 use super::trace::{trace, TraceInput};
 use super::{output_path, prepare_with, Observer, Prepared, StageTime, Stages};
 use crate::field::FieldFile;
-use crate::highlight::Lighting;
+use crate::highlight::{highlight_field_near, Lighting};
 use crate::output::{json_compact, json_pretty, Staged};
 use crate::render::RenderReport;
 use crate::scene::LoadedScene;
@@ -141,7 +141,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         }
         _ => None,
     };
-    let shown = Shown::of(&prepared, optimized.as_ref(), given_phi);
+    let shown = Shown::of(&prepared, optimized.as_ref(), given_phi, s.scene.render.is_some());
     let mut out = Outputs { s, options, staged: &mut staged };
     if let Some(p) = &s.scene.field.output {
         stages.start("write field");
@@ -262,16 +262,33 @@ struct Shown<'a> {
     /// solver's own φ may differ from them by whole turns, and cos/sin of φ + 2π by an ulp.
     /// Else the given field's angles.
     phi: Option<Vec<f64>>,
+    /// ℓ (Eq. 7) of the given field (`--field`) under the scene's lighting, for the preview's
+    /// LIC and statistics (issue 33, item 4: they showed the initial field's ℓ).
+    given_ell: Option<Vec<Vector3<f64>>>,
 }
 
 impl<'a> Shown<'a> {
-    fn of(p: &Prepared, optimized: Option<&'a Optimized>, given: Option<Vec<f64>>) -> Self {
+    /// The field shown; `render`: ℓ of a given field is computed for the preview.
+    fn of(
+        p: &Prepared,
+        optimized: Option<&'a Optimized>,
+        given: Option<Vec<f64>>,
+        render: bool,
+    ) -> Self {
         let g = &p.field.geometry;
+        let (symmetry, form) = (p.field_options.symmetry, p.field_options.gradient_form);
+        let given_ell = match (optimized, &given) {
+            (None, Some(phi)) if render => {
+                let hg = p.field.h_gradient.as_deref();
+                Some(highlight_field_near(g, phi, symmetry, form, &p.field.h, hg).ell)
+            }
+            _ => None,
+        };
         let phi = match optimized {
             Some(o) => Some(g.angles_of(&g.directions_of(&o.phi))),
             None => given,
         };
-        Shown { optimized, phi }
+        Shown { optimized, phi, given_ell }
     }
     fn phi<'b>(&'b self, p: &'b Prepared) -> &'b [f64] {
         self.phi.as_deref().unwrap_or(&p.field.phi)
@@ -283,7 +300,11 @@ impl<'a> Shown<'a> {
         self.optimized.map_or(&p.field.h_gradient, |o| &o.h_gradient).as_deref()
     }
     fn ell<'b>(&'b self, p: &'b Prepared) -> &'b [Vector3<f64>] {
-        self.optimized.map_or(&p.field.highlight.ell, |o| &o.highlight.ell)
+        match (self.optimized, &self.given_ell) {
+            (Some(o), _) => &o.highlight.ell,
+            (None, Some(ell)) => ell,
+            (None, None) => &p.field.highlight.ell,
+        }
     }
     fn critical<'b>(&'b self, p: &'b Prepared) -> &'b [bool] {
         self.optimized.map_or(&p.field.critical, |o| &o.critical)

@@ -34,8 +34,16 @@ impl EnvMap {
         let bytes =
             std::fs::read(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
         let is_png = bytes.starts_with(b"\x89PNG");
-        let r = if is_png { parse_png(&bytes) } else { parse_hdr(&bytes) };
-        r.map_err(|message| Error::Parse { path: path.to_path_buf(), line: 0, message })
+        let is_hdr = bytes.starts_with(b"#?RADIANCE") || bytes.starts_with(b"#?RGBE");
+        let r = match (is_png, is_hdr) {
+            (true, _) => parse_png(&bytes),
+            (_, true) => parse_hdr(&bytes),
+            _ => Err("not an image: an environment light reads a Radiance .hdr (starting \
+                      `#?RADIANCE` or `#?RGBE`) or a PNG"
+                .into()),
+        };
+        // No line: an image has none.
+        r.map_err(|message| Error::Scene { path: path.to_path_buf(), line: None, message })
     }
 
     /// A deterministic set of `n` samples: texels chosen by inverting the luminance × sin θ

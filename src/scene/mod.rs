@@ -91,6 +91,8 @@ impl Scene {
     /// # Ok::<(), grainline::Error>(())
     /// ```
     pub fn from_str(text: &str, path: &Path) -> Result<Scene> {
+        // A UTF-8 byte-order mark (as some Windows editors write) is read past.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut de = serde_json::Deserializer::from_str(text);
         let scene: Scene = serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let key = e.path().to_string();

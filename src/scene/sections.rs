@@ -212,10 +212,14 @@ impl MeshSection {
             }
         }
         m.refine.validate().map_err(|e| crate::scene::prefix("refine", e))?;
-        if !(m.scale.is_finite() && m.scale > 0.0) {
+        let (lo, hi) = crate::limits::MESH_SCALE_RANGE;
+        if !(m.scale.is_finite() && (lo..=hi).contains(&m.scale)) {
             return Err(Error::setting(
                 "scale",
-                format!("must be a finite number > 0, got {}", crate::error::fmt_num(m.scale)),
+                format!(
+                    "must be in [1e-12, 1e12] (limits::MESH_SCALE_RANGE), got {}",
+                    crate::error::fmt_num(m.scale)
+                ),
             ));
         }
         Ok(())

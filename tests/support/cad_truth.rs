@@ -363,3 +363,37 @@ pub fn across_highlight(p0: P, n: P, u: P, l: P, eye: P, step: f64) -> P {
     let (ga, gb) = ((g(at(a, step)) - g(at(a, -step))), (g(at(b, step)) - g(at(b, -step))));
     unit([a[0] * ga + b[0] * gb, a[1] * ga + b[1] * gb, a[2] * ga + b[2] * gb])
 }
+
+/// Where and how a test edit is seen: a key light above the surface, an eye that puts the key
+/// highlight through the brush's centre, the push across that highlight (for a bend), and a
+/// drawn S-curve (tangent-plane points, for a curve).
+pub struct EditSite {
+    pub light: P,
+    pub eye: P,
+    pub push: P,
+    pub curve: Vec<P>,
+}
+
+/// The [`EditSite`] at `p0` on a surface of normal `n` with grain `u`, for a brush of radius
+/// `r` on a part of diagonal `d`: the light (0.3, −0.5, 1) unless it grazes the surface (then
+/// one 37° from the normal), the eye 1.5 d away ([`eye_on_highlight`]), and an S-curve 2.5 r
+/// long at 45° to the grain, of amplitude 0.2 r, in the tangent plane.
+pub fn edit_site(p0: P, n: P, u: P, r: f64, d: f64) -> EditSite {
+    let s = cross(n, u);
+    let mut light = unit([0.3, -0.5, 1.0]);
+    if dot(light, n) < 0.2 {
+        light = unit([0.8 * n[0] + 0.6 * s[0], 0.8 * n[1] + 0.6 * s[1], 0.8 * n[2] + 0.6 * s[2]]);
+    }
+    let eye = eye_on_highlight(p0, u, light, 1.5 * d);
+    let push = across_highlight(p0, n, u, light, eye, 1e-3 * d);
+    let a = unit([u[0] + s[0], u[1] + s[1], u[2] + s[2]]);
+    let b = cross(n, a);
+    let curve = (0..=40)
+        .map(|i| {
+            let t = i as f64 / 20.0 - 1.0;
+            let w = 0.2 * r * (std::f64::consts::PI * t).sin();
+            [0, 1, 2].map(|k| p0[k] + a[k] * 1.25 * r * t + b[k] * w)
+        })
+        .collect();
+    EditSite { light, eye, push, curve }
+}

@@ -18,6 +18,11 @@ use crate::place::PlacementOptions;
 /// 5.4 × 10⁶.
 pub const MAX_STROKE_SAMPLES: f64 = 2e7;
 
+/// Largest `plan.lead_in`, `lead_out`, `ramp_height`, `overtravel` and `contact_depth`: 10⁶
+/// scene units (1 km in mm), far beyond any machine's travel. 1e300 used to pass and print a
+/// 300-digit coordinate, or fail as a `gcode.safe_z` error.
+pub const MAX_LEAD_LENGTH: f64 = 1e6;
+
 /// Largest `plan.order.neighbours` (candidate neighbours per stroke end). Default 10.
 pub const MAX_NEIGHBOURS: usize = 256;
 
@@ -59,10 +64,17 @@ impl PlacementOptions {
         if e.samples.is_finite() && e.samples <= MAX_STROKE_SAMPLES {
             return Ok(e);
         }
-        // The key to change: the step cap when it alone is below d_test / 2, else overlap
-        // when it shrinks d_sep more than half, else the width.
+        // The key to change: the step cap when it alone is below d_test / 2, else test_ratio
+        // when below its default it alone makes the step so fine, else overlap when it shrinks
+        // d_sep more than half, else the width.
+        let default_ratio = PlacementOptions::default().test_ratio;
+        let at_default_ratio = PlacementOptions { test_ratio: default_ratio, ..self.clone() };
         let key = if self.trace.max_step < 0.5 * self.d_test() {
             "placement.trace.max_step"
+        } else if self.test_ratio < default_ratio
+            && at_default_ratio.estimate(area).samples <= MAX_STROKE_SAMPLES
+        {
+            "placement.test_ratio"
         } else if self.overlap >= 0.5 {
             "placement.overlap"
         } else {
@@ -73,8 +85,8 @@ impl PlacementOptions {
             message: format!(
                 "placing strokes {} mm apart (width {} × (1 − overlap {})) sampled every {} mm \
                  over {} mm² is about {} mm of strokes in {:.2e} samples, beyond the budget of \
-                 {:.0e} samples; widen placement.width, lower placement.overlap, or brush a \
-                 smaller part",
+                 {:.0e} samples; widen placement.width, lower placement.overlap, raise \
+                 placement.test_ratio, or brush a smaller part",
                 g(e.d_sep),
                 g(self.width),
                 g(self.overlap),
@@ -85,6 +97,16 @@ impl PlacementOptions {
                 MAX_STROKE_SAMPLES
             ),
         })
+    }
+}
+
+/// Check that `value` is finite, ≥ 0 and at most [`MAX_LEAD_LENGTH`].
+pub(crate) fn lead_length(name: &'static str, value: f64) -> Result<f64> {
+    if (0.0..=MAX_LEAD_LENGTH).contains(&value) {
+        Ok(value)
+    } else {
+        let reason = "must be in [0, 1e6] scene units (budget::MAX_LEAD_LENGTH)";
+        Err(ToolpathError::InvalidOption { name, value, reason })
     }
 }
 

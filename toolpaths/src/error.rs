@@ -11,7 +11,7 @@ use thiserror::Error;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ToolpathError {
     /// A numeric option is NaN, infinite, or outside its allowed range.
-    #[error("{name}: {reason}, got {value}")]
+    #[error("{name}: {reason}, got {}", exact(*value))]
     InvalidOption {
         /// The option's key path from [`crate::JobOptions`] (e.g. `gcode.feed`,
         /// `placement.width`), as in a scene file's `toolpaths` section.
@@ -138,8 +138,12 @@ pub enum ToolpathError {
     Internal(String),
 }
 
-/// A length for messages: at most 6 decimals, trailing zeros removed (`10`, `0.25`).
+/// A length for messages: at most 6 decimals, trailing zeros removed (`10`, `0.25`); from
+/// 10¹⁵ on in exponent form (`-1e300`, not 300 digits).
 pub(crate) fn short(x: f64) -> String {
+    if x.abs() >= 1e15 {
+        return format!("{x:e}");
+    }
     let s = format!("{x:.6}");
     let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
     if s == "-0" {
@@ -165,6 +169,17 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
         Ok(value)
     } else {
         Err(ToolpathError::InvalidOption { name, value, reason: "must be finite and > 0" })
+    }
+}
+
+/// An option's value as messages print it: the shortest text that reads back as the same
+/// `f64`, in exponent form when very small or large (`1e300`, not 300 digits), without a
+/// trailing `.0`.
+pub(crate) fn exact(x: f64) -> String {
+    let s = format!("{x:?}");
+    match s.strip_suffix(".0") {
+        Some(t) => t.to_string(),
+        None => s,
     }
 }
 

@@ -3,7 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{finite, non_negative, positive, Result, ToolpathError};
+use crate::budget::lead_length;
+use crate::error::{finite, positive, Result, ToolpathError};
 use crate::geom::Vec2;
 use crate::order::{Direction, OrderOptions};
 
@@ -127,11 +128,11 @@ impl PlanOptions {
         if let Some(r) = self.min_turning_radius {
             positive("plan.min_turning_radius", r)?;
         }
-        non_negative("plan.contact_depth", self.contact_depth)?;
-        non_negative("plan.lead_in", self.lead_in)?;
-        non_negative("plan.lead_out", self.lead_out)?;
-        non_negative("plan.ramp_height", self.ramp_height)?;
-        non_negative("plan.overtravel", self.overtravel)?;
+        lead_length("plan.contact_depth", self.contact_depth)?;
+        lead_length("plan.lead_in", self.lead_in)?;
+        lead_length("plan.lead_out", self.lead_out)?;
+        lead_length("plan.ramp_height", self.ramp_height)?;
+        lead_length("plan.overtravel", self.overtravel)?;
         finite("plan.order.home[0]", self.order.home[0])?;
         finite("plan.order.home[1]", self.order.home[1])?;
         crate::budget::check_neighbours(self.order.neighbours)?;

@@ -73,10 +73,19 @@ impl TraceOptions {
         positive("placement.trace.max_length", self.max_length)?;
         non_negative("placement.trace.exclusion_radius", self.exclusion_radius)?;
         if self.min_step > self.max_step {
-            return Err(ToolpathError::InvalidOption {
-                name: "placement.trace.min_step",
-                value: self.min_step,
-                reason: "must not exceed max_step",
+            // Blame the one that was moved: min_step when it is not its default.
+            return Err(if self.min_step != Self::default().min_step {
+                ToolpathError::InvalidOption {
+                    name: "placement.trace.min_step",
+                    value: self.min_step,
+                    reason: "must not exceed max_step",
+                }
+            } else {
+                ToolpathError::InvalidOption {
+                    name: "placement.trace.max_step",
+                    value: self.max_step,
+                    reason: "must be at least min_step (default 1e-6)",
+                }
             });
         }
         Ok(())
