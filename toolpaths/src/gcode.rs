@@ -139,9 +139,10 @@ pub struct GcodeOptions {
     pub feed: f64,
     /// Plunge feed, length units per minute (same rules). Default 300.
     pub plunge_feed: f64,
-    /// Rapid (`G0`) rate of the machine, length units per minute (same rules), for the cycle
-    /// time only: it is not printed as a feed. Default none: 5000 mm/min whatever `units`.
-    pub rapid_rate: Option<f64>,
+    /// Rapid (`G0`) rate of the machine in mm/min whatever `units` (> 0 and at least
+    /// 0.1 mm/min), for the cycle time only: it is not printed as a feed. Default none:
+    /// [`DEFAULT_RAPID_MM_MIN`].
+    pub rapid_rate_mm_min: Option<f64>,
     /// Safe Z for travel. As printed, it must clear the highest printed cutting point by at
     /// least `clearance`. Default 5.
     pub safe_z: f64,
@@ -172,7 +173,7 @@ impl Default for GcodeOptions {
             job: "grainline".into(),
             feed: 1000.0,
             plunge_feed: 300.0,
-            rapid_rate: None,
+            rapid_rate_mm_min: None,
             safe_z: 5.0,
             clearance: 1.0,
             spindle: Spindle::Speed(1000.0),
@@ -196,26 +197,30 @@ impl GcodeOptions {
     /// snippet words and other bad values.
     pub fn validate(&self) -> Result<()> {
         let (k, u) = (self.units.in_mm(), self.units.as_str());
-        let feeds = [
-            Some(("gcode.feed", self.feed)),
-            Some(("gcode.plunge_feed", self.plunge_feed)),
-            self.rapid_rate.map(|r| ("gcode.rapid_rate", r)),
-        ];
-        for (key, v) in feeds.into_iter().flatten() {
+        for (key, v) in [("gcode.feed", self.feed), ("gcode.plunge_feed", self.plunge_feed)] {
             positive(key, v)?;
             if rounded(v * k, FEED_DECIMALS) <= 0.0 {
-                // The rapid rate is not printed as a feed, but it is taken (and stated in the
-                // header) in mm/min with the feeds' decimals.
-                let (what, one) =
-                    if key == "gcode.rapid_rate" { ("rates", "rate") } else { ("feeds", "feed") };
                 return Err(ToolpathError::Gcode {
                     key,
                     message: format!(
-                        "{} {u}/min prints as F{} ({what} are printed in mm/min with \
-                         {FEED_DECIMALS} decimal); the smallest printable {one} is F0.1 = {} {u}/min",
+                        "{} {u}/min prints as F{} (feeds are printed in mm/min with {FEED_DECIMALS} \
+                         decimal); the smallest printable feed is F0.1 = {} {u}/min",
                         short(v),
                         num(v * k, FEED_DECIMALS),
                         short(0.1 / k)
+                    ),
+                });
+            }
+        }
+        if let Some(r) = self.rapid_rate_mm_min {
+            positive("gcode.rapid_rate_mm_min", r)?;
+            if rounded(r, FEED_DECIMALS) <= 0.0 {
+                return Err(ToolpathError::Gcode {
+                    key: "gcode.rapid_rate_mm_min",
+                    message: format!(
+                        "{} mm/min rounds to 0 (the rate is taken in mm/min with \
+                         {FEED_DECIMALS} decimal); use at least 0.1",
+                        short(r)
                     ),
                 });
             }
@@ -412,7 +417,7 @@ fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
     Ok(Program { blend, safe_z, passes })
 }
 
-/// Rapid rate (mm/min) when [`GcodeOptions::rapid_rate`] is not set: a modest hobby or
+/// Rapid rate (mm/min) when [`GcodeOptions::rapid_rate_mm_min`] is not set: a modest hobby or
 /// light-industrial machine (5 m/min); set the key to your machine's `G0` rate.
 pub const DEFAULT_RAPID_MM_MIN: f64 = 5000.0;
 
@@ -443,10 +448,10 @@ pub struct CycleTime {
     pub rapid_mm_min: f64,
 }
 
-/// The rapid rate in mm/min: the option converted from `units` and rounded like a printed
-/// feed, or [`DEFAULT_RAPID_MM_MIN`].
+/// The rapid rate in mm/min: the option rounded like a printed feed, or
+/// [`DEFAULT_RAPID_MM_MIN`].
 fn rapid_mm_min(o: &GcodeOptions) -> f64 {
-    o.rapid_rate.map_or(DEFAULT_RAPID_MM_MIN, |r| rounded(r * o.units.in_mm(), FEED_DECIMALS))
+    o.rapid_rate_mm_min.map_or(DEFAULT_RAPID_MM_MIN, |r| rounded(r, FEED_DECIMALS))
 }
 
 /// Passes that start a new sheet (each one an `M0` pause with the spindle stopped).

@@ -39,7 +39,7 @@ fn hand_options(unit: LengthUnit) -> GcodeOptions {
     GcodeOptions {
         feed: 1000.0 / k,
         plunge_feed: 300.0 / k,
-        rapid_rate: Some(6000.0 / k),
+        rapid_rate_mm_min: Some(6000.0),
         safe_z: 5.0 / k,
         clearance: 1.0 / k,
         spindle: Spindle::Snippet {
@@ -53,7 +53,7 @@ fn hand_options(unit: LengthUnit) -> GcodeOptions {
 
 /// Hand-computed: rapid 5 mm at 6000 mm/min (0.05 s), plunge 5.2 mm at 300 (1.04 s), cut 10
 /// mm at 1000 (0.6 s), retract 5.2 mm at 6000 (0.052 s), dwell 1.5 + 0.5 s: 3.742 s. The same
-/// job in inches (lengths, feeds and the rapid rate in inches) takes the same time.
+/// job in inches (lengths and feeds in inches, the rapid rate in mm/min as always) takes the same time.
 #[test]
 fn one_straight_pass_is_timed_exactly() {
     for unit in [LengthUnit::Mm, LengthUnit::In] {
@@ -80,23 +80,23 @@ fn one_straight_pass_is_timed_exactly() {
         assert!((cycle_time(&plan, &plain).unwrap().total_s - 1.742).abs() < 1e-9);
     }
     // Without the key: 5000 mm/min, whatever the units.
-    let o = GcodeOptions { rapid_rate: None, ..hand_options(LengthUnit::In) };
+    let o = GcodeOptions { rapid_rate_mm_min: None, ..hand_options(LengthUnit::In) };
     let t = cycle_time(&one_pass(25.4), &o).unwrap();
     assert_eq!(t.rapid_mm_min, DEFAULT_RAPID_MM_MIN);
     assert!((t.rapid_s - 60.0 * 10.2 / 5000.0).abs() < 1e-9, "{t:?}");
 }
 
 #[test]
-fn rapid_rate_must_be_positive() {
+fn rapid_rate_mm_min_must_be_positive() {
     for bad in [0.0, -100.0, f64::NAN, 0.01] {
-        let o = GcodeOptions { rapid_rate: Some(bad), ..Default::default() };
+        let o = GcodeOptions { rapid_rate_mm_min: Some(bad), ..Default::default() };
         let e = o.validate().unwrap_err();
         let key = match &e {
             ToolpathError::InvalidOption { name, .. } => *name,
             ToolpathError::Gcode { key, .. } => *key,
             other => panic!("{other}"),
         };
-        assert_eq!(key, "gcode.rapid_rate", "{bad}: {e}");
+        assert_eq!(key, "gcode.rapid_rate_mm_min", "{bad}: {e}");
     }
 }
 
@@ -197,7 +197,7 @@ fn cycle_time_matches_rs274_canonical_moves() {
         let gcode = GcodeOptions {
             feed: 1200.0,
             plunge_feed: 250.0,
-            rapid_rate,
+            rapid_rate_mm_min: rapid_rate,
             safe_z: 10.0,
             spindle,
             ..Default::default()
