@@ -786,6 +786,19 @@ impl ToolpathSection {
         }
     }
 
+    /// Sets the job report's `cycle_time_s` when no G-code program was written (the toolpaths
+    /// crate times only the program it writes): the plan timed with this section's
+    /// `gcode_options`, so the report always says how long the program would run. A plan the
+    /// options cannot print (a refused blending tolerance) leaves it unset.
+    pub fn time_job(&self, job: &mut JobOutput, units: Units) {
+        if job.report.cycle_time_s.is_none() {
+            let mut gcode = self.gcode_options.clone();
+            gcode.units = length_unit(units);
+            job.report.cycle_time_s =
+                grainline_toolpaths::cycle_time(&job.plan, &gcode).ok().map(|t| t.total_s);
+        }
+    }
+
     /// Range-checks every setting for a scene in millimetres; see [`Self::validate_in`].
     pub fn validate(&self) -> Result<()> {
         self.validate_in(Units::Mm)
@@ -829,7 +842,8 @@ pub fn run_toolpaths(
 ) -> Result<(JobOutput, UvFieldReport)> {
     section.validate_in(mesh.units)?;
     let (fm, report) = field_mesh(mesh, geometry, phi, symmetry, &section.uv_field)?;
-    let out = grainline_toolpaths::generate(fm, &section.job_options(mesh.units))
+    let mut out = grainline_toolpaths::generate(fm, &section.job_options(mesh.units))
         .map_err(toolpath_error)?;
+    section.time_job(&mut out, mesh.units);
     Ok((out, report))
 }

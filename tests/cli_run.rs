@@ -98,6 +98,11 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
         let wall = r["wall_seconds"].as_f64().unwrap();
         assert!((wall - sum).abs() <= 0.05 * wall + 1e-3, "stages {sum} s, wall {wall} s");
         assert!(r["toolpaths"]["job"]["stroke_count"].as_u64().unwrap() > 5);
+        // The cycle time (issue 31): in the report and, to one decimal, in the program header.
+        let cycle = r["toolpaths"]["job"]["cycle_time_s"].as_f64().unwrap();
+        let head = format!("(cycle time: {cycle:.1} s at rapid 5000 mm/min");
+        let ngc = String::from_utf8_lossy(&files[1]);
+        assert!(cycle > 0.0 && ngc.lines().any(|l| l.starts_with(&head)), "{cycle} s");
         // The solve ran: iterations, or the position energy's branch-coherent start, which
         // satisfies the targets as it is.
         let solver = &r["optimize"]["solver"];

@@ -279,4 +279,10 @@ fn run_toolpaths_writes_the_requested_outputs() {
     let (out, rep) = run_toolpaths(&mesh, &g, &phi, Symmetry::Line, &section).unwrap();
     assert_eq!(rep.triangles, 128);
     assert!(out.svg.is_some() && out.gcode.is_some() && out.strokes_json.is_none());
+    // The cycle time is in the report with or without a program (then from gcode_options).
+    let written = out.report.cycle_time_s.unwrap();
+    let none = ToolpathSection { gcode: None, ..section };
+    let (out, _) = run_toolpaths(&mesh, &g, &phi, Symmetry::Line, &none).unwrap();
+    assert!(out.gcode.is_none());
+    assert_eq!(out.report.cycle_time_s, Some(written));
 }

@@ -90,8 +90,12 @@ pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
             eprintln!("wrote {o}");
         }
         if let Some(t) = &report.toolpaths {
+            let cycle = t
+                .job
+                .cycle_time_s
+                .map_or(String::new(), |s| format!(", about {:.1} min of machine time", s / 60.0));
             eprintln!(
-                "{} strokes, {:.0} mm brushed, {:.0} mm travel",
+                "{} strokes, {:.0} mm brushed, {:.0} mm travel{cycle}",
                 t.job.stroke_count, t.job.cut_length_mm, t.job.travel_length_mm
             );
         }

@@ -104,8 +104,9 @@ pub fn trace(input: &TraceInput) -> Result<Traced> {
     let (fm, uv) =
         field_mesh(input.mesh, input.geometry, input.phi, input.symmetry, &section.uv_field)?;
     let field_mesh = if input.keep_field_mesh { Some(fm.clone()) } else { None };
-    let job = grainline_toolpaths::generate(fm, &section.job_options(units))
+    let mut job = grainline_toolpaths::generate(fm, &section.job_options(units))
         .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
+    section.time_job(&mut job, units);
     let strokes_3d =
         job.strokes_3d.iter().map(|s| s.iter().map(|p| Vector3::from(*p)).collect()).collect();
     Ok(Traced { section, job, field_mesh, uv, strokes_3d })

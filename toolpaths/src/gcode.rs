@@ -4,7 +4,8 @@
 //! absolute, XY plane, feed per minute); `G64 P<plan.tolerance>` (linuxcnc); `G0 Z<safe>`;
 //! spindle/tool on (`M3 S…` or a configured snippet); per pass `G0 X Y` at safe Z,
 //! `G1 Z… F<plunge>`, then `G1`/`G2`/`G3` cutting moves at `F<feed>`, then `G0 Z<safe>`;
-//! finally tool off (`M5`), and `M2` (`M30` for grbl).
+//! finally tool off (`M5`), and `M2` (`M30` for grbl). The header states the estimated
+//! cycle time ([`CycleTime`]), computed from the same printed moves.
 //!
 //! **Units.** The program is always in millimetres (`G21`). The plan and every length option
 //! (`safe_z`, `clearance`, `envelope`, `z_floor`, feeds per minute, the blending tolerance)
@@ -35,6 +36,7 @@ use crate::error::{finite, positive, short, Result, ToolpathError};
 use crate::geom::{Vec2, Vec3};
 use crate::plan::Plan;
 use crate::simplify::Segment;
+use crate::snippet::{check_snippet, snippet_dwell};
 
 /// Target controller.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -137,6 +139,10 @@ pub struct GcodeOptions {
     pub feed: f64,
     /// Plunge feed, length units per minute (same rules). Default 300.
     pub plunge_feed: f64,
+    /// Rapid (`G0`) rate of the machine in mm/min whatever `units` (> 0 and at least
+    /// 0.1 mm/min), for the cycle time only: it is not printed as a feed. Default none:
+    /// [`DEFAULT_RAPID_MM_MIN`].
+    pub rapid_rate_mm_min: Option<f64>,
     /// Safe Z for travel. As printed, it must clear the highest printed cutting point by at
     /// least `clearance`. Default 5.
     pub safe_z: f64,
@@ -167,6 +173,7 @@ impl Default for GcodeOptions {
             job: "grainline".into(),
             feed: 1000.0,
             plunge_feed: 300.0,
+            rapid_rate_mm_min: None,
             safe_z: 5.0,
             clearance: 1.0,
             spindle: Spindle::Speed(1000.0),
@@ -201,6 +208,19 @@ impl GcodeOptions {
                         short(v),
                         num(v * k, FEED_DECIMALS),
                         short(0.1 / k)
+                    ),
+                });
+            }
+        }
+        if let Some(r) = self.rapid_rate_mm_min {
+            positive("gcode.rapid_rate_mm_min", r)?;
+            if rounded(r, FEED_DECIMALS) <= 0.0 {
+                return Err(ToolpathError::Gcode {
+                    key: "gcode.rapid_rate_mm_min",
+                    message: format!(
+                        "{} mm/min rounds to 0 (the rate is taken in mm/min with \
+                         {FEED_DECIMALS} decimal); use at least 0.1",
+                        short(r)
                     ),
                 });
             }
@@ -266,124 +286,6 @@ pub(crate) fn num(x: f64, decimals: usize) -> String {
 /// `x` as the controller reads it back after printing with `decimals`.
 fn rounded(x: f64, decimals: usize) -> f64 {
     num(x, decimals).parse().unwrap_or(x)
-}
-
-/// LinuxCNC comments that do something (print, log to a file, probe to a file).
-const ACTIVE_COMMENTS: [&str; 10] = [
-    "MSG",
-    "DEBUG",
-    "PRINT",
-    "LOG",
-    "LOGOPEN",
-    "LOGAPPEND",
-    "LOGCLOSE",
-    "PROBEOPEN",
-    "PROBECLOSE",
-    "ABORT",
-];
-
-/// A G-code number as rs274 reads it: optional sign, digits with an optional point.
-fn gnum(s: &str) -> Option<f64> {
-    let t = s.strip_prefix(['+', '-']).unwrap_or(s);
-    let ok = !t.is_empty()
-        && t != "."
-        && t.chars().all(|c| c.is_ascii_digit() || c == '.')
-        && t.matches('.').count() <= 1;
-    if ok {
-        s.parse().ok().filter(|v: &f64| v.is_finite())
-    } else {
-        None
-    }
-}
-
-/// Check a snippet word by word (see [`Spindle::Snippet`]).
-fn check_snippet(key: &'static str, text: &str) -> Result<()> {
-    let allowed = "only M3, M4, M5, M7, M8, M9, S<number>, G4 P<number> and comments are \
-                   allowed in a snippet";
-    for (li, raw) in text.lines().enumerate() {
-        let line = raw.trim();
-        let bad = |word: &str, why: &str| ToolpathError::Gcode {
-            key,
-            message: format!("line {} `{}`: {why} `{word}`; {allowed}", li + 1, short_line(line)),
-        };
-        // Split into words and comments.
-        let mut words: Vec<String> = Vec::new();
-        let mut rest = line;
-        while !rest.is_empty() {
-            let c = rest.chars().next().unwrap_or(' ');
-            if c.is_whitespace() {
-                rest = rest.trim_start();
-            } else if c == ';' {
-                break;
-            } else if c == '(' {
-                let Some(end) = rest.find(')') else {
-                    return Err(bad(rest, "unclosed comment"));
-                };
-                let body = &rest[1..end];
-                if body.contains('(') {
-                    return Err(bad(&rest[..=end], "nested comment"));
-                }
-                let first: String = body
-                    .trim_start()
-                    .chars()
-                    .take_while(|c| c.is_ascii_alphabetic())
-                    .collect::<String>()
-                    .to_ascii_uppercase();
-                if ACTIVE_COMMENTS.contains(&first.as_str()) {
-                    return Err(bad(&rest[..=end], "active comment"));
-                }
-                rest = &rest[end + 1..];
-            } else if c.is_ascii_alphabetic() {
-                let end = rest[1..]
-                    .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '+' || c == '-'))
-                    .map_or(rest.len(), |e| e + 1);
-                words.push(rest[..end].to_string());
-                rest = &rest[end..];
-            } else {
-                let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
-                return Err(bad(&rest[..end], "the word"));
-            }
-        }
-        let (mut spindle, mut coolant, mut s, mut dwell, mut p) = (0, 0, 0, 0, 0);
-        for w in &words {
-            let letter = w.chars().next().unwrap_or(' ').to_ascii_uppercase();
-            let Some(v) = gnum(&w[1..]) else {
-                return Err(bad(w, "the word"));
-            };
-            match letter {
-                'M' if [3.0, 4.0, 5.0].contains(&v) => spindle += 1,
-                'M' if [7.0, 8.0, 9.0].contains(&v) => coolant += 1,
-                'S' if v >= 0.0 => s += 1,
-                'G' if v == 4.0 => dwell += 1,
-                'P' if v >= 0.0 => p += 1,
-                _ => return Err(bad(w, "the word")),
-            }
-            let twice = match letter {
-                'M' if spindle > 1 => Some("a second spindle word"),
-                'M' if coolant > 1 => Some("a second coolant word"),
-                'S' if s > 1 => Some("a second S word"),
-                'G' if dwell > 1 => Some("a second dwell"),
-                'P' if p > 1 => Some("a second P word"),
-                _ => None,
-            };
-            if let Some(why) = twice {
-                return Err(bad(w, &format!("{why} on the line:")));
-            }
-        }
-        if dwell != p {
-            let w = if dwell > 0 { "G4" } else { "P" };
-            return Err(bad(w, "a dwell needs `G4 P<seconds>` on one line, got"));
-        }
-    }
-    Ok(())
-}
-
-fn short_line(l: &str) -> String {
-    let mut s: String = l.chars().take(80).collect();
-    if l.chars().count() > 80 {
-        s.push('…');
-    }
-    s
 }
 
 /// One machine move as printed (mm, rounded to `decimals`).
@@ -513,6 +415,100 @@ fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
         passes.push((pass.stroke, moves));
     }
     Ok(Program { blend, safe_z, passes })
+}
+
+/// Rapid rate (mm/min) when [`GcodeOptions::rapid_rate_mm_min`] is not set: a modest hobby or
+/// light-industrial machine (5 m/min); set the key to your machine's `G0` rate.
+pub const DEFAULT_RAPID_MM_MIN: f64 = 5000.0;
+
+/// How long a program runs, estimated from its moves as printed ([`cycle_time`]).
+///
+/// Each move takes its length over its rate: `t = 60 · L / F` seconds for `L` in mm and `F`
+/// in mm/min. Feed moves (`G1`, and `G2`/`G3` by their helical length) run at their printed
+/// `F`, rapids (`G0`, straight lines in XYZ) at the rapid rate. The tool starts at the plan's
+/// home at the travel height (the program's first `G0 Z`, from wherever the tool is, is not
+/// counted). Acceleration, path blending (`G64`) and the controller's look-ahead are not
+/// modelled, so short moves run slower than this on a real machine; the operator's `M0`
+/// pauses between sheets count as zero (their number is given).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CycleTime {
+    /// Total, seconds: the sum of the four parts below.
+    pub total_s: f64,
+    /// Cutting moves at the cutting feed (leads, overtravel and the strokes), seconds.
+    pub cut_s: f64,
+    /// Plunges (`G1 Z` at the plunge feed), seconds.
+    pub plunge_s: f64,
+    /// Rapids (`G0`: to each pass at the travel height and the retracts), seconds.
+    pub rapid_s: f64,
+    /// Dwell (`G4 P<s>` in the spindle snippets, each time a snippet runs), seconds.
+    pub dwell_s: f64,
+    /// Operator pauses (`M0` between sheets), not counted in `total_s`.
+    pub pauses: usize,
+    /// The rapid rate used, mm/min.
+    pub rapid_mm_min: f64,
+}
+
+/// The rapid rate in mm/min: the option rounded like a printed feed, or
+/// [`DEFAULT_RAPID_MM_MIN`].
+fn rapid_mm_min(o: &GcodeOptions) -> f64 {
+    o.rapid_rate_mm_min.map_or(DEFAULT_RAPID_MM_MIN, |r| rounded(r, FEED_DECIMALS))
+}
+
+/// Passes that start a new sheet (each one an `M0` pause with the spindle stopped).
+fn sheet_changes(plan: &Plan) -> usize {
+    plan.passes.windows(2).filter(|w| w[0].sheet != w[1].sheet).count()
+}
+
+/// The cycle time of a program as printed (see [`CycleTime`]).
+fn program_time(plan: &Plan, o: &GcodeOptions, prog: &Program) -> CycleTime {
+    let k = o.units.in_mm();
+    let rapid = rapid_mm_min(o);
+    let secs = |len: f64, rate: f64| if rate > 0.0 { 60.0 * len / rate } else { 0.0 };
+    let mut t = CycleTime { rapid_mm_min: rapid, ..Default::default() };
+    let home = |a: usize| rounded(plan.home[a] * k, o.decimals);
+    let mut cur = [home(0), home(1), prog.safe_z];
+    for (_, moves) in &prog.passes {
+        for (j, m) in moves.iter().enumerate() {
+            match *m {
+                Move::Rapid(to) => {
+                    t.rapid_s += secs(crate::geom::norm3(crate::geom::sub3(to, cur)), rapid);
+                    cur = to;
+                }
+                Move::Line { to, feed, .. } => {
+                    let dt = secs(crate::geom::norm3(crate::geom::sub3(to, cur)), feed);
+                    // The move after the rapid to the pass's start is its plunge.
+                    if j == 1 {
+                        t.plunge_s += dt;
+                    } else {
+                        t.cut_s += dt;
+                    }
+                    cur = to;
+                }
+                Move::Arc { to, center, ccw, feed, .. } => {
+                    t.cut_s += secs(crate::geom::helix_length(cur, to, center, ccw), feed);
+                    cur = to;
+                }
+            }
+        }
+    }
+    t.pauses = sheet_changes(plan);
+    if let (Dialect::LinuxCnc | Dialect::Grbl, Spindle::Snippet { on, off }) =
+        (o.dialect, &o.spindle)
+    {
+        // The spindle starts once and after each pause, and stops before each and at the end.
+        t.dwell_s = (t.pauses + 1) as f64 * (snippet_dwell(on) + snippet_dwell(off));
+    }
+    t.total_s = t.cut_s + t.plunge_s + t.rapid_s + t.dwell_s;
+    t
+}
+
+/// Estimate how long the program [`write_gcode`] writes for `plan` runs (see
+/// [`CycleTime`]). The options are validated and the program is built as printed (rounded
+/// coordinates, printed feeds and arc centres) but not checked for safety.
+pub fn cycle_time(plan: &Plan, o: &GcodeOptions) -> Result<CycleTime> {
+    o.validate()?;
+    let prog = build(plan, o)?;
+    Ok(program_time(plan, o, &prog))
 }
 
 /// Check the printed program against the envelope, the floor and the clearance.
@@ -648,7 +644,7 @@ fn spindle_off(w: &mut String, o: &GcodeOptions) {
 
 /// The program's head: job, dialect, passes, units and sheets as comments, the modal
 /// state, path blending and the move to safe Z.
-fn write_header(w: &mut String, plan: &Plan, o: &GcodeOptions, prog: &Program) {
+fn write_header(w: &mut String, plan: &Plan, o: &GcodeOptions, prog: &Program, t: &CycleTime) {
     let dialect = match o.dialect {
         Dialect::Grbl => "grbl",
         Dialect::LinuxCnc => "linuxcnc",
@@ -667,6 +663,17 @@ fn write_header(w: &mut String, plan: &Plan, o: &GcodeOptions, prog: &Program) {
             "(sheets: {n_sheets}, cut in order; the program pauses with M0 between them)"
         );
     }
+    let _ = writeln!(
+        w,
+        "(cycle time: {} s at rapid {} mm/min: cutting {} s, plunges {} s, rapids {} s, dwell {} \
+         s; no acceleration, M0 pauses not counted)",
+        num(t.total_s, 1),
+        short(t.rapid_mm_min),
+        num(t.cut_s, 1),
+        num(t.plunge_s, 1),
+        num(t.rapid_s, 1),
+        num(t.dwell_s, 1)
+    );
     let _ = writeln!(w, "G21 G90 G17 G94");
     if let Some((p, d)) = prog.blend {
         let _ = writeln!(w, "G64 P{}", num(p, d));
@@ -714,15 +721,21 @@ fn write_moves(w: &mut String, moves: &[Move], dp: usize) {
 /// floor or the clearance, snippets with forbidden words, numbers that print as zero, and
 /// empty programs (unless `allow_empty`); see the module docs for the program shape.
 pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
+    write_gcode_timed(plan, o).map(|(g, _)| g)
+}
+
+/// [`write_gcode`] and the program's [`CycleTime`] (the figure its header states).
+pub(crate) fn write_gcode_timed(plan: &Plan, o: &GcodeOptions) -> Result<(String, CycleTime)> {
     o.validate()?;
     if plan.passes.is_empty() && !o.allow_empty {
         return Err(ToolpathError::EmptyProgram { skipped_tilt: plan.skipped_tilt.len() });
     }
     let prog = build(plan, o)?;
     check_program(plan, o, &prog)?;
+    let time = program_time(plan, o, &prog);
     let mut g = String::new();
     let w = &mut g;
-    write_header(w, plan, o, &prog);
+    write_header(w, plan, o, &prog, &time);
     spindle_on(w, o);
     for (i, (stroke, moves)) in prog.passes.iter().enumerate() {
         // A new sheet (charts overlapping in UV, flat mode): the tool is at safe Z after
@@ -740,5 +753,5 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
     }
     spindle_off(w, o);
     let _ = writeln!(w, "{}", if o.dialect == Dialect::Grbl { "M30" } else { "M2" });
-    Ok(g)
+    Ok((g, time))
 }

@@ -38,6 +38,18 @@ pub(crate) fn cross3(a: Vec3, b: Vec3) -> Vec3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
+/// Length of a helical arc in the XY plane from `from` to `to` about `center`, counter-
+/// clockwise when `ccw`: `√((r·θ)² + Δz²)` with `r = |from − center|` in XY and `θ` the sweep
+/// in `[0, 2π)` (coinciding ends in XY sweep 0: a straight move in Z).
+pub(crate) fn helix_length(from: Vec3, to: Vec3, center: Vec2, ccw: bool) -> f64 {
+    let r = ((from[0] - center[0]).powi(2) + (from[1] - center[1]).powi(2)).sqrt();
+    let a0 = (from[1] - center[1]).atan2(from[0] - center[0]);
+    let a1 = (to[1] - center[1]).atan2(to[0] - center[0]);
+    let tau = std::f64::consts::TAU;
+    let sweep = if ccw { (a1 - a0).rem_euclid(tau) } else { (a0 - a1).rem_euclid(tau) };
+    ((r * sweep).powi(2) + (to[2] - from[2]).powi(2)).sqrt()
+}
+
 /// The first fundamental form of the surface in UV coordinates,
 /// `I(du, dv) = E du² + 2F du dv + G dv²`, constant over a triangle for a piecewise-linear lift.
 ///

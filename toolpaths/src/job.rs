@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::coverage::{coverage, Coverage, CoverageOptions};
 use crate::error::Result;
-use crate::gcode::{write_gcode, GcodeOptions};
+use crate::gcode::{write_gcode_timed, GcodeOptions};
 use crate::json::strokes_json;
 use crate::mesh::{Domain, FieldMesh};
 use crate::place::{place_strokes, Placement, PlacementOptions};
@@ -104,9 +104,12 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
         Some(s) => Some(timed(&mut t, "svg", || write_svg(&dom, &plan, s))?),
         None => None,
     };
-    let gcode = match &o.gcode {
-        Some(g) => Some(timed(&mut t, "gcode", || write_gcode(&plan, g))?),
-        None => None,
+    let (gcode, cycle) = match &o.gcode {
+        Some(g) => {
+            let (text, time) = timed(&mut t, "gcode", || write_gcode_timed(&plan, g))?;
+            (Some(text), Some(time))
+        }
+        None => (None, None),
     };
     let json = if o.strokes_json {
         Some(timed(&mut t, "json", || strokes_json(&placement, &plan))?)
@@ -115,6 +118,7 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
     };
     let mut report = Report::new(&placement, &plan, cov.as_ref(), t);
     report.charts = dom.chart_count();
+    report.cycle_time_s = cycle.map(|c| c.total_s);
     report.tight_end_cuts = cuts.cuts;
     report.tight_end_dropped = cuts.dropped;
     let mut with = vec![false; dom.chart_count()];

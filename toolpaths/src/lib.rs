@@ -12,8 +12,9 @@
 //! Layers of the source files, bottom to top (a file uses only files of lower layers):
 //!
 //! 1. `error`, `geom`: errors; vectors, metrics, barycentric coordinates.
-//! 2. `input`, `grid`, `buckets`, `simplify`, `stroke`, `tour`: the input mesh; uniform
-//!    grids; point buckets; polyline simplification; strokes; the stroke tour model.
+//! 2. `input`, `grid`, `buckets`, `simplify`, `snippet`, `stroke`, `tour`: the input mesh;
+//!    uniform grids; point buckets; polyline simplification; spindle snippets; strokes; the
+//!    stroke tour model.
 //! 3. `topology`, `improve`, `bound`: adjacency, metrics and seams; tour local search;
 //!    travel bounds.
 //! 4. `mesh`, `order`: the validated [`Domain`]; stroke ordering.
@@ -70,6 +71,7 @@ mod plan;
 mod plan_options;
 mod report;
 mod simplify;
+mod snippet;
 mod spacing;
 mod stroke;
 mod stroke_checks;
@@ -83,7 +85,10 @@ pub use budget::{PlacementEstimate, MAX_NEIGHBOURS, MAX_STROKE_SAMPLES};
 pub use coverage::{coverage, Coverage, CoverageOptions, GapMap};
 pub use error::{Result, ToolpathError};
 pub use field::{singularities, Singularity};
-pub use gcode::{check_safety, write_gcode, Dialect, Envelope, GcodeOptions, LengthUnit, Spindle};
+pub use gcode::{
+    check_safety, cycle_time, write_gcode, CycleTime, Dialect, Envelope, GcodeOptions, LengthUnit,
+    Spindle, DEFAULT_RAPID_MM_MIN,
+};
 pub use geom::{Metric, Vec2, Vec3};
 pub use job::{generate, JobOptions, JobOutput};
 pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};

@@ -75,6 +75,12 @@ pub struct Report {
     pub field_evaluations: u64,
     /// Time per phase.
     pub timings: Vec<PhaseTime>,
+    /// Estimated run time of the G-code program, seconds: every printed move at its printed
+    /// feed, rapids at the rapid rate, plus the spindle snippets' dwell; no acceleration, `M0`
+    /// pauses counted as zero ([`crate::CycleTime`]). Set by [`crate::generate`] when G-code
+    /// options are given; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cycle_time_s: Option<f64>,
     /// Things the job did that a user should know about although they are not errors (an
     /// empty G-code program written because `gcode.allow_empty` is set).
     #[serde(default)]
@@ -89,14 +95,7 @@ fn seg_len(from: [f64; 3], s: &Segment) -> f64 {
     let to = s.end();
     match *s {
         Segment::Line { .. } => crate::geom::norm3(crate::geom::sub3(to, from)),
-        Segment::Arc { center, ccw, .. } => {
-            let r = ((from[0] - center[0]).powi(2) + (from[1] - center[1]).powi(2)).sqrt();
-            let a0 = (from[1] - center[1]).atan2(from[0] - center[0]);
-            let a1 = (to[1] - center[1]).atan2(to[0] - center[0]);
-            let tau = std::f64::consts::TAU;
-            let sweep = if ccw { (a1 - a0).rem_euclid(tau) } else { (a0 - a1).rem_euclid(tau) };
-            ((r * sweep).powi(2) + (to[2] - from[2]).powi(2)).sqrt()
-        }
+        Segment::Arc { center, ccw, .. } => crate::geom::helix_length(from, to, center, ccw),
     }
 }
 
@@ -147,6 +146,7 @@ impl Report {
             skipped_tilt: plan.skipped_tilt.clone(),
             field_evaluations: placement.field_evaluations,
             timings,
+            cycle_time_s: None,
             warnings: Vec::new(),
         }
     }
