@@ -740,6 +740,7 @@ pub fn toolpath_error(e: ToolpathError) -> Error {
         ),
         ToolpathError::Gcode { key, message } => Error::setting(section_key(key), message),
         ToolpathError::Budget { key, message } => Error::setting(section_key(key), message),
+        ToolpathError::Rotary { key, message } => Error::setting(section_key(key), message),
         e @ ToolpathError::OutsideEnvelope { .. } => {
             Error::setting("gcode_options.envelope", e.to_string())
         }
