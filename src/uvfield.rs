@@ -787,6 +787,35 @@ impl ToolpathSection {
         }
     }
 
+    /// Sets every length option of the section that the scene file does not give (`given`
+    /// answers for a key path relative to the section: `placement.width`,
+    /// `gcode_options.clearance`, …) to its default as a physical length in `units`
+    /// ([`grainline_toolpaths::LENGTH_DEFAULTS_MM`]: a 1 mm clearance, a 1000 mm/min feed,
+    /// whatever the units). Values the file gives keep their meaning, in the scene's units.
+    pub fn default_lengths_in(&mut self, units: Units, given: &dyn Fn(&str) -> bool) {
+        let mut all = self.job_options(units);
+        all.svg = Some(self.svg_options.clone());
+        all.gcode = Some(self.gcode_options.clone());
+        all.default_lengths_in(length_unit(units), &|key| given(&section_key(key)));
+        self.placement = all.placement;
+        self.plan = all.plan;
+        if let Some(s) = all.svg {
+            self.svg_options = s;
+        }
+        if let Some(mut g) = all.gcode {
+            g.units = self.gcode_options.units;
+            self.gcode_options = g;
+        }
+    }
+
+    /// The section a scene without one traces with: the defaults, lengths in `units` (see
+    /// [`Self::default_lengths_in`]).
+    pub fn default_in(units: Units) -> ToolpathSection {
+        let mut s = ToolpathSection::default();
+        s.default_lengths_in(units, &|_| false);
+        s
+    }
+
     /// Sets the job report's `cycle_time_s` when no G-code program was written (the toolpaths
     /// crate times only the program it writes): the plan timed with this section's
     /// `gcode_options`, so the report always says how long the program would run. A plan the

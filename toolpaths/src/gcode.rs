@@ -33,6 +33,7 @@ use std::fmt::Write;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{finite, positive, short, Result, ToolpathError};
+pub use crate::geom::LengthUnit;
 use crate::geom::{Vec2, Vec3};
 use crate::plan::Plan;
 use crate::rotary::{rotary_move_length, Fixture};
@@ -86,43 +87,6 @@ pub struct Envelope {
     pub min: Vec3,
     /// Maximum X, Y, Z.
     pub max: Vec3,
-}
-
-/// Length unit of the plan and of the length options of [`GcodeOptions`]. The program is
-/// always printed in millimetres (`G21`): lengths are multiplied by [`LengthUnit::in_mm`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LengthUnit {
-    /// Millimetres (the default).
-    #[default]
-    Mm,
-    /// Centimetres.
-    Cm,
-    /// Metres.
-    M,
-    /// Inches.
-    In,
-}
-
-impl LengthUnit {
-    /// Length of one unit in millimetres.
-    pub fn in_mm(self) -> f64 {
-        match self {
-            LengthUnit::Mm => 1.0,
-            LengthUnit::Cm => 10.0,
-            LengthUnit::M => 1000.0,
-            LengthUnit::In => 25.4,
-        }
-    }
-
-    /// Short name (`mm`, `cm`, `m`, `in`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            LengthUnit::Mm => "mm",
-            LengthUnit::Cm => "cm",
-            LengthUnit::M => "m",
-            LengthUnit::In => "in",
-        }
-    }
 }
 
 /// G-code options. Lengths are in [`GcodeOptions::units`] (the plan's unit).

@@ -92,7 +92,7 @@ pub use gcode::{
     Spindle, DEFAULT_RAPID_MM_MIN,
 };
 pub use geom::{Metric, Vec2, Vec3};
-pub use job::{generate, JobOptions, JobOutput};
+pub use job::{generate, JobOptions, JobOutput, LENGTH_DEFAULTS_MM};
 pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};
 pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
 pub use order::{order_strokes, tour_length, Direction, Ends, OrderOptions, Ordering};
