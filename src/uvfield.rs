@@ -740,6 +740,7 @@ pub fn toolpath_error(e: ToolpathError) -> Error {
         ),
         ToolpathError::Gcode { key, message } => Error::setting(section_key(key), message),
         ToolpathError::Budget { key, message } => Error::setting(section_key(key), message),
+        ToolpathError::Rotary { key, message } => Error::setting(section_key(key), message),
         e @ ToolpathError::OutsideEnvelope { .. } => {
             Error::setting("gcode_options.envelope", e.to_string())
         }
@@ -784,6 +785,35 @@ impl ToolpathSection {
             gcode: self.gcode.as_ref().map(|_| gcode),
             strokes_json: self.strokes_json.is_some(),
         }
+    }
+
+    /// Sets every length option of the section that the scene file does not give (`given`
+    /// answers for a key path relative to the section: `placement.width`,
+    /// `gcode_options.clearance`, …) to its default as a physical length in `units`
+    /// ([`grainline_toolpaths::LENGTH_DEFAULTS_MM`]: a 1 mm clearance, a 1000 mm/min feed,
+    /// whatever the units). Values the file gives keep their meaning, in the scene's units.
+    pub fn default_lengths_in(&mut self, units: Units, given: &dyn Fn(&str) -> bool) {
+        let mut all = self.job_options(units);
+        all.svg = Some(self.svg_options.clone());
+        all.gcode = Some(self.gcode_options.clone());
+        all.default_lengths_in(length_unit(units), &|key| given(&section_key(key)));
+        self.placement = all.placement;
+        self.plan = all.plan;
+        if let Some(s) = all.svg {
+            self.svg_options = s;
+        }
+        if let Some(mut g) = all.gcode {
+            g.units = self.gcode_options.units;
+            self.gcode_options = g;
+        }
+    }
+
+    /// The section a scene without one traces with: the defaults, lengths in `units` (see
+    /// [`Self::default_lengths_in`]).
+    pub fn default_in(units: Units) -> ToolpathSection {
+        let mut s = ToolpathSection::default();
+        s.default_lengths_in(units, &|_| false);
+        s
     }
 
     /// Sets the job report's `cycle_time_s` when no G-code program was written (the toolpaths

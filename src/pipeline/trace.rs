@@ -48,7 +48,10 @@ pub fn toolpath_section(
     units: crate::mesh::Units,
     keep_map: bool,
 ) -> Result<crate::uvfield::ToolpathSection> {
-    let mut section = scene.toolpaths.clone().unwrap_or_default();
+    let mut section = scene
+        .toolpaths
+        .clone()
+        .unwrap_or_else(|| crate::uvfield::ToolpathSection::default_in(units));
     if keep_map {
         let mut c = section.coverage.clone().unwrap_or_default();
         c.keep_map = true;

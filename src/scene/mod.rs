@@ -103,6 +103,8 @@ impl Scene {
                 if key.is_empty() || key == "." { message } else { format!("{key}: {message}") };
             Error::Scene { path: path.to_path_buf(), line, message }
         })?;
+        let mut scene = scene;
+        scene.default_lengths(text);
         // Trailing characters are reported by serde_json above; check the settings.
         scene.validate().map_err(|e| Error::Scene {
             path: path.to_path_buf(),
@@ -110,6 +112,16 @@ impl Scene {
             message: e.to_string(),
         })?;
         Ok(scene)
+    }
+
+    /// The toolpaths section's length defaults as physical lengths in the scene's units, for
+    /// the keys `text` (the scene file, already parsed) does not give (issue 31, item 4).
+    fn default_lengths(&mut self, text: &str) {
+        let Some(t) = &mut self.toolpaths else { return };
+        let raw: serde_json::Value = serde_json::from_str(text).unwrap_or_default();
+        let given =
+            |key: &str| raw.pointer(&format!("/toolpaths/{}", key.replace('.', "/"))).is_some();
+        t.default_lengths_in(self.units, &given);
     }
 
     /// Range and consistency checks of every section, naming the key path.

@@ -127,6 +127,16 @@ pub enum ToolpathError {
         /// Excess, degrees.
         by_deg: f64,
     },
+    /// A rotary (4-axis) option that cannot be used: an axis that is not one, a part that is
+    /// not near a body of revolution for `"auto"`, a dialect without an A axis. `key` is the
+    /// option's key path (`plan.z_mode.axis`, `gcode.dialect`, …).
+    #[error("{key}: {message}")]
+    Rotary {
+        /// The option's key path from [`crate::JobOptions`].
+        key: &'static str,
+        /// What is wrong, with the values involved.
+        message: String,
+    },
     /// A feature needs data the input does not have (e.g. surface following without a lift).
     #[error("missing input: {0}")]
     MissingInput(&'static str),

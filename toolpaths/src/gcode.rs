@@ -33,8 +33,10 @@ use std::fmt::Write;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{finite, positive, short, Result, ToolpathError};
+pub use crate::geom::LengthUnit;
 use crate::geom::{Vec2, Vec3};
 use crate::plan::Plan;
+use crate::rotary::{rotary_move_length, Fixture};
 use crate::simplify::Segment;
 use crate::snippet::{check_snippet, snippet_dwell};
 
@@ -85,43 +87,6 @@ pub struct Envelope {
     pub min: Vec3,
     /// Maximum X, Y, Z.
     pub max: Vec3,
-}
-
-/// Length unit of the plan and of the length options of [`GcodeOptions`]. The program is
-/// always printed in millimetres (`G21`): lengths are multiplied by [`LengthUnit::in_mm`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum LengthUnit {
-    /// Millimetres (the default).
-    #[default]
-    Mm,
-    /// Centimetres.
-    Cm,
-    /// Metres.
-    M,
-    /// Inches.
-    In,
-}
-
-impl LengthUnit {
-    /// Length of one unit in millimetres.
-    pub fn in_mm(self) -> f64 {
-        match self {
-            LengthUnit::Mm => 1.0,
-            LengthUnit::Cm => 10.0,
-            LengthUnit::M => 1000.0,
-            LengthUnit::In => 25.4,
-        }
-    }
-
-    /// Short name (`mm`, `cm`, `m`, `in`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            LengthUnit::Mm => "mm",
-            LengthUnit::Cm => "cm",
-            LengthUnit::M => "m",
-            LengthUnit::In => "in",
-        }
-    }
 }
 
 /// G-code options. Lengths are in [`GcodeOptions::units`] (the plan's unit).
@@ -293,8 +258,9 @@ fn rounded(x: f64, decimals: usize) -> f64 {
 enum Move {
     /// `G0` to a point.
     Rapid(Vec3),
-    /// `G1` to a point at a feed (mm/min, as printed); `first` prints the feed word.
-    Line { to: Vec3, feed: f64, first: bool },
+    /// `G1` to a point at a feed (mm/min, as printed; in a rotary program the inverse-time
+    /// `F`, 1/min, printed with `fdec` decimals); `first` prints the feed word.
+    Line { to: Vec3, feed: f64, first: bool, fdec: usize },
     /// `G2`/`G3` to a point around `center` (printed start + printed I/J).
     Arc { to: Vec3, center: Vec2, ij: Vec2, ccw: bool, feed: f64, first: bool },
 }
@@ -307,6 +273,8 @@ struct Program {
     safe_z: f64,
     /// Per pass: the stroke index and its moves (rapid to XY, plunge, cuts, retract).
     passes: Vec<(usize, Vec<Move>)>,
+    /// A rotary program: points are `[X, A°, Z]`, feeds are inverse time (`G93`).
+    rotary: bool,
 }
 
 /// Points an XY arc reaches at its extremes (axis crossings within the sweep), plus its end.
@@ -353,6 +321,9 @@ fn blend_tolerance(tolerance: f64, o: &GcodeOptions) -> Result<(f64, usize)> {
 
 /// Build the program as printed.
 fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
+    if let Some(f) = &plan.rotary {
+        return build_rotary(plan, o, f);
+    }
     let (k, dp) = (o.units.in_mm(), o.decimals);
     let p = |x: f64| rounded(x * k, dp);
     let p3 = |v: Vec3| [p(v[0]), p(v[1]), p(v[2])];
@@ -375,7 +346,7 @@ fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
         }
         let mut moves = vec![
             Move::Rapid([start[0], start[1], safe_z]),
-            Move::Line { to: start, feed: plunge, first: true },
+            Move::Line { to: start, feed: plunge, first: true, fdec: FEED_DECIMALS },
         ];
         let mut cur = start;
         let mut first = true;
@@ -405,7 +376,7 @@ fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
                 }
                 // A line, or an arc whose printed ends coincide in XY (a controller would
                 // read that as a full circle): a straight move.
-                _ => Move::Line { to, feed, first },
+                _ => Move::Line { to, feed, first, fdec: FEED_DECIMALS },
             };
             moves.push(mv);
             first = false;
@@ -414,7 +385,77 @@ fn build(plan: &Plan, o: &GcodeOptions) -> Result<Program> {
         moves.push(Move::Rapid([cur[0], cur[1], safe_z]));
         passes.push((pass.stroke, moves));
     }
-    Ok(Program { blend, safe_z, passes })
+    Ok(Program { blend, safe_z, passes, rotary: false })
+}
+
+/// The inverse-time `F` (1/min) of a move of `len_mm` at `feed_mm_min`, printed with the
+/// fewest decimals (at least one, at most 6) that keep it within 10⁻⁴ of its value.
+fn inverse_time(len_mm: f64, feed_mm_min: f64) -> Result<(f64, usize)> {
+    let f = feed_mm_min / len_mm;
+    let mut d = FEED_DECIMALS;
+    while d < MAX_BLEND_DECIMALS && (rounded(f, d) - f).abs() > 1e-4 * f {
+        d += 1;
+    }
+    let p = rounded(f, d);
+    if !(p.is_finite() && p > 0.0) {
+        return Err(ToolpathError::Gcode {
+            key: "gcode.feed",
+            message: format!(
+                "a move of {} mm at {} mm/min takes {} min: its inverse-time feed F{} prints as 0",
+                short(len_mm),
+                short(feed_mm_min),
+                short(len_mm / feed_mm_min),
+                num(f, d)
+            ),
+        });
+    }
+    Ok((p, d))
+}
+
+/// Build a rotary program as printed: `[X, A°, Z]` (X and Z in mm, A in degrees, both with
+/// `decimals`), every feed move with its inverse-time `F` = feed / (the contact point's path
+/// length on the part, [`rotary_move_length`]); moves that print as no motion are left out.
+fn build_rotary(plan: &Plan, o: &GcodeOptions, f: &Fixture) -> Result<Program> {
+    let (k, dp) = (o.units.in_mm(), o.decimals);
+    let p3 = |v: Vec3| [rounded(v[0] * k, dp), rounded(v[1], dp), rounded(v[2] * k, dp)];
+    let feed = rounded(o.feed * k, FEED_DECIMALS);
+    let plunge = rounded(o.plunge_feed * k, FEED_DECIMALS);
+    let depth = f.contact_depth * k;
+    let safe_z = rounded(o.safe_z * k, dp);
+    let blend = if o.dialect == Dialect::LinuxCnc {
+        Some(blend_tolerance(plan.tolerance, o)?)
+    } else {
+        None
+    };
+    let mut passes = Vec::with_capacity(plan.passes.len());
+    for pass in &plan.passes {
+        let start = p3(pass.start);
+        let ends = pass.moves.iter().map(|(_, m)| p3(m.end()));
+        if !std::iter::once(start).chain(ends).flatten().all(f64::is_finite) {
+            return Err(ToolpathError::Internal(format!(
+                "non-finite coordinate in stroke {}",
+                pass.stroke
+            )));
+        }
+        let (fp, fdec) = inverse_time((safe_z - start[2]).abs(), plunge)?;
+        let mut moves = vec![
+            Move::Rapid([start[0], start[1], safe_z]),
+            Move::Line { to: start, feed: fp, first: true, fdec },
+        ];
+        let mut cur = start;
+        for (_, m) in &pass.moves {
+            let to = p3(m.end());
+            if to == cur {
+                continue;
+            }
+            let (fp, fdec) = inverse_time(rotary_move_length(cur, to, depth), feed)?;
+            moves.push(Move::Line { to, feed: fp, first: true, fdec });
+            cur = to;
+        }
+        moves.push(Move::Rapid([cur[0], cur[1], safe_z]));
+        passes.push((pass.stroke, moves));
+    }
+    Ok(Program { blend, safe_z, passes, rotary: true })
 }
 
 /// Rapid rate (mm/min) when [`GcodeOptions::rapid_rate_mm_min`] is not set: a modest hobby or
@@ -461,21 +502,33 @@ fn sheet_changes(plan: &Plan) -> usize {
 
 /// The cycle time of a program as printed (see [`CycleTime`]).
 fn program_time(plan: &Plan, o: &GcodeOptions, prog: &Program) -> CycleTime {
-    let k = o.units.in_mm();
     let rapid = rapid_mm_min(o);
     let secs = |len: f64, rate: f64| if rate > 0.0 { 60.0 * len / rate } else { 0.0 };
     let mut t = CycleTime { rapid_mm_min: rapid, ..Default::default() };
-    let home = |a: usize| rounded(plan.home[a] * k, o.decimals);
-    let mut cur = [home(0), home(1), prog.safe_z];
+    let mut cur = home(plan, o, prog);
+    // A rotary program's A moves count as the arc they turn at the mean height of the move.
+    let dist = |a: Vec3, b: Vec3| {
+        if prog.rotary {
+            let arc = 0.5 * (a[2] + b[2]) * (b[1] - a[1]).to_radians();
+            ((b[0] - a[0]).powi(2) + (b[2] - a[2]).powi(2) + arc * arc).sqrt()
+        } else {
+            crate::geom::norm3(crate::geom::sub3(b, a))
+        }
+    };
     for (_, moves) in &prog.passes {
         for (j, m) in moves.iter().enumerate() {
             match *m {
                 Move::Rapid(to) => {
-                    t.rapid_s += secs(crate::geom::norm3(crate::geom::sub3(to, cur)), rapid);
+                    t.rapid_s += secs(dist(cur, to), rapid);
                     cur = to;
                 }
                 Move::Line { to, feed, .. } => {
-                    let dt = secs(crate::geom::norm3(crate::geom::sub3(to, cur)), feed);
+                    // Inverse time (G93): the move takes 1/F minutes.
+                    let dt = if prog.rotary {
+                        60.0 / feed
+                    } else {
+                        secs(crate::geom::norm3(crate::geom::sub3(to, cur)), feed)
+                    };
                     // The move after the rapid to the pass's start is its plunge.
                     if j == 1 {
                         t.plunge_s += dt;
@@ -507,8 +560,16 @@ fn program_time(plan: &Plan, o: &GcodeOptions, prog: &Program) -> CycleTime {
 /// coordinates, printed feeds and arc centres) but not checked for safety.
 pub fn cycle_time(plan: &Plan, o: &GcodeOptions) -> Result<CycleTime> {
     o.validate()?;
+    check_dialect(plan, o)?;
     let prog = build(plan, o)?;
     Ok(program_time(plan, o, &prog))
+}
+
+/// The plan's home at the travel height, as printed (`[X, A°, Z]` in a rotary program).
+fn home(plan: &Plan, o: &GcodeOptions, prog: &Program) -> Vec3 {
+    let k = o.units.in_mm();
+    let a = if prog.rotary { plan.home[1] } else { plan.home[1] * k };
+    [rounded(plan.home[0] * k, o.decimals), rounded(a, o.decimals), prog.safe_z]
 }
 
 /// Check the printed program against the envelope, the floor and the clearance.
@@ -533,6 +594,10 @@ fn check_program(plan: &Plan, o: &GcodeOptions, prog: &Program) -> Result<()> {
         }
         if let Some(e) = o.envelope {
             for (a, axis) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+                // A rotary program's second coordinate is A (no Y moves).
+                if prog.rotary && a == 1 {
+                    continue;
+                }
                 let (lo, hi, v) = (e.min[a] * k, e.max[a] * k, q[a]);
                 if v < lo - eps(lo) || v > hi + eps(hi) {
                     let by = if v < lo { lo - v } else { v - hi };
@@ -592,15 +657,14 @@ fn check_program(plan: &Plan, o: &GcodeOptions, prog: &Program) -> Result<()> {
             ),
         });
     }
-    let home =
-        [rounded(plan.home[0] * k, o.decimals), rounded(plan.home[1] * k, o.decimals), prog.safe_z];
-    check(home, None)
+    check(home(plan, o, prog), None)
 }
 
 /// Check the whole program (as printed) against the envelope, the floor, the clearance of
 /// the travel height and the printable-number rules; see the module docs.
 pub fn check_safety(plan: &Plan, o: &GcodeOptions) -> Result<()> {
     o.validate()?;
+    check_dialect(plan, o)?;
     let prog = build(plan, o)?;
     check_program(plan, o, &prog)
 }
@@ -674,34 +738,62 @@ fn write_header(w: &mut String, plan: &Plan, o: &GcodeOptions, prog: &Program, t
         num(t.rapid_s, 1),
         num(t.dwell_s, 1)
     );
-    let _ = writeln!(w, "G21 G90 G17 G94");
+    if let Some(f) = &plan.rotary {
+        rotary_header(w, f, o.units.in_mm(), o.decimals);
+    }
+    let _ = writeln!(w, "G21 G90 G17 {}", if prog.rotary { "G93" } else { "G94" });
     if let Some((p, d)) = prog.blend {
         let _ = writeln!(w, "G64 P{}", num(p, d));
     }
     let _ = writeln!(w, "G0 Z{}", num(prog.safe_z, o.decimals));
 }
 
-/// The moves of one pass: the rapid to its start, the plunge, the cut, the retract.
-fn write_moves(w: &mut String, moves: &[Move], dp: usize) {
+/// The fixture of a rotary program as header comments: the line
+/// `(rotary: point PX,PY,PZ direction DX,DY,DZ zero RX,RY,RZ)` (the point in mm, the unit
+/// vectors with 6 decimals; part coordinates) and the convention in words.
+fn rotary_header(w: &mut String, f: &Fixture, k: f64, dp: usize) {
+    let v =
+        |x: Vec3, s: f64, d: usize| x.iter().map(|c| num(c * s, d)).collect::<Vec<_>>().join(",");
+    let _ = writeln!(
+        w,
+        "(rotary: point {} direction {} zero {})",
+        v(f.point, k, dp),
+        v(f.direction, 1.0, 6),
+        v(f.zero, 1.0, 6)
+    );
+    for line in [
+        "(A axis: the part's axis on machine X, X = 0 at the point, Z = distance from the axis)",
+        "(A in degrees: positive turns the part counter-clockwise seen from +X towards the origin)",
+        "(A = 0 turns zero to +Z; A is unwrapped: run A without WRAPPED_ROTARY)",
+        "(feeds in inverse time, G93: each F is 1 / minutes of its move)",
+    ] {
+        let _ = writeln!(w, "{line}");
+    }
+}
+
+/// The moves of one pass: the rapid to its start, the plunge, the cut, the retract. In a
+/// rotary program the second axis is A and every feed move carries its inverse-time `F`.
+fn write_moves(w: &mut String, moves: &[Move], dp: usize, rotary: bool) {
     let n = |x: f64| num(x, dp);
-    let f = |x: f64| num(x, FEED_DECIMALS);
+    let ax = if rotary { 'A' } else { 'Y' };
     for (j, m) in moves.iter().enumerate() {
         match *m {
             Move::Rapid(q) if j == 0 => {
-                let _ = writeln!(w, "G0 X{} Y{}", n(q[0]), n(q[1]));
+                let _ = writeln!(w, "G0 X{} {ax}{}", n(q[0]), n(q[1]));
             }
             Move::Rapid(q) => {
                 let _ = writeln!(w, "G0 Z{}", n(q[2]));
             }
-            Move::Line { to, feed, .. } if j == 1 => {
-                let _ = writeln!(w, "G1 Z{} F{}", n(to[2]), f(feed));
+            Move::Line { to, feed, fdec, .. } if j == 1 => {
+                let _ = writeln!(w, "G1 Z{} F{}", n(to[2]), num(feed, fdec));
             }
-            Move::Line { to, feed, first } => {
-                let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
-                let _ = writeln!(w, "G1 X{} Y{} Z{}{fw}", n(to[0]), n(to[1]), n(to[2]));
+            Move::Line { to, feed, first, fdec } => {
+                let fw = if first { format!(" F{}", num(feed, fdec)) } else { String::new() };
+                let _ = writeln!(w, "G1 X{} {ax}{} Z{}{fw}", n(to[0]), n(to[1]), n(to[2]));
             }
             Move::Arc { to, ij, ccw, feed, first, .. } => {
-                let fw = if first { format!(" F{}", f(feed)) } else { String::new() };
+                let fw =
+                    if first { format!(" F{}", num(feed, FEED_DECIMALS)) } else { String::new() };
                 let _ = writeln!(
                     w,
                     "{} X{} Y{} Z{} I{} J{}{fw}",
@@ -717,6 +809,20 @@ fn write_moves(w: &mut String, moves: &[Move], dp: usize) {
     }
 }
 
+/// A rotary plan needs a dialect with an A axis and inverse time: grbl 1.1 drives X, Y and Z
+/// only, so rotary + grbl is refused.
+fn check_dialect(plan: &Plan, o: &GcodeOptions) -> Result<()> {
+    if plan.rotary.is_some() && o.dialect == Dialect::Grbl {
+        return Err(ToolpathError::Rotary {
+            key: "gcode.dialect",
+            message: "grbl 1.1 drives three axes (X, Y, Z) and has no A axis for a rotary \
+                      program; use linuxcnc (A axis, inverse-time G93 feeds)"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
 /// Write the plan as G-code. Refuses (with an error) programs that break the envelope, the
 /// floor or the clearance, snippets with forbidden words, numbers that print as zero, and
 /// empty programs (unless `allow_empty`); see the module docs for the program shape.
@@ -727,6 +833,7 @@ pub fn write_gcode(plan: &Plan, o: &GcodeOptions) -> Result<String> {
 /// [`write_gcode`] and the program's [`CycleTime`] (the figure its header states).
 pub(crate) fn write_gcode_timed(plan: &Plan, o: &GcodeOptions) -> Result<(String, CycleTime)> {
     o.validate()?;
+    check_dialect(plan, o)?;
     if plan.passes.is_empty() && !o.allow_empty {
         return Err(ToolpathError::EmptyProgram { skipped_tilt: plan.skipped_tilt.len() });
     }
@@ -749,7 +856,10 @@ pub(crate) fn write_gcode_timed(plan: &Plan, o: &GcodeOptions) -> Result<(String
             spindle_on(w, o);
         }
         let _ = writeln!(w, "(pass {i}: stroke {stroke})");
-        write_moves(w, moves, o.decimals);
+        write_moves(w, moves, o.decimals, prog.rotary);
+    }
+    if prog.rotary {
+        let _ = writeln!(w, "G94");
     }
     spindle_off(w, o);
     let _ = writeln!(w, "{}", if o.dialect == Dialect::Grbl { "M30" } else { "M2" });

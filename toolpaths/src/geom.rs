@@ -7,6 +7,43 @@ pub type Vec2 = [f64; 2];
 /// A 3D point or vector (mm).
 pub type Vec3 = [f64; 3];
 
+/// Length unit of the plan and of the length options of [`crate::GcodeOptions`]. The program is
+/// always printed in millimetres (`G21`): lengths are multiplied by [`LengthUnit::in_mm`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LengthUnit {
+    /// Millimetres (the default).
+    #[default]
+    Mm,
+    /// Centimetres.
+    Cm,
+    /// Metres.
+    M,
+    /// Inches.
+    In,
+}
+
+impl LengthUnit {
+    /// Length of one unit in millimetres.
+    pub fn in_mm(self) -> f64 {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::Cm => 10.0,
+            LengthUnit::M => 1000.0,
+            LengthUnit::In => 25.4,
+        }
+    }
+
+    /// Short name (`mm`, `cm`, `m`, `in`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LengthUnit::Mm => "mm",
+            LengthUnit::Cm => "cm",
+            LengthUnit::M => "m",
+            LengthUnit::In => "in",
+        }
+    }
+}
+
 pub(crate) fn sub(a: Vec2, b: Vec2) -> Vec2 {
     [a[0] - b[0], a[1] - b[1]]
 }

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::coverage::{coverage, Coverage, CoverageOptions};
 use crate::error::Result;
 use crate::gcode::{write_gcode_timed, GcodeOptions};
+use crate::geom::LengthUnit;
 use crate::json::strokes_json;
 use crate::mesh::{Domain, FieldMesh};
 use crate::place::{place_strokes, Placement, PlacementOptions};
@@ -81,6 +82,62 @@ impl JobOptions {
             g.validate()?;
         }
         Ok(())
+    }
+}
+
+/// The option keys (from [`JobOptions`]) whose default is a length or a feed, with that
+/// default in millimetres (per minute for the feeds); [`JobOptions::default_lengths_in`] turns
+/// them into another unit. Every other length option defaults to 0, none or a multiple of the
+/// brush width.
+pub const LENGTH_DEFAULTS_MM: [(&str, f64); 12] = [
+    ("placement.width", 1.0),
+    ("placement.trace.tolerance", 1e-3),
+    ("placement.trace.max_step", 1.0),
+    ("placement.trace.min_step", 1e-6),
+    ("placement.trace.max_length", 10_000.0),
+    ("placement.trace.exclusion_radius", 1.0),
+    ("plan.tolerance", 0.01),
+    ("gcode.feed", 1000.0),
+    ("gcode.plunge_feed", 300.0),
+    ("gcode.safe_z", 5.0),
+    ("gcode.clearance", 1.0),
+    ("svg.margin", 2.0),
+];
+
+impl JobOptions {
+    /// Sets every option of [`LENGTH_DEFAULTS_MM`] that is not `given` (by its key path) to its
+    /// default as a physical length in `unit`: a scene in inches gets a 1 mm clearance, not
+    /// 1 inch. Options the caller gave keep their value (in `unit`). A no-op for millimetres.
+    pub fn default_lengths_in(&mut self, unit: LengthUnit, given: &dyn Fn(&str) -> bool) {
+        let k = unit.in_mm();
+        for (key, mm) in LENGTH_DEFAULTS_MM {
+            if given(key) {
+                continue;
+            }
+            let v = mm / k;
+            match key {
+                "placement.width" => self.placement.width = v,
+                "placement.trace.tolerance" => self.placement.trace.tolerance = v,
+                "placement.trace.max_step" => self.placement.trace.max_step = v,
+                "placement.trace.min_step" => self.placement.trace.min_step = v,
+                "placement.trace.max_length" => self.placement.trace.max_length = v,
+                "placement.trace.exclusion_radius" => self.placement.trace.exclusion_radius = v,
+                "plan.tolerance" => self.plan.tolerance = v,
+                _ => {}
+            }
+            if let Some(g) = &mut self.gcode {
+                match key {
+                    "gcode.feed" => g.feed = v,
+                    "gcode.plunge_feed" => g.plunge_feed = v,
+                    "gcode.safe_z" => g.safe_z = v,
+                    "gcode.clearance" => g.clearance = v,
+                    _ => {}
+                }
+            }
+            if let (Some(s), "svg.margin") = (&mut self.svg, key) {
+                s.margin = v;
+            }
+        }
     }
 }
 

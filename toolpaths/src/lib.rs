@@ -18,7 +18,8 @@
 //! 3. `topology`, `improve`, `bound`: adjacency, metrics and seams; tour local search;
 //!    travel bounds.
 //! 4. `mesh`, `order`: the validated [`Domain`]; stroke ordering.
-//! 5. `field`, `locate`: field sampling and singularities; point location.
+//! 5. `field`, `locate`, `rotary`: field sampling and singularities; point location; rotary
+//!    fixtures (the axis of a turned part, found or given).
 //! 6. `trace`: streamline tracing.
 //! 7. `spacing`: stroke-to-stroke distances.
 //! 8. `place`: stroke placement.
@@ -70,6 +71,7 @@ mod place;
 mod plan;
 mod plan_options;
 mod report;
+pub mod rotary;
 mod simplify;
 mod snippet;
 mod spacing;
@@ -90,7 +92,7 @@ pub use gcode::{
     Spindle, DEFAULT_RAPID_MM_MIN,
 };
 pub use geom::{Metric, Vec2, Vec3};
-pub use job::{generate, JobOptions, JobOutput};
+pub use job::{generate, JobOptions, JobOutput, LENGTH_DEFAULTS_MM};
 pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};
 pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
 pub use order::{order_strokes, tour_length, Direction, Ends, OrderOptions, Ordering};
@@ -99,6 +101,7 @@ pub use plan::{
     ordering_ends, plan_toolpath, MoveKind, Pass, Plan, PlanOptions, Sheets, TiltPolicy, ZMode,
 };
 pub use report::{PhaseTime, Report};
+pub use rotary::{fit_axis, rotary_move_length, AxisFit, AxisSpec, Fixture, RotaryAxis};
 pub use simplify::{fit_moves, rdp_indices, Segment};
 pub use spacing::Spacing;
 pub use stroke_checks::{

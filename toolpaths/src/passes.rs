@@ -82,7 +82,16 @@ fn far_point(pts: &[Vec3], eps: f64) -> Vec3 {
     pts[pts.len() - 1]
 }
 
-pub(crate) fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) -> Pass {
+/// One pass of an ordered item (flipped when `flip`). `period`: on a rotary fixture, the period
+/// of the developed angle (the machine points' second coordinate), unwrapped again here since a
+/// closed loop may have been rotated to a new entry.
+pub(crate) fn make_pass(
+    dom: &Domain,
+    it: &Item,
+    flip: bool,
+    o: &PlanOptions,
+    period: Option<f64>,
+) -> Pass {
     let mut machine = it.machine.clone();
     let mut uv = it.uv.clone();
     let mut faces = it.faces.clone();
@@ -96,6 +105,9 @@ pub(crate) fn make_pass(dom: &Domain, it: &Item, flip: bool, o: &PlanOptions) ->
             f.reverse();
         }
         stops.swap(0, 1);
+    }
+    if let Some(period) = period {
+        crate::rotary::unwrap_developed(&mut machine, period);
     }
     let eps = o.tolerance;
     let first = machine[0];

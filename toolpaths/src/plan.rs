@@ -8,6 +8,10 @@
 //!   on the table in its own 3D coordinates and Z follows it along each stroke (3-axis).
 //!   Strokes whose surface normal tilts more than `max_tilt_deg` from +Z are refused or
 //!   skipped ([`TiltPolicy`]).
+//! * **Rotary** — `(X, A, Z)`: the part turns about its axis on machine X, the tool stands at
+//!   the surface's distance from the axis minus `contact_depth` ([`crate::rotary`]). The
+//!   passes hold `[x, A in degrees, z]`, A unwrapped along each pass and between passes; the
+//!   tilt is measured from the radial direction.
 //!
 //! A pass is: (lead-in ramp) → (overtravel before, if the stroke starts on the chart
 //! boundary) → the stroke → (overtravel after) → (lead-out ramp). Leads are tangent
@@ -23,6 +27,8 @@ use crate::passes::{make_pass, Item};
 pub use crate::passes::{MoveKind, Pass};
 use crate::place::Placement;
 pub use crate::plan_options::{PlanOptions, Sheets, TiltPolicy, ZMode};
+use crate::rotary::{fit_axis, nearest_equivalent, unwrap_developed, AxisSpec, Fixture};
+use crate::simplify::Segment;
 use crate::trace::{StopReason, Stroke};
 
 /// The ordered passes.
@@ -45,6 +51,9 @@ pub struct Plan {
     /// The simplification tolerance the passes were made with (`PlanOptions::tolerance`);
     /// LinuxCNC's `G64 P` path blending uses it.
     pub tolerance: f64,
+    /// The rotary fixture when `z_mode` is `rotary` (the passes are then `[x, A°, z]` and
+    /// `home` is `(X, A°)`); none otherwise.
+    pub rotary: Option<Fixture>,
 }
 
 /// Most entry candidates offered to the orderer per closed loop.
@@ -116,23 +125,42 @@ fn signed_area(p: &[Vec2]) -> f64 {
     (0..n).map(|i| cross(p[i], p[(i + 1) % n])).sum::<f64>() * 0.5
 }
 
-/// The oriented items of a placement (one per stroke piece) and the strokes skipped for tilt.
-type Items = (Vec<Item>, Vec<(usize, f64)>);
+/// The oriented items of a placement (one per stroke piece), the strokes skipped for tilt
+/// and the rotary fixture.
+type Items = (Vec<Item>, Vec<(usize, f64)>, Option<Fixture>);
+
+/// The rotary fixture of `z_mode: rotary`: the given axis, or the one found from the lift.
+fn fixture(dom: &Domain, opts: &PlanOptions) -> Result<Option<Fixture>> {
+    let ZMode::Rotary { axis, .. } = opts.z_mode else { return Ok(None) };
+    let (Some(points), Some(normals)) = (&dom.positions, &dom.spacing_normals) else {
+        return Err(ToolpathError::MissingInput(
+            "a rotary program needs per-vertex 3D positions in the field mesh",
+        ));
+    };
+    let axis = match axis {
+        AxisSpec::Given(a) => a,
+        AxisSpec::Auto(_) => fit_axis(points, normals)?.axis,
+    };
+    Fixture::new(axis, points, opts.contact_depth).map(Some)
+}
 
 fn plan_items(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Items> {
     opts.validate()?;
-    let surface = matches!(opts.z_mode, ZMode::SurfaceFollowing { .. });
+    let surface = !matches!(opts.z_mode, ZMode::Flat { .. });
     if surface && !dom.has_lift() {
         return Err(ToolpathError::MissingInput(
             "surface-following Z needs per-vertex 3D positions in the field mesh",
         ));
     }
+    let rot = fixture(dom, opts)?;
     let mut items = Vec::new();
     let mut skipped_tilt = Vec::new();
     for (si, s) in placement.strokes.iter().enumerate() {
         let rev = wants_reverse(dom.symmetry, opts.direction, s, opts.reference);
-        if let ZMode::SurfaceFollowing { max_tilt_deg, on_tilt } = opts.z_mode {
-            let tilt = max_tilt(dom, s);
+        if let ZMode::SurfaceFollowing { max_tilt_deg, on_tilt }
+        | ZMode::Rotary { max_tilt_deg, on_tilt, .. } = opts.z_mode
+        {
+            let tilt = max_tilt(dom, s, rot.as_ref());
             if tilt > max_tilt_deg {
                 match on_tilt {
                     TiltPolicy::Error => {
@@ -150,9 +178,9 @@ fn plan_items(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result
                 }
             }
         }
-        items.extend(make_items(dom, si, s, rev, surface, opts));
+        items.extend(make_items(dom, si, s, rev, rot.as_ref(), opts));
     }
-    Ok((items, skipped_tilt))
+    Ok((items, skipped_tilt, rot))
 }
 
 /// What the orderer of [`plan_toolpath`] sees: the machine-XY entry and exit of every oriented
@@ -165,13 +193,13 @@ pub fn ordering_ends(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
 
 /// Build the ordered passes from a placement (see the module docs).
 pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) -> Result<Plan> {
-    let (items, skipped_tilt) = plan_items(dom, placement, opts)?;
+    let (items, skipped_tilt, rot) = plan_items(dom, placement, opts)?;
     // Sheets: in flat mode (XY = UV) charts that overlap in UV cannot be cut on one sheet;
     // each sheet is ordered on its own, from home, and cut in sheet order.
     let sheet_of_chart = match (opts.z_mode, opts.sheets) {
         (ZMode::Flat { .. }, Sheets::Overlap) => sheets(dom),
         (ZMode::Flat { .. }, Sheets::Chart) => (0..dom.chart_count()).collect(),
-        (ZMode::SurfaceFollowing { .. }, _) => vec![0; dom.chart_count()],
+        (ZMode::SurfaceFollowing { .. } | ZMode::Rotary { .. }, _) => vec![0; dom.chart_count()],
     };
     let mut item_sheet: Vec<usize> = items
         .iter()
@@ -193,6 +221,12 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
         }
     }
     let n_sheets = item_sheet.iter().copied().max().map_or(1, |m| m + 1);
+    // Rotary: the orderer works in (X, A developed at r_ref); home is (X, A°).
+    let mut order = opts.order.clone();
+    if let Some(f) = &rot {
+        order.home[1] = order.home[1].to_radians() * f.r_ref;
+    }
+    let period = rot.as_ref().map(Fixture::period);
     let mut passes = Vec::with_capacity(items.len());
     let (mut travel, mut travel_between, mut travel_greedy) = (0.0, 0.0, 0.0);
     for sheet in 0..n_sheets {
@@ -201,7 +235,7 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
             continue;
         }
         let ends: Vec<Ends> = ids.iter().map(|&k| ends_of(&items[k])).collect();
-        let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &opts.order);
+        let ordering = order_strokes(&ends, opts.direction == Direction::Alternate, &order);
         for &j in &ordering.order {
             let mut it = items[ids[j]].clone();
             if let Some(v) = ordering.entry[j] {
@@ -209,13 +243,16 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
                 rotate_loop(&mut it, at);
             }
             let flip = ordering.flipped[j];
-            let mut pass = make_pass(dom, &it, flip, opts);
+            let mut pass = make_pass(dom, &it, flip, opts, period);
             pass.sheet = sheet;
             passes.push(pass);
         }
         travel += ordering.travel;
         travel_between += ordering.travel_between;
         travel_greedy += ordering.travel_greedy;
+    }
+    if let Some(f) = &rot {
+        rotary_passes(&mut passes, f, opts.order.home[1]);
     }
     Ok(Plan {
         passes,
@@ -226,7 +263,28 @@ pub fn plan_toolpath(dom: &Domain, placement: &Placement, opts: &PlanOptions) ->
         width: placement.width,
         home: opts.order.home,
         tolerance: opts.tolerance,
+        rotary: rot,
     })
+}
+
+/// Rotary passes from developed `[x, s, z]` to `[x, A°, z]`: each pass shifted by whole turns
+/// to start at the equivalent of its start nearest where the previous pass ended (the first:
+/// nearest `home_a_deg`), so A never jumps by a turn (A is unwrapped).
+fn rotary_passes(passes: &mut [Pass], f: &Fixture, home_a_deg: f64) {
+    let period = f.period();
+    let mut prev = home_a_deg.to_radians() * f.r_ref;
+    for p in passes {
+        let shift = nearest_equivalent(p.start[1], prev, period) - p.start[1];
+        let last = p.moves.last().map_or(p.start, |(_, m)| m.end());
+        prev = last[1] + shift;
+        let deg = |q: Vec3| [q[0], ((q[1] + shift) / f.r_ref).to_degrees(), q[2]];
+        p.start = deg(p.start);
+        for (_, m) in &mut p.moves {
+            match m {
+                Segment::Line { to } | Segment::Arc { to, .. } => *to = deg(*to),
+            }
+        }
+    }
 }
 
 /// Sheet of each chart: charts that overlap in UV get different sheets (greedy colouring
@@ -250,24 +308,36 @@ pub(crate) fn sheets(dom: &Domain) -> Vec<usize> {
     sheet
 }
 
-/// Largest angle (degrees) between the surface normal and +Z along a stroke.
-fn max_tilt(dom: &Domain, s: &Stroke) -> f64 {
+/// Largest angle (degrees) between the surface normal and the tool axis along a stroke: +Z,
+/// or the radial direction on a rotary fixture.
+fn max_tilt(dom: &Domain, s: &Stroke, rot: Option<&Fixture>) -> f64 {
     let mut worst: f64 = 0.0;
     for (p, &f) in s.uv.iter().zip(&s.faces) {
-        if let Some(n) = dom.normal(f, barycentric(dom.corners(f), *p)) {
-            worst = worst.max(n[2].clamp(-1.0, 1.0).acos().to_degrees());
+        let b = barycentric(dom.corners(f), *p);
+        if let Some(n) = dom.normal(f, b) {
+            let tilt = match (rot, dom.lift(f, b)) {
+                (Some(fx), Some(x)) => fx.tilt_deg(x, n),
+                _ => n[2].clamp(-1.0, 1.0).acos().to_degrees(),
+            };
+            worst = worst.max(tilt);
         }
     }
     worst
 }
 
-fn machine_point(dom: &Domain, p: Vec2, f: u32, surface: bool, opts: &PlanOptions) -> Vec3 {
-    match opts.z_mode {
-        ZMode::Flat { surface_z } => [p[0], p[1], surface_z - opts.contact_depth],
-        ZMode::SurfaceFollowing { .. } => {
-            let b = barycentric(dom.corners(f), p);
-            let x = dom.lift(f, b).unwrap_or([p[0], p[1], 0.0]);
-            debug_assert!(surface);
+/// Machine point of a stroke point: flat `[u, v, z]`, the lift, or on a rotary fixture the
+/// developed `[x, r_ref · A, |r|]` (A in radians, unwrapped later), each minus the contact depth
+/// in Z.
+fn machine_point(dom: &Domain, p: Vec2, f: u32, rot: Option<&Fixture>, opts: &PlanOptions) -> Vec3 {
+    let lift = || dom.lift(f, barycentric(dom.corners(f), p)).unwrap_or([p[0], p[1], 0.0]);
+    match (opts.z_mode, rot) {
+        (ZMode::Flat { surface_z }, _) => [p[0], p[1], surface_z - opts.contact_depth],
+        (_, Some(fx)) => {
+            let [x, a, r] = fx.cylindrical(lift());
+            [x, fx.r_ref * a, r - opts.contact_depth]
+        }
+        _ => {
+            let x = lift();
             [x[0], x[1], x[2] - opts.contact_depth]
         }
     }
@@ -279,9 +349,10 @@ fn make_items(
     si: usize,
     s: &Stroke,
     rev: bool,
-    surface: bool,
+    rot: Option<&Fixture>,
     opts: &PlanOptions,
 ) -> Vec<Item> {
+    let surface = !matches!(opts.z_mode, ZMode::Flat { .. });
     let mut pieces: Vec<(Vec<Vec2>, Vec<u32>)> = s
         .pieces()
         .into_iter()
@@ -299,10 +370,13 @@ fn make_items(
     }
     let np = pieces.len();
     let to_machine = |(p, f): &(Vec<Vec2>, Vec<u32>)| -> Vec<Vec3> {
-        p.iter().zip(f).map(|(q, &ff)| machine_point(dom, *q, ff, surface, opts)).collect()
+        p.iter().zip(f).map(|(q, &ff)| machine_point(dom, *q, ff, rot, opts)).collect()
     };
     if surface {
-        let machine: Vec<Vec3> = pieces.iter().flat_map(to_machine).collect();
+        let mut machine: Vec<Vec3> = pieces.iter().flat_map(to_machine).collect();
+        if let Some(fx) = rot {
+            unwrap_developed(&mut machine, fx.period());
+        }
         let (uv, faces) = pieces.into_iter().unzip();
         return vec![Item {
             stroke: si,

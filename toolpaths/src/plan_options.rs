@@ -7,6 +7,7 @@ use crate::budget::lead_length;
 use crate::error::{finite, positive, Result, ToolpathError};
 use crate::geom::Vec2;
 use crate::order::{Direction, OrderOptions};
+use crate::rotary::AxisSpec;
 
 /// What to do with a stroke whose surface tilts beyond the limit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -36,6 +37,21 @@ pub enum ZMode {
         /// Largest allowed angle between the surface normal and +Z, degrees.
         max_tilt_deg: f64,
         /// What to do beyond it.
+        on_tilt: TiltPolicy,
+    },
+    /// A turned part on a rotary (A) axis along machine X, the tool along machine Z at the
+    /// surface's distance from the axis (4-axis; needs positions in the input). See
+    /// [`crate::rotary`] for the mapping and the sign of A.
+    Rotary {
+        /// The part's axis: `"auto"` (found from a body of revolution, the default) or
+        /// `{"point", "direction", "zero"}` in part coordinates.
+        #[serde(default)]
+        axis: AxisSpec,
+        /// Largest allowed angle between the surface normal and the radial direction (the
+        /// tool axis once the point is turned to the top), degrees.
+        max_tilt_deg: f64,
+        /// What to do beyond it. Default `error`.
+        #[serde(default)]
         on_tilt: TiltPolicy,
     },
 }
@@ -140,7 +156,7 @@ impl PlanOptions {
             ZMode::Flat { surface_z } => {
                 finite("plan.z_mode.surface_z", surface_z)?;
             }
-            ZMode::SurfaceFollowing { max_tilt_deg, .. } => {
+            ZMode::SurfaceFollowing { max_tilt_deg, .. } | ZMode::Rotary { max_tilt_deg, .. } => {
                 crate::error::in_range(
                     "plan.z_mode.max_tilt_deg",
                     max_tilt_deg,
@@ -148,6 +164,20 @@ impl PlanOptions {
                     180.0,
                     "must be in [0, 180) degrees",
                 )?;
+            }
+        }
+        if let ZMode::Rotary { axis, .. } = self.z_mode {
+            if self.arcs {
+                return Err(ToolpathError::Rotary {
+                    key: "plan.arcs",
+                    message: "G2/G3 arcs lie in the XY plane and a rotary program has no Y: set \
+                              arcs to false (a linear X A Z move already follows a helix on the \
+                              part)"
+                        .into(),
+                });
+            }
+            if let AxisSpec::Given(a) = axis {
+                crate::rotary::check_axis(&a)?;
             }
         }
         Ok(())

@@ -119,7 +119,11 @@ impl Report {
         for p in &plan.passes {
             let mut cur = p.start;
             for (_, m) in &p.moves {
-                cut += seg_len(cur, m);
+                cut += match &plan.rotary {
+                    // [x, A°, z]: the contact point's path on the part.
+                    Some(f) => crate::rotary::rotary_move_length(cur, m.end(), f.contact_depth),
+                    None => seg_len(cur, m),
+                };
                 cur = m.end();
             }
         }

@@ -31,6 +31,7 @@ fn one_pass(scale: f64) -> Plan {
         width: 1.0,
         home: [-3.0 / scale, 4.0 / scale],
         tolerance: 0.01 / scale,
+        rotary: None,
     }
 }
 

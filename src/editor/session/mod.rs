@@ -582,7 +582,11 @@ impl Session {
                         ),
                     ));
                 }
-                let mut t = scene.toolpaths.take().unwrap_or_default();
+                let units = scene.units;
+                let mut t = scene
+                    .toolpaths
+                    .take()
+                    .unwrap_or_else(|| crate::uvfield::ToolpathSection::default_in(units));
                 let (svg, gcode) = match what {
                     ExportKind::Svg => (Some(t.svg.clone().unwrap_or_else(|| beside("svg"))), None),
                     _ => (None, Some(t.gcode.clone().unwrap_or_else(|| beside("ngc")))),
