@@ -28,6 +28,9 @@ pub struct Prepared {
     pub refinement: Option<RefinementReport>,
     /// The part's split into smooth patches (`mesh.patches`), if any vertex was split.
     pub patches: Option<PatchReport>,
+    /// The part's noise (`field.noise: "auto"`) and the fit radius it chose; `None` with
+    /// `field.noise: "off"` or a `field.fit_radius` given.
+    pub noise: Option<crate::geometry::noise::NoiseEstimate>,
 }
 
 /// The highlight model's key light as the scene gives it.
@@ -176,7 +179,9 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
 pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
     let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout, patches } = part;
-    let refinement = refine_for_edits(s, &mut mesh, stages)?;
+    let noise = estimate_noise(s, &mesh, stages);
+    let fit_radius = scene.field.fit_radius.or(noise.and_then(|e| e.fit_radius));
+    let refinement = refine_for_edits(s, &mut mesh, fit_radius, stages)?;
     if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
         // A line or vector field read per vertex: each new vertex gets the mean of its edge's
         // two directions (aligned first, so a line field's ±u do not cancel).
@@ -191,14 +196,30 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     field_options.symmetry = scene.field.symmetry.symmetry();
     field_options.gradient_form = scene.field.gradient_form;
     field_options.geometry.normals = scene.field.normals;
-    field_options.geometry.fit_radius = scene.field.fit_radius;
+    field_options.geometry.fit_radius = fit_radius;
     field_options.critical_threshold = scene.field.critical_threshold;
     if let Some(r) = &refinement {
         field_options.kept_normals = r.kept_normals.clone();
     }
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
-    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement, patches })
+    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement, patches, noise })
+}
+
+/// The part's noise and the fit radius it asks for (`field.noise: "auto"`, docs/math.md §5.6,
+/// "Noise scale"), estimated on the part as loaded and split into its patches, before any
+/// refinement; `None` when the scene sets `field.fit_radius` or `field.noise: "off"`.
+fn estimate_noise(
+    s: &LoadedScene,
+    mesh: &Mesh,
+    stages: &mut Stages,
+) -> Option<crate::geometry::noise::NoiseEstimate> {
+    let field = &s.scene.field;
+    if field.fit_radius.is_some() || field.noise == crate::scene::NoiseMode::Off {
+        return None;
+    }
+    stages.start("noise");
+    Some(crate::geometry::noise::estimate(mesh))
 }
 
 /// The part cut into smooth patches along its sharp edges (`mesh.patches`, docs/math.md §3,
@@ -376,6 +397,7 @@ pub fn refine_request(
 fn refine_for_edits(
     s: &LoadedScene,
     mesh: &mut Mesh,
+    fit_radius: Option<f64>,
     stages: &mut Stages,
 ) -> Result<Option<Refinement>> {
     let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
@@ -407,7 +429,7 @@ fn refine_for_edits(
     // split near a brush must not turn the normal, and so the grain, of its far end.
     let geometry = crate::geometry::GeometryOptions {
         normals: s.scene.field.normals,
-        fit_radius: s.scene.field.fit_radius,
+        fit_radius,
         ..Default::default()
     };
     let kept_normals =

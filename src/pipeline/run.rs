@@ -64,6 +64,10 @@ pub struct RunReport {
     /// no vertex was split.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub patches: Option<super::PatchReport>,
+    /// The part's noise and the fit radius it chose (`field.noise: "auto"`); absent when the
+    /// scene sets `field.fit_radius` or `field.noise: "off"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::geometry::noise::NoiseEstimate>,
     /// Edits and the solve (iterations, energies, constraint violations, singularities).
     pub optimize: Option<OptimizeStageReport>,
     /// Strokes, coverage, lengths.
@@ -178,6 +182,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         critical_points,
         layout: prepared.layout.clone(),
         patches: prepared.patches.clone(),
+        noise: prepared.noise,
         optimize: optimized.map(|o| o.report),
         toolpaths: traced.map(|t| t.figures),
         as_brushed: as_brushed_figures,

@@ -406,6 +406,28 @@ pub enum InitKind {
     Directions,
 }
 
+/// Whether the part's noise picks the fit radius (`field.noise`, docs/math.md §5.6, "Noise
+/// scale").
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseMode {
+    /// Estimate the noise from the mesh and fit normals and curvature over the radius it asks
+    /// for; on a clean part that is the 1-ring, as with `off` (the default).
+    #[default]
+    Auto,
+    /// Fit over the 1-ring (or `field.fit_radius` when set), whatever the noise.
+    Off,
+}
+
+impl NoiseMode {
+    /// The default, `auto`.
+    pub fn is_auto(&self) -> bool {
+        *self == NoiseMode::Auto
+    }
+}
+
 /// The field's symmetry (`field.symmetry`).
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
@@ -451,10 +473,14 @@ pub struct FieldSection {
     /// hᵀn above which a vertex is a critical point (default 0.9995).
     pub critical_threshold: f64,
     /// Fit normals and curvature over the vertices within this distance (scene units) instead
-    /// of each vertex's 1-ring: for scans, a few times the noise's wavelength (none by default;
+    /// of each vertex's 1-ring: overrides the radius `noise: "auto"` picks (none by default;
     /// docs/math.md §5.6).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fit_radius: Option<f64>,
+    /// `auto` (default): estimate the part's noise and, on a scan or a sculpted part, fit over
+    /// the radius it asks for (the estimate is in the run report's `noise`); `off`: the 1-ring.
+    #[serde(skip_serializing_if = "NoiseMode::is_auto")]
+    pub noise: NoiseMode,
     /// Where `grainline run` writes FIELD.json (none by default).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
@@ -471,6 +497,7 @@ impl Default for FieldSection {
             normals: NormalSource::default(),
             critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
             fit_radius: None,
+            noise: NoiseMode::Auto,
             output: None,
         }
     }
