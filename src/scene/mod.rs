@@ -148,6 +148,7 @@ impl Scene {
         }
         self.solver.validate().map_err(|e| prefix("solver", e))?;
         if let Some(e) = &self.export {
+            e.validate().map_err(|err| prefix("export", err))?;
             if (e.strokes || e.as_brushed) && self.toolpaths.is_none() {
                 let key = if e.strokes { "export.strokes" } else { "export.as_brushed" };
                 return Err(Error::setting(
