@@ -37,7 +37,7 @@ use crate::{Error, Result};
 pub use material::{gltf_material, GltfMaterial};
 
 /// The scene's `export` section: files for other programs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ExportSection {
     /// glTF 2.0 binary (.glb) of the part with its grain as tangents and an anisotropic
@@ -52,9 +52,11 @@ pub struct ExportSection {
     #[serde(default)]
     pub as_brushed: bool,
     /// Texels per side of the glb's `anisotropyTexture` and of the maps (`maps`): a power of
-    /// two in [16, 8192]. Default 1024: a dozen texels along a typical edge of the examples.
-    #[serde(default = "default_texture_size")]
-    pub anisotropy_texture_size: u32,
+    /// two in [16, 8192]. Default: chosen for the part, the smallest power of two in
+    /// [1024, 4096] at which the shortest 5 % of the UV edges span 8 texels (1024 for the
+    /// kettle and the dome, 2048 for the panel).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anisotropy_texture_size: Option<u32>,
     /// A directory for the grain as 16-bit PNG maps in UV space (`grain-direction.png`,
     /// `grain-angle.png`; docs/formats.md, "Grain maps"), written by `grainline run` and
     /// `grainline export --maps`.
@@ -62,26 +64,13 @@ pub struct ExportSection {
     pub maps: Option<String>,
 }
 
-fn default_texture_size() -> u32 {
-    crate::texmap::DEFAULT_TEXTURE_SIZE
-}
-
-impl Default for ExportSection {
-    fn default() -> Self {
-        ExportSection {
-            glb: None,
-            strokes: false,
-            as_brushed: false,
-            anisotropy_texture_size: default_texture_size(),
-            maps: None,
-        }
-    }
-}
-
 impl ExportSection {
     /// Range checks; keys are relative to this section.
     pub fn validate(&self) -> Result<()> {
-        crate::texmap::check_size("anisotropy_texture_size", self.anisotropy_texture_size)
+        match self.anisotropy_texture_size {
+            Some(n) => crate::texmap::check_size("anisotropy_texture_size", n),
+            None => Ok(()),
+        }
     }
 }
 

@@ -49,7 +49,7 @@ pub struct Maps {
 pub fn maps(x: &ExportStageInput) -> Result<Maps> {
     let (normals, u, singular) = grain(x);
     let input = export_input(x, &normals, &u, &singular)?;
-    let t = grain_texture(&input, x.section.anisotropy_texture_size)?;
+    let t = grain_texture(&input, texture_size(x.section, input.uv))?;
     Ok(Maps { direction: t.baked.image.direction_png16()?, angle: t.baked.image.angle_png16()? })
 }
 
@@ -107,6 +107,15 @@ fn export_input<'a>(
     })
 }
 
+/// `export.anisotropy_texture_size`, or the size chosen for the part's UVs
+/// ([`crate::texmap::auto_size`]).
+fn texture_size(
+    e: &ExportSection,
+    uv: &crate::mesh::CornerAttribute<nalgebra::Vector2<f64>>,
+) -> u32 {
+    e.anisotropy_texture_size.unwrap_or_else(|| crate::texmap::auto_size(uv))
+}
+
 /// Writes the glb ([`export_glb`]).
 pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
     let (scene, prepared) = (x.scene, x.prepared);
@@ -128,7 +137,7 @@ pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
             fov_deg: scene.view.fov_deg,
         }),
         // The key light as the highlight model used it (a light edit may have moved it).
-        texture_size: x.section.anisotropy_texture_size,
+        texture_size: texture_size(x.section, input.uv),
         key_light: crate::appearance::key_light_index(&scene.lights).and_then(|i| {
             match &scene.lights[i] {
                 LightSpec::Directional { irradiance, .. } => {

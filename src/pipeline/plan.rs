@@ -132,6 +132,9 @@ pub fn scene_inputs(s: &LoadedScene, plan: &mut OutputPlan) {
     if let Some(p) = &scene.field.directions {
         plan.input("field.directions", s.input(p));
     }
+    if let Some(m) = &scene.field.map {
+        plan.input("field.map.path", s.input(&m.path));
+    }
     for (i, e) in scene.edits.iter().enumerate() {
         if let crate::edit::Edit::Curve(c) = e {
             if let Some(p) = &c.svg {

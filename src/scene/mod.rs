@@ -15,8 +15,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 pub use sections::{
-    FieldSection, InitKind, MeshFull, MeshSection, OutlineSection, PatchMode, RefineMode,
-    RefineSettings, SymmetryKind, ViewModel, ViewSection,
+    FieldSection, InitKind, MapSource, MeshFull, MeshSection, OutlineSection, PatchMode,
+    RefineMode, RefineSettings, SymmetryKind, ViewModel, ViewSection,
 };
 
 use crate::{Error, Result};

@@ -41,8 +41,34 @@ pub use raster::GrainImage;
 /// The smallest and largest texture size (texels per side) grainline writes.
 pub const TEXTURE_SIZE_RANGE: (u32, u32) = (16, 8192);
 
-/// The texture size used when the scene does not give one.
-pub const DEFAULT_TEXTURE_SIZE: u32 = 1024;
+/// The range of the texture size chosen when the scene gives none ([`auto_size`]).
+pub const AUTO_SIZE_RANGE: (u32, u32) = (1024, 4096);
+
+/// Texels the shortest 5 % of the UV edges span at least, at the size [`auto_size`] picks.
+pub const AUTO_TEXELS_PER_EDGE: f64 = 8.0;
+
+/// The texture size when the scene gives none: the smallest power of two in
+/// [`AUTO_SIZE_RANGE`] at which the 5th percentile of the UV edge lengths (in texture space)
+/// spans [`AUTO_TEXELS_PER_EDGE`] texels — so that the grain, linear inside each triangle, is
+/// held at eight texels or more per edge (the round trip of every example within 0.5°,
+/// tests/texture_maps.rs).
+pub fn auto_size(uv: &CornerAttribute<Vector2<f64>>) -> u32 {
+    let space = TextureSpace::of(uv);
+    let mut lengths: Vec<f64> = space
+        .corners(uv)
+        .iter()
+        .flat_map(|t| [(t[1] - t[0]).norm(), (t[2] - t[1]).norm(), (t[0] - t[2]).norm()])
+        .filter(|l| *l > 0.0 && l.is_finite())
+        .collect();
+    let (lo, hi) = AUTO_SIZE_RANGE;
+    if lengths.is_empty() {
+        return lo;
+    }
+    lengths.sort_by(f64::total_cmp);
+    let p5 = lengths[lengths.len() / 20];
+    let need = (AUTO_TEXELS_PER_EDGE / p5).min(f64::from(hi));
+    (need.ceil() as u32).next_power_of_two().clamp(lo, hi)
+}
 
 /// The map from a part's UVs to texture space: st = (uv − offset) / scale.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
