@@ -167,7 +167,7 @@ impl GrainMap {
             let t = self.texels[j * self.width + i];
             let v = Vector2::new(f64::from(t[0]), f64::from(t[1]));
             let len2 = v.norm_squared();
-            if !(len2 > 1e-12) {
+            if len2.is_nan() || len2 <= 1e-12 {
                 continue;
             }
             acc += wt
@@ -178,7 +178,7 @@ impl GrainMap {
                 };
         }
         let len = acc.norm();
-        if !(len > 1e-9) {
+        if len.is_nan() || len <= 1e-9 {
             return None;
         }
         Some(if oriented {

@@ -42,12 +42,12 @@ fn texel_value(
     b: [f64; 3],
 ) -> Option<([f32; 2], f32)> {
     let (mut n, mut t, mut u, mut w) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), 0.0);
-    for c in 0..3 {
+    for (c, bc) in b.iter().enumerate() {
         let tc = frames.tangents[f][c];
-        n += b[c] * input.normals[input.faces[f][c] as usize];
-        t += b[c] * Vector3::new(f64::from(tc[0]), f64::from(tc[1]), f64::from(tc[2]));
-        w += b[c] * f64::from(tc[3]);
-        u += b[c] * input.grain[f][c];
+        n += *bc * input.normals[input.faces[f][c] as usize];
+        t += *bc * Vector3::new(f64::from(tc[0]), f64::from(tc[1]), f64::from(tc[2]));
+        w += *bc * f64::from(tc[3]);
+        u += *bc * input.grain[f][c];
     }
     let (t, bt, _) = frame(n, t, w)?;
     let (x, y) = (u.dot(&t), u.dot(&bt));
@@ -122,9 +122,9 @@ fn dilate(img: &mut GrainImage, line: bool) {
     }
     let mut queued: Vec<bool> = img.sign.iter().map(|&w| w != 0.0).collect();
     let mut layer: Vec<usize> = Vec::new();
-    for k in 0..n * n {
-        if !queued[k] && neighbours(n, k).any(|m| img.sign[m] != 0.0) {
-            queued[k] = true;
+    for (k, q) in queued.iter_mut().enumerate() {
+        if !*q && neighbours(n, k).any(|m| img.sign[m] != 0.0) {
+            *q = true;
             layer.push(k);
         }
     }
