@@ -288,7 +288,7 @@ fn panel() {
 }
 
 /// A shared mesh (../shared; skipped without it): spot, whose stencil edit makes a field with
-/// singularities (measured 92.7 %).
+/// singularities (measured 94.0 %).
 #[test]
 fn spot() {
     check("spot", ROW_SHARE);

@@ -236,12 +236,13 @@ fn read_texture(doc: &Value, blob: &[u8], index: usize) -> Texture {
         png::Decoder::new(std::io::Cursor::new(&blob[off..off + len])).read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!((info.color_type, info.bit_depth), (png::ColorType::Rgb, png::BitDepth::Eight));
+    assert_eq!((info.color_type, info.bit_depth), (png::ColorType::Rgb, png::BitDepth::Sixteen));
     assert_eq!(info.width, info.height);
     let size = info.width as usize;
-    let rg = buf[..3 * size * size]
-        .chunks(3)
-        .map(|p| [2.0 * f64::from(p[0]) / 255.0 - 1.0, 2.0 * f64::from(p[1]) / 255.0 - 1.0])
+    let c = |p: &[u8], o: usize| f64::from(u16::from_be_bytes([p[o], p[o + 1]])) / 65535.0;
+    let rg = buf[..6 * size * size]
+        .chunks(6)
+        .map(|p| [2.0 * c(p, 0) - 1.0, 2.0 * c(p, 2) - 1.0])
         .collect();
     Texture { size, rg }
 }

@@ -311,7 +311,7 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
         grain_texture(input, options.texture_size)?;
     let verts = vertices::gltf_vertices(input.faces, &baked.st, &baked.frames, nv);
     let m = gltf_material(&options.material);
-    let texture = baked.image.anisotropy_png8(m.anisotropy_rotation)?;
+    let texture = baked.image.anisotropy_png16(m.anisotropy_rotation)?;
     let mut gltf = glb_build::Gltf::default();
     let count = gltf.push_part_buffers(input.positions, &normals, &verts);
     let scale = options.units.in_mm() / 1000.0;

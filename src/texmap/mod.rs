@@ -21,7 +21,7 @@
 //! from its nearest filled neighbours (a breadth-first dilation over the whole image), so that
 //! bilinear and mipmapped sampling near a chart's border reads the chart's own grain.
 //! [`GrainImage`] encodes it ([`GrainImage::direction_png16`], [`GrainImage::angle_png16`],
-//! [`GrainImage::anisotropy_png8`]); [`read_map`] and [`corner_grain`] read a map back.
+//! [`GrainImage::anisotropy_png16`]); [`read_map`] and [`corner_grain`] read a map back.
 
 pub mod mikk;
 pub mod orient;

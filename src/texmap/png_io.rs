@@ -55,11 +55,6 @@ pub fn encode16(w: usize, h: usize, channels: Channels, samples: &[u16]) -> Resu
     encode(w, h, color, png::BitDepth::Sixteen, &bytes)
 }
 
-/// An 8-bit RGB PNG of `w × h` pixels.
-pub fn encode8(w: usize, h: usize, rgb: &[u8]) -> Result<Vec<u8>> {
-    encode(w, h, png::ColorType::Rgb, png::BitDepth::Eight, rgb)
-}
-
 /// Reads a grain map (docs/formats.md, "Grain maps"): a PNG of 8 or 16 bits per sample.
 /// A direction map needs colour (RG; alpha and B are ignored); an angle map is grey (or its
 /// red channel). Errors name the file.

@@ -186,14 +186,7 @@ impl GrainImage {
     /// The direction map (docs/formats.md): 16-bit RGB, RG = n × u in the tangent frame
     /// mapped from [−1, 1] to [0, 1], B = 1 (full strength).
     pub fn direction_png16(&self) -> Result<Vec<u8>> {
-        let n = self.size;
-        let q = |v: f64| ((v.clamp(-1.0, 1.0) + 1.0) * 0.5 * 65535.0).round() as u16;
-        let mut px = Vec::with_capacity(3 * n * n);
-        for k in 0..n * n {
-            let d = self.turned(k, std::f64::consts::FRAC_PI_2);
-            px.extend([q(d[0]), q(d[1]), u16::MAX]);
-        }
-        png_io::encode16(n, n, png_io::Channels::Rgb, &px)
+        self.anisotropy_png16(std::f64::consts::FRAC_PI_2)
     }
 
     /// The angle map (docs/formats.md): 16-bit grey, the grain's angle θ ∈ [0, π) from T
@@ -210,18 +203,19 @@ impl GrainImage {
         png_io::encode16(self.size, self.size, png_io::Channels::Grey, &px)
     }
 
-    /// The glb's `anisotropyTexture`: 8-bit RGB, RG = the grain turned by `rotation` (the
-    /// material's `anisotropyRotation`, written as 0 in the file), B = 255 (strength 1 ×
-    /// `anisotropyStrength`).
-    pub fn anisotropy_png8(&self, rotation: f64) -> Result<Vec<u8>> {
+    /// The glb's `anisotropyTexture`: 16-bit RGB, RG = the grain turned by `rotation` (the
+    /// material's `anisotropyRotation`, written as 0 in the file), B = 65535 (strength 1 ×
+    /// `anisotropyStrength`). 16 bits: an 8-bit direction is off by up to 0.3°; a browser reads
+    /// it at 8 bits, Blender at 16.
+    pub fn anisotropy_png16(&self, rotation: f64) -> Result<Vec<u8>> {
         let n = self.size;
-        let q = |v: f64| ((v.clamp(-1.0, 1.0) + 1.0) * 0.5 * 255.0).round() as u8;
+        let q = |v: f64| ((v.clamp(-1.0, 1.0) + 1.0) * 0.5 * 65535.0).round() as u16;
         let mut px = Vec::with_capacity(3 * n * n);
         for k in 0..n * n {
             let d = self.turned(k, rotation);
-            px.extend([q(d[0]), q(d[1]), u8::MAX]);
+            px.extend([q(d[0]), q(d[1]), u16::MAX]);
         }
-        png_io::encode8(n, n, &px)
+        png_io::encode16(n, n, png_io::Channels::Rgb, &px)
     }
 }
 
