@@ -115,6 +115,8 @@ pub struct LoadedPart {
     pub lighting: Lighting,
     /// Directions read per vertex (`field.init: "directions"`).
     pub directions: Option<Vec<Vector3<f64>>>,
+    /// The grain map read (`field.init: "map"`).
+    pub map: Option<crate::texmap::GrainMap>,
     /// The UV layout made for the part, if one was.
     pub layout: Option<crate::layout::LayoutReport>,
     /// The part's split into smooth patches (`mesh.patches`), if any vertex was split.
@@ -151,6 +153,8 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
             format!("\"uv\" needs UVs, and {mesh_name} has none"),
         )));
     }
+    // A grain map lives in the UVs: a part without them gets the layout the export would make.
+    let layout = layout || matches!(scene.field.init, InitKind::Map);
     let layout_report = if layout {
         let options = scene.toolpaths.as_ref().map(|t| t.layout.clone()).unwrap_or_default();
         ensure_layout(&mut mesh, &mesh_name, &options, stages)?
@@ -170,7 +174,11 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
         }
         _ => None,
     };
-    Ok(LoadedPart { mesh, mesh_name, lighting, directions, layout: layout_report, patches })
+    let map = match (&scene.field.init, &scene.field.map) {
+        (InitKind::Map, Some(m)) => Some(crate::texmap::read_map(&s.input(&m.path), m.kind)?),
+        _ => None,
+    };
+    Ok(LoadedPart { mesh, mesh_name, lighting, directions, map, layout: layout_report, patches })
 }
 
 /// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
@@ -178,7 +186,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
 /// initial field and its highlights on the result.
 pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
-    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, layout, patches } = part;
+    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, map, layout, patches } = part;
     let noise = estimate_noise(s, &mesh, stages);
     let fit_radius = scene.field.fit_radius.or(noise.and_then(|e| e.fit_radius));
     let refinement = refine_for_edits(s, &mut mesh, fit_radius, stages)?;
@@ -192,7 +200,7 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     }
     stages.start("field");
     let mut field_options = FieldOptions::new(lighting);
-    field_options.init = scene.field.initial_field(directions);
+    field_options.init = scene.field.initial_field(directions, map);
     field_options.symmetry = scene.field.symmetry.symmetry();
     field_options.gradient_form = scene.field.gradient_form;
     field_options.geometry.normals = scene.field.normals;

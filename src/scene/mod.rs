@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 pub use sections::{
-    FieldSection, InitKind, MeshFull, MeshSection, NoiseMode, OutlineSection, PatchMode,
+    FieldSection, InitKind, MapSource, MeshFull, MeshSection, NoiseMode, OutlineSection, PatchMode,
     RefineMode, RefineSettings, SymmetryKind, ViewModel, ViewSection,
 };
 
@@ -160,6 +160,7 @@ impl Scene {
         }
         self.solver.validate().map_err(|e| prefix("solver", e))?;
         if let Some(e) = &self.export {
+            e.validate().map_err(|err| prefix("export", err))?;
             if (e.strokes || e.as_brushed) && self.toolpaths.is_none() {
                 let key = if e.strokes { "export.strokes" } else { "export.as_brushed" };
                 return Err(Error::setting(
