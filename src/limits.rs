@@ -11,6 +11,16 @@
 /// false zero-area ones.
 pub const MAX_COORDINATE: f64 = 1e75;
 
+/// Smallest accepted size of a part: its bounding box's diagonal, after `scale`, at least
+/// 1e-60 (in the mesh's units).
+///
+/// Degenerate faces are found by their shape alone (a face's size does not matter), but the
+/// geometry divides by lengths: curvatures are about 1/L and the jet fit and the smoothest
+/// field raise them to the fourth power. A part 1e-100 across failed in the smoothest field's
+/// factorization and one 1e-80 across came out with spurious critical points; 1e-60 keeps
+/// 1/L⁴ ≤ 1e240, a margin of 10⁶⁸ below `f64::MAX`.
+pub const MIN_PART_SIZE: f64 = 1e-60;
+
 /// The range of `mesh.scale` (`--scale`): [10⁻¹², 10¹²]. Areas multiply two scaled
 /// coordinates, so a scale of 1e-300 made every area underflow to zero (and was reported as
 /// faces degenerate in UV); unit conversions need factors of 10⁻⁶…10⁶ at most.
