@@ -71,6 +71,12 @@ pub const MAX_FACTOR_BYTES: u64 = 8 << 30;
 /// would otherwise give billions).
 pub const MAX_SVG_POINTS: usize = 10_000_000;
 
+/// Largest magnitude of a number in an SVG's shapes (path data, `points`, `x`, `width`, `r`,
+/// …) and transforms: 1e30. usvg keeps points as `f32` (largest 3.4e38), so a larger number
+/// became infinity and its shape vanished ("no closed outline"); 1e30 leaves 10⁸ for the
+/// transforms and units. Refused naming the file, the line, the element and the attribute.
+pub const MAX_SVG_NUMBER: f64 = 1e30;
+
 /// Most stroke samples a placement may be estimated to take (`A / (d_sep · h)`; see
 /// [`grainline_toolpaths::budget`]).
 pub use grainline_toolpaths::budget::MAX_STROKE_SAMPLES;
