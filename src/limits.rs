@@ -94,6 +94,12 @@ pub const MAX_SMOOTHNESS: f64 = 1e6;
 /// only turns the hinge's residuals into infinity.
 pub const MAX_TURNING_RADIUS: f64 = 1e9;
 
+/// Largest brush radius (and curve width) of an edit: 10⁹ scene units (1000 km in mm), as
+/// [`MAX_TURNING_RADIUS`]. A brush far larger than any part holds the whole part and its
+/// weights (a Gaussian of the distance over the radius) are all 1; 1e30 was accepted by the
+/// scene and the editor alike.
+pub const MAX_EDIT_RADIUS: f64 = 1e9;
+
 /// Longest output path a scene may give: 4096 bytes (Linux's `PATH_MAX`). A longer one is
 /// refused naming its key, and echoed shortened ([`crate::error::shorten`]).
 pub const MAX_OUTPUT_PATH_BYTES: usize = 4096;
