@@ -666,3 +666,26 @@ fn item_11_svg_outlines_view_box_syntax_bounds_transforms_and_fine_circles() {
     }
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+// Item 1, found again by the load benchmark (docs/benchmarks.md): a file of 4 MB or more is read
+// by the parallel scanner, which let a face of exactly 10⁶ + 1 corners through (its last corner
+// ends at the line's end, where the budget was not checked).
+#[test]
+fn item_1_parallel_reader_refuses_a_face_one_corner_past_the_budget() {
+    use grainline::limits::MAX_POLYGON_CORNERS;
+    use grainline::mesh::load::PARALLEL_MIN_BYTES;
+    let d = dir("item1p");
+    let p = d.join("big.obj");
+    let mut s = "v 0.000000 0.000000 0.000000\n".repeat(PARALLEL_MIN_BYTES / 29 + 1);
+    s += "v 0 0 0\nv 1 0 0\nv 0 1 0\nf";
+    let n = s.matches('v').count();
+    let (a, b, c) = (n - 2, n - 1, n);
+    for k in 0..=MAX_POLYGON_CORNERS {
+        s += &format!(" {}", [a, b, c][k % 3]);
+    }
+    s += "\n";
+    std::fs::write(&p, &s).unwrap();
+    let e = load_err(&p);
+    assert!(e.contains("big.obj:") && e.contains("limits::MAX_POLYGON_CORNERS"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
