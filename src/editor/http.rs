@@ -9,7 +9,7 @@
 //! - the request line and headers within [`HEAD_TIMEOUT`] in all (not per read: a client that
 //!   sends a byte every few seconds is cut off too) and [`MAX_HEAD`] bytes: else `408` / `431`;
 //! - a body announced by `Content-Length` (no chunked uploads: `411`), at most
-//!   [`MAX_BODY`](super::server::MAX_BODY) (`413`, decided before reading), read within
+//!   [`MAX_BODY`] (`413`, decided before reading), read within
 //!   [`BODY_TIMEOUT`];
 //! - writes that give up after [`WRITE_TIMEOUT`] on a client that does not read.
 
