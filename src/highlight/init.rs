@@ -252,7 +252,8 @@ fn with_fallbacks(
 /// fold's common line, which a sum of vectors cancelled. Faces with a degenerate UV triangle
 /// are skipped.
 /// The grain a map gives each vertex: its corners' readings ([`crate::texmap::corner_grain`],
-/// in the geometry's normals' frames) summed with their corner angles as weights.
+/// in the geometry's normals' frames) summed with their corner angles as weights — of the
+/// faces fitted to their own texels when the vertex has any, else of all its faces.
 fn map_directions(
     mesh: &Mesh,
     geom: &Geometry,
@@ -269,11 +270,16 @@ fn map_directions(
     let vf = crate::geometry::VertexFaces::new(mesh);
     Ok((0..mesh.num_vertices())
         .map(|v| {
+            // The faces fitted to their own texels, when any is; else every face's sample.
+            let any_fitted = vf.of(v).iter().any(|&(f, _)| corners.fitted[f as usize]);
             let dirs = vf.of(v).iter().filter_map(|&(f, c)| {
                 let (f, c) = (f as usize, c as usize);
+                if any_fitted && !corners.fitted[f] {
+                    return None;
+                }
                 let tri = mesh.face_positions(f);
                 let angle = corner_angle(&tri[c], &tri[(c + 1) % 3], &tri[(c + 2) % 3]);
-                corners[f][c].map(|d| (d, angle))
+                corners.grain[f][c].map(|d| (d, angle))
             });
             sum_directions(geom, v, dirs, symmetry)
         })

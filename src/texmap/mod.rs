@@ -23,6 +23,7 @@
 //! [`GrainImage`] encodes it ([`GrainImage::direction_png16`], [`GrainImage::angle_png16`],
 //! [`GrainImage::anisotropy_png16`]); [`read_map`] and [`corner_grain`] read a map back.
 
+mod fit;
 pub mod mikk;
 pub mod orient;
 pub mod png_io;
@@ -203,6 +204,28 @@ pub fn frame(
     Some((t, n.cross(&t) * w, n))
 }
 
+/// A frame (T, B, N) and its sign w.
+pub(crate) type LerpFrame = (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64);
+
+/// The frame (T, B, N) and sign w at barycentric `b` of a face whose corners have unit normals
+/// `normals` and MikkTSpace `tangents`: N, T and w interpolated, then [`frame`] — what a viewer
+/// does per fragment and what the baker writes each texel in. `None` when degenerate.
+pub(crate) fn lerp_frame(
+    normals: &[Vector3<f64>; 3],
+    tangents: &[[f32; 4]; 3],
+    b: [f64; 3],
+) -> Option<LerpFrame> {
+    let (mut n, mut t, mut w) = (Vector3::zeros(), Vector3::zeros(), 0.0);
+    for (c, bc) in b.iter().enumerate() {
+        let tc = tangents[c];
+        n += *bc * normals[c];
+        t += *bc * Vector3::new(f64::from(tc[0]), f64::from(tc[1]), f64::from(tc[2]));
+        w += *bc * f64::from(tc[3]);
+    }
+    let (t, bt, n) = frame(n, t, w)?;
+    Some((t, bt, n, if w < 0.0 { -1.0 } else { 1.0 }))
+}
+
 /// What [`bake`] needs: the part, its unit normals, its UVs and the grain per face corner,
 /// already oriented per triangle for a line field ([`orient`]).
 #[derive(Clone, Copy, Debug)]
@@ -269,7 +292,8 @@ pub fn bake(input: &BakeInput) -> Result<Baked> {
 }
 
 /// The grain a map gives at every face corner, in 3D (unit, in the corner's tangent plane):
-/// the map sampled at the corner's texture coordinates ([`GrainMap::sample`]) in the corner's
+/// the field fitted to the texels inside the face ([`fit`]), or where that fails the map
+/// sampled at the corner's texture coordinates ([`GrainMap::sample`]) in the corner's
 /// MikkTSpace frame. A direction map's vector is the direction across the grain, n × u, so
 /// u = (n × u) × n. `None` where the map's texels cancel or the frame is degenerate.
 pub fn corner_grain(
@@ -279,11 +303,21 @@ pub fn corner_grain(
     uv: &CornerAttribute<Vector2<f64>>,
     map: &GrainMap,
     oriented: bool,
-) -> Vec<[Option<Vector3<f64>>; 3]> {
+) -> CornerGrain {
     let st = TextureSpace::of(uv).corners(uv);
     let frames = mikk::corner_frames(positions, faces, normals, &st);
-    (0..faces.len())
+    let mut fitted = vec![false; faces.len()];
+    let grain = (0..faces.len())
         .map(|f| {
+            let face = fit::Face {
+                normals: faces[f].map(|v| normals[v as usize]),
+                tangents: &frames.tangents[f],
+                line: !oriented,
+            };
+            if let Some(u) = fit::fit_face(&face, map, &st[f]) {
+                fitted[f] = true;
+                return u.map(Some);
+            }
             [0, 1, 2].map(|c| {
                 let t = frames.tangents[f][c];
                 let n = normals[faces[f][c] as usize];
@@ -297,7 +331,18 @@ pub fn corner_grain(
                 })
             })
         })
-        .collect()
+        .collect();
+    CornerGrain { grain, fitted }
+}
+
+/// What [`corner_grain`] reads: the grain per face corner, and per face whether it was fitted
+/// to the face's own texels (else sampled bilinearly at each corner).
+#[derive(Clone, Debug)]
+pub struct CornerGrain {
+    /// Per face, per corner: the unit grain, `None` where the map gives none.
+    pub grain: Vec<[Option<Vector3<f64>>; 3]>,
+    /// Per face: read by the fit.
+    pub fitted: Vec<bool>,
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 use nalgebra::{Vector2, Vector3};
 
 use super::mikk::CornerFrames;
-use super::{frame, png_io, BakeInput};
+use super::{lerp_frame, png_io, BakeInput};
 use crate::Result;
 
 /// The grain in texture space: per texel (rows top to bottom) the unit grain (x, y) in the
@@ -41,19 +41,12 @@ fn texel_value(
     f: usize,
     b: [f64; 3],
 ) -> Option<([f32; 2], f32)> {
-    let (mut n, mut t, mut u, mut w) = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), 0.0);
-    for (c, bc) in b.iter().enumerate() {
-        let tc = frames.tangents[f][c];
-        n += *bc * input.normals[input.faces[f][c] as usize];
-        t += *bc * Vector3::new(f64::from(tc[0]), f64::from(tc[1]), f64::from(tc[2]));
-        w += *bc * f64::from(tc[3]);
-        u += *bc * input.grain[f][c];
-    }
-    let (t, bt, _) = frame(n, t, w)?;
+    let normals = input.faces[f].map(|v| input.normals[v as usize]);
+    let (t, bt, _, w) = lerp_frame(&normals, &frames.tangents[f], b)?;
+    let u: Vector3<f64> = (0..3).map(|c| b[c] * input.grain[f][c]).sum();
     let (x, y) = (u.dot(&t), u.dot(&bt));
     let len = x.hypot(y);
-    (len > 1e-12 && len.is_finite())
-        .then(|| ([(x / len) as f32, (y / len) as f32], if w < 0.0 { -1.0 } else { 1.0 }))
+    (len > 1e-12 && len.is_finite()).then(|| ([(x / len) as f32, (y / len) as f32], w as f32))
 }
 
 /// Rasterizes every UV triangle (texel centres inside it; a later face overwrites an earlier
