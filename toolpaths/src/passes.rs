@@ -59,6 +59,8 @@ pub(crate) struct Item {
     pub(crate) faces: Vec<Vec<u32>>,
     pub(crate) machine: Vec<Vec3>,
     pub(crate) stops: [StopReason; 2],
+    /// The stroke's run-outs past chart edges ([`crate::Stroke::overtravel`]), mm.
+    pub(crate) overtravel: [f64; 2],
     pub(crate) length: f64,
 }
 
@@ -96,7 +98,9 @@ pub(crate) fn make_pass(
     let mut uv = it.uv.clone();
     let mut faces = it.faces.clone();
     let mut stops = it.stops;
+    let mut run = it.overtravel;
     if flip {
+        run.swap(0, 1);
         machine.reverse();
         uv.reverse();
         faces.reverse();
@@ -115,8 +119,11 @@ pub(crate) fn make_pass(
     let t0 = tangent_xy(first, far_point(&machine, eps));
     let rev_m: Vec<Vec3> = machine.iter().rev().copied().collect();
     let t1 = tangent_xy(far_point(&rev_m, eps), last);
-    let over_start = if stops[0] == StopReason::Boundary { o.overtravel } else { 0.0 };
-    let over_end = if stops[1] == StopReason::Boundary { o.overtravel } else { 0.0 };
+    // At an end on a chart edge the brush runs past it by the plan's overtravel or the
+    // stroke's own run-out, whichever is longer.
+    let over =
+        |k: usize| if stops[k] == StopReason::Boundary { o.overtravel.max(run[k]) } else { 0.0 };
+    let (over_start, over_end) = (over(0), over(1));
     let at = |p: Vec3, t: Vec2, s: f64, dz: f64| [p[0] + t[0] * s, p[1] + t[1] * s, p[2] + dz];
     let mut moves = Vec::new();
     let cut_begin = at(first, t0, -over_start, 0.0);

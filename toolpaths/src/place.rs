@@ -62,11 +62,16 @@ pub struct PlacementOptions {
     pub test_ratio: f64,
     /// Where spacing is measured. Default [`Spacing::Surface`].
     pub spacing: Spacing,
-    /// Strokes shorter than this (mm, on the part) are dropped and counted in the report.
-    /// Default (`None`): twice the brush width, and one width for corner pieces (both ends
-    /// on a chart edge) and fill strokes. An explicit value applies to every stroke; `0`
-    /// keeps every stroke.
+    /// Strokes whose brushed length ([`Stroke::brushed_length`]: the stroke plus its
+    /// run-outs past chart edges) is shorter than this (mm, on the part) are dropped and
+    /// counted in the report. Default (`None`): twice the brush width; `0` keeps every
+    /// stroke.
     pub min_length: Option<f64>,
+    /// How far a stroke that stops on a chart edge runs past it, along its tangent (mm on
+    /// the part): the brush then brushes the edge beside the stroke's end instead of a short
+    /// corner or gap stroke doing it ([`Stroke::run_out`]). Default (`None`): the brush
+    /// width; `0`: strokes stop at the edge.
+    pub overtravel: Option<f64>,
     /// Exclusion radius around singularities, mm; `None` means `d_sep`.
     pub exclusion_radius: Option<f64>,
     /// Run-on past the first approach, as a multiple of `d_test` (arc length): a stroke
@@ -92,6 +97,7 @@ impl Default for PlacementOptions {
             test_ratio: 0.5,
             spacing: Spacing::Surface,
             min_length: None,
+            overtravel: None,
             exclusion_radius: None,
             end_run: 1.0,
             fill_gaps: true,
@@ -117,10 +123,14 @@ impl PlacementOptions {
         self.test_ratio * self.d_sep()
     }
 
-    /// The minimum stroke length in force: `min_length`, else `2 · width` (corner pieces
-    /// and fill strokes: `width`, see the field).
+    /// The minimum brushed length in force: `min_length`, else `2 · width`.
     pub fn min_length(&self) -> f64 {
         self.min_length.unwrap_or(2.0 * self.width)
+    }
+
+    /// The run-out past chart edges in force: `overtravel`, else `width`.
+    pub fn overtravel(&self) -> f64 {
+        self.overtravel.unwrap_or(self.width)
     }
 
     /// Reject NaN and out-of-range values with a clear error.
@@ -137,6 +147,9 @@ impl PlacementOptions {
         }
         if let Some(l) = self.min_length {
             non_negative("placement.min_length", l)?;
+        }
+        if let Some(l) = self.overtravel {
+            non_negative("placement.overtravel", l)?;
         }
         if let Some(r) = self.exclusion_radius {
             non_negative("placement.exclusion_radius", r)?;
@@ -215,7 +228,8 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         d_sep,
         d_test,
         min_length: opts.min_length(),
-        relaxed_ends: opts.min_length.is_none(),
+        overtravel: opts.overtravel(),
+        run_outs: RunOuts::new(pitch_of(dom, d_sep, opts.spacing), RUN_OUT_REACH * d_sep),
         end_run: opts.end_run,
         dropped_short: 0,
         seeds_traced: 0,
@@ -293,8 +307,10 @@ struct State<'a> {
     d_sep: f64,
     d_test: f64,
     min_length: f64,
-    /// The default minimum length is in force: corner pieces and fill strokes get half.
-    relaxed_ends: bool,
+    /// [`PlacementOptions::overtravel`].
+    overtravel: f64,
+    /// The run-outs of the accepted strokes.
+    run_outs: RunOuts,
     /// [`PlacementOptions::end_run`].
     end_run: f64,
     dropped_short: usize,
@@ -402,9 +418,9 @@ impl State<'_> {
         }
     }
 
-    /// Trace from a seed already found clear of the strokes; the stroke is inserted into
-    /// the index when it is long enough (else counted as dropped). With the default minimum
-    /// length, fill strokes and corner pieces are kept down to half of it.
+    /// Trace from a seed already found clear of the strokes; the stroke gets its run-outs
+    /// and is inserted into the index when its brushed length is at least the minimum
+    /// (else counted as dropped).
     fn trace(&mut self, p: Vec2, f: u32, fill: bool) -> Option<Stroke> {
         let (dom, d_test) = (self.dom, self.d_test);
         if self.tracer.near_singularity(p, f).is_some() {
@@ -419,7 +435,7 @@ impl State<'_> {
         // so the wedge beyond its end, between its two neighbours, is brushed too.
         let mut first: [Option<f64>; 2] = [None, None];
         let run = self.end_run * d_test;
-        let s = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
+        let mut s = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
             let pr = idx.probe(dom, q, fq);
             let close = idx.within_probe(dom, &pr, fq, d_test) && {
                 let half = usize::from(arc < 0.0);
@@ -433,18 +449,19 @@ impl State<'_> {
                 }
         })?;
         self.seeds_traced += 1;
-        // Corner pieces (both ends on a chart edge: nothing else can brush that corner) and
-        // fill strokes (placed to cover a gap) are kept down to half the minimum length.
-        let corner = s.start == StopReason::Boundary && s.end == StopReason::Boundary;
-        let least = if (corner || fill) && self.relaxed_ends {
-            0.5 * self.min_length
-        } else {
-            self.min_length
-        };
-        if s.length < least || s.uv.len() < 2 {
+        if s.uv.len() < 2 {
             self.dropped_short += 1;
             return None;
         }
+        let index = &self.index;
+        let metric = |g: u32| index.metric(dom, g);
+        add_run_outs(&mut s, metric, self.overtravel);
+        if s.brushed_length() < self.min_length || s.length < 0.5 * self.min_length {
+            self.dropped_short += 1;
+            return None;
+        }
+        s.fill = fill;
+        self.run_outs.add_stroke(dom, &s, metric);
         self.index.insert(dom, &s);
         Some(s)
     }
@@ -487,7 +504,10 @@ impl State<'_> {
                     let March::Inside { p: q, face } = march(dom, metric, f, p, dir, at) else {
                         continue;
                     };
-                    if self.index.within(dom, q, face, 0.5 * d * (1.0 + FILL_MIN)) {
+                    let clear = 0.5 * d * (1.0 + FILL_MIN);
+                    if self.index.within(dom, q, face, clear)
+                        || self.run_outs.distance(dom.chart[face as usize], q) <= clear
+                    {
                         continue;
                     }
                     // Around a singularity the gap is the exclusion zone, left on purpose.
@@ -495,8 +515,7 @@ impl State<'_> {
                     if self.tracer.near_singularity_within(q, face, ex + d).is_some() {
                         continue;
                     }
-                    if let Some(mut s) = self.trace(q, face, true) {
-                        s.fill = true;
+                    if let Some(s) = self.trace(q, face, true) {
                         self.strokes.push(s);
                         count += 1;
                     }
@@ -517,6 +536,126 @@ const SIDE_SLACK: f64 = 1.0 - 1e-3;
 
 /// Gap filling ignores uncovered bands narrower than this fraction of `d_sep`.
 const FILL_MIN: f64 = 0.1;
+
+/// Run-outs are found by [`RunOuts::distance`] within this multiple of `d_sep`.
+const RUN_OUT_REACH: f64 = 0.5 * (1.0 + FILL_MIN);
+
+/// UV pitch of about `d_sep` on the part.
+fn pitch_of(dom: &Domain, d_sep: f64, spacing: Spacing) -> f64 {
+    d_sep / typical_stretch(dom, spacing)
+}
+
+/// Give the ends of `s` that stopped on a chart edge a run-out of `length` mm on the part:
+/// straight on in UV along the end's tangent, `length / |t|_M` UV units for the end face's
+/// metric `M` and the unit UV tangent `t`.
+fn add_run_outs(s: &mut Stroke, metric: impl Fn(u32) -> Metric, length: f64) {
+    let n = s.uv.len();
+    if length <= 0.0 || n < 2 || s.is_closed() {
+        return;
+    }
+    for k in 0..2 {
+        let stop = if k == 0 { s.start } else { s.end };
+        if stop != StopReason::Boundary {
+            continue;
+        }
+        let (end, face) =
+            if k == 0 { (s.uv[0], s.faces[0]) } else { (s.uv[n - 1], s.faces[n - 1]) };
+        // The first point back from the end that is not on top of it gives the tangent.
+        let back = (1..n).map(|i| if k == 0 { s.uv[i] } else { s.uv[n - 1 - i] }).find(|q| {
+            let t = sub(end, *q);
+            t[0].hypot(t[1]) > 1e-9 * (1.0 + end[0].abs() + end[1].abs())
+        });
+        let Some(q) = back else { continue };
+        let t = sub(end, q);
+        let m = metric(face).length(t);
+        if !(m > 0.0) {
+            continue;
+        }
+        s.run_out[k] = Some([end[0] + t[0] * length / m, end[1] + t[1] * length / m]);
+        s.overtravel[k] = length;
+    }
+}
+
+/// The run-outs of the strokes ([`Stroke::run_out`]) as UV segments with the metric of
+/// their end face, bucketed on a UV grid for distance queries within a reach (mm).
+pub(crate) struct RunOuts {
+    cell: f64,
+    reach: f64,
+    segs: Vec<(Vec2, Vec2, Metric)>,
+    buckets: std::collections::HashMap<(u32, i64, i64), Vec<u32>>,
+}
+
+impl RunOuts {
+    /// Empty, with buckets of `cell` UV units and queries answered within `reach` mm.
+    pub(crate) fn new(cell: f64, reach: f64) -> RunOuts {
+        RunOuts { cell, reach, segs: Vec::new(), buckets: Default::default() }
+    }
+
+    /// The run-outs of all `strokes`.
+    pub(crate) fn of(
+        dom: &Domain,
+        strokes: &[Stroke],
+        d_sep: f64,
+        spacing: Spacing,
+        metric: impl Fn(u32) -> Metric,
+    ) -> RunOuts {
+        let mut r = RunOuts::new(pitch_of(dom, d_sep, spacing), RUN_OUT_REACH * d_sep);
+        for s in strokes {
+            r.add_stroke(dom, s, &metric);
+        }
+        r
+    }
+
+    /// Add the run-outs of `s` (each found only from its end's chart: charts may overlap
+    /// in UV).
+    pub(crate) fn add_stroke(&mut self, dom: &Domain, s: &Stroke, metric: impl Fn(u32) -> Metric) {
+        let n = s.uv.len();
+        for (k, (end, face)) in
+            [(s.uv[0], s.faces[0]), (s.uv[n - 1], s.faces[n - 1])].into_iter().enumerate()
+        {
+            if let Some(p) = s.run_out[k] {
+                self.add(dom.chart[face as usize], end, p, metric(face));
+            }
+        }
+    }
+
+    fn add(&mut self, chart: u32, a: Vec2, b: Vec2, m: Metric) {
+        // Smallest eigenvalue of the metric: a UV step of 1 is at least √λ mm on the part.
+        let h = 0.5 * (m.e - m.g);
+        let lambda = 0.5 * (m.e + m.g) - (h * h + m.f * m.f).sqrt();
+        let pad = self.reach / lambda.max(1e-12).sqrt();
+        let id = self.segs.len() as u32;
+        self.segs.push((a, b, m));
+        let c = |x: f64| (x / self.cell).floor() as i64;
+        let (i0, i1) = (c(a[0].min(b[0]) - pad), c(a[0].max(b[0]) + pad));
+        let (j0, j1) = (c(a[1].min(b[1]) - pad), c(a[1].max(b[1]) + pad));
+        if (i1 - i0 + 1).saturating_mul(j1 - j0 + 1) > 1 << 16 {
+            return; // a degenerate metric: not found by queries (they only under-count).
+        }
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                self.buckets.entry((chart, i, j)).or_default().push(id);
+            }
+        }
+    }
+
+    /// Distance on the part (the run-out's metric) from `p` on chart `chart` to the nearest
+    /// run-out of that chart; exact when it is within the reach, else a distance to some
+    /// run-out or infinity.
+    pub(crate) fn distance(&self, chart: u32, p: Vec2) -> f64 {
+        let c = |x: f64| (x / self.cell).floor() as i64;
+        let key = (chart, c(p[0]), c(p[1]));
+        let Some(ids) = self.buckets.get(&key) else { return f64::INFINITY };
+        let mut best = f64::INFINITY;
+        for &id in ids {
+            let (a, b, m) = self.segs[id as usize];
+            let (ab, ap) = (sub(b, a), sub(p, a));
+            let t = (m.inner(ap, ab) / m.inner(ab, ab).max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+            best = best.min(m.length(sub(ap, scale(ab, t))));
+        }
+        best
+    }
+}
 
 fn dom_centroid(dom: &Domain, f: u32) -> Vec2 {
     let c = dom.corners(f);

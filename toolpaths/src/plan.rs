@@ -360,7 +360,9 @@ fn make_items(
         .filter(|(p, _)| p.len() >= 2)
         .collect();
     let mut stops = [s.start, s.end];
+    let mut over = s.overtravel;
     if rev {
+        over.swap(0, 1);
         pieces.reverse();
         for (p, f) in &mut pieces {
             p.reverse();
@@ -385,6 +387,7 @@ fn make_items(
             faces,
             machine,
             stops,
+            overtravel: over,
             length: s.length,
         }];
     }
@@ -404,6 +407,10 @@ fn make_items(
                 faces: vec![piece.1],
                 machine,
                 stops: st,
+                overtravel: [
+                    if k == 0 { over[0] } else { 0.0 },
+                    if k + 1 == np { over[1] } else { 0.0 },
+                ],
                 length: s.length,
             }
         })
