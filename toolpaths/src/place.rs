@@ -24,10 +24,12 @@
 //!   chart edge that runs along the strokes (the seed sits in the middle of the uncovered
 //!   part of the strip), and the wider gaps between diverging strokes (the seed sits midway).
 //!   Fill strokes are marked ([`Stroke::fill`]) and counted, and do not seed further strokes.
-//! * Strokes shorter than `min_length` (default twice the brush width) are dropped and
-//!   counted. With the default, a corner piece — a stroke with both ends on a chart edge —
-//!   and a fill stroke are kept down to one brush width: nothing else can brush that corner
-//!   or gap. An explicit `min_length` applies to every stroke; `0` keeps all.
+//! * **Run-outs** (issue 31, item 3): an end on a chart edge runs `overtravel` (default one
+//!   width) past it along its tangent ([`Stroke::run_out`]), so the edge beside it is brushed
+//!   without a short corner or gap stroke; fill seeds are not placed where a run-out brushes.
+//! * Strokes whose brushed length (on the part plus run-outs) is shorter than `min_length`
+//!   (default twice the brush width), or that lie on the part for less than half of it, are
+//!   dropped and counted; `0` keeps all.
 //!
 //! Distances are measured on the part's 3D lift when there is one ([`crate::Spacing`],
 //! `spacing.rs`), else with the metric, or in UV for [`Spacing::Uv`]. The sideways offset of
