@@ -24,12 +24,16 @@
 //!   chart edge that runs along the strokes (the seed sits in the middle of the uncovered
 //!   part of the strip), and the wider gaps between diverging strokes (the seed sits midway).
 //!   Fill strokes are marked ([`Stroke::fill`]) and counted, and do not seed further strokes.
-//! * **Run-outs** (issue 31, item 3): an end on a chart edge runs `overtravel` (default one
-//!   width) past it along its tangent ([`Stroke::run_out`]), so the edge beside it is brushed
-//!   without a short corner or gap stroke; fill seeds are not placed where a run-out brushes.
-//! * Strokes whose brushed length (on the part plus run-outs) is shorter than `min_length`
-//!   (default twice the brush width), or that lie on the part for less than half of it, are
-//!   dropped and counted; `0` keeps all.
+//! * **Run-outs** (issue 31, item 3): an end on the part's real edge (a chart boundary that is
+//!   not a UV seam: the metal ends there) runs `overtravel` (default one width) past it along
+//!   its tangent ([`Stroke::run_out`]), so the edge beside it is brushed without a short corner
+//!   or gap stroke; fill seeds are not placed where a run-out brushes. Ends on a seam get none
+//!   (the surface goes on across it: a run-out would brush the other side).
+//! * **No dabs** (D1): a stroke with an end on the metal (not run out) must lie on the part for
+//!   `min_length` (default twice the brush width); a stroke run out at both ends (in from past
+//!   the edge and out past it again, no plunge or lift-off mark on the metal) must be brushed
+//!   `min_length` in all, run-outs included, and lie on the part for half of it. Shorter ones
+//!   are dropped and counted; `0` keeps all.
 //!
 //! Distances are measured on the part's 3D lift when there is one ([`crate::Spacing`],
 //! `spacing.rs`), else with the metric, or in UV for [`Spacing::Uv`]. The sideways offset of
@@ -64,15 +68,17 @@ pub struct PlacementOptions {
     pub test_ratio: f64,
     /// Where spacing is measured. Default [`Spacing::Surface`].
     pub spacing: Spacing,
-    /// Strokes whose brushed length ([`Stroke::brushed_length`]: the stroke plus its
-    /// run-outs past chart edges) is shorter than this (mm, on the part) are dropped and
-    /// counted in the report. Default (`None`): twice the brush width; `0` keeps every
-    /// stroke.
+    /// The shortest stroke kept (mm, on the part; shorter ones are dropped and counted in the
+    /// report): a stroke with an end on the metal must lie on the part for this long; one run
+    /// out past the part's edge at both ends must be brushed this long in all
+    /// ([`Stroke::brushed_length`]) and lie on the part for half of it. Default (`None`):
+    /// twice the brush width; `0` keeps every stroke.
     pub min_length: Option<f64>,
-    /// How far a stroke that stops on a chart edge runs past it, along its tangent (mm on
-    /// the part): the brush then brushes the edge beside the stroke's end instead of a short
-    /// corner or gap stroke doing it ([`Stroke::run_out`]). Default (`None`): the brush
-    /// width; `0`: strokes stop at the edge.
+    /// How far a stroke that stops on the part's edge (a chart boundary that is not a UV
+    /// seam) runs past it, along its tangent (mm on the part): the brush then brushes the edge
+    /// beside the stroke's end instead of a short corner or gap stroke doing it
+    /// ([`Stroke::run_out`]). Default (`None`): the brush width; `0`: strokes stop at the
+    /// edge.
     pub overtravel: Option<f64>,
     /// Exclusion radius around singularities, mm; `None` means `d_sep`.
     pub exclusion_radius: Option<f64>,
@@ -125,7 +131,7 @@ impl PlacementOptions {
         self.test_ratio * self.d_sep()
     }
 
-    /// The minimum brushed length in force: `min_length`, else `2 · width`.
+    /// The minimum length in force (see the field): `min_length`, else `2 · width`.
     pub fn min_length(&self) -> f64 {
         self.min_length.unwrap_or(2.0 * self.width)
     }
@@ -421,8 +427,7 @@ impl State<'_> {
     }
 
     /// Trace from a seed already found clear of the strokes; the stroke gets its run-outs
-    /// and is inserted into the index when its brushed length is at least the minimum
-    /// (else counted as dropped).
+    /// and is inserted into the index unless it is a dab ([`is_dab`]; counted as dropped).
     fn trace(&mut self, p: Vec2, f: u32, fill: bool) -> Option<Stroke> {
         let (dom, d_test) = (self.dom, self.d_test);
         if self.tracer.near_singularity(p, f).is_some() {
@@ -457,8 +462,8 @@ impl State<'_> {
         }
         let index = &self.index;
         let metric = |g: u32| index.metric(dom, g);
-        add_run_outs(&mut s, metric, self.overtravel);
-        if s.brushed_length() < self.min_length || s.length < 0.5 * self.min_length {
+        add_run_outs(dom, &mut s, metric, self.overtravel);
+        if is_dab(&s, self.min_length) {
             self.dropped_short += 1;
             return None;
         }
@@ -547,21 +552,35 @@ fn pitch_of(dom: &Domain, d_sep: f64, spacing: Spacing) -> f64 {
     d_sep / typical_stretch(dom, spacing)
 }
 
-/// Give the ends of `s` that stopped on a chart edge a run-out of `length` mm on the part:
-/// straight on in UV along the end's tangent, `length / |t|_M` UV units for the end face's
-/// metric `M` and the unit UV tangent `t`.
-fn add_run_outs(s: &mut Stroke, metric: impl Fn(u32) -> Metric, length: f64) {
+/// Whether `s` is a dab, too short to keep (eq. D1): a stroke that starts or ends on the metal
+/// must brush `min_length` on the part; one that enters and leaves the part over its edge
+/// (run-outs at both ends: no plunge or lift-off mark on the metal) must brush `min_length`
+/// in all, run-outs included, and lie on the part for half of it.
+fn is_dab(s: &Stroke, min_length: f64) -> bool {
+    let through = s.run_out[0].is_some() && s.run_out[1].is_some();
+    if through {
+        s.brushed_length() < min_length || s.length < 0.5 * min_length
+    } else {
+        s.length < min_length
+    }
+}
+
+/// Give the ends of `s` that stopped on the part's real edge ([`Domain::on_part_edge`]: not
+/// on a UV seam, where the surface goes on) a run-out of `length` mm on the part: straight on
+/// in UV along the end's tangent, `length / |t|_M` UV units for the end face's metric `M` and
+/// the unit UV tangent `t`.
+fn add_run_outs(dom: &Domain, s: &mut Stroke, metric: impl Fn(u32) -> Metric, length: f64) {
     let n = s.uv.len();
     if length <= 0.0 || n < 2 || s.is_closed() {
         return;
     }
     for k in 0..2 {
         let stop = if k == 0 { s.start } else { s.end };
-        if stop != StopReason::Boundary {
-            continue;
-        }
         let (end, face) =
             if k == 0 { (s.uv[0], s.faces[0]) } else { (s.uv[n - 1], s.faces[n - 1]) };
+        if stop != StopReason::Boundary || !dom.on_part_edge(face, end) {
+            continue;
+        }
         // The first point back from the end that is not on top of it gives the tangent.
         let back = (1..n).map(|i| if k == 0 { s.uv[i] } else { s.uv[n - 1 - i] }).find(|q| {
             let t = sub(end, *q);
@@ -570,7 +589,7 @@ fn add_run_outs(s: &mut Stroke, metric: impl Fn(u32) -> Metric, length: f64) {
         let Some(q) = back else { continue };
         let t = sub(end, q);
         let m = metric(face).length(t);
-        if !(m > 0.0) {
+        if m.is_nan() || m <= 0.0 {
             continue;
         }
         s.run_out[k] = Some([end[0] + t[0] * length / m, end[1] + t[1] * length / m]);

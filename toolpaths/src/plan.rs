@@ -14,9 +14,11 @@
 //!   tilt is measured from the radial direction.
 //!
 //! A pass is: (lead-in ramp) → (overtravel before, if the stroke starts on the chart
-//! boundary) → the stroke → (overtravel after) → (lead-out ramp). Leads are tangent
-//! extensions in XY of length `lead_in`/`lead_out`, rising `ramp_height` above the cutting
-//! Z at their free end, so the tool touches down while moving.
+//! boundary) → the stroke → (overtravel after) → (lead-out ramp). Overtravel (the larger of
+//! `overtravel` and the stroke's run-out past the part's edge) continues the machine path
+//! along its tangent, Z included (`passes.rs`, R1). Leads are tangent extensions in XY of
+//! length `lead_in`/`lead_out`, rising `ramp_height` above the cutting Z at their free end, so
+//! the tool touches down while moving.
 
 use crate::error::{Result, ToolpathError};
 use crate::geom::{cross, Vec2, Vec3};

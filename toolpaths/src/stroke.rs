@@ -63,9 +63,11 @@ pub struct Stroke {
     pub fill: bool,
     /// Where the brush's centre runs to past each end (first, last), in UV: a straight run
     /// along the end's tangent, `PlacementOptions::overtravel` long on the part (measured
-    /// with the end face's metric), at ends that stopped on a chart edge. The brush runs
-    /// past the edge there so the whole edge beside the stroke is brushed; only the part of
-    /// its swept band inside the part counts as coverage. `None` at other ends.
+    /// with the end face's metric), at ends that stopped on the part's real edge (a chart
+    /// boundary that is not a UV seam). The brush runs past the edge there so the whole edge
+    /// beside the stroke is brushed; only the part of its swept band inside the part counts as
+    /// coverage. The program runs it along the machine path's tangent (`passes.rs`, R1).
+    /// `None` at other ends (inside the part, at a singularity, on a seam, closed loops).
     pub run_out: [Option<Vec2>; 2],
     /// Length of each run-out on the part, mm (0 without one).
     pub overtravel: [f64; 2],

@@ -80,6 +80,20 @@ fn same_program(a: &str, b: &str) -> usize {
     numbers
 }
 
+/// A placement's lengths (stroke lengths and run-outs, width, spacing) divided by `k`: the
+/// same strokes in a unit `k` mm long.
+fn in_unit(pl: &Placement, k: f64) -> Placement {
+    let mut pl = pl.clone();
+    for s in &mut pl.strokes {
+        s.length /= k;
+        s.overtravel = s.overtravel.map(|x| x / k);
+    }
+    (pl.width, pl.d_sep, pl.d_test, pl.min_length) =
+        (pl.width / k, pl.d_sep / k, pl.d_test / k, pl.min_length / k);
+    pl.exclusion_radius /= k;
+    pl
+}
+
 /// The strokes placed in millimetres (the dome's UV is the same in both units), planned and
 /// written in millimetres and in inches: one program. Leads, ramps, overtravel and a contact
 /// depth are given (in each unit); the plan tolerance, clearance and feeds are defaults.
@@ -99,7 +113,7 @@ fn inch_and_millimetre_plans_of_one_placement_give_one_program() {
             ..o.plan.clone()
         };
         let dom = Domain::new(dome(k)).unwrap();
-        let plan = plan_toolpath(&dom, &mm.placement, &plan_o).unwrap();
+        let plan = plan_toolpath(&dom, &in_unit(&mm.placement, k), &plan_o).unwrap();
         programs.push(write_gcode(&plan, o.gcode.as_ref().unwrap()).unwrap());
     }
     let n = same_program(&programs[0], &programs[1]);
