@@ -394,7 +394,7 @@ impl OwnPoints {
             if dist >= r {
                 return true;
             }
-            if s.abs() <= 2.0 * r {
+            if s.abs() <= 2.0 * r * (1.0 + TIE) {
                 if let Some(along) = along {
                     let across = (dist * dist - along * along).max(0.0).sqrt();
                     if along > 0.0 && across < closure {
@@ -447,7 +447,8 @@ impl State<'_> {
             let close = idx.within_probe(dom, &pr, fq, d_test) && {
                 let half = usize::from(arc < 0.0);
                 let at = *first[half].get_or_insert(arc);
-                (arc - at).abs() >= run || idx.within_probe(dom, &pr, fq, 0.5 * d_test)
+                (arc - at).abs() >= run * (1.0 - TIE)
+                    || idx.within_probe(dom, &pr, fq, 0.5 * d_test)
             };
             close
                 || vertex && {
@@ -540,6 +541,11 @@ const SEED_SLACK: f64 = 1.0 - 1e-6;
 /// the stroke from 3D chords and normals (eq. S1), which agrees to about 1e-4 relative, so
 /// side seeds get this looser test.
 const SIDE_SLACK: f64 = 1.0 - 1e-3;
+
+/// Relative margin of comparisons between lengths summed along a stroke and a threshold that
+/// can be an exact multiple of them: far above the rounding of the sums (10⁻¹⁵ relative per
+/// step), so a part in inches and the same part in millimetres take the same branch.
+const TIE: f64 = 1e-9;
 
 /// Gap filling ignores uncovered bands narrower than this fraction of `d_sep`.
 const FILL_MIN: f64 = 0.1;
@@ -701,17 +707,25 @@ fn candidates(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<
             if i > 0 {
                 since += index.metric(dom, s.faces[k]).length(sub(pts[i], pts[i - 1]));
             }
-            if since < 0.5 * d_sep && i + 1 < pts.len() {
+            // The pitch is often a whole number of full tracing steps (a 6 mm brush traced
+            // in 1 mm steps): `TIE` decides such ties the same way at any scale (units).
+            if since < 0.5 * d_sep * (1.0 - TIE) && i + 1 < pts.len() {
                 continue;
             }
             since = 0.0;
             let f = s.faces[k];
             let m: Metric = index.metric(dom, f);
-            let t = sub(pts[(i + 1).min(pts.len() - 1)], pts[i.saturating_sub(1)]);
-            let l = m.length(t);
-            if l <= 0.0 {
+            // The chord between the neighbours, widened past (nearly) repeated points: a
+            // stroke can end with its point on the chart edge repeated within rounding, whose
+            // chord has no direction (`TIE · d_sep`: a length relative to the part, so the
+            // same chord is taken in any unit).
+            let chord = |w: usize| {
+                let t = sub(pts[(i + w).min(pts.len() - 1)], pts[i.saturating_sub(w)]);
+                (t, m.length(t))
+            };
+            let Some((t, l)) = (1..pts.len()).map(chord).find(|&(_, l)| l > TIE * d_sep) else {
                 continue;
-            }
+            };
             out.push((pts[i], f, m.unit_normal(scale(t, 1.0 / l))));
         }
     }

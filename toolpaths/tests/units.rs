@@ -127,3 +127,39 @@ fn inch_and_millimetre_plans_of_one_placement_give_one_program() {
         );
     }
 }
+
+/// The whole job — placement, plan and program — on the dome in millimetres and on the dome
+/// scaled by 1/25.4 in inches: the same strokes (point for point within 1e-9 mm), the same
+/// passes and run-outs past the dome's edges (move for move within 1e-9 mm after × 25.4) and
+/// one program, printed in mm, to the last digit.
+#[test]
+fn inch_and_millimetre_runs_of_one_part_give_one_program() {
+    let mm = generate(dome(1.0), &job(LengthUnit::Mm)).unwrap();
+    let inch = generate(dome(25.4), &job(LengthUnit::In)).unwrap();
+    let (a, b) = (&mm.placement.strokes, &inch.placement.strokes);
+    assert_eq!(a.len(), b.len(), "strokes");
+    for (s, t) in a.iter().zip(b) {
+        assert_eq!(s.uv.len(), t.uv.len());
+        assert!((s.length - 25.4 * t.length).abs() < 1e-9, "{} vs {}", s.length, t.length);
+        assert_eq!((s.start, s.end, s.fill), (t.start, t.end, t.fill));
+    }
+    let (p, q) = (&mm.plan.passes, &inch.plan.passes);
+    assert_eq!(p.len(), q.len(), "passes");
+    let mut run_outs = 0;
+    for (x, y) in p.iter().zip(q) {
+        assert_eq!((x.stroke, x.reversed, x.moves.len()), (y.stroke, y.reversed, y.moves.len()));
+        for ((k, m), (l, n)) in x.moves.iter().zip(&y.moves) {
+            assert_eq!(k, l);
+            let (u, v) = (m.end(), n.end());
+            assert!((0..3).all(|i| (u[i] - 25.4 * v[i]).abs() < 1e-9), "{u:?} vs {v:?} × 25.4");
+            run_outs += usize::from(*k == MoveKind::Overtravel);
+        }
+    }
+    let n = same_program(mm.gcode.as_ref().unwrap(), inch.gcode.as_ref().unwrap());
+    eprintln!(
+        "{} strokes, {} passes, {run_outs} run-outs, {n} numbers printed alike",
+        a.len(),
+        p.len()
+    );
+    assert!(run_outs > 10 && n > 1000);
+}
