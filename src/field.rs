@@ -200,6 +200,7 @@ pub fn init_name(init: &InitialField) -> String {
         InitialField::CurvatureMax => "curvature-max".into(),
         InitialField::World(w) => format!("world:{},{},{}", w.x, w.y, w.z),
         InitialField::Directions(_) => "directions".into(),
+        InitialField::Map(_) => "map".into(),
     }
 }
 

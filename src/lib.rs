@@ -17,7 +17,8 @@
 //!    outputs written atomically, the bounded sparse Cholesky factor, the allocator.
 //! 2. `mesh` — loading (OBJ, STL, PLY), validation, topology, UV charts, refinement.
 //! 3. `svg_read`, `generate` — SVG drawings read as polylines; analytic test parts.
-//! 4. `geometry` — normals, frames, areas, connection, curvature, ∇φ, face angles.
+//! 4. `geometry`, `texmap` — normals, frames, areas, connection, curvature, ∇φ, face angles;
+//!    the grain as a texture in UV space (MikkTSpace frames, baking, maps read back).
 //! 5. `highlight`, `layout`, `panel`, `appearance` — ℓ and the initial fields; UV layouts;
 //!    panels from outlines; materials, lights and BRDFs.
 //! 6. `edit`, `solve`, `field`, `uvfield` — the edit tools; the solver; FIELD.json; the grain
@@ -75,6 +76,7 @@ pub mod render;
 pub mod scene;
 pub mod solve;
 pub mod svg_read;
+pub mod texmap;
 pub mod uvfield;
 
 pub use error::{Error, Result};

@@ -11,6 +11,16 @@
 /// false zero-area ones.
 pub const MAX_COORDINATE: f64 = 1e75;
 
+/// Smallest accepted size of a part: its bounding box's diagonal, after `scale`, at least
+/// 1e-60 (in the mesh's units).
+///
+/// Degenerate faces are found by their shape alone (a face's size does not matter), but the
+/// geometry divides by lengths: curvatures are about 1/L and the jet fit and the smoothest
+/// field raise them to the fourth power. A part 1e-100 across failed in the smoothest field's
+/// factorization and one 1e-80 across came out with spurious critical points; 1e-60 keeps
+/// 1/L⁴ ≤ 1e240, a margin of 10⁶⁸ below `f64::MAX`.
+pub const MIN_PART_SIZE: f64 = 1e-60;
+
 /// The range of `mesh.scale` (`--scale`): [10⁻¹², 10¹²]. Areas multiply two scaled
 /// coordinates, so a scale of 1e-300 made every area underflow to zero (and was reported as
 /// faces degenerate in UV); unit conversions need factors of 10⁻⁶…10⁶ at most.
@@ -61,6 +71,12 @@ pub const MAX_FACTOR_BYTES: u64 = 8 << 30;
 /// would otherwise give billions).
 pub const MAX_SVG_POINTS: usize = 10_000_000;
 
+/// Largest magnitude of a number in an SVG's shapes (path data, `points`, `x`, `width`, `r`,
+/// …) and transforms: 1e30. usvg keeps points as `f32` (largest 3.4e38), so a larger number
+/// became infinity and its shape vanished ("no closed outline"); 1e30 leaves 10⁸ for the
+/// transforms and units. Refused naming the file, the line, the element and the attribute.
+pub const MAX_SVG_NUMBER: f64 = 1e30;
+
 /// Most stroke samples a placement may be estimated to take (`A / (d_sep · h)`; see
 /// [`grainline_toolpaths::budget`]).
 pub use grainline_toolpaths::budget::MAX_STROKE_SAMPLES;
@@ -77,6 +93,12 @@ pub const MAX_SMOOTHNESS: f64 = 1e6;
 /// hinge divides the streamlines' curvature by the bound 1/R, so a radius far beyond any part
 /// only turns the hinge's residuals into infinity.
 pub const MAX_TURNING_RADIUS: f64 = 1e9;
+
+/// Largest brush radius (and curve width) of an edit: 10⁹ scene units (1000 km in mm), as
+/// [`MAX_TURNING_RADIUS`]. A brush far larger than any part holds the whole part and its
+/// weights (a Gaussian of the distance over the radius) are all 1; 1e30 was accepted by the
+/// scene and the editor alike.
+pub const MAX_EDIT_RADIUS: f64 = 1e9;
 
 /// Longest output path a scene may give: 4096 bytes (Linux's `PATH_MAX`). A longer one is
 /// refused naming its key, and echoed shortened ([`crate::error::shorten`]).

@@ -34,6 +34,8 @@ use std::path::Path;
 
 use crate::{Error, Result};
 
+mod check;
+
 /// The SVG namespace, added to a root that has none (hand-written files often omit it).
 const SVG_NS: &str = "http://www.w3.org/2000/svg";
 
@@ -141,6 +143,7 @@ pub fn read_with(text: &str, name: &Path, o: &ReadOptions) -> Result<Drawing> {
     let root_map = RootMap::of(&root, o.stretch).map_err(|m| parse_error(name, root_line, m))?;
     // Tag every shape element with an id (insertions into the text, applied back to front),
     // check the sizes usvg would skip silently, and add the namespace where it is missing.
+    check::check_elements(&doc, name)?;
     let mut edits = Edits::default();
     let sources = tag_shapes(&doc, text, name, &mut edits)?;
     root_edits(&root, text, &root_map, &mut edits);
@@ -338,6 +341,20 @@ fn flatten_tree(
     let mut shapes = Vec::new();
     let mut left = crate::limits::MAX_SVG_POINTS;
     collect(tree.root(), &root_map.to_canvas, sources, None, tolerance_px, &mut left, &mut shapes);
+    for s in &shapes {
+        if s.subpaths
+            .iter()
+            .flat_map(|p| &p.points)
+            .any(|q| !(q[0].is_finite() && q[1].is_finite()))
+        {
+            let message = format!(
+                "{}: a coordinate is not finite after the transforms and the viewBox (beyond \
+                 f32's range, 3.4e38, in usvg)",
+                s.element
+            );
+            return Err(parse_error(name, s.line, message));
+        }
+    }
     if left == 0 {
         return Err(parse_error(
             name,
@@ -419,12 +436,7 @@ impl RootMap {
         use svgtypes::{Align, LengthUnit};
         let view = match root.attribute("viewBox") {
             Some(v) => {
-                let b = svgtypes::ViewBox::from_str(v)
-                    .map_err(|_| format!("viewBox={v:?} is not four numbers"))?;
-                let b = [b.x, b.y, b.w, b.h];
-                if !(b.iter().all(|x| x.is_finite()) && b[2] > 0.0 && b[3] > 0.0) {
-                    return Err(format!("viewBox={v:?} must have a positive width and height"));
-                }
+                let b = view_box(v)?;
                 Some(b)
             }
             None => None,
@@ -499,6 +511,33 @@ impl RootMap {
         }
         Ok(RootMap { width: w, height: h, view, to_canvas: compose(&own, &fit) })
     }
+}
+
+/// A root's `viewBox`: four finite numbers, its width and height positive.
+fn view_box(v: &str) -> std::result::Result<[f64; 4], String> {
+    let numbers: Vec<f64> = v
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse::<f64>().map_err(|_| format!("viewBox={v:?} is not four numbers")))
+        .collect::<std::result::Result<_, _>>()?;
+    let Ok(b) = <[f64; 4]>::try_from(numbers) else {
+        return Err(format!("viewBox={v:?} is not four numbers"));
+    };
+    if !b.iter().all(|x| x.is_finite()) {
+        return Err(format!("viewBox={v:?} is not finite"));
+    }
+    if b[2] == 0.0 && b[3] == 0.0 {
+        return Err(format!("viewBox={v:?} has a zero width and height: it shows nothing"));
+    }
+    for (k, what) in [(2, "width"), (3, "height")] {
+        if b[k] == 0.0 {
+            return Err(format!("viewBox={v:?} has a zero {what}: it shows nothing"));
+        }
+        if b[k] < 0.0 {
+            return Err(format!("viewBox={v:?} has a negative {what}"));
+        }
+    }
+    Ok(b)
 }
 
 fn apply(m: &Affine, p: [f64; 2]) -> [f64; 2] {

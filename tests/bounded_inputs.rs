@@ -466,3 +466,226 @@ fn item_9_messages_name_the_key_that_caused_them() {
     assert!(e.contains("vase.obj: not an image") && !e.contains(":0:"), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// One ASCII STL triangle with the given line end.
+fn ascii_stl(eol: &str) -> String {
+    let lines = [
+        "solid t",
+        "facet normal 0 0 1",
+        "outer loop",
+        "vertex 0 0 0",
+        "vertex 1 0 0",
+        "vertex 0 1 0",
+        "endloop",
+        "endfacet",
+        "endsolid t",
+    ];
+    lines.join(eol) + eol
+}
+
+fn load(p: &Path) -> grainline::Result<grainline::mesh::load::LoadedMesh> {
+    grainline::mesh::load::load_mesh(p, &Default::default())
+}
+
+fn load_err(p: &Path) -> String {
+    load(p).expect_err("refused").to_string()
+}
+
+// Item 10: an ASCII STL with CR line ends ("without facets") or a UTF-8 BOM ("binary STL
+// truncated … 1818521189 triangles") loads; a mesh named `.txt` is read by its content or
+// refused naming the file and the extensions read ("empty mesh"); an ASCII PLY vertex line
+// of 2 values is reported at its vertex element and line (it was blamed on a face element);
+// a face of area 5e37 is not called zero-area, and large faces stay finite downstream.
+#[test]
+fn item_10_meshes_line_ends_bom_extension_ply_lines_and_large_faces() {
+    use grainline::mesh::load::MeshFormat;
+    let d = dir("item10");
+    let w = |name: &str, bytes: &[u8]| {
+        let p = d.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    };
+    for (name, text) in [
+        ("crlf.stl", ascii_stl("\r\n")),
+        ("cr.stl", ascii_stl("\r")),
+        ("bom.stl", format!("\u{feff}{}", ascii_stl("\n"))),
+        ("bomcr.stl", format!("\u{feff}{}", ascii_stl("\r"))),
+        ("stl.txt", ascii_stl("\r\n")),
+    ] {
+        let m = load(&w(name, text.as_bytes())).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!((m.report.format, m.mesh.num_faces()), (MeshFormat::Stl, 1), "{name}");
+    }
+    // Line numbers count lone CRs: a bad keyword on line 4.
+    let bad = ascii_stl("\r").replacen("vertex 0 0 0", "vertux 0 0 0", 1);
+    let e = load_err(&w("badcr.stl", bad.as_bytes()));
+    assert!(e.contains("badcr.stl:4:"), "{e}");
+    // By content: an OBJ, a binary STL and a PLY named .txt; anything else refused.
+    let m = load(&w("obj.txt", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).unwrap();
+    assert_eq!(m.report.format, MeshFormat::Obj);
+    let tri = generate::plane(1.0, generate::Grid::new(1, 1));
+    let mut stl = vec![0u8; 80];
+    stl.extend((tri.faces.len() as u32).to_le_bytes());
+    for f in &tri.faces {
+        stl.extend([0u8; 12]);
+        for &v in f {
+            for k in 0..3 {
+                stl.extend((tri.positions[v as usize][k] as f32).to_le_bytes());
+            }
+        }
+        stl.extend([0u8; 2]);
+    }
+    let m = load(&w("binary.txt", &stl)).unwrap();
+    assert_eq!((m.report.format, m.mesh.num_faces()), (MeshFormat::Stl, 2));
+    for (name, bytes) in
+        [("notes.txt", &b"hello, world\n"[..]), ("empty.txt", b""), ("noext", b"\x01\x02")]
+    {
+        let e = load_err(&w(name, bytes));
+        assert!(
+            e.contains(name) && e.contains(".obj, .stl, .ply") && !e.contains("empty mesh"),
+            "{e}"
+        );
+    }
+    // An ASCII PLY vertex line of 2 values: its element and its line (12), not a face's.
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+               property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+               end_header\n0 0 0\n1 0 0\n0 1\n3 0 1 2\n";
+    let e = load_err(&w("two.ply", ply.as_bytes()));
+    assert!(
+        e.contains("two.ply:12:") && e.contains("vertex element 2") && !e.contains("face"),
+        "{e}"
+    );
+    let e = load_err(&w("four.ply", ply.replace("\n0 1\n", "\n0 1 0 7\n").as_bytes()));
+    assert!(e.contains("four.ply:12:") && e.contains("vertex element 2"), "{e}");
+    // A needle of area 5e37 within the coordinate bound: a sliver, not a zero-area face.
+    let e = load_err(&w("needle.obj", b"v 0 0 0\nv 1e75 0 0\nv 0 1e-37 0\nf 1 2 3\n"));
+    assert!(e.contains("needle.obj") && e.contains("sliver") && e.contains("5e37"), "{e}");
+    assert!(!e.contains("zero area"), "{e}");
+    // Faces of area ~5e37 (and of ~1e148) load whole and give a finite field.
+    for s in [1e19, 1e74] {
+        let mut part = generate::quadric_patch([0.4, 0.0, -0.4], 1.0, generate::Grid::new(8, 8));
+        part.positions.iter_mut().for_each(|p| *p *= s);
+        let m = load(&w("large.obj", obj_exact(&part).as_bytes())).unwrap();
+        assert_eq!(m.report.dropped_degenerate_faces, 0, "{s}");
+        let field = finite_field(&m.mesh);
+        assert!(field, "{s}: a non-finite value in the field");
+    }
+    // A part 1e-150 across: refused naming the bound (its curvatures would overflow).
+    let mut tiny = generate::plane(1.0, generate::Grid::new(4, 4));
+    tiny.positions.iter_mut().for_each(|p| *p *= 1e-150);
+    let e = load_err(&w("tiny.obj", obj_exact(&tiny).as_bytes()));
+    assert!(e.contains("tiny.obj") && e.contains("limits::MIN_PART_SIZE"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+/// An OBJ of a mesh's positions (exact, in exponent form) and faces.
+fn obj_exact(mesh: &grainline::mesh::Mesh) -> String {
+    let v = mesh.positions.iter().map(|p| format!("v {:e} {:e} {:e}\n", p.x, p.y, p.z));
+    let f = mesh.faces.iter().map(|f| format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1));
+    v.chain(f).collect()
+}
+
+/// Whether the initial field and ℓ of a mesh are finite everywhere.
+fn finite_field(mesh: &grainline::mesh::Mesh) -> bool {
+    use grainline::field::{compute_field, FieldOptions};
+    use grainline::highlight::{Lighting, View};
+    let light = nalgebra::Vector3::new(0.3, 0.2, 1.0);
+    let lighting = Lighting::new(light, View::Direction(nalgebra::Vector3::new(0.0, 0.1, 1.0)));
+    let field = compute_field(mesh, &FieldOptions::new(lighting.unwrap())).unwrap();
+    let ell = field.highlight.ell.iter().all(|l| l.iter().all(|x| x.is_finite()));
+    ell && field.phi.iter().all(|x| x.is_finite())
+}
+
+/// An SVG document 100 × 100 mm (viewBox in mm) holding `body`, with the root's `viewBox`.
+fn svg_doc(view_box: &str, body: &str) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"100mm\" height=\"100mm\" \
+         viewBox=\"{view_box}\">\n{body}\n</svg>\n"
+    )
+}
+
+fn svg_err(d: &Path, file: &str, text: &str) -> String {
+    let p = d.join(file);
+    std::fs::write(&p, text).unwrap();
+    let opts = grainline::panel::PanelOptions::default();
+    grainline::panel::panel_from_svg(&p, &opts).expect_err("refused").to_string()
+}
+
+// Item 11: SVG outlines. `viewBox="0 0 0 0"` ("is not four numbers"), a path syntax error
+// ("subpath 1 is open"), coordinates of 1e39 (`FILE:0: no closed outline`), `scale(NaN)`
+// (accepted), and a 200,000-point circle written with 6 decimals (refused as self-crossing).
+#[test]
+fn item_11_svg_outlines_view_box_syntax_bounds_transforms_and_fine_circles() {
+    let d = dir("item11");
+    let rect = r#"<rect x="10" y="10" width="50" height="40"/>"#;
+    let e = svg_err(&d, "vb.svg", &svg_doc("0 0 0 0", rect));
+    assert!(e.contains("vb.svg:1:") && e.contains("zero width and height"), "{e}");
+    let e = svg_err(&d, "vbw.svg", &svg_doc("0 0 0 100", rect));
+    assert!(e.contains("zero width") && !e.contains("four numbers"), "{e}");
+    let path = r#"<path d="M 10 10 L 50 10 L 50 x50 L 10 50 Z"/>"#;
+    let e = svg_err(&d, "syntax.svg", &svg_doc("0 0 100 100", path));
+    assert!(e.contains("syntax.svg:2:") && e.contains("syntax error"), "{e}");
+    assert!(e.contains("position 22") && e.contains("x50") && !e.contains("open"), "{e}");
+    for (body, attr) in [
+        (r#"<path d="M 1e39 10 L 50 10 L 50 50 Z"/>"#, "d:"),
+        (r#"<polygon points="10,10 1e39,10 50,50"/>"#, "points:"),
+        (r#"<rect x="10" y="10" width="1e39" height="5"/>"#, "width:"),
+    ] {
+        let e = svg_err(&d, "big.svg", &svg_doc("0 0 100 100", body));
+        assert!(e.contains("big.svg:2:") && e.contains(attr) && e.contains("1e39"), "{e}");
+        assert!(e.contains("limits::MAX_SVG_NUMBER") && !e.contains(":0:"), "{e}");
+    }
+    for t in ["scale(NaN)", "scale(0)", "translate(1e39 0)", "rotate(oops)"] {
+        let body = format!(r#"<g id="part" transform="{t}">{rect}</g>"#);
+        let e = svg_err(&d, "t.svg", &svg_doc("0 0 100 100", &body));
+        assert!(
+            e.contains("t.svg:2: g element") && e.contains(&format!("transform=\"{t}\"")),
+            "{e}"
+        );
+    }
+    // A circle of 200,000 points at 6 decimals, at several radii (the smallest has repeated
+    // points once rounded): one simple loop, checked and meshed in well under a second each
+    // (the check is timed in src/panel/mod.rs).
+    for r in [0.03, 1.0, 40.0] {
+        let n = 200_000;
+        let pts: Vec<String> = (0..n)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / n as f64;
+                format!("{:.6},{:.6}", 50.0 + r * t.cos(), 50.0 + r * t.sin())
+            })
+            .collect();
+        let body = format!(r#"<path d="M{} Z"/>"#, pts.join(" L"));
+        let p = d.join("circle.svg");
+        std::fs::write(&p, svg_doc("0 0 100 100", &body)).unwrap();
+        let loops =
+            grainline::panel::read_svg_loops(&std::fs::read_to_string(&p).unwrap(), &p, 0.01)
+                .unwrap();
+        assert_eq!(loops.len(), 1);
+        let opts = grainline::panel::PanelOptions { min_angle_deg: 0.0, ..Default::default() };
+        let res = grainline::panel::mesh_loops(&loops, &p, &opts);
+        assert!(res.is_ok(), "r = {r}: {}", res.err().unwrap());
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// Item 1, found again by the load benchmark (docs/benchmarks.md): a file of 4 MB or more is read
+// by the parallel scanner, which let a face of exactly 10⁶ + 1 corners through (its last corner
+// ends at the line's end, where the budget was not checked).
+#[test]
+fn item_1_parallel_reader_refuses_a_face_one_corner_past_the_budget() {
+    use grainline::limits::MAX_POLYGON_CORNERS;
+    use grainline::mesh::load::PARALLEL_MIN_BYTES;
+    let d = dir("item1p");
+    let p = d.join("big.obj");
+    let mut s = "v 0.000000 0.000000 0.000000\n".repeat(PARALLEL_MIN_BYTES / 29 + 1);
+    s += "v 0 0 0\nv 1 0 0\nv 0 1 0\nf";
+    let n = s.matches('v').count();
+    let (a, b, c) = (n - 2, n - 1, n);
+    for k in 0..=MAX_POLYGON_CORNERS {
+        s += &format!(" {}", [a, b, c][k % 3]);
+    }
+    s += "\n";
+    std::fs::write(&p, &s).unwrap();
+    let e = load_err(&p);
+    assert!(e.contains("big.obj:") && e.contains("limits::MAX_POLYGON_CORNERS"), "{e}");
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -10,6 +10,9 @@ use std::f64::consts::PI;
 use std::path::Path;
 use std::process::Command;
 
+#[path = "support/cad_truth.rs"]
+mod cad_truth;
+
 const W: f64 = 100.0;
 const H: f64 = 60.0;
 const T: f64 = 10.0;
@@ -206,18 +209,11 @@ fn strokes_on_the_plates_top_run_straight_along_the_grain() {
 }
 
 /// The share of the top face's area, in the glb, whose three corners carry the plane's normal
-/// (within 1°) and the grain as their tangent (within 0.5°). The buffers are in the part's
-/// coordinates (the node's transform turns them to glTF's +Y up).
+/// (within 1°) and the grain (within 0.5°, read from the `anisotropyTexture` as a viewer does:
+/// `cad_truth::glb_grain`). The buffers are in the part's coordinates (the node's transform
+/// turns them to glTF's +Y up).
 fn glb_flat_share(dir: &Path) -> f64 {
-    let bytes = std::fs::read(dir.join("plate.glb")).unwrap();
-    let g = gltf::Gltf::from_slice(&bytes).unwrap();
-    let blob = g.blob.as_deref().unwrap();
-    let prim = g.meshes().next().unwrap().primitives().next().unwrap();
-    let reader = prim.reader(|_| Some(blob));
-    let p: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
-    let n: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
-    let t: Vec<[f32; 4]> = reader.read_tangents().unwrap().collect();
-    let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+    let cad_truth::GlbGrain { p, n, u, idx } = cad_truth::glb_grain(&dir.join("plate.glb"));
     let d = |v: [f32; 3]| v.map(f64::from);
     let (mut good, mut total) = (0.0, 0.0);
     for tri in idx.chunks(3) {
@@ -230,9 +226,8 @@ fn glb_flat_share(dir: &Path) -> f64 {
         let area = 0.5 * (a[0] * b[1] - a[1] * b[0]).abs();
         total += area;
         let ok = tri.iter().all(|&i| {
-            let (n, t) = (d(n[i as usize]), t[i as usize]);
-            angle_deg(n, [0.0, 0.0, 1.0], false) < 1.0
-                && angle_deg(d([t[0], t[1], t[2]]), [0.0, 1.0, 0.0], true) < 0.5
+            angle_deg(d(n[i as usize]), [0.0, 0.0, 1.0], false) < 1.0
+                && angle_deg(u[i as usize], [0.0, 1.0, 0.0], true) < 0.5
         });
         if ok {
             good += area;

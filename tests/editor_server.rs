@@ -543,3 +543,103 @@ fn a_key_light_set_on_the_page_is_saved_and_the_run_reproduces_the_field() {
     let (_, back) = get(p, &format!("/api/field.json?version={v}"));
     assert!(back == under_old, "undo did not bring the old light's field back");
 }
+
+/// The `Threads:` and `VmRSS:` (kB) of a process, from /proc.
+fn threads_and_rss(pid: u32) -> (usize, usize) {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    let field = |name: &str| {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix(name))
+            .and_then(|v| v.split_whitespace().next().and_then(|n| n.parse().ok()))
+            .unwrap_or(0)
+    };
+    (field("Threads:"), field("VmRSS:"))
+}
+
+// Issue 30, item 5: 200 partial connections (half a request, then silence) kept 211 threads
+// alive and grew the editor from 71 to 259 MB. At most 32 connections are handled at once
+// (more get a 503 at once), a request's head must arrive within 10 s, and then the server
+// answers as before.
+#[test]
+fn issue30_item5_partial_connections_are_bounded() {
+    use std::io::{Read, Write};
+    let srv = start("partial");
+    let p = srv.port;
+    assert_eq!(get(p, "/api/info").0, Some(200));
+    let pid = srv.child.id();
+    let (threads0, rss0) = threads_and_rss(pid);
+    let mut stalled = Vec::new();
+    for _ in 0..200 {
+        let mut s = TcpStream::connect(("127.0.0.1", p)).unwrap();
+        let _ =
+            s.write_all(format!("GET /api/info HTTP/1.1\r\nHost: 127.0.0.1:{p}\r\nX-").as_bytes());
+        stalled.push(s);
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    let (threads, rss) = threads_and_rss(pid);
+    assert!(threads <= threads0 + 34, "{threads0} threads before, {threads} with 200 stalled");
+    assert!(rss < rss0 + 40_000, "{rss0} kB before, {rss} kB with 200 stalled");
+    // The ones beyond the bound were answered 503 and closed.
+    let mut busy = 0;
+    for s in &mut stalled {
+        s.set_read_timeout(Some(Duration::from_millis(20))).unwrap();
+        let mut b = [0u8; 12];
+        if matches!(s.read(&mut b), Ok(12) if b.starts_with(b"HTTP/1.1 503")) {
+            busy += 1;
+        }
+    }
+    assert!(busy >= 200 - 32, "{busy} connections answered 503");
+    // After the head's time limit the stalled ones are closed (408), and requests are served.
+    let t = Instant::now();
+    loop {
+        if get(p, "/api/info").0 == Some(200) {
+            break;
+        }
+        assert!(t.elapsed() < Duration::from_secs(15), "still busy after {:?}", t.elapsed());
+        std::thread::sleep(Duration::from_millis(250));
+    }
+    drop(stalled);
+    std::thread::sleep(Duration::from_millis(300));
+    let (threads, _) = threads_and_rss(pid);
+    assert!(threads <= threads0 + 2, "{threads0} threads before, {threads} after");
+}
+
+// Issue 30, item 5: `/api/save` with a garbage body saved anyway; a bend of radius 1e30 and a
+// key light the scene file refuses were accepted and saved. Each is a 400 naming what is wrong,
+// with the scene file's own checks, and nothing is saved.
+#[test]
+fn issue30_item5_api_refuses_what_the_scene_file_refuses() {
+    // The eye straight above the part: a key light of [0, 0, -1] points straight away from it.
+    let text = SCENE.replace(r#""eye": [0, -300, 0]"#, r#""eye": [0, 0, 300], "up": [0, 1, 0]"#);
+    let srv = start_with("refuse", &text);
+    let p = srv.port;
+    let scene = srv.dir.join("scene.json");
+    let before = std::fs::read(&scene).unwrap();
+    for body in ["garbage", "[]", r#"{"path": "/tmp/x.json"}"#] {
+        let (s, r) = post(p, "/api/save", &own(p), body);
+        assert_eq!(s, Some(400), "{body}: {r}");
+        assert!(r.contains("/api/save takes {}"), "{body}: {r}");
+    }
+    let bend = r#"{"action": "commit", "edit": {"tool": "bend", "centre": {"point": [30, 0, 0]}, "radius": 1e30}}"#;
+    let (s, r) = post(p, "/api/edit", &own(p), bend);
+    assert_eq!(s, Some(400), "{r}");
+    assert!(r.contains("radius") && r.contains("1e30") && r.contains("MAX_EDIT_RADIUS"), "{r}");
+    let (s, r) = post(p, "/api/light", &own(p), r#"{"direction": [0, 0, -1]}"#);
+    assert_eq!(s, Some(400), "{r}");
+    assert!(r.contains("lights[0].direction"), "{r}");
+    // The scene file says the same of the same values.
+    let path = std::path::Path::new("s.json");
+    let light = text.replace("[0.3, -0.5, 1]", "[0, 0, -1]");
+    let e = grainline::scene::Scene::from_str(&light, path).unwrap_err().to_string();
+    assert!(e.contains("lights[0].direction"), "{e}");
+    let edit = r#", "edits": [{"tool": "bend", "centre": {"point": [30, 0, 0]}, "radius": 1e30}]}"#;
+    let plain = format!(
+        r#"{{"mesh": "part.obj", "view": {{"eye": [0, 0, 300], "up": [0, 1, 0]}},
+            "lights": [{{"type": "directional", "direction": [0.3, -0.5, 1]}}]{edit}"#
+    );
+    let e = grainline::scene::Scene::from_str(&plain, path).unwrap_err().to_string();
+    assert!(e.contains("edits[0].radius") && e.contains("MAX_EDIT_RADIUS"), "{e}");
+    assert_eq!(std::fs::read(&scene).unwrap(), before, "nothing was saved");
+    assert_eq!(state(p)["edits"].as_array().unwrap().len(), 0);
+}

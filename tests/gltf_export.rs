@@ -4,11 +4,12 @@
 //!   export of every example (spot needs ../shared and is skipped with a message without it);
 //! - three.js (GLTFLoader, MeshPhysicalMaterial anisotropy) in headless Chromium renders the
 //!   kettle and the light example with the scene's camera and key light at 512²: its key
-//!   highlight ridge lies within 4 px of grainline's own preview's, and the same render with
+//!   highlight ridge lies within 1 px of grainline's own preview's, and the same render with
 //!   `anisotropyRotation` turned by 90° lies beyond that bound (the test can fail);
-//! - the anisotropy direction read back with the `gltf` crate (TANGENT turned by
-//!   `anisotropyRotation` in the tangent–bitangent plane) is perpendicular to the solved grain
-//!   (FIELD.json of the same run) within 8° at ≥ 99 % of the vertices.
+//! - the anisotropy direction read back with the `gltf` crate (the `anisotropyTexture`'s RG at
+//!   TEXCOORD_0 in the MikkTSpace frame of TANGENT, turned by `anisotropyRotation`) is
+//!   perpendicular to the solved grain (FIELD.json of the same run) within 8° at ≥ 99 % of the
+//!   vertices.
 //!
 //! tests/gltf-client/setup.sh installs what the clients need (`npm ci`; Debian's chromium when
 //! /usr/bin/chromium is missing) on first use; a failed set-up fails the test, it never skips.
@@ -21,8 +22,9 @@ use std::sync::OnceLock;
 use serde_json::{json, Value};
 
 const SIZE: usize = 512;
-/// The issue's bound on the ridge distance, pixels at 512².
-const RIDGE_BOUND_PX: f64 = 4.0;
+/// The bound on the ridge distance, pixels at 512² (issue 18 asked for 4 px; issue 33 for 1 px
+/// with the grain carried by the `anisotropyTexture`).
+const RIDGE_BOUND_PX: f64 = 1.0;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -193,9 +195,63 @@ fn validate(name: &str, glb: &Path) {
     assert_eq!(r["warnings"], 0, "{name}: {}", r["messages"]);
 }
 
-/// (c) The anisotropy direction d = cos r·T + sin r·w·(N × T), read back with the `gltf`
-/// crate, against the solved grain u of FIELD.json: |d·u| ≤ sin 8° at ≥ 99 % of the glTF
-/// vertices. Returns the fraction.
+/// The material's `anisotropyTexture` decoded: RG mapped back to [−1, 1], rows top to bottom.
+struct Texture {
+    size: usize,
+    rg: Vec<[f64; 2]>,
+}
+
+impl Texture {
+    /// Bilinear at glTF's texture coordinates (s, v), clamped to the edge (the file's sampler).
+    fn sample(&self, st: [f32; 2]) -> [f64; 2] {
+        let n = self.size as f64;
+        let x = (f64::from(st[0]) * n - 0.5).clamp(0.0, n - 1.0);
+        let y = (f64::from(st[1]) * n - 0.5).clamp(0.0, n - 1.0);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(self.size - 1), (y0 + 1).min(self.size - 1));
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        let t = |i: usize, j: usize| self.rg[j * self.size + i];
+        let mut out = [0.0; 2];
+        for (i, j, w) in [
+            (x0, y0, (1.0 - fx) * (1.0 - fy)),
+            (x1, y0, fx * (1.0 - fy)),
+            (x0, y1, (1.0 - fx) * fy),
+            (x1, y1, fx * fy),
+        ] {
+            out[0] += w * t(i, j)[0];
+            out[1] += w * t(i, j)[1];
+        }
+        out
+    }
+}
+
+/// The embedded PNG of texture `index`, decoded.
+fn read_texture(doc: &Value, blob: &[u8], index: usize) -> Texture {
+    let image = &doc["images"][doc["textures"][index]["source"].as_u64().unwrap() as usize];
+    assert_eq!(image["mimeType"], "image/png");
+    let view = &doc["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
+    let off = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let len = view["byteLength"].as_u64().unwrap() as usize;
+    let mut reader =
+        png::Decoder::new(std::io::Cursor::new(&blob[off..off + len])).read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.color_type, info.bit_depth), (png::ColorType::Rgb, png::BitDepth::Sixteen));
+    assert_eq!(info.width, info.height);
+    let size = info.width as usize;
+    let c = |p: &[u8], o: usize| f64::from(u16::from_be_bytes([p[o], p[o + 1]])) / 65535.0;
+    let rg = buf[..6 * size * size]
+        .chunks(6)
+        .map(|p| [2.0 * c(p, 0) - 1.0, 2.0 * c(p, 2) - 1.0])
+        .collect();
+    Texture { size, rg }
+}
+
+/// (c) The anisotropy direction as a viewer reads it — the `anisotropyTexture`'s RG sampled at
+/// TEXCOORD_0, in the frame (T, B = w·(N × T)), turned by `anisotropyRotation` — read back with
+/// the `gltf` crate, against the solved grain u of FIELD.json: |d·u| ≤ sin 8° at ≥ 99 % of the
+/// glTF vertices. The same with the texture's angle mirrored (B taken as N × T whatever w) is
+/// reported. Returns the fraction.
 fn check_direction(name: &str, x: &Exported) -> f64 {
     let bytes = std::fs::read(&x.glb).unwrap();
     let g = gltf::Gltf::from_slice(&bytes).unwrap();
@@ -205,7 +261,11 @@ fn check_direction(name: &str, x: &Exported) -> f64 {
     let doc: Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
     let ext = &doc["materials"][0]["extensions"]["KHR_materials_anisotropy"];
     let rot = ext["anisotropyRotation"].as_f64().unwrap_or(0.0);
+    assert_eq!(rot, 0.0, "{name}: {ext}");
     assert!(ext["anisotropyStrength"].as_f64().unwrap() > 0.1, "{name}: {ext}");
+    let tex_info = &ext["anisotropyTexture"];
+    assert_eq!(tex_info["texCoord"].as_u64().unwrap_or(0), 0, "{name}: {ext}");
+    let texture = read_texture(&doc, blob, tex_info["index"].as_u64().unwrap() as usize);
     let mesh = g.meshes().next().unwrap();
     let prim = mesh.primitives().next().unwrap();
     assert_eq!(prim.mode(), gltf::mesh::Mode::Triangles);
@@ -213,6 +273,7 @@ fn check_direction(name: &str, x: &Exported) -> f64 {
     let p: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
     let n: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
     let t: Vec<[f32; 4]> = reader.read_tangents().unwrap().collect();
+    let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
     let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
     assert_eq!(idx.len() % 3, 0);
     assert!(idx.iter().all(|&i| (i as usize) < p.len()));
@@ -226,7 +287,7 @@ fn check_direction(name: &str, x: &Exported) -> f64 {
         by_pos.entry(key(v3(q).map(|c| c as f32))).or_default().push(i);
     }
     let sin8 = 8f64.to_radians().sin();
-    let mut good = 0;
+    let (mut good, mut good_mirrored) = (0, 0);
     for k in 0..p.len() {
         let nn = n[k].map(f64::from);
         let tt = [t[k][0], t[k][1], t[k][2]].map(f64::from);
@@ -237,40 +298,42 @@ fn check_direction(name: &str, x: &Exported) -> f64 {
             nn[2] * tt[0] - nn[0] * tt[2],
             nn[0] * tt[1] - nn[1] * tt[0],
         ];
-        let d = [0, 1, 2].map(|c| rot.cos() * tt[c] + rot.sin() * w * b[c]);
+        let [dx, dy] = texture.sample(uv[k]);
+        let a = dy.atan2(dx) + rot;
+        let d = [0, 1, 2].map(|c| a.cos() * tt[c] + a.sin() * w * b[c]);
+        let dm = [0, 1, 2].map(|c| a.cos() * tt[c] + a.sin() * b[c]);
         let verts =
             by_pos.get(&key(p[k])).unwrap_or_else(|| panic!("{name}: vertex {k} not in the mesh"));
-        let ok = verts.iter().any(|&i| {
-            let uu = v3(&u[i]);
-            let dot: f64 = (0..3).map(|c| d[c] * uu[c]).sum();
-            let nd = d.iter().map(|c| c * c).sum::<f64>().sqrt();
-            let nu = uu.iter().map(|c| c * c).sum::<f64>().sqrt();
-            nu > 0.0 && dot.abs() <= sin8 * nd * nu
-        });
-        good += usize::from(ok);
+        let across = |d: [f64; 3]| {
+            verts.iter().any(|&i| {
+                let uu = v3(&u[i]);
+                let dot: f64 = (0..3).map(|c| d[c] * uu[c]).sum();
+                let nd = d.iter().map(|c| c * c).sum::<f64>().sqrt();
+                let nu = uu.iter().map(|c| c * c).sum::<f64>().sqrt();
+                nu > 0.0 && dot.abs() <= sin8 * nd * nu
+            })
+        };
+        good += usize::from(across(d));
+        good_mirrored += usize::from(across(dm));
     }
-    // Item 2 of the issue: no triangle interpolates opposite tangents, except the faces the
-    // export isolated (inconsistent or singular: their own vertices, counted in the report).
-    let opposite = idx
-        .chunks(3)
-        .filter(|c| {
-            let dot = |a: u32, b: u32| {
-                let (a, b) = (t[a as usize], t[b as usize]);
-                a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-            };
-            dot(c[0], c[1]) < 0.0 || dot(c[1], c[2]) < 0.0 || dot(c[0], c[2]) < 0.0
-        })
-        .count();
-    let isolated = x.report["export"]["isolated_faces"].as_u64().unwrap() as usize;
-    eprintln!("{name}: {opposite} triangles with opposite corner tangents ({isolated} isolated)");
-    assert!(opposite <= isolated, "{name}: {opposite} triangles interpolate opposite tangents");
     let frac = good as f64 / p.len() as f64;
     eprintln!(
-        "{name}: anisotropy direction ⟂ grain within 8° at {:.3} % of {} vertices",
+        "{name}: anisotropy direction (texture at TEXCOORD_0 in the MikkTSpace frame) ⟂ grain \
+         within 8° at {:.3} % of {} vertices ({:.3} % with B = N × T whatever w)",
         100.0 * frac,
-        p.len()
+        p.len(),
+        100.0 * good_mirrored as f64 / p.len() as f64
     );
-    assert!(frac >= 0.99, "{name}: only {:.2} % of the vertices", 100.0 * frac);
+    // Around a singular face (k = 2, the report's `isolated_faces`: oriented on its own) the
+    // texels of neighbouring faces carry opposite signs of one line, which a bilinear sample
+    // at the face's corners averages away: its three corners are not counted against the bound.
+    let isolated = x.report["export"]["isolated_faces"].as_u64().unwrap() as usize;
+    let missed = p.len() - good;
+    assert!(
+        missed as f64 <= 0.01 * p.len() as f64 + 3.0 * isolated as f64,
+        "{name}: only {:.2} % of the vertices ({isolated} isolated faces)",
+        100.0 * frac
+    );
     frac
 }
 

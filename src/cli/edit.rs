@@ -21,7 +21,7 @@ pub struct EditArgs {
 
 /// Runs `grainline edit`: the page's URL is the first line on standard output.
 pub fn run(args: EditArgs, quiet: bool) -> anyhow::Result<()> {
-    let editor = Editor::bind(&args.scene, &EditorOptions { port: args.port, threads: 0 })?;
+    let editor = Editor::bind(&args.scene, &EditorOptions { port: args.port })?;
     let url = editor.url();
     {
         let mut out = std::io::stdout().lock();

@@ -1,4 +1,5 @@
-//! `grainline export`: the part and its grain as glTF 2.0 binary (docs/gltf.md).
+//! `grainline export`: the part and its grain as glTF 2.0 binary (docs/gltf.md), and as
+//! 16-bit PNG maps in UV space (docs/formats.md, "Grain maps").
 
 use std::path::PathBuf;
 
@@ -17,6 +18,11 @@ pub struct ExportArgs {
     /// Write the glTF binary here (overrides `export.glb`).
     #[arg(long, value_name = "OUT.glb")]
     glb: Option<PathBuf>,
+    /// Write the grain as 16-bit PNG maps in UV space into this directory (overrides
+    /// `export.maps`): grain-direction.png (RG = the direction across the grain, glTF's
+    /// anisotropyTexture convention) and grain-angle.png (the grain's angle in [0, π)).
+    #[arg(long, value_name = "DIR")]
+    maps: Option<PathBuf>,
     /// The grain from `grainline optimize` or `grainline field` on the same mesh (default:
     /// the scene's field, after its edits and solve).
     #[arg(long, value_name = "FIELD.json")]
@@ -41,6 +47,11 @@ pub fn run(args: ExportArgs, quiet: bool) -> anyhow::Result<()> {
             plan.output(flag, p);
         }
     }
+    if let Some(d) = &args.maps {
+        for f in grainline::pipeline::export::MAP_FILES {
+            plan.output("--maps", d.join(f));
+        }
+    }
     if let Some(f) = &args.field {
         plan.input("--field", f);
     }
@@ -50,10 +61,16 @@ pub fn run(args: ExportArgs, quiet: bool) -> anyhow::Result<()> {
     if let Some(p) = &args.glb {
         e.glb = Some(absolute(p)?);
     }
+    if let Some(d) = &args.maps {
+        e.maps = Some(absolute(d)?);
+    }
     e.as_brushed |= args.as_brushed;
     e.strokes |= args.strokes;
-    if e.glb.is_none() {
-        anyhow::bail!("{}: no output: give --glb OUT.glb or `export.glb`", args.scene.display());
+    if e.glb.is_none() && e.maps.is_none() {
+        anyhow::bail!(
+            "{}: no output: give --glb OUT.glb, --maps DIR, `export.glb` or `export.maps`",
+            args.scene.display()
+        );
     }
     // Only the glTF file is written: the other outputs are dropped (the strokes are still
     // traced when the export needs them).

@@ -683,10 +683,15 @@ pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
 
 /// A radius must be finite and > 0.
 pub(crate) fn check_radius(key: &str, r: f64) -> Result<()> {
-    if !(r.is_finite() && r > 0.0) {
+    use crate::limits::MAX_EDIT_RADIUS;
+    if !(r.is_finite() && r > 0.0 && r <= MAX_EDIT_RADIUS) {
         return Err(Error::setting(
             key,
-            format!("must be a finite number > 0, got {}", crate::error::fmt_num(r)),
+            format!(
+                "must be a finite number > 0 and at most {} (limits::MAX_EDIT_RADIUS), got {}",
+                crate::error::fmt_num(MAX_EDIT_RADIUS),
+                crate::error::fmt_num(r)
+            ),
         ));
     }
     Ok(())

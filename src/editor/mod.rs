@@ -1,6 +1,6 @@
 //! `grainline edit`: an interactive editor in the browser (issue 16).
 //!
-//! A local HTTP server ([`server`], on `tiny_http`) serves a page ([`assets`]: HTML, the
+//! A local HTTP server ([`server`] on [`http`], bounded connections) serves a page ([`assets`]: HTML, the
 //! page's script and three.js, all embedded in the binary) that shows the part in WebGL
 //! shaded with the scene's anisotropic BRDF and the current grain, the key light's highlight
 //! curves over it, and drives the scene's tools with the mouse. Each change of the edit list
@@ -12,10 +12,13 @@
 //! request whose `Host` is not its own address (DNS rebinding) and a write (`POST`) whose
 //! `Origin` is not its own page; serves only its embedded assets and the scene's own files
 //! under fixed names (no path from the URL ever reaches the file system); answers a malformed
-//! request with a 4xx and keeps running.
+//! request with a 4xx and keeps running; bounds every connection's time, headers and body,
+//! and the number of connections handled at once ([`http`]); checks every edit and light
+//! from the page with the scene file's own checks.
 
 pub mod assets;
 pub mod drag;
+pub mod http;
 pub mod server;
 pub mod session;
 
@@ -33,16 +36,13 @@ pub use session::{Base, Change, ExportKind, Part, Session, Solved, StateView, Tr
 pub struct EditorOptions {
     /// The port on 127.0.0.1 (0: a free one).
     pub port: u16,
-    /// Request threads (default 4 when 0).
-    pub threads: usize,
 }
 
 /// A bound editor: the session prepared, the socket listening, not yet serving.
 pub struct Editor {
     session: Arc<Session>,
-    server: Arc<tiny_http::Server>,
+    listener: std::net::TcpListener,
     port: u16,
-    threads: usize,
 }
 
 impl Editor {
@@ -50,13 +50,12 @@ impl Editor {
     pub fn bind(scene: &Path, options: &EditorOptions) -> Result<Editor> {
         let session = Arc::new(Session::open(scene)?);
         let addr = std::net::SocketAddr::from(([127, 0, 0, 1], options.port));
-        let server = tiny_http::Server::http(addr).map_err(|e| Error::Io {
+        let listener = std::net::TcpListener::bind(addr).map_err(|e| Error::Io {
             path: std::path::PathBuf::from(addr.to_string()),
             source: std::io::Error::other(format!("cannot listen: {e}")),
         })?;
-        let port = server.server_addr().to_ip().map_or(options.port, |a| a.port());
-        let threads = if options.threads == 0 { 4 } else { options.threads };
-        Ok(Editor { session, server: Arc::new(server), port, threads })
+        let port = listener.local_addr().map_or(options.port, |a| a.port());
+        Ok(Editor { session, listener, port })
     }
 
     /// The page's address, `http://127.0.0.1:PORT/`.
@@ -82,23 +81,8 @@ impl Editor {
             .name("editor-solver".into())
             .spawn(move || s.solver_loop())
             .map_err(|e| Error::invalid_arg("edit", format!("cannot start the solver: {e}")))?;
-        let ctx = Arc::new(server::Context::new(Arc::clone(&self.session), self.port));
-        let mut handles = Vec::new();
-        for k in 0..self.threads {
-            let (server, ctx) = (Arc::clone(&self.server), Arc::clone(&ctx));
-            let h = std::thread::Builder::new()
-                .name(format!("editor-http-{k}"))
-                .spawn(move || {
-                    while let Ok(rq) = server.recv() {
-                        server::handle(&ctx, rq);
-                    }
-                })
-                .map_err(|e| Error::invalid_arg("edit", format!("cannot start a thread: {e}")))?;
-            handles.push(h);
-        }
-        for h in handles {
-            let _ = h.join();
-        }
+        let ctx = server::Context::new(Arc::clone(&self.session), self.port);
+        http::serve(self.listener, move |rq| server::handle(&ctx, rq));
         Ok(())
     }
 }

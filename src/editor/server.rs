@@ -8,7 +8,9 @@
 //! 3. a `POST` carries `Origin: http://127.0.0.1:PORT` (or `localhost`), `Content-Type:
 //!    application/json`, and no `Sec-Fetch-Site` other than `same-origin`: else 403 / 415
 //!    (another site's page cannot write);
-//! 4. only `GET`, `HEAD` and `POST`: else 405; a body of at most 1 MiB: else 413;
+//! 4. only `GET`, `HEAD` and `POST`: else 405; a body of at most 1 MiB: else 413 (the
+//!    connection's own bounds — time, header size, concurrent connections — are
+//!    [`super::http`]'s);
 //! 5. the path is one of a fixed table (embedded assets, the API, `/files/scene.json`): else
 //!    404. No part of a URL is ever used as a file path, so there is nothing to traverse.
 //!
@@ -26,21 +28,21 @@
 //!   the part has no UV layout);
 //! - `GET /files/scene.json`: the scene file as it is on disk;
 //! - `POST /api/edit` `{"action": "preview" | "commit" | "cancel", "edit": {…}}`,
-//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save`: the new state;
+//!   `POST /api/undo`, `POST /api/redo`, `POST /api/save` (body `{}`; anything else is a 400
+//!   and nothing is saved): the new state;
 //! - `POST /api/light {"direction": [x, y, z]}`: the key light (directional) points towards
 //!   it — a scene change, undone like an edit and saved into `lights`; the new state;
 //! - `POST /api/export {"what": "svg" | "gcode" | "glb"}`: [`Session::export`] writes that
 //!   file for the committed edits (the path the scene names, else beside the scene file);
 //!   `{"written": PATH}`.
 
-use std::io::Read;
 use std::sync::Arc;
 use std::time::Duration;
 
 use serde::Deserialize;
 use serde_json::json;
-use tiny_http::{Header, Method, Request, Response};
 
+use super::http::{Request, Response};
 use super::session::{Change, ExportKind, Session};
 
 /// The largest request body read (bytes).
@@ -88,56 +90,40 @@ impl Reply {
     }
 }
 
-fn header(name: &str, value: &str) -> Option<Header> {
-    Header::from_bytes(name.as_bytes(), value.as_bytes()).ok()
-}
-
-/// The values of the headers named `name` (case-insensitive).
-fn values<'a>(rq: &'a Request, name: &str) -> Vec<&'a str> {
-    rq.headers()
-        .iter()
-        .filter(|h| h.field.as_str().as_str().eq_ignore_ascii_case(name))
-        .map(|h| h.value.as_str())
-        .collect()
-}
-
 /// Answers one request; never panics on its content.
-pub fn handle(ctx: &Context, mut rq: Request) {
-    let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| route(ctx, &mut rq)))
+pub fn handle(ctx: &Context, rq: &Request) -> Response {
+    let reply = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| route(ctx, rq)))
         .unwrap_or_else(|_| Reply::error(500, "internal error"));
-    let mut response = Response::from_data(reply.body).with_status_code(reply.status);
     let is_html = reply.content_type.starts_with("text/html");
     let mut headers = vec![
-        header("Content-Type", reply.content_type),
-        header("Cache-Control", "no-store"),
-        header("X-Content-Type-Options", "nosniff"),
-        header("X-Frame-Options", "DENY"),
-        header("Referrer-Policy", "no-referrer"),
-        header("Cross-Origin-Resource-Policy", "same-origin"),
+        ("Content-Type", reply.content_type.to_string()),
+        ("Cache-Control", "no-store".into()),
+        ("X-Content-Type-Options", "nosniff".into()),
+        ("X-Frame-Options", "DENY".into()),
+        ("Referrer-Policy", "no-referrer".into()),
+        ("Cross-Origin-Resource-Policy", "same-origin".into()),
     ];
     if is_html {
-        headers.push(header(
+        headers.push((
             "Content-Security-Policy",
             "default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; \
              img-src 'self' data: blob:; base-uri 'none'; form-action 'none'; \
-             frame-ancestors 'none'",
+             frame-ancestors 'none'"
+                .into(),
         ));
     }
-    for h in headers.into_iter().flatten() {
-        response.add_header(h);
-    }
-    let _ = rq.respond(response);
+    Response { status: reply.status, headers, body: reply.body }
 }
 
-fn route(ctx: &Context, rq: &mut Request) -> Reply {
-    let target = rq.url().to_string();
+fn route(ctx: &Context, rq: &Request) -> Reply {
+    let target = rq.target.clone();
     if target.len() > MAX_TARGET {
         return Reply::error(414, "request target too long");
     }
     if !target.starts_with('/') || target.starts_with("//") {
         return Reply::error(400, "the request target must be a path");
     }
-    let hosts = values(rq, "Host");
+    let hosts = rq.values("Host");
     match hosts.as_slice() {
         [h] if ctx.hosts.iter().any(|o| o.eq_ignore_ascii_case(h)) => {}
         [] => return Reply::error(400, "no Host header"),
@@ -147,17 +133,13 @@ fn route(ctx: &Context, rq: &mut Request) -> Reply {
         Some((p, q)) => (p.to_string(), q.to_string()),
         None => (target.clone(), String::new()),
     };
-    match rq.method().clone() {
-        Method::Get | Method::Head => get(ctx, &path, &query),
-        Method::Post => {
+    match rq.method.as_str() {
+        "GET" | "HEAD" => get(ctx, &path, &query),
+        "POST" => {
             if let Some(r) = check_write(ctx, rq) {
                 return r;
             }
-            let body = match read_body(rq) {
-                Ok(b) => b,
-                Err(r) => return r,
-            };
-            post(ctx, &path, &body)
+            post(ctx, &path, &rq.body)
         }
         _ => Reply::error(405, "only GET, HEAD and POST"),
     }
@@ -165,35 +147,21 @@ fn route(ctx: &Context, rq: &mut Request) -> Reply {
 
 /// The cross-origin rules of a write; `None` when it may go on.
 fn check_write(ctx: &Context, rq: &Request) -> Option<Reply> {
-    let origins = values(rq, "Origin");
+    let origins = rq.values("Origin");
     match origins.as_slice() {
         [o] if ctx.origins.iter().any(|x| x.eq_ignore_ascii_case(o)) => {}
         _ => return Some(Reply::error(403, "cross-origin write refused (Origin)")),
     }
-    if values(rq, "Sec-Fetch-Site").iter().any(|s| !s.eq_ignore_ascii_case("same-origin")) {
+    if rq.values("Sec-Fetch-Site").iter().any(|s| !s.eq_ignore_ascii_case("same-origin")) {
         return Some(Reply::error(403, "cross-origin write refused (Sec-Fetch-Site)"));
     }
-    let json_type = values(rq, "Content-Type").iter().any(|t| {
+    let json_type = rq.values("Content-Type").iter().any(|t| {
         t.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case("application/json"))
     });
     if !json_type {
         return Some(Reply::error(415, "a write is application/json"));
     }
     None
-}
-
-fn read_body(rq: &mut Request) -> Result<Vec<u8>, Reply> {
-    if rq.body_length().is_some_and(|n| n > MAX_BODY) {
-        return Err(Reply::error(413, format!("a body is at most {MAX_BODY} bytes")));
-    }
-    let mut body = Vec::new();
-    match rq.as_reader().take(MAX_BODY as u64 + 1).read_to_end(&mut body) {
-        Ok(_) if body.len() > MAX_BODY => {
-            Err(Reply::error(413, format!("a body is at most {MAX_BODY} bytes")))
-        }
-        Ok(_) => Ok(body),
-        Err(e) => Err(Reply::error(400, format!("reading the body: {e}"))),
-    }
 }
 
 /// The value of `key` in a query string of `k=v` pairs, as a number.
@@ -284,6 +252,16 @@ struct LightRequest {
     direction: [f64; 3],
 }
 
+/// `POST /api/save`'s body: `{}` (anything else is refused, and nothing is saved).
+fn save_request(body: &[u8]) -> Result<(), String> {
+    let map: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_slice(body).map_err(|e| e.to_string())?;
+    match map.keys().next() {
+        Some(k) => Err(format!("unknown field `{k}`")),
+        None => Ok(()),
+    }
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ExportRequest {
@@ -345,13 +323,16 @@ fn post(ctx: &Context, path: &str, body: &[u8]) -> Reply {
         "/api/undo" => Change::Undo,
         "/api/redo" => Change::Redo,
         "/api/save" => {
+            if let Err(e) = save_request(body) {
+                return Reply::error(400, format!("the request: {e} (/api/save takes {{}})"));
+            }
             return match s.save() {
                 Ok(p) => {
                     let view = s.view(None, Duration::ZERO);
                     Reply::json(&json!({ "saved": p.display().to_string(), "state": view }))
                 }
                 Err(e) => Reply::error(500, format!("saving: {e}")),
-            }
+            };
         }
         _ => return Reply::error(404, "not found"),
     };

@@ -38,6 +38,14 @@ impl Bin {
         (start, self.bytes.len() - start)
     }
 
+    /// Appends raw bytes (an embedded image) at a 4-byte boundary; returns (offset, length).
+    pub fn push_bytes(&mut self, bytes: &[u8]) -> (usize, usize) {
+        self.align();
+        let start = self.bytes.len();
+        self.bytes.extend_from_slice(bytes);
+        (start, bytes.len())
+    }
+
     fn align(&mut self) {
         let pad = (4 - self.bytes.len() % 4) % 4;
         self.bytes.resize(self.bytes.len() + pad, 0);

@@ -5,14 +5,17 @@
 use nalgebra::Vector3;
 use serde_json::{json, Value};
 
-use super::orient::Oriented;
-use super::{glb, perpendicular, quaternion_of, rotate, ExportInput, GltfMaterial, ViewCamera};
+use super::vertices::GltfVertices;
+use super::{glb, perpendicular, quaternion_of, rotate, GltfMaterial, ViewCamera};
 use crate::{Error, Result};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
+const LINEAR: u32 = 9729;
+const LINEAR_MIPMAP_LINEAR: u32 = 9987;
+const CLAMP_TO_EDGE: u32 = 33071;
 
 fn f32s(v: &Vector3<f64>) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
@@ -31,12 +34,7 @@ fn bounds(p: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
     (lo, hi)
 }
 
-fn unit32(v: &Vector3<f64>) -> [f32; 3] {
-    // Renormalized in f32 so the stored vector is unit to f32 precision.
-    let w = f32s(v);
-    let l = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    [w[0] / l, w[1] / l, w[2] / l]
-}
+use crate::texmap::mikk::unit32;
 
 /// A node of `mesh`, scaled and rotated into glTF's world.
 fn node(mesh: usize, name: String, scale: f64, rotation: [f64; 4]) -> Value {
@@ -54,6 +52,7 @@ pub(super) struct Gltf {
     nodes: Vec<Value>,
     cameras: Vec<Value>,
     lights: Vec<Value>,
+    images: Vec<Value>,
 }
 
 impl Gltf {
@@ -65,58 +64,63 @@ impl Gltf {
         self.views.len() - 1
     }
 
-    /// The part's POSITION, NORMAL, TANGENT and index accessors (0 to 3); the number of glTF
-    /// vertices.
+    /// A VEC`n` f32 accessor of `values` (n = 2, 3 or 4); its index.
+    fn push_vec<const N: usize>(&mut self, values: &[[f32; N]], extra: Value) -> usize {
+        let s = self.bin.push_f32(values.iter().flatten().copied());
+        let view = self.view(s, ARRAY_BUFFER);
+        let mut a = json!({
+            "bufferView": view, "componentType": FLOAT, "count": values.len(),
+            "type": format!("VEC{N}")
+        });
+        if let (Some(a), Some(e)) = (a.as_object_mut(), extra.as_object()) {
+            a.extend(e.clone());
+        }
+        self.accessors.push(a);
+        self.accessors.len() - 1
+    }
+
+    /// The part's POSITION, NORMAL, TANGENT, TEXCOORD_0 and index accessors (0 to 4); the
+    /// number of glTF vertices.
     pub fn push_part_buffers(
         &mut self,
-        input: &ExportInput,
-        oriented: &Oriented,
+        positions: &[Vector3<f64>],
         normals: &[Vector3<f64>],
-        tangents: &[Vector3<f64>],
+        verts: &GltfVertices,
     ) -> usize {
         // POSITION with its bounds (required by the spec).
         let pos: Vec<[f32; 3]> =
-            oriented.vertex.iter().map(|&v| f32s(&input.positions[v as usize])).collect();
+            verts.vertex.iter().map(|&v| f32s(&positions[v as usize])).collect();
         let (lo, hi) = bounds(&pos);
-        let count = pos.len();
-        let s = self.bin.push_f32(pos.iter().flatten().copied());
-        let v_pos = self.view(s, ARRAY_BUFFER);
-        self.accessors.push(json!({
-            "bufferView": v_pos, "componentType": FLOAT, "count": count, "type": "VEC3",
-            "min": lo, "max": hi
-        }));
+        self.push_vec(&pos, json!({ "min": lo, "max": hi }));
         let nrm: Vec<[f32; 3]> =
-            oriented.vertex.iter().map(|&v| unit32(&normals[v as usize])).collect();
-        let s = self.bin.push_f32(nrm.iter().flatten().copied());
-        let v_nrm = self.view(s, ARRAY_BUFFER);
-        self.accessors.push(json!({
-            "bufferView": v_nrm, "componentType": FLOAT, "count": count, "type": "VEC3"
-        }));
-        let tan: Vec<[f32; 4]> = oriented
-            .vertex
-            .iter()
-            .zip(&oriented.sign)
-            .map(|(&v, &s)| {
-                let t = unit32(&(tangents[v as usize] * s));
-                [t[0], t[1], t[2], 1.0]
-            })
-            .collect();
-        let s = self.bin.push_f32(tan.iter().flatten().copied());
-        let v_tan = self.view(s, ARRAY_BUFFER);
-        self.accessors.push(json!({
-            "bufferView": v_tan, "componentType": FLOAT, "count": count, "type": "VEC4"
-        }));
-        let s = self.bin.push_u32(oriented.faces.iter().flatten().copied());
+            verts.vertex.iter().map(|&v| unit32(&normals[v as usize])).collect();
+        self.push_vec(&nrm, json!({}));
+        self.push_vec(&verts.tangent, json!({}));
+        self.push_vec(&verts.texcoord, json!({}));
+        let s = self.bin.push_u32(verts.faces.iter().flatten().copied());
         let v_idx = self.view(s, ELEMENT_ARRAY_BUFFER);
         self.accessors.push(json!({
-            "bufferView": v_idx, "componentType": UNSIGNED_INT, "count": 3 * oriented.faces.len(),
+            "bufferView": v_idx, "componentType": UNSIGNED_INT, "count": 3 * verts.faces.len(),
             "type": "SCALAR"
         }));
-        count
+        pos.len()
     }
 
-    /// The part's material (anisotropic), mesh and node.
-    pub fn push_part(&mut self, name: &str, m: &GltfMaterial, scale: f64, rotation: [f64; 4]) {
+    /// The part's material (anisotropic, its direction in the embedded PNG `texture`), mesh
+    /// and node.
+    pub fn push_part(
+        &mut self,
+        name: &str,
+        m: &GltfMaterial,
+        texture: &[u8],
+        scale: f64,
+        rotation: [f64; 4],
+    ) {
+        let s = self.bin.push_bytes(texture);
+        self.views.push(json!({ "buffer": 0, "byteOffset": s.0, "byteLength": s.1 }));
+        self.images.push(json!({
+            "name": "anisotropy", "bufferView": self.views.len() - 1, "mimeType": "image/png"
+        }));
         self.materials.push(json!({
             "name": name,
             "pbrMetallicRoughness": {
@@ -126,14 +130,15 @@ impl Gltf {
             },
             "extensions": { "KHR_materials_anisotropy": {
                 "anisotropyStrength": m.anisotropy_strength,
-                "anisotropyRotation": m.anisotropy_rotation
+                "anisotropyRotation": 0.0,
+                "anisotropyTexture": { "index": 0 }
             } }
         }));
         self.meshes.push(json!({
             "name": name,
             "primitives": [{
-                "attributes": { "POSITION": 0, "NORMAL": 1, "TANGENT": 2 },
-                "indices": 3, "material": 0, "mode": 4
+                "attributes": { "POSITION": 0, "NORMAL": 1, "TANGENT": 2, "TEXCOORD_0": 3 },
+                "indices": 4, "material": 0, "mode": 4
             }]
         }));
         self.nodes.push(node(0, name.to_string(), scale, rotation));
@@ -262,7 +267,8 @@ impl Gltf {
 
     /// The document (one scene of every node, named `name`) and the buffer as a .glb.
     pub fn into_glb(self, name: &str) -> Result<Vec<u8>> {
-        let Gltf { bin, views, accessors, materials, meshes, nodes, cameras, lights } = self;
+        let Gltf { bin, views, accessors, materials, meshes, nodes, cameras, lights, images } =
+            self;
         let node_ids: Vec<usize> = (0..nodes.len()).collect();
         let mut used = vec!["KHR_materials_anisotropy"];
         if !lights.is_empty() {
@@ -283,6 +289,16 @@ impl Gltf {
             "bufferViews": views,
             "buffers": [{ "byteLength": bin.bytes.len() }]
         });
+        if !images.is_empty() {
+            doc["images"] = json!(images);
+            doc["samplers"] = json!([{
+                "magFilter": LINEAR, "minFilter": LINEAR_MIPMAP_LINEAR,
+                "wrapS": CLAMP_TO_EDGE, "wrapT": CLAMP_TO_EDGE
+            }]);
+            doc["textures"] = json!((0..images.len())
+                .map(|i| json!({ "sampler": 0, "source": i }))
+                .collect::<Vec<_>>());
+        }
         if !cameras.is_empty() {
             doc["cameras"] = json!(cameras);
         }

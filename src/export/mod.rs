@@ -2,15 +2,17 @@
 //! designer's own viewer (three.js, Babylon.js, Blender, ...). docs/gltf.md has the format, the
 //! material mapping and the conventions; in short:
 //!
-//! - the triangle mesh with POSITION, NORMAL, TANGENT (xyz = the grain u, w = +1) and indices,
-//!   in the scene's length unit; the node's `scale` turns it into metres (0.001 for mm) and its
-//!   `rotation` turns the scene's `view.up` axis into glTF's +Y;
+//! - the triangle mesh with POSITION, NORMAL, TEXCOORD_0 (the part's UVs in texture space,
+//!   [`crate::texmap::TextureSpace`]), TANGENT (MikkTSpace from those UVs: what a viewer
+//!   computes when the file has none) and indices, in the scene's length unit; the node's
+//!   `scale` turns it into metres (0.001 for mm) and its `rotation` turns the scene's `view.up`
+//!   axis into glTF's +Y;
 //! - one metallic material with `KHR_materials_anisotropy` { `anisotropyStrength`,
-//!   `anisotropyRotation` = π/2 }: the anisotropy direction (TANGENT turned by the rotation,
-//!   i.e. the bitangent n × u) is where the extension *raises* the roughness, across the
-//!   grooves ([`material`]);
-//! - a line field (k = 2) oriented per triangle, vertices split where the sign changes and
-//!   around singular faces ([`orient`]);
+//!   `anisotropyRotation` = 0, `anisotropyTexture` }: the texture's RG is the anisotropy
+//!   direction in the tangent frame — the grain turned by the material's rotation, n × u for a
+//!   lobe narrow along the grain: where the extension *raises* the roughness, across the
+//!   grooves ([`material`]) —, baked per UV triangle ([`crate::texmap`]), B = 1;
+//! - a line field (k = 2) oriented per triangle before it is baked ([`orient`]);
 //! - optionally the brush strokes as a second node of LINES;
 //! - deterministic bytes: no time stamp, fixed key order, face order kept.
 //!
@@ -19,15 +21,17 @@
 pub mod glb;
 mod glb_build;
 pub mod material;
-pub mod orient;
+pub use crate::texmap::orient;
+mod vertices;
 
-use nalgebra::Vector3;
+use nalgebra::{Vector2, Vector3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::appearance::Material;
 use crate::highlight::Symmetry;
-use crate::mesh::Units;
+use crate::mesh::{CornerAttribute, Units};
+use crate::texmap::{BakeInput, TextureSpace};
 use crate::{Error, Result};
 
 pub use material::{gltf_material, GltfMaterial};
@@ -47,6 +51,27 @@ pub struct ExportSection {
     /// one (needs `toolpaths`).
     #[serde(default)]
     pub as_brushed: bool,
+    /// Texels per side of the glb's `anisotropyTexture` and of the maps (`maps`): a power of
+    /// two in [16, 8192]. Default: chosen for the part, the smallest power of two in
+    /// [1024, 4096] at which the shortest 5 % of the UV edges span 8 texels (1024 for the
+    /// kettle and the dome, 2048 for the panel).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub anisotropy_texture_size: Option<u32>,
+    /// A directory for the grain as 16-bit PNG maps in UV space (`grain-direction.png`,
+    /// `grain-angle.png`; docs/formats.md, "Grain maps"), written by `grainline run` and
+    /// `grainline export --maps`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub maps: Option<String>,
+}
+
+impl ExportSection {
+    /// Range checks; keys are relative to this section.
+    pub fn validate(&self) -> Result<()> {
+        match self.anisotropy_texture_size {
+            Some(n) => crate::texmap::check_size("anisotropy_texture_size", n),
+            None => Ok(()),
+        }
+    }
 }
 
 /// What [`export_glb`] exports: the mesh and its per-vertex fields, borrowed.
@@ -66,6 +91,9 @@ pub struct ExportInput<'a> {
     pub singular_faces: &'a [u32],
     /// Brush strokes (3D polylines, scene unit), written as a second node when given.
     pub strokes: Option<&'a [Vec<Vector3<f64>>]>,
+    /// The part's UV layout (its own, or one made by `layout::flatten`): TEXCOORD_0, the
+    /// tangent frames and the texture's domain.
+    pub uv: &'a CornerAttribute<Vector2<f64>>,
 }
 
 /// Options of [`export_glb`].
@@ -86,6 +114,9 @@ pub struct ExportOptions {
     /// The key light: direction towards it (scene coordinates) and irradiance, written as a
     /// `KHR_lights_punctual` directional light (a node `key light`).
     pub key_light: Option<([f64; 3], f64)>,
+    /// Texels per side of the `anisotropyTexture` (a power of two in
+    /// [`crate::texmap::TEXTURE_SIZE_RANGE`]).
+    pub texture_size: u32,
 }
 
 /// The scene's pinhole camera, in scene coordinates.
@@ -139,13 +170,23 @@ pub struct ExportReport {
     pub mesh_vertices: usize,
     /// Triangles.
     pub triangles: usize,
-    /// Mesh vertices written more than once (k = 2 sign changes and isolated faces).
+    /// Mesh vertices written more than once (UV seams, MikkTSpace tangent splits).
     pub split_vertices: usize,
-    /// Faces given vertices of their own (inconsistent or singular, k = 2).
+    /// Faces whose grain is oriented on their own in the texture (inconsistent or singular,
+    /// k = 2).
     pub isolated_faces: usize,
-    /// Vertices whose grain was zero or along the normal (tangent set to an arbitrary
+    /// Vertices whose grain was zero or along the normal (grain set to an arbitrary
     /// perpendicular).
     pub fallback_tangents: usize,
+    /// Face corners MikkTSpace gave no tangent (degenerate UV triangles with no neighbour):
+    /// TANGENT from the face's UV Jacobian, or any perpendicular.
+    pub fallback_uv_tangents: usize,
+    /// Texels per side of the `anisotropyTexture`.
+    pub texture_size: u32,
+    /// Texels whose centre lies inside a UV triangle (the rest is dilated padding).
+    pub texture_covered: usize,
+    /// The map from the part's UVs to TEXCOORD_0's texture space (st = (uv − offset)/scale).
+    pub texture_space: TextureSpace,
     /// Strokes written as lines (0 without the strokes node).
     pub strokes: usize,
     /// Line segments of the strokes node.
@@ -219,23 +260,64 @@ fn check_finite(what: &str, i: usize, v: &Vector3<f64>) -> Result<()> {
     }
 }
 
-/// The part as glTF 2.0 binary (module docs). Errors name the vertex or face of a bad input.
-pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<ExportOutput> {
-    let nv = input.positions.len();
+/// The grain of an export baked into texture space ([`grain_texture`]).
+#[derive(Clone, Debug)]
+pub struct GrainTexture {
+    /// The texels, the texture space and the MikkTSpace frames.
+    pub baked: crate::texmap::Baked,
+    /// The unit normals the frames were computed with.
+    pub normals: Vec<Vector3<f64>>,
+    /// Vertices whose grain was zero or along the normal.
+    pub fallback: usize,
+    /// Faces oriented on their own (k = 2).
+    pub isolated_faces: usize,
+}
+
+/// The grain of `input` baked into a `size`² texture: unit normals and grain, a line field
+/// oriented per triangle ([`orient`]), then [`crate::texmap::bake`]. What the glb's
+/// `anisotropyTexture` and the maps of `export.maps` are encoded from.
+pub fn grain_texture(input: &ExportInput, size: u32) -> Result<GrainTexture> {
     check_input(input)?;
-    // Unit normals and unit tangents in the tangent plane.
+    let nv = input.positions.len();
+    // Unit normals and unit grain in the tangent plane.
     let UnitFrames { normals, tangents, fallback } = unit_frames(input)?;
     let oriented = match input.symmetry {
         Symmetry::Line => orient::orient_line_field(input.faces, &tangents, input.singular_faces),
         Symmetry::Oriented => orient::identity(input.faces, nv),
     };
-    let mut gltf = glb_build::Gltf::default();
-    let count = gltf.push_part_buffers(input, &oriented, &normals, &tangents);
+    let grain: Vec<[Vector3<f64>; 3]> = oriented
+        .faces
+        .iter()
+        .map(|f| {
+            f.map(|k| tangents[oriented.vertex[k as usize] as usize] * oriented.sign[k as usize])
+        })
+        .collect();
+    let baked = crate::texmap::bake(&BakeInput {
+        positions: input.positions,
+        faces: input.faces,
+        normals: &normals,
+        uv: input.uv,
+        grain: &grain,
+        size,
+        line: input.symmetry == Symmetry::Line,
+    })?;
+    Ok(GrainTexture { baked, normals, fallback, isolated_faces: oriented.isolated_faces })
+}
+
+/// The part as glTF 2.0 binary (module docs). Errors name the vertex or face of a bad input.
+pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<ExportOutput> {
+    let nv = input.positions.len();
+    let GrainTexture { baked, normals, fallback, isolated_faces } =
+        grain_texture(input, options.texture_size)?;
+    let verts = vertices::gltf_vertices(input.faces, &baked.st, &baked.frames, nv);
     let m = gltf_material(&options.material);
+    let texture = baked.image.anisotropy_png16(m.anisotropy_rotation)?;
+    let mut gltf = glb_build::Gltf::default();
+    let count = gltf.push_part_buffers(input.positions, &normals, &verts);
     let scale = options.units.in_mm() / 1000.0;
     let rotation = up_rotation(options.up);
     let name = &options.name;
-    gltf.push_part(name, &m, scale, rotation);
+    gltf.push_part(name, &m, &texture, scale, rotation);
     let (n_strokes, n_segments) = match input.strokes {
         Some(strokes) => gltf.push_strokes(strokes, scale, rotation)?,
         None => (0, 0),
@@ -246,10 +328,14 @@ pub fn export_glb(input: &ExportInput, options: &ExportOptions) -> Result<Export
     let report = ExportReport {
         vertices: count,
         mesh_vertices: nv,
-        triangles: oriented.faces.len(),
-        split_vertices: oriented.split_vertices,
-        isolated_faces: oriented.isolated_faces,
+        triangles: verts.faces.len(),
+        split_vertices: verts.split_vertices,
+        isolated_faces,
         fallback_tangents: fallback,
+        fallback_uv_tangents: baked.frames.fallback,
+        texture_size: options.texture_size,
+        texture_covered: baked.image.covered,
+        texture_space: baked.space,
         strokes: n_strokes,
         stroke_segments: n_segments,
         scale,
@@ -283,6 +369,18 @@ fn check_input(input: &ExportInput) -> Result<()> {
                 format!("face {f} refers to vertex {v}, the mesh has {nv}"),
             ));
         }
+    }
+    if input.uv.corners.len() != input.faces.len()
+        || input.uv.corners.iter().flatten().any(|&c| c as usize >= input.uv.values.len())
+    {
+        return Err(Error::invalid_arg(
+            "export input",
+            format!(
+                "{} UV faces for {} faces, or a UV index out of range",
+                input.uv.corners.len(),
+                input.faces.len()
+            ),
+        ));
     }
     Ok(())
 }
@@ -392,6 +490,10 @@ mod tests {
         let n = [Vector3::z(); 4];
         let u = [Vector3::x(), -Vector3::x(), Vector3::x(), -Vector3::x()];
         let faces = [[0, 1, 2], [2, 1, 3]];
+        let uv = CornerAttribute {
+            values: p.iter().map(|q| Vector2::new(q.x / 10.0, q.y / 10.0)).collect(),
+            corners: faces.to_vec(),
+        };
         let input = ExportInput {
             positions: &p,
             faces: &faces,
@@ -400,6 +502,7 @@ mod tests {
             symmetry: Symmetry::Line,
             singular_faces: &[],
             strokes: None,
+            uv: &uv,
         };
         let options = ExportOptions {
             material: Material::default(),
@@ -408,6 +511,7 @@ mod tests {
             name: "square".into(),
             camera: None,
             key_light: None,
+            texture_size: 16,
         };
         let out = export_glb(&input, &options).unwrap();
         assert_eq!(out.report.vertices, 4);

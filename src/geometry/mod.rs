@@ -11,6 +11,7 @@ pub mod curvature;
 pub mod frames;
 pub mod gradient;
 pub mod laplacian;
+pub mod noise;
 pub mod normals;
 pub mod patches;
 pub mod quality;

@@ -29,6 +29,10 @@ pub enum InitialField {
     World(Vector3<f64>),
     /// One world direction per vertex, projected onto the tangent planes.
     Directions(Vec<Vector3<f64>>),
+    /// A grain map in UV space (direction or angle, docs/formats.md "Grain maps"), read at
+    /// every face corner in its MikkTSpace frame ([`crate::texmap::corner_grain`]) and summed
+    /// per vertex (needs UVs).
+    Map(crate::texmap::GrainMap),
 }
 
 impl std::str::FromStr for InitialField {
@@ -132,6 +136,7 @@ pub fn initial_field(
                 .map(|phi| InitialFieldResult { phi, fallback_vertices: Vec::new() });
         }
         InitialField::Uv => uv_directions(mesh, geom, symmetry)?,
+        InitialField::Map(map) => map_directions(mesh, geom, map, symmetry)?,
     };
     Ok(with_fallbacks(geom, dirs, symmetry))
 }
@@ -246,6 +251,35 @@ fn with_fallbacks(
 /// point opposite ways), a line field sums them as lines ([`sum_directions`]) and gets the
 /// fold's common line, which a sum of vectors cancelled. Faces with a degenerate UV triangle
 /// are skipped.
+/// The grain a map gives each vertex: its corners' readings ([`crate::texmap::corner_grain`],
+/// in the geometry's normals' frames) summed with their corner angles as weights.
+fn map_directions(
+    mesh: &Mesh,
+    geom: &Geometry,
+    map: &crate::texmap::GrainMap,
+    symmetry: Symmetry,
+) -> Result<Vec<Option<Vector3<f64>>>> {
+    let uv = mesh.uv.as_ref().ok_or_else(|| {
+        Error::invalid_arg("init", "a grain map needs the part's UV coordinates, and it has none")
+    })?;
+    let normals: Vec<Vector3<f64>> = geom.frames.iter().map(|f| f.n).collect();
+    let oriented = symmetry == Symmetry::Oriented;
+    let corners =
+        crate::texmap::corner_grain(&mesh.positions, &mesh.faces, &normals, uv, map, oriented);
+    let vf = crate::geometry::VertexFaces::new(mesh);
+    Ok((0..mesh.num_vertices())
+        .map(|v| {
+            let dirs = vf.of(v).iter().filter_map(|&(f, c)| {
+                let (f, c) = (f as usize, c as usize);
+                let tri = mesh.face_positions(f);
+                let angle = corner_angle(&tri[c], &tri[(c + 1) % 3], &tri[(c + 2) % 3]);
+                corners[f][c].map(|d| (d, angle))
+            });
+            sum_directions(geom, v, dirs, symmetry)
+        })
+        .collect())
+}
+
 fn uv_directions(
     mesh: &Mesh,
     geom: &Geometry,

@@ -17,9 +17,10 @@
 //! * **Welding** (`weld = Some(tol)`, file units) merges vertices whose distance is at most
 //!   `tol`, transitively; the cluster keeps the position and the place of its first vertex in
 //!   the file (see [`super::weld`]). Only vertices used by the kept object take part.
-//! * **Zero-area faces**: a face with a repeated vertex (after welding) or with
-//!   |(b − a) × (c − a)| ≤ 1e-12·ℓ², ℓ its longest edge (collinear up to rounding; slivers of
-//!   aspect up to ~1e11 are kept). Dropped and counted, or an error, by [`DegeneratePolicy`].
+//! * **Degenerate faces**: a face with a repeated vertex (after welding), collinear corners, or
+//!   |(b − a) × (c − a)| ≤ 1e-12·ℓ², ℓ its longest edge (a sliver, collinear up to rounding;
+//!   slivers of aspect up to ~1e11 are kept), computed on the edges scaled by their largest
+//!   component (`degenerate.rs`). Dropped and counted, or an error, by [`DegeneratePolicy`].
 //! * **Units**: positions are multiplied by `scale` and are then in `units`.
 //!
 //! Numbers are read as `f64` (tobj's `use_f64`).
@@ -45,6 +46,7 @@ use std::path::Path;
 use nalgebra::{Vector2, Vector3};
 use rayon::prelude::*;
 
+use super::degenerate::{self, Counts, Degeneracy};
 use super::halfedge::HalfEdges;
 use super::parse::{self, Values};
 use super::scan::{self, Kind, Scan, NONE};
@@ -123,19 +125,26 @@ pub enum MeshFormat {
 impl MeshFormat {
     /// The format of a file: by its content where that is unambiguous (a PLY's `ply` magic
     /// line; a binary STL whose size is exactly 84 + 50·n for the n at byte 80 and whose
-    /// name ends in `.stl` or whose bytes are not text), else by its extension (`.stl`,
-    /// `.ply`, case-insensitive; anything else is read as OBJ).
-    pub fn detect(path: &Path, bytes: &[u8]) -> MeshFormat {
+    /// name ends in `.stl` or whose bytes are not text), else by its extension (`.obj`,
+    /// `.stl`, `.ply`, case-insensitive). A file with any other extension (or none) is read by
+    /// what it holds: an ASCII STL (`solid …`), or an OBJ (a `v`, `vt`, `vn`, `f`, `o`, `g`,
+    /// … statement before any other text); anything else is refused naming the file and the
+    /// extensions grainline reads. A UTF-8 byte-order mark is skipped.
+    pub fn detect(path: &Path, bytes: &[u8]) -> Result<MeshFormat> {
         let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-        if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
-            return MeshFormat::Ply;
+        let text = bytes.strip_prefix(super::stl::BOM).unwrap_or(bytes);
+        if text.starts_with(b"ply\n") || text.starts_with(b"ply\r\n") {
+            return Ok(MeshFormat::Ply);
         }
-        match ext.as_deref() {
+        let binary_stl = super::stl::binary_count(bytes).is_some() && bytes.contains(&0);
+        Ok(match ext.as_deref() {
             Some("stl") => MeshFormat::Stl,
             Some("ply") => MeshFormat::Ply,
-            _ if super::stl::binary_count(bytes).is_some() && bytes.contains(&0) => MeshFormat::Stl,
-            _ => MeshFormat::Obj,
-        }
+            Some("obj") => MeshFormat::Obj,
+            _ if binary_stl || super::stl::starts_with_solid(text) => MeshFormat::Stl,
+            _ if scan::looks_like_obj(text) => MeshFormat::Obj,
+            _ => return Err(unknown_format(path, ext.as_deref())),
+        })
     }
 
     /// The format's name as messages and reports write it (`obj`, `stl`, `ply`).
@@ -160,7 +169,7 @@ pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
     // A FIFO or a device is refused before it is opened (opening a FIFO would block).
     crate::output::check_input_file(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
-    let format = MeshFormat::detect(path, &bytes);
+    let format = MeshFormat::detect(path, &bytes)?;
     if format == MeshFormat::Obj {
         drop(bytes);
         return load_obj(path, options);
@@ -183,6 +192,22 @@ pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
             drop(bytes);
             super::raw::build(path, raw, options, format, Naming::Ply, None)
         }
+    }
+}
+
+/// The error of a file whose extension and content name no mesh format grainline reads.
+fn unknown_format(path: &Path, ext: Option<&str>) -> Error {
+    let named = match ext {
+        Some(e) => format!("its extension `.{e}` is not one grainline reads"),
+        None => "it has no extension".to_string(),
+    };
+    Error::InvalidMesh {
+        path: path.to_owned(),
+        message: format!(
+            "not a mesh file grainline can read: {named} (.obj, .stl, .ply), and its content is \
+             none of an OBJ (`v`/`f` statements), an ASCII STL (`solid`), a binary STL (84 + 50·n \
+             bytes) or a PLY (`ply` first line)"
+        ),
     }
 }
 
@@ -496,9 +521,9 @@ impl Builder<'_> {
             None => (0..self.scan.num_v as u32).collect(),
         };
         let (tris, dropped) = self.triangles(&selected, &rep, &positions)?;
-        report.dropped_degenerate_faces = dropped;
+        report.dropped_degenerate_faces = dropped.total();
         if tris.is_empty() {
-            return Err(self.empty(dropped));
+            return Err(self.empty(&dropped));
         }
         let (new_id, source) = compact_vertices(self.scan.num_v, &tris, &self.scan.corner_v, &rep);
         report.welded_vertices =
@@ -519,6 +544,7 @@ impl Builder<'_> {
             units: self.options.units,
             ..Default::default()
         };
+        super::raw::check_part_size(self.path, &mesh.positions, scale)?;
         report.face_line = tris.par_iter().map(|&t| self.scan.face_line[t as usize]).collect();
         report.source_vertex = source.par_iter().map(|&i| i + 1).collect();
         (mesh.uv, report.corners_without_uv) = self.uvs(&tris)?;
@@ -597,8 +623,8 @@ impl Builder<'_> {
         }
     }
 
-    fn empty(&self, dropped: usize) -> Error {
-        let message = if dropped > 0 {
+    fn empty(&self, dropped: &Counts) -> Error {
+        let message = if dropped.total() > 0 {
             zero_area_message(dropped, self.options)
         } else if self.options.object.is_some() {
             "the selected object has no faces".to_string()
@@ -608,32 +634,33 @@ impl Builder<'_> {
         Error::EmptyMesh { path: self.path.to_owned(), message }
     }
 
-    /// Kept triangles (indices into the file's triangles) and the number dropped.
+    /// Kept triangles (indices into the file's triangles) and the degenerate ones dropped.
     fn triangles(
         &self,
         selected: &[usize],
         rep: &[u32],
         pos: &[Vector3<f64>],
-    ) -> Result<(Vec<u32>, usize)> {
+    ) -> Result<(Vec<u32>, Counts)> {
         let cv = &self.scan.corner_v;
+        let corners = |t: usize| [0, 1, 2].map(|k| rep[cv[3 * t + k] as usize]);
         let mut kept = Vec::with_capacity(self.scan.face_line.len());
         let mut bad = Vec::new();
+        let mut counts = Counts::default();
         for &m in selected {
             let m = &self.models[m];
             let range = m.start / 3..(m.start + m.len) / 3;
-            let flags: Vec<bool> = range
+            let kinds: Vec<Option<Degeneracy>> = range
                 .clone()
                 .into_par_iter()
-                .map(|t| {
-                    let v = [0, 1, 2].map(|k| rep[cv[3 * t + k] as usize]);
-                    is_degenerate(v, pos)
-                })
+                .map(|t| degenerate::classify(corners(t), pos))
                 .collect();
-            for (t, d) in range.zip(flags) {
-                if d {
-                    bad.push(t as u32);
-                } else {
-                    kept.push(t as u32);
+            for (t, d) in range.zip(kinds) {
+                match d {
+                    Some(kind) => {
+                        counts.add(kind, corners(t), pos);
+                        bad.push(t as u32);
+                    }
+                    None => kept.push(t as u32),
                 }
             }
         }
@@ -645,10 +672,15 @@ impl Builder<'_> {
                 .collect();
             return Err(Error::DegenerateFaces {
                 path: self.path.to_owned(),
-                message: format!("{} zero-area face(s), at {}", bad.len(), lines.join(", ")),
+                message: format!(
+                    "{} degenerate face(s), at {}: they {}",
+                    bad.len(),
+                    lines.join(", "),
+                    counts.describe()
+                ),
             });
         }
-        Ok((kept, bad.len()))
+        Ok((kept, counts))
     }
 
     /// Per-corner UVs if every kept corner has one, and the number of corners without.
@@ -761,9 +793,9 @@ impl Builder<'_> {
     }
 }
 
-/// "no faces left: all N faces have zero area", naming the weld tolerance when one was given
-/// (a tolerance beyond the part's size merges every vertex into one).
-pub(super) fn zero_area_message(dropped: usize, options: &LoadOptions) -> String {
+/// "no faces left: all N faces have zero area" (or are slivers), naming the weld tolerance when
+/// one was given (a tolerance beyond the part's size merges every vertex into one).
+pub(super) fn zero_area_message(counts: &Counts, options: &LoadOptions) -> String {
     let weld = match options.weld {
         Some(t) if t > 0.0 => format!(
             " after welding vertices within {} (mesh.weld, --weld): is the tolerance larger \
@@ -772,7 +804,7 @@ pub(super) fn zero_area_message(dropped: usize, options: &LoadOptions) -> String
         ),
         _ => String::new(),
     };
-    format!("no faces left: all {dropped} faces have zero area{weld}")
+    format!("no faces left: all {} faces {}{weld}", counts.total(), counts.describe())
 }
 
 trait AllFinite {
@@ -811,17 +843,6 @@ fn used_vertices(
         }
     }
     used
-}
-
-/// Zero area: a repeated vertex, or |(b − a) × (c − a)| ≤ 1e-12·ℓ² with ℓ the longest edge.
-pub(super) fn is_degenerate(v: [u32; 3], pos: &[Vector3<f64>]) -> bool {
-    if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
-        return true;
-    }
-    let [a, b, c] = v.map(|i| pos[i as usize]);
-    let (e1, e2, e3) = (b - a, c - a, c - b);
-    let l2 = e1.norm_squared().max(e2.norm_squared()).max(e3.norm_squared());
-    e1.cross(&e2).norm() <= 1e-12 * l2
 }
 
 /// New index (file order) of every vertex used by a kept triangle, and the file index of each.

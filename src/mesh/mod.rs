@@ -6,6 +6,7 @@
 //! attributes *per face corner*, so seams and hard edges are represented exactly.
 
 pub mod adjacency;
+pub(crate) mod degenerate;
 pub mod halfedge;
 pub mod load;
 mod parse;

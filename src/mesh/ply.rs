@@ -181,7 +181,8 @@ fn read_header(path: &Path, bytes: &[u8]) -> Result<Header> {
         let words: Vec<&str> = text.split_ascii_whitespace().collect();
         let err = |m: String| parse_err(path, line_no, m);
         if line_no == 1 {
-            if text.trim_end() != "ply" {
+            // A UTF-8 byte-order mark before the magic is skipped.
+            if text.trim_start_matches('\u{feff}').trim_end() != "ply" {
                 return Err(err("not a PLY file: the first line is not `ply`".into()));
             }
             continue;
@@ -261,6 +262,8 @@ struct Reader<'a> {
     pos: usize,
     line: usize,
     encoding: Encoding,
+    /// ASCII: the line of the entry being read (its values must all be on it); 0 for none.
+    entry_line: usize,
 }
 
 impl Reader<'_> {
@@ -294,6 +297,16 @@ impl Reader<'_> {
         match self.encoding {
             Encoding::Ascii => {
                 self.skip_blanks();
+                if self.entry_line != 0 && self.line != self.entry_line {
+                    return Err(self.error(
+                        (self.entry_line, self.pos),
+                        format!(
+                            "{} is missing: the line ends before it (an ASCII PLY entry holds \
+                             all its values on one line)",
+                            what()
+                        ),
+                    ));
+                }
                 let at = (self.line, self.pos);
                 let start = self.pos;
                 while self.pos < self.bytes.len() && !self.bytes[self.pos].is_ascii_whitespace() {
@@ -512,8 +525,14 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
     let mesh = mesh_elements(path, &header)?;
     check_limits(path, &header.elements[mesh.vertex], &header.elements[mesh.face])?;
     check_data_size(path, bytes, &header)?;
-    let mut rd =
-        Reader { path, bytes, pos: header.data, line: header.data_line, encoding: header.encoding };
+    let mut rd = Reader {
+        path,
+        bytes,
+        pos: header.data,
+        line: header.data_line,
+        encoding: header.encoding,
+        entry_line: 0,
+    };
     let collected = read_data(&mut rd, &header, mesh, scale)?;
     check_no_trailing_data(&mut rd)?;
     collected.into_mesh(path, rd.encoding)

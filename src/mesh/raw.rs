@@ -8,14 +8,15 @@ use std::path::Path;
 use nalgebra::{Vector2, Vector3};
 use rayon::prelude::*;
 
+use super::degenerate::{self, Counts};
 use super::halfedge::HalfEdges;
 use super::load::{
-    compact_vertices, dedup_by_value, is_degenerate, DegeneratePolicy, LoadOptions, LoadReport,
-    LoadedMesh, MeshFormat,
+    compact_vertices, dedup_by_value, DegeneratePolicy, LoadOptions, LoadReport, LoadedMesh,
+    MeshFormat,
 };
 use super::validate::{self, FileNames, Naming};
 use super::{weld, CornerAttribute, Mesh};
-use crate::limits::MAX_COORDINATE;
+use crate::limits::{MAX_COORDINATE, MIN_PART_SIZE};
 use crate::{Error, Result};
 
 /// File vertices and triangles before welding and validation.
@@ -78,6 +79,29 @@ pub(crate) fn check_position(p: &Vector3<f64>, scale: f64) -> std::result::Resul
     }
 }
 
+/// Refuses a part smaller than [`MIN_PART_SIZE`] across (its bounding box's diagonal, in the
+/// mesh's units after `scale`).
+pub(super) fn check_part_size(path: &Path, positions: &[Vector3<f64>], scale: f64) -> Result<()> {
+    let (lo, hi) = positions.iter().fold(
+        (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+    );
+    let diagonal = (hi - lo).norm();
+    if positions.is_empty() || diagonal >= MIN_PART_SIZE {
+        return Ok(());
+    }
+    let scaled = if scale == 1.0 { String::new() } else { format!(" (after ×{scale} scale)") };
+    Err(Error::InvalidMesh {
+        path: path.to_owned(),
+        message: format!(
+            "the part is {} across{scaled}: smaller than the {MIN_PART_SIZE:e} grainline \
+             computes with (its curvatures would overflow; limits::MIN_PART_SIZE) — give the \
+             coordinates in a smaller unit",
+            crate::error::fmt_num(diagonal)
+        ),
+    })
+}
+
 /// Builds the validated mesh of a [`RawMesh`]. `default_weld` is the weld used when the
 /// options give none (STL: `Some(0.0)`, the exact weld).
 pub(crate) fn build(
@@ -98,25 +122,37 @@ pub(crate) fn build(
         Some(tol) => weld::weld_map(&raw.positions, &used, tol),
         None => (0..nv as u32).collect(),
     };
-    let flags: Vec<bool> = raw
-        .faces
-        .par_iter()
-        .map(|f| is_degenerate(f.map(|v| rep[v as usize]), &raw.positions))
+    let corners = |t: usize| raw.faces[t].map(|v| rep[v as usize]);
+    let flags: Vec<Option<degenerate::Degeneracy>> = (0..raw.faces.len())
+        .into_par_iter()
+        .map(|t| degenerate::classify(corners(t), &raw.positions))
         .collect();
-    let tris: Vec<u32> = (0..raw.faces.len() as u32).filter(|&t| !flags[t as usize]).collect();
-    let dropped = raw.faces.len() - tris.len();
+    let tris: Vec<u32> =
+        (0..raw.faces.len() as u32).filter(|&t| flags[t as usize].is_none()).collect();
+    let mut counts = Counts::default();
+    for (t, kind) in flags.iter().enumerate() {
+        if let Some(kind) = kind {
+            counts.add(*kind, corners(t), &raw.positions);
+        }
+    }
+    let dropped = counts.total();
     let face_name = |t: usize| naming.face(raw.face_line[t], raw.face_index[t]);
     if dropped > 0 && options.degenerate == DegeneratePolicy::Error {
-        let bad: Vec<usize> = (0..raw.faces.len()).filter(|&t| flags[t]).collect();
+        let bad: Vec<usize> = (0..raw.faces.len()).filter(|&t| flags[t].is_some()).collect();
         let names: Vec<String> = bad.iter().take(5).map(|&t| face_name(t)).collect();
         return Err(Error::DegenerateFaces {
             path: path.to_owned(),
-            message: format!("{} zero-area face(s), at {}", bad.len(), names.join(", ")),
+            message: format!(
+                "{} degenerate face(s), at {}: they {}",
+                bad.len(),
+                names.join(", "),
+                counts.describe()
+            ),
         });
     }
     if tris.is_empty() {
         let message = if dropped > 0 {
-            super::load::zero_area_message(dropped, options)
+            super::load::zero_area_message(&counts, options)
         } else {
             "no faces: empty mesh".to_string()
         };
@@ -144,6 +180,7 @@ pub(crate) fn build(
         units: options.units,
         ..Default::default()
     };
+    check_part_size(path, &mesh.positions, scale)?;
     report.face_line = tris.iter().map(|&t| raw.face_line[t as usize]).collect();
     report.face_index = tris.iter().map(|&t| raw.face_index[t as usize]).collect();
     report.source_vertex = source.iter().map(|&i| i + 1).collect();

@@ -123,6 +123,19 @@ pub(crate) fn is_ignored_keyword(kw: &[u8]) -> bool {
         && kw.first().is_some_and(|b| b.is_ascii_alphabetic())
 }
 
+/// Whether a text reads as an OBJ: its first statement (after blank and `#` comment lines)
+/// starts with an OBJ keyword (`v`, `vt`, `vn`, `vp`, `f`, `l`, `p`, `o`, `g`, `s`, `mtllib`,
+/// `usemtl`). Used for a file whose extension names no format.
+pub(crate) fn looks_like_obj(text: &[u8]) -> bool {
+    const KEYWORDS: [&[u8]; 12] =
+        [b"v", b"vt", b"vn", b"vp", b"f", b"l", b"p", b"o", b"g", b"s", b"mtllib", b"usemtl"];
+    text.split(|&b| b == b'\n' || b == b'\r')
+        .map(|line| tokens(line).next())
+        .find(|first| first.is_some_and(|t| !t.starts_with(b"#")))
+        .flatten()
+        .is_some_and(|kw| KEYWORDS.contains(&kw))
+}
+
 /// A forward reference (index beyond the count so far), checked against the totals at the end.
 struct Forward {
     line: u32,

@@ -122,6 +122,11 @@ impl<'a> Lines<'a> {
         if tok != usize::MAX {
             toks.push((tok - start, i - start));
         }
+        // The keyword and more than the budget of corners (the last one ends at the line end).
+        if toks.len() > crate::limits::MAX_POLYGON_CORNERS + 1 {
+            (self.bad, self.at) = (true, bytes.len());
+            return None;
+        }
         self.bad |= bad;
         self.at = i + 1;
         Some(&bytes[start..i])

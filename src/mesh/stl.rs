@@ -19,7 +19,8 @@
 //!
 //! `solid NAME`, then `facet [normal nx ny nz]`, `outer loop`, three or more `vertex x y z`,
 //! `endloop`, `endfacet`, …, `endsolid [NAME]`; several solids may follow each other. Keywords
-//! are matched without regard to case. A loop of more than three vertices is split into the
+//! are matched without regard to case. Lines end at LF, CRLF or a lone CR, and a UTF-8
+//! byte-order mark before `solid` is skipped. A loop of more than three vertices is split into the
 //! fan `(v0, v1, v2), (v0, v2, v3), …`.
 //!
 //! Coordinates are `f32` in a binary file and read as `f64` from ASCII; −0 is read as +0 so
@@ -38,6 +39,8 @@ use crate::{Error, Result};
 const HEADER: usize = 84;
 /// Bytes of one binary triangle record.
 const RECORD: usize = 50;
+/// The UTF-8 byte-order mark some editors write before a text file.
+pub(crate) const BOM: &[u8] = b"\xEF\xBB\xBF";
 
 /// The triangle count of a binary STL if the file's size is exactly what it announces.
 pub(crate) fn binary_count(bytes: &[u8]) -> Option<usize> {
@@ -60,8 +63,10 @@ pub(crate) fn read(path: &Path, bytes: &[u8], scale: f64) -> Result<RawMesh> {
         return read_binary(path, bytes, n, scale);
     }
     // An ASCII STL holds no control bytes; a binary one (count, floats) nearly always does.
-    if starts_with_solid(bytes) && !has_control_bytes(bytes) {
-        return read_ascii(path, bytes, scale);
+    // A UTF-8 byte-order mark before `solid` is skipped (lines are counted from it all the same).
+    let text = bytes.strip_prefix(BOM).unwrap_or(bytes);
+    if starts_with_solid(text) && !has_control_bytes(text) {
+        return read_ascii(path, text, scale);
     }
     if bytes.len() < HEADER {
         return Err(Error::BinaryFile {
@@ -161,10 +166,11 @@ impl<'a> Tokens<'a> {
         Tokens { bytes, pos: 0, line: 1 }
     }
 
-    /// The next token and its line, or `None` at the end.
+    /// The next token and its line, or `None` at the end. Lines end at LF, CRLF or a lone CR.
     fn next(&mut self) -> Option<(&'a [u8], usize)> {
         while self.pos < self.bytes.len() && self.bytes[self.pos].is_ascii_whitespace() {
-            if self.bytes[self.pos] == b'\n' {
+            let b = self.bytes[self.pos];
+            if b == b'\n' || (b == b'\r' && self.bytes.get(self.pos + 1) != Some(&b'\n')) {
                 self.line += 1;
             }
             self.pos += 1;
@@ -179,9 +185,9 @@ impl<'a> Tokens<'a> {
         Some((&self.bytes[start..self.pos], self.line))
     }
 
-    /// Skips the rest of the current line (a solid's name).
+    /// Skips the rest of the current line (a solid's name), up to its LF or CR.
     fn skip_line(&mut self) {
-        while self.pos < self.bytes.len() && self.bytes[self.pos] != b'\n' {
+        while self.pos < self.bytes.len() && !matches!(self.bytes[self.pos], b'\n' | b'\r') {
             self.pos += 1;
         }
     }

@@ -1,6 +1,7 @@
 //! The export stage: the part and its grain as glTF 2.0 binary (`export.glb`,
 //! docs/gltf.md) — the designed grain, or the as-brushed one with `export.as_brushed` — with
-//! the scene's view and key light.
+//! the scene's view and key light; and the same grain as 16-bit PNG maps in UV space
+//! (`export.maps`, docs/formats.md, "Grain maps").
 
 use std::path::Path;
 
@@ -9,7 +10,7 @@ use nalgebra::Vector3;
 use super::Prepared;
 use crate::appearance::LightSpec;
 use crate::export::{
-    export_glb, ExportInput, ExportOptions, ExportOutput, ExportSection, ViewCamera,
+    export_glb, grain_texture, ExportInput, ExportOptions, ExportOutput, ExportSection, ViewCamera,
 };
 use crate::highlight::{Lighting, Symmetry};
 use crate::scene::Scene;
@@ -33,9 +34,32 @@ pub struct ExportStageInput<'a> {
     pub brushed_u: Option<&'a [[f64; 3]]>,
 }
 
-/// Writes the glb ([`export_glb`]).
-pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
-    let (scene, e, prepared) = (x.scene, x.section, x.prepared);
+/// The file names of the maps inside `export.maps`.
+pub const MAP_FILES: [&str; 2] = ["grain-direction.png", "grain-angle.png"];
+
+/// The grain maps of `export.maps` (docs/formats.md, "Grain maps").
+pub struct Maps {
+    /// The direction map's PNG ([`MAP_FILES`]\[0\]).
+    pub direction: Vec<u8>,
+    /// The angle map's PNG ([`MAP_FILES`]\[1\]).
+    pub angle: Vec<u8>,
+}
+
+/// The grain's maps: the glb's grain baked ([`grain_texture`]) and encoded as 16-bit PNGs.
+pub fn maps(x: &ExportStageInput) -> Result<Maps> {
+    let (normals, u, singular) = grain(x);
+    let input = export_input(x, &normals, &u, &singular)?;
+    let t = grain_texture(&input, texture_size(x.section, input.uv))?;
+    Ok(Maps { direction: t.baked.image.direction_png16()?, angle: t.baked.image.angle_png16()? })
+}
+
+/// The part's normals, the grain exported (designed or as-brushed) and the singular faces of
+/// its angles.
+type Grain = (Vec<Vector3<f64>>, Vec<Vector3<f64>>, Vec<u32>);
+
+/// The part's normals, the grain exported and its singular faces ([`Grain`]).
+fn grain(x: &ExportStageInput) -> Grain {
+    let (e, prepared) = (x.section, x.prepared);
     let g = &prepared.field.geometry;
     let symmetry = prepared.field_options.symmetry;
     let normals: Vec<Vector3<f64>> = g.frames.iter().map(|f| f.n).collect();
@@ -54,15 +78,49 @@ pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
             .collect(),
         Symmetry::Oriented => Vec::new(),
     };
-    let input = ExportInput {
+    (normals, u, singular)
+}
+
+/// The export's input: the part, its normals and UVs, the grain `u` and its `singular` faces.
+fn export_input<'a>(
+    x: &'a ExportStageInput,
+    normals: &'a [Vector3<f64>],
+    u: &'a [Vector3<f64>],
+    singular: &'a [u32],
+) -> Result<ExportInput<'a>> {
+    let prepared = x.prepared;
+    let uv = prepared.mesh.uv.as_ref().ok_or_else(|| {
+        crate::Error::setting(
+            "export",
+            format!("{} has no UV coordinates: the export needs a UV layout", prepared.mesh_name),
+        )
+    })?;
+    Ok(ExportInput {
         positions: &prepared.mesh.positions,
         faces: &prepared.mesh.faces,
-        normals: &normals,
-        u: &u,
-        symmetry,
-        singular_faces: &singular,
-        strokes: e.strokes.then_some(x.strokes_3d),
-    };
+        normals,
+        u,
+        symmetry: prepared.field_options.symmetry,
+        singular_faces: singular,
+        strokes: x.section.strokes.then_some(x.strokes_3d),
+        uv,
+    })
+}
+
+/// `export.anisotropy_texture_size`, or the size chosen for the part's UVs
+/// ([`crate::texmap::auto_size`]).
+fn texture_size(
+    e: &ExportSection,
+    uv: &crate::mesh::CornerAttribute<nalgebra::Vector2<f64>>,
+) -> u32 {
+    e.anisotropy_texture_size.unwrap_or_else(|| crate::texmap::auto_size(uv))
+}
+
+/// Writes the glb ([`export_glb`]).
+pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
+    let (scene, prepared) = (x.scene, x.prepared);
+    let (normals, u, singular) = grain(x);
+    let input = export_input(x, &normals, &u, &singular)?;
     let name = Path::new(&prepared.mesh_name)
         .file_stem()
         .map_or_else(|| "part".to_string(), |s| s.to_string_lossy().into_owned());
@@ -79,6 +137,7 @@ pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
             fov_deg: scene.view.fov_deg,
         }),
         // The key light as the highlight model used it (a light edit may have moved it).
+        texture_size: texture_size(x.section, input.uv),
         key_light: crate::appearance::key_light_index(&scene.lights).and_then(|i| {
             match &scene.lights[i] {
                 LightSpec::Directional { irradiance, .. } => {

@@ -35,6 +35,8 @@ pub struct StagePlan {
     pub as_brushed: bool,
     /// The scene asks for a glTF export (`export.glb`).
     pub export: bool,
+    /// The scene asks for the grain maps (`export.maps`).
+    pub maps: bool,
 }
 
 impl StagePlan {
@@ -57,7 +59,14 @@ impl StagePlan {
             render: scene.render.is_some(),
             as_brushed,
             export: ex.is_some(),
+            maps: scene.export.as_ref().is_some_and(|e| e.maps.is_some()),
         }
+    }
+
+    /// Whether the part needs a UV layout: the strokes, the glb's texture and the maps live
+    /// in it.
+    pub fn needs_uv(&self) -> bool {
+        self.trace || self.export || self.maps
     }
 }
 
@@ -93,6 +102,12 @@ pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> Result<OutputPlan> 
     if let Some(p) = scene.export.as_ref().and_then(|e| e.glb.as_ref()) {
         plan.output("export.glb", out("export.glb", p)?);
     }
+    if let Some(d) = scene.export.as_ref().and_then(|e| e.maps.as_ref()) {
+        let dir = out("export.maps", d)?;
+        for f in super::export::MAP_FILES {
+            plan.output("export.maps", dir.join(f));
+        }
+    }
     if let Some(p) = &options.report {
         plan.output("the run report", p.clone());
     }
@@ -116,6 +131,9 @@ pub fn scene_inputs(s: &LoadedScene, plan: &mut OutputPlan) {
     }
     if let Some(p) = &scene.field.directions {
         plan.input("field.directions", s.input(p));
+    }
+    if let Some(m) = &scene.field.map {
+        plan.input("field.map.path", s.input(&m.path));
     }
     for (i, e) in scene.edits.iter().enumerate() {
         if let crate::edit::Edit::Curve(c) = e {

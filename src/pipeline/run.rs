@@ -64,6 +64,10 @@ pub struct RunReport {
     /// no vertex was split.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub patches: Option<super::PatchReport>,
+    /// The part's noise and the fit radius it chose (`field.noise: "auto"`); absent when the
+    /// scene sets `field.fit_radius` or `field.noise: "off"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::geometry::noise::NoiseEstimate>,
     /// Edits and the solve (iterations, energies, constraint violations, singularities).
     pub optimize: Option<OptimizeStageReport>,
     /// Strokes, coverage, lengths.
@@ -120,7 +124,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     output_plan(s, options)?.check()?;
     let mut stages = Stages::new(observer);
     let mut staged = Staged::new();
-    let prepared = prepare_for_field(s, given.as_ref(), plan.trace, &mut stages)?;
+    let prepared = prepare_for_field(s, given.as_ref(), plan.needs_uv(), &mut stages)?;
     if plan.trace && prepared.mesh.uv.is_none() {
         // Checked before the solve, not after it.
         return Err(crate::Error::setting(
@@ -178,6 +182,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         critical_points,
         layout: prepared.layout.clone(),
         patches: prepared.patches.clone(),
+        noise: prepared.noise,
         optimize: optimized.map(|o| o.report),
         toolpaths: traced.map(|t| t.figures),
         as_brushed: as_brushed_figures,
@@ -418,18 +423,18 @@ fn render_stage(out: &mut Outputs, f: &Field, stages: &mut Stages) -> Result<Opt
     Ok(Some(r.report))
 }
 
-/// The export stage of a run (`export.glb`).
+/// The export stage of a run (`export.glb`, `export.maps`).
 fn export_stage(
     out: &mut Outputs,
     f: &Field,
     stages: &mut Stages,
 ) -> Result<Option<crate::export::ExportReport>> {
     let scene = &out.s.scene;
-    let Some((e, path)) = scene.export.as_ref().and_then(|e| e.glb.as_ref().map(|p| (e, p))) else {
+    let Some(e) = scene.export.as_ref().filter(|e| e.glb.is_some() || e.maps.is_some()) else {
         return Ok(None);
     };
     stages.start("export");
-    let x = super::export::export(&super::export::ExportStageInput {
+    let x = super::export::ExportStageInput {
         scene,
         section: e,
         prepared: f.prepared,
@@ -437,7 +442,16 @@ fn export_stage(
         lighting: f.shown.lighting(f.prepared),
         strokes_3d: f.strokes_3d(),
         brushed_u: f.brushed_u(),
-    })?;
-    out.write("export.glb", path, &x.glb)?;
-    Ok(Some(x.report))
+    };
+    if let Some(dir) = &e.maps {
+        let maps = super::export::maps(&x)?;
+        let files = super::export::MAP_FILES;
+        let sep = if dir.ends_with('/') { "" } else { "/" };
+        out.write("export.maps", &format!("{dir}{sep}{}", files[0]), &maps.direction)?;
+        out.write("export.maps", &format!("{dir}{sep}{}", files[1]), &maps.angle)?;
+    }
+    let Some(path) = &e.glb else { return Ok(None) };
+    let glb = super::export::export(&x)?;
+    out.write("export.glb", path, &glb.glb)?;
+    Ok(Some(glb.report))
 }

@@ -15,8 +15,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 pub use sections::{
-    FieldSection, InitKind, MeshFull, MeshSection, OutlineSection, PatchMode, RefineMode,
-    RefineSettings, SymmetryKind, ViewModel, ViewSection,
+    FieldSection, InitKind, MapSource, MeshFull, MeshSection, NoiseMode, OutlineSection, PatchMode,
+    RefineMode, RefineSettings, SymmetryKind, ViewModel, ViewSection,
 };
 
 use crate::{Error, Result};
@@ -150,6 +150,7 @@ impl Scene {
                  (`\"key\": true` picks one when there are several)",
             ));
         }
+        check_key_light_faces_the_view(&self.lights, &self.view)?;
         crate::edit::validate_edits(&self.edits).map_err(|e| prefix("edits", e))?;
         if let Some(t) = &self.toolpaths {
             t.validate_in(self.units).map_err(|e| prefix("toolpaths", e))?;
@@ -160,6 +161,7 @@ impl Scene {
         }
         self.solver.validate().map_err(|e| prefix("solver", e))?;
         if let Some(e) = &self.export {
+            e.validate().map_err(|err| prefix("export", err))?;
             if (e.strokes || e.as_brushed) && self.toolpaths.is_none() {
                 let key = if e.strokes { "export.strokes" } else { "export.as_brushed" };
                 return Err(Error::setting(
@@ -170,6 +172,31 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// Refuses a directional key light that points straight away from the eye (within 0.8° of
+/// the direction target → eye reversed): the half vector ω_in + ω_out vanishes at the target,
+/// so the highlight the model shapes is undefined there. A light from behind or below the part
+/// at any other angle is a light like any other.
+fn check_key_light_faces_the_view(
+    lights: &[crate::render::LightSpec],
+    view: &ViewSection,
+) -> Result<()> {
+    use crate::render::LightSpec;
+    let Some(i) = crate::render::key_light_index(lights) else { return Ok(()) };
+    let LightSpec::Directional { direction, .. } = &lights[i] else { return Ok(()) };
+    let d = nalgebra::Vector3::from(*direction);
+    let out = nalgebra::Vector3::from(view.eye) - nalgebra::Vector3::from(view.target);
+    let (dn, on) = (d.norm(), out.norm());
+    if dn > 0.0 && on > 0.0 && d.dot(&out) / (dn * on) < -0.9999 {
+        return Err(Error::setting(
+            format!("lights[{i}].direction"),
+            "the key light points straight away from the eye (opposite view.eye − \
+             view.target): the half vector of light and view vanishes, so there is no highlight \
+             to shape; turn the light towards the eye's side",
+        ));
+    }
+    Ok(())
 }
 
 /// Prefixes a setting error's key path with its section.

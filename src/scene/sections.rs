@@ -404,6 +404,43 @@ pub enum InitKind {
     /// Per-vertex directions read from `field.directions` (a JSON object whose `u` holds one
     /// [x, y, z] per vertex).
     Directions,
+    /// A grain painted elsewhere: a direction or angle map in UV space (`field.map`,
+    /// docs/formats.md "Grain maps"; needs UVs, or the layout grainline makes).
+    Map,
+}
+
+/// A grain map read as the initial field (`field.map`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MapSource {
+    /// The PNG, relative to the scene.
+    pub path: String,
+    /// `direction` (RG across the grain, as `export.maps` writes grain-direction.png and the
+    /// glb's anisotropyTexture) or `angle` (the grain's angle in [0, π) encoded θ/π, as
+    /// grain-angle.png).
+    pub kind: crate::texmap::MapKind,
+}
+
+/// Whether the part's noise picks the fit radius (`field.noise`, docs/math.md §5.6, "Noise
+/// scale").
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseMode {
+    /// Estimate the noise from the mesh and fit normals and curvature over the radius it asks
+    /// for; on a clean part that is the 1-ring, as with `off` (the default).
+    #[default]
+    Auto,
+    /// Fit over the 1-ring (or `field.fit_radius` when set), whatever the noise.
+    Off,
+}
+
+impl NoiseMode {
+    /// The default, `auto`.
+    pub fn is_auto(&self) -> bool {
+        *self == NoiseMode::Auto
+    }
 }
 
 /// The field's symmetry (`field.symmetry`).
@@ -442,6 +479,9 @@ pub struct FieldSection {
     /// The directions file for `init: "directions"`, relative to the scene.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub directions: Option<String>,
+    /// The grain map for `init: "map"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map: Option<MapSource>,
     /// `line` (k = 2, default) or `oriented` (k = 1).
     pub symmetry: SymmetryKind,
     /// Which regression of Eq. 10 estimates ∇φ (default `angle`).
@@ -451,10 +491,14 @@ pub struct FieldSection {
     /// hᵀn above which a vertex is a critical point (default 0.9995).
     pub critical_threshold: f64,
     /// Fit normals and curvature over the vertices within this distance (scene units) instead
-    /// of each vertex's 1-ring: for scans, a few times the noise's wavelength (none by default;
+    /// of each vertex's 1-ring: overrides the radius `noise: "auto"` picks (none by default;
     /// docs/math.md §5.6).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fit_radius: Option<f64>,
+    /// `auto` (default): estimate the part's noise and, on a scan or a sculpted part, fit over
+    /// the radius it asks for (the estimate is in the run report's `noise`); `off`: the 1-ring.
+    #[serde(skip_serializing_if = "NoiseMode::is_auto")]
+    pub noise: NoiseMode,
     /// Where `grainline run` writes FIELD.json (none by default).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
@@ -466,11 +510,13 @@ impl Default for FieldSection {
             init: InitKind::Smooth,
             world: None,
             directions: None,
+            map: None,
             symmetry: SymmetryKind::Line,
             gradient_form: GradientForm::default(),
             normals: NormalSource::default(),
             critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
             fit_radius: None,
+            noise: NoiseMode::Auto,
             output: None,
         }
     }
@@ -494,6 +540,9 @@ impl FieldSection {
             InitKind::Directions if self.directions.is_none() => {
                 return Err(Error::setting("directions", "is required by `init: \"directions\"`"));
             }
+            InitKind::Map if self.map.is_none() => {
+                return Err(Error::setting("map", "is required by `init: \"map\"`"));
+            }
             _ => {}
         }
         if self.world.is_some() && self.init != InitKind::World {
@@ -501,6 +550,9 @@ impl FieldSection {
         }
         if self.directions.is_some() && self.init != InitKind::Directions {
             return Err(Error::setting("directions", "is only used with `init: \"directions\"`"));
+        }
+        if self.map.is_some() && self.init != InitKind::Map {
+            return Err(Error::setting("map", "is only used with `init: \"map\"`"));
         }
         if let Some(r) = self.fit_radius {
             if !(r.is_finite() && r > 0.0) {
@@ -521,8 +573,12 @@ impl FieldSection {
     }
 
     /// The initial field; `directions` are the already-read per-vertex directions when
-    /// `init` is `directions`.
-    pub fn initial_field(&self, directions: Option<Vec<Vector3<f64>>>) -> InitialField {
+    /// `init` is `directions`, `map` the map read when it is `map`.
+    pub fn initial_field(
+        &self,
+        directions: Option<Vec<Vector3<f64>>>,
+        map: Option<crate::texmap::GrainMap>,
+    ) -> InitialField {
         match self.init {
             InitKind::Uv => InitialField::Uv,
             InitKind::Smooth => InitialField::Smooth,
@@ -532,6 +588,10 @@ impl FieldSection {
                 InitialField::World(Vector3::from(self.world.unwrap_or([1.0, 0.0, 0.0])))
             }
             InitKind::Directions => InitialField::Directions(directions.unwrap_or_default()),
+            InitKind::Map => match map {
+                Some(m) => InitialField::Map(m),
+                None => InitialField::Directions(Vec::new()),
+            },
         }
     }
 }

@@ -462,8 +462,9 @@ impl Session {
                 if !(n.is_finite() && n > 1e-9) {
                     return Err(Error::setting("direction", "a finite, non-zero direction"));
                 }
-                // Checked here, not when the solver first meets it.
-                with_key_light(self.original.loaded.clone(), d)?;
+                // Checked here, not when the solver first meets it: the scene file's own
+                // checks on the scene as it would be saved.
+                with_key_light(self.original.loaded.clone(), d)?.scene.validate()?;
                 let before = (st.edits.clone(), st.light);
                 st.undo.push(before);
                 if st.undo.len() > UNDO_DEPTH {

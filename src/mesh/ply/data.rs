@@ -210,7 +210,11 @@ pub(super) fn read_data(
         for i in 0..el.count {
             let at = rd.here();
             let entry = Entry { el, i, at, keep };
+            if rd.encoding == Encoding::Ascii {
+                rd.entry_line = at.0;
+            }
             read_entry(rd, &entry, &mut values)?;
+            check_line_end(rd, &entry)?;
             if e == mesh.vertex {
                 out.push_vertex(rd, &entry, &values.values)?;
             } else if e == mesh.face {
@@ -219,6 +223,29 @@ pub(super) fn read_data(
         }
     }
     Ok(out)
+}
+
+/// ASCII: refuses values left on an entry's line after its last property.
+fn check_line_end(rd: &mut Reader, entry: &Entry) -> Result<()> {
+    if rd.encoding != Encoding::Ascii {
+        return Ok(());
+    }
+    while rd.pos < rd.bytes.len() && matches!(rd.bytes[rd.pos], b' ' | b'\t' | 0x0b | 0x0c) {
+        rd.pos += 1;
+    }
+    match rd.bytes.get(rd.pos) {
+        None | Some(b'\n') | Some(b'\r') => Ok(()),
+        Some(_) => Err(rd.error(
+            entry.at,
+            format!(
+                "{} element {} has more values on its line than its {} properties (and list \
+                 counts) call for",
+                entry.el.name,
+                entry.i,
+                entry.el.properties.len()
+            ),
+        )),
+    }
 }
 
 /// Refuses data after the last element (ASCII: other than blanks).

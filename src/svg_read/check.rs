@@ -1,0 +1,122 @@
+//! Checks of the attributes usvg would read past silently: path data with a syntax error (SVG
+//! draws up to the error), numbers beyond [`MAX_SVG_NUMBER`] (usvg keeps `f32`, which turns
+//! them into infinity and drops the shape), and transforms that are not understood, not finite
+//! or collapse the element. Each error names the file, the line, the element and the attribute.
+
+use std::path::Path;
+use std::str::FromStr;
+
+use super::{describe_element, parse_error};
+use crate::limits::MAX_SVG_NUMBER;
+use crate::Result;
+
+/// The number attributes of the shape elements.
+const NUMBER_ATTRIBUTES: [&str; 13] =
+    ["x", "y", "width", "height", "rx", "ry", "cx", "cy", "r", "x1", "y1", "x2", "y2"];
+
+/// Checks every element's `transform` and every shape's coordinates (`d`, `points`, the number
+/// attributes).
+pub(super) fn check_elements(doc: &usvg::roxmltree::Document, name: &Path) -> Result<()> {
+    let root = doc.root_element();
+    for node in doc.descendants().filter(|n| n.is_element() && *n != root) {
+        let tag = node.tag_name().name();
+        let line = doc.text_pos_at(node.range().start).row as usize;
+        let at = |message: String| {
+            parse_error(name, line, format!("{}: {message}", describe_element(&node, tag, line)))
+        };
+        if let Some(v) = node.attribute("transform") {
+            check_transform(v).map_err(at)?;
+        }
+        if !super::SHAPES.contains(&tag) {
+            continue;
+        }
+        for k in NUMBER_ATTRIBUTES {
+            if let Some(x) = node.attribute(k).and_then(super::leading_number) {
+                bounded(x).map_err(|m| at(format!("{k}: {m}")))?;
+            }
+        }
+        if let Some(d) = node.attribute("d").filter(|_| tag == "path") {
+            check_path_data(d).map_err(at)?;
+        }
+        if let Some(p) = node.attribute("points") {
+            for (x, y) in svgtypes::PointsParser::from(p) {
+                bounded(x).and(bounded(y)).map_err(|m| at(format!("points: {m}")))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A number within ±[`MAX_SVG_NUMBER`], or the message saying it is not.
+fn bounded(x: f64) -> std::result::Result<(), String> {
+    if x.is_finite() && x.abs() <= MAX_SVG_NUMBER {
+        return Ok(());
+    }
+    Err(format!(
+        "the coordinate {} is beyond ±{MAX_SVG_NUMBER:e}, the bound of SVG numbers \
+         (limits::MAX_SVG_NUMBER)",
+        crate::error::fmt_num(x)
+    ))
+}
+
+/// A `transform` attribute: understood, finite, within the bound, and not collapsing.
+fn check_transform(v: &str) -> std::result::Result<(), String> {
+    let shown = crate::error::shorten(v);
+    let t = svgtypes::Transform::from_str(v)
+        .map_err(|e| format!("transform=\"{shown}\" is not understood ({e})"))?;
+    let m = [t.a, t.b, t.c, t.d, t.e, t.f];
+    if !m.iter().all(|x| x.is_finite()) {
+        return Err(format!("transform=\"{shown}\" is not finite"));
+    }
+    if let Some(&x) = m.iter().find(|x| x.abs() > MAX_SVG_NUMBER) {
+        return Err(format!("transform=\"{shown}\": {}", bounded(x).unwrap_err()));
+    }
+    if t.a * t.d - t.b * t.c == 0.0 {
+        return Err(format!("transform=\"{shown}\" collapses the element (its determinant is 0)"));
+    }
+    Ok(())
+}
+
+/// A path's `d`: no syntax error (SVG would draw the path up to it), every number bounded.
+fn check_path_data(d: &str) -> std::result::Result<(), String> {
+    use svgtypes::PathSegment as S;
+    for seg in svgtypes::PathParser::from(d) {
+        let seg = seg.map_err(|e| syntax_error(d, &e))?;
+        let numbers: &[f64] = match seg {
+            S::MoveTo { x, y, .. } | S::LineTo { x, y, .. } | S::SmoothQuadratic { x, y, .. } => {
+                &[x, y]
+            }
+            S::HorizontalLineTo { x, .. } => &[x],
+            S::VerticalLineTo { y, .. } => &[y],
+            S::CurveTo { x1, y1, x2, y2, x, y, .. } => &[x1, y1, x2, y2, x, y],
+            S::SmoothCurveTo { x2, y2, x, y, .. } => &[x2, y2, x, y],
+            S::Quadratic { x1, y1, x, y, .. } => &[x1, y1, x, y],
+            S::EllipticalArc { rx, ry, x, y, .. } => &[rx, ry, x, y],
+            S::ClosePath { .. } => &[],
+        };
+        for &x in numbers {
+            bounded(x).map_err(|m| format!("d: {m}"))?;
+        }
+    }
+    Ok(())
+}
+
+/// "syntax error in its path data (d) at character 17 (`x`): …": svgtypes' message, with the
+/// text from the position it gives (1-based, in characters).
+fn syntax_error(d: &str, e: &svgtypes::Error) -> String {
+    let pos = match *e {
+        svgtypes::Error::UnexpectedData(p)
+        | svgtypes::Error::InvalidNumber(p)
+        | svgtypes::Error::InvalidChar(_, p)
+        | svgtypes::Error::InvalidString(_, p) => Some(p),
+        _ => None,
+    };
+    let from: String = match pos {
+        Some(p) => d.chars().skip(p.saturating_sub(1)).take(12).collect(),
+        None => String::new(),
+    };
+    let context = if from.is_empty() { String::new() } else { format!(" (at {from:?})") };
+    format!(
+        "syntax error in its path data (d): {e}{context}; SVG would draw the path only up to it"
+    )
+}
