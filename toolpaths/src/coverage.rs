@@ -19,7 +19,7 @@ use crate::error::{positive, Result};
 use crate::geom::Vec2;
 use crate::locate::{walk, Walk};
 use crate::mesh::Domain;
-use crate::place::Placement;
+use crate::place::{Placement, RunOuts};
 use crate::spacing::{typical_stretch, StrokeIndex};
 
 /// Most pixels a gap map may have; the pitch grows past this.
@@ -94,6 +94,10 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
     for s in &placement.strokes {
         index.insert(dom, s);
     }
+    // The brush's band along the run-outs past chart edges counts where it lies inside the
+    // domain (only pixels inside are measured).
+    let metric = |f: u32| index.metric(dom, f);
+    let run_outs = RunOuts::of(dom, &placement.strokes, d_sep, placement.spacing, metric);
     let b = dom.bbox();
     let (w, h) = (b[1][0] - b[0][0], b[1][1] - b[0][1]);
     let mut pixel = res / typical_stretch(dom, placement.spacing);
@@ -129,7 +133,9 @@ pub fn coverage(dom: &Domain, placement: &Placement, o: &CoverageOptions) -> Res
                 // Expanding search: most pixels have a stroke within d_sep / 2.
                 let mut r = 0.5 * d_sep;
                 let d = loop {
-                    let d = index.nearest(dom, p, f, r);
+                    let d = index
+                        .nearest(dom, p, f, r)
+                        .min(run_outs.distance(dom.chart[f as usize], p));
                     if d < r || r >= cap {
                         break d;
                     }

@@ -294,6 +294,25 @@ impl Domain {
         out
     }
 
+    /// Whether `p`, a stroke end on a boundary edge of face `f`, is on the part's real edge
+    /// (the metal ends there) rather than on a UV seam (the surface goes on across it): the
+    /// boundary edge of `f` nearest to `p` is not listed in the seams. `false` when `f` has no
+    /// boundary edge.
+    pub(crate) fn on_part_edge(&self, f: u32, p: Vec2) -> bool {
+        let c = self.corners(f);
+        let nb = self.neighbors[f as usize];
+        let dist = |i: usize| {
+            let (a, b) = (c[(i + 1) % 3], c[(i + 2) % 3]);
+            let (ab, ap) = (sub(b, a), sub(p, a));
+            let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+            let t =
+                if l2 > 0.0 { ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+            (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
+        };
+        let edge = (0..3).filter(|&i| nb[i] == NONE).min_by(|&i, &j| dist(i).total_cmp(&dist(j)));
+        edge.is_some_and(|i| !self.seams.contains_key(&(f, i as u8)))
+    }
+
     /// 3D position of a UV point given its face and barycentric coordinates.
     pub(crate) fn lift(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
         let p = self.positions.as_ref()?;

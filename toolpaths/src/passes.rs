@@ -1,6 +1,16 @@
 //! Building one pass from an oriented, ordered stroke: lead-in ramp, overtravel past the
 //! part edge, the simplified (or arc-fitted) stroke, lead-out ramp; plus the simplified UV
 //! and 3D polylines for SVG and JSON. See [`crate::plan`] for the geometry.
+//!
+//! **Overtravel (run-outs) continue the machine path along its tangent** (R1): at an end `p`
+//! that stopped on the part's edge, with `t` the unit tangent of the machine polyline there
+//! (in `X Y Z`, or in the developed `x, r_ref·A, Z` of a rotary fixture, Z included), the
+//! brush runs on to `p ± L t`, `L` the larger of `plan.overtravel` and the stroke's run-out
+//! ([`crate::Stroke::overtravel`]). The path has no corner at the edge (the controller does
+//! not slow down there), and the run-out lies on the part's surface continued by its tangent
+//! plane past the edge: in flat mode at the cutting Z, on a rotary fixture on the cone that
+//! continues the body of revolution (`ρ = ρ_edge + (dρ/dx)·Δx`), when surface following
+//! above a convex part by at most `√(R² + L²) − R` for a normal curvature radius `R`.
 
 use serde::{Deserialize, Serialize};
 
@@ -59,6 +69,8 @@ pub(crate) struct Item {
     pub(crate) faces: Vec<Vec<u32>>,
     pub(crate) machine: Vec<Vec3>,
     pub(crate) stops: [StopReason; 2],
+    /// The stroke's run-outs past chart edges ([`crate::Stroke::overtravel`]), mm.
+    pub(crate) overtravel: [f64; 2],
     pub(crate) length: f64,
 }
 
@@ -82,6 +94,25 @@ fn far_point(pts: &[Vec3], eps: f64) -> Vec3 {
     pts[pts.len() - 1]
 }
 
+/// Unit tangent of the machine polyline at its first point pointing inwards (`from_end`:
+/// at its last point pointing outwards), in machine space (`Z` included; `[x, r_ref·A, Z]` on a
+/// rotary fixture), towards the first point at least `eps` away in 3D.
+fn tangent_3d(pts: &[Vec3], eps: f64, from_end: bool) -> Vec3 {
+    let n = pts.len();
+    let at = |i: usize| if from_end { pts[n - 1 - i] } else { pts[i] };
+    let a = at(0);
+    let away = |p: Vec3| [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+    let q = (1..n).map(at).find(|&p| crate::geom::norm3(away(p)) > eps).unwrap_or(at(n - 1));
+    let v = away(q);
+    let l = crate::geom::norm3(v);
+    if l.is_nan() || l <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    // Inwards at the first point; outwards (from the interior to the end) at the last.
+    let sign = if from_end { -1.0 } else { 1.0 };
+    v.map(|x| sign * x / l)
+}
+
 /// One pass of an ordered item (flipped when `flip`). `period`: on a rotary fixture, the period
 /// of the developed angle (the machine points' second coordinate), unwrapped again here since a
 /// closed loop may have been rotated to a new entry.
@@ -96,7 +127,9 @@ pub(crate) fn make_pass(
     let mut uv = it.uv.clone();
     let mut faces = it.faces.clone();
     let mut stops = it.stops;
+    let mut run = it.overtravel;
     if flip {
+        run.swap(0, 1);
         machine.reverse();
         uv.reverse();
         faces.reverse();
@@ -115,11 +148,26 @@ pub(crate) fn make_pass(
     let t0 = tangent_xy(first, far_point(&machine, eps));
     let rev_m: Vec<Vec3> = machine.iter().rev().copied().collect();
     let t1 = tangent_xy(far_point(&rev_m, eps), last);
-    let over_start = if stops[0] == StopReason::Boundary { o.overtravel } else { 0.0 };
-    let over_end = if stops[1] == StopReason::Boundary { o.overtravel } else { 0.0 };
+    // At an end on a chart edge the brush runs past it by the plan's overtravel or the
+    // stroke's own run-out, whichever is longer, straight on along the machine path's
+    // tangent (eq. R1 in the module docs).
+    let over =
+        |k: usize| if stops[k] == StopReason::Boundary { o.overtravel.max(run[k]) } else { 0.0 };
+    let (over_start, over_end) = (over(0), over(1));
+    let (u0, u1) = (tangent_3d(&machine, eps, false), tangent_3d(&machine, eps, true));
+    // `s` mm on the part along `u` from `p`: on a rotary fixture a developed step `ds` turns
+    // the contact point, at `ρ = Z + contact_depth` from the axis, by `ρ / r_ref · ds`.
+    let run_to = |p: Vec3, u: Vec3, s: f64| {
+        let stretch = period.map_or(1.0, |period| {
+            let (rho, r_ref) = (p[2] + o.contact_depth, period / std::f64::consts::TAU);
+            (u[0] * u[0] + (rho / r_ref * u[1]).powi(2) + u[2] * u[2]).sqrt()
+        });
+        let s = if stretch > 0.0 { s / stretch } else { s };
+        [p[0] + u[0] * s, p[1] + u[1] * s, p[2] + u[2] * s]
+    };
     let at = |p: Vec3, t: Vec2, s: f64, dz: f64| [p[0] + t[0] * s, p[1] + t[1] * s, p[2] + dz];
     let mut moves = Vec::new();
-    let cut_begin = at(first, t0, -over_start, 0.0);
+    let cut_begin = run_to(first, u0, -over_start);
     let start = if o.lead_in > 0.0 || o.ramp_height > 0.0 {
         let s = at(cut_begin, t0, -o.lead_in, o.ramp_height);
         moves.push((MoveKind::LeadIn, Segment::Line { to: cut_begin }));
@@ -133,7 +181,7 @@ pub(crate) fn make_pass(
     for seg in fit_moves(&machine, o.tolerance, o.arcs) {
         moves.push((MoveKind::Cut, seg));
     }
-    let cut_end = at(last, t1, over_end, 0.0);
+    let cut_end = run_to(last, u1, over_end);
     if over_end > 0.0 {
         moves.push((MoveKind::Overtravel, Segment::Line { to: cut_end }));
     }

@@ -24,10 +24,16 @@
 //!   chart edge that runs along the strokes (the seed sits in the middle of the uncovered
 //!   part of the strip), and the wider gaps between diverging strokes (the seed sits midway).
 //!   Fill strokes are marked ([`Stroke::fill`]) and counted, and do not seed further strokes.
-//! * Strokes shorter than `min_length` (default twice the brush width) are dropped and
-//!   counted. With the default, a corner piece — a stroke with both ends on a chart edge —
-//!   and a fill stroke are kept down to one brush width: nothing else can brush that corner
-//!   or gap. An explicit `min_length` applies to every stroke; `0` keeps all.
+//! * **Run-outs** (issue 31, item 3): an end on the part's real edge (a chart boundary that is
+//!   not a UV seam: the metal ends there) runs `overtravel` (default one width) past it along
+//!   its tangent ([`Stroke::run_out`]), so the edge beside it is brushed without a short corner
+//!   or gap stroke; fill seeds are not placed where a run-out brushes. Ends on a seam get none
+//!   (the surface goes on across it: a run-out would brush the other side).
+//! * **No dabs** (D1): a stroke with an end on the metal (not run out) must lie on the part for
+//!   `min_length` (default twice the brush width); a stroke run out at both ends (in from past
+//!   the edge and out past it again, no plunge or lift-off mark on the metal) must be brushed
+//!   `min_length` in all, run-outs included, and lie on the part for half of it. Shorter ones
+//!   are dropped and counted; `0` keeps all.
 //!
 //! Distances are measured on the part's 3D lift when there is one ([`crate::Spacing`],
 //! `spacing.rs`), else with the metric, or in UV for [`Spacing::Uv`]. The sideways offset of
@@ -62,11 +68,18 @@ pub struct PlacementOptions {
     pub test_ratio: f64,
     /// Where spacing is measured. Default [`Spacing::Surface`].
     pub spacing: Spacing,
-    /// Strokes shorter than this (mm, on the part) are dropped and counted in the report.
-    /// Default (`None`): twice the brush width, and one width for corner pieces (both ends
-    /// on a chart edge) and fill strokes. An explicit value applies to every stroke; `0`
-    /// keeps every stroke.
+    /// The shortest stroke kept (mm, on the part; shorter ones are dropped and counted in the
+    /// report): a stroke with an end on the metal must lie on the part for this long; one run
+    /// out past the part's edge at both ends must be brushed this long in all
+    /// ([`Stroke::brushed_length`]) and lie on the part for half of it. Default (`None`):
+    /// twice the brush width; `0` keeps every stroke.
     pub min_length: Option<f64>,
+    /// How far a stroke that stops on the part's edge (a chart boundary that is not a UV
+    /// seam) runs past it, along its tangent (mm on the part): the brush then brushes the edge
+    /// beside the stroke's end instead of a short corner or gap stroke doing it
+    /// ([`Stroke::run_out`]). Default (`None`): the brush width; `0`: strokes stop at the
+    /// edge.
+    pub overtravel: Option<f64>,
     /// Exclusion radius around singularities, mm; `None` means `d_sep`.
     pub exclusion_radius: Option<f64>,
     /// Run-on past the first approach, as a multiple of `d_test` (arc length): a stroke
@@ -92,6 +105,7 @@ impl Default for PlacementOptions {
             test_ratio: 0.5,
             spacing: Spacing::Surface,
             min_length: None,
+            overtravel: None,
             exclusion_radius: None,
             end_run: 1.0,
             fill_gaps: true,
@@ -117,10 +131,14 @@ impl PlacementOptions {
         self.test_ratio * self.d_sep()
     }
 
-    /// The minimum stroke length in force: `min_length`, else `2 · width` (corner pieces
-    /// and fill strokes: `width`, see the field).
+    /// The minimum length in force (see the field): `min_length`, else `2 · width`.
     pub fn min_length(&self) -> f64 {
         self.min_length.unwrap_or(2.0 * self.width)
+    }
+
+    /// The run-out past chart edges in force: `overtravel`, else `width`.
+    pub fn overtravel(&self) -> f64 {
+        self.overtravel.unwrap_or(self.width)
     }
 
     /// Reject NaN and out-of-range values with a clear error.
@@ -137,6 +155,9 @@ impl PlacementOptions {
         }
         if let Some(l) = self.min_length {
             non_negative("placement.min_length", l)?;
+        }
+        if let Some(l) = self.overtravel {
+            non_negative("placement.overtravel", l)?;
         }
         if let Some(r) = self.exclusion_radius {
             non_negative("placement.exclusion_radius", r)?;
@@ -215,7 +236,8 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         d_sep,
         d_test,
         min_length: opts.min_length(),
-        relaxed_ends: opts.min_length.is_none(),
+        overtravel: opts.overtravel(),
+        run_outs: RunOuts::new(pitch_of(dom, d_sep, opts.spacing), RUN_OUT_REACH * d_sep),
         end_run: opts.end_run,
         dropped_short: 0,
         seeds_traced: 0,
@@ -293,8 +315,10 @@ struct State<'a> {
     d_sep: f64,
     d_test: f64,
     min_length: f64,
-    /// The default minimum length is in force: corner pieces and fill strokes get half.
-    relaxed_ends: bool,
+    /// [`PlacementOptions::overtravel`].
+    overtravel: f64,
+    /// The run-outs of the accepted strokes.
+    run_outs: RunOuts,
     /// [`PlacementOptions::end_run`].
     end_run: f64,
     dropped_short: usize,
@@ -370,7 +394,7 @@ impl OwnPoints {
             if dist >= r {
                 return true;
             }
-            if s.abs() <= 2.0 * r {
+            if s.abs() <= 2.0 * r * (1.0 + TIE) {
                 if let Some(along) = along {
                     let across = (dist * dist - along * along).max(0.0).sqrt();
                     if along > 0.0 && across < closure {
@@ -402,9 +426,8 @@ impl State<'_> {
         }
     }
 
-    /// Trace from a seed already found clear of the strokes; the stroke is inserted into
-    /// the index when it is long enough (else counted as dropped). With the default minimum
-    /// length, fill strokes and corner pieces are kept down to half of it.
+    /// Trace from a seed already found clear of the strokes; the stroke gets its run-outs
+    /// and is inserted into the index unless it is a dab ([`is_dab`]; counted as dropped).
     fn trace(&mut self, p: Vec2, f: u32, fill: bool) -> Option<Stroke> {
         let (dom, d_test) = (self.dom, self.d_test);
         if self.tracer.near_singularity(p, f).is_some() {
@@ -419,12 +442,13 @@ impl State<'_> {
         // so the wedge beyond its end, between its two neighbours, is brushed too.
         let mut first: [Option<f64>; 2] = [None, None];
         let run = self.end_run * d_test;
-        let s = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
+        let mut s = self.tracer.trace_both(p, f, |q, fq, arc, vertex| {
             let pr = idx.probe(dom, q, fq);
             let close = idx.within_probe(dom, &pr, fq, d_test) && {
                 let half = usize::from(arc < 0.0);
                 let at = *first[half].get_or_insert(arc);
-                (arc - at).abs() >= run || idx.within_probe(dom, &pr, fq, 0.5 * d_test)
+                (arc - at).abs() >= run * (1.0 - TIE)
+                    || idx.within_probe(dom, &pr, fq, 0.5 * d_test)
             };
             close
                 || vertex && {
@@ -433,18 +457,19 @@ impl State<'_> {
                 }
         })?;
         self.seeds_traced += 1;
-        // Corner pieces (both ends on a chart edge: nothing else can brush that corner) and
-        // fill strokes (placed to cover a gap) are kept down to half the minimum length.
-        let corner = s.start == StopReason::Boundary && s.end == StopReason::Boundary;
-        let least = if (corner || fill) && self.relaxed_ends {
-            0.5 * self.min_length
-        } else {
-            self.min_length
-        };
-        if s.length < least || s.uv.len() < 2 {
+        if s.uv.len() < 2 {
             self.dropped_short += 1;
             return None;
         }
+        let index = &self.index;
+        let metric = |g: u32| index.metric(dom, g);
+        add_run_outs(dom, &mut s, metric, self.overtravel);
+        if is_dab(&s, self.min_length) {
+            self.dropped_short += 1;
+            return None;
+        }
+        s.fill = fill;
+        self.run_outs.add_stroke(dom, &s, metric);
         self.index.insert(dom, &s);
         Some(s)
     }
@@ -487,7 +512,10 @@ impl State<'_> {
                     let March::Inside { p: q, face } = march(dom, metric, f, p, dir, at) else {
                         continue;
                     };
-                    if self.index.within(dom, q, face, 0.5 * d * (1.0 + FILL_MIN)) {
+                    let clear = 0.5 * d * (1.0 + FILL_MIN);
+                    if self.index.within(dom, q, face, clear)
+                        || self.run_outs.distance(dom.chart[face as usize], q) <= clear
+                    {
                         continue;
                     }
                     // Around a singularity the gap is the exclusion zone, left on purpose.
@@ -495,8 +523,7 @@ impl State<'_> {
                     if self.tracer.near_singularity_within(q, face, ex + d).is_some() {
                         continue;
                     }
-                    if let Some(mut s) = self.trace(q, face, true) {
-                        s.fill = true;
+                    if let Some(s) = self.trace(q, face, true) {
                         self.strokes.push(s);
                         count += 1;
                     }
@@ -515,8 +542,147 @@ const SEED_SLACK: f64 = 1.0 - 1e-6;
 /// side seeds get this looser test.
 const SIDE_SLACK: f64 = 1.0 - 1e-3;
 
+/// Relative margin of comparisons between lengths summed along a stroke and a threshold that
+/// can be an exact multiple of them: far above the rounding of the sums (10⁻¹⁵ relative per
+/// step), so a part in inches and the same part in millimetres take the same branch.
+const TIE: f64 = 1e-9;
+
 /// Gap filling ignores uncovered bands narrower than this fraction of `d_sep`.
 const FILL_MIN: f64 = 0.1;
+
+/// Run-outs are found by [`RunOuts::distance`] within this multiple of `d_sep`.
+const RUN_OUT_REACH: f64 = 0.5 * (1.0 + FILL_MIN);
+
+/// UV pitch of about `d_sep` on the part.
+fn pitch_of(dom: &Domain, d_sep: f64, spacing: Spacing) -> f64 {
+    d_sep / typical_stretch(dom, spacing)
+}
+
+/// Whether `s` is a dab, too short to keep (eq. D1): a stroke that starts or ends on the metal
+/// must brush `min_length` on the part; one that enters and leaves the part over its edge
+/// (run-outs at both ends: no plunge or lift-off mark on the metal) must brush `min_length`
+/// in all, run-outs included, and lie on the part for half of it.
+fn is_dab(s: &Stroke, min_length: f64) -> bool {
+    let through = s.run_out[0].is_some() && s.run_out[1].is_some();
+    if through {
+        s.brushed_length() < min_length || s.length < 0.5 * min_length
+    } else {
+        s.length < min_length
+    }
+}
+
+/// Give the ends of `s` that stopped on the part's real edge ([`Domain::on_part_edge`]: not
+/// on a UV seam, where the surface goes on) a run-out of `length` mm on the part: straight on
+/// in UV along the end's tangent, `length / |t|_M` UV units for the end face's metric `M` and
+/// the unit UV tangent `t`.
+fn add_run_outs(dom: &Domain, s: &mut Stroke, metric: impl Fn(u32) -> Metric, length: f64) {
+    let n = s.uv.len();
+    if length <= 0.0 || n < 2 || s.is_closed() {
+        return;
+    }
+    for k in 0..2 {
+        let stop = if k == 0 { s.start } else { s.end };
+        let (end, face) =
+            if k == 0 { (s.uv[0], s.faces[0]) } else { (s.uv[n - 1], s.faces[n - 1]) };
+        if stop != StopReason::Boundary || !dom.on_part_edge(face, end) {
+            continue;
+        }
+        // The first point back from the end that is not on top of it gives the tangent.
+        let back = (1..n).map(|i| if k == 0 { s.uv[i] } else { s.uv[n - 1 - i] }).find(|q| {
+            let t = sub(end, *q);
+            t[0].hypot(t[1]) > 1e-9 * (1.0 + end[0].abs() + end[1].abs())
+        });
+        let Some(q) = back else { continue };
+        let t = sub(end, q);
+        let m = metric(face).length(t);
+        if m.is_nan() || m <= 0.0 {
+            continue;
+        }
+        s.run_out[k] = Some([end[0] + t[0] * length / m, end[1] + t[1] * length / m]);
+        s.overtravel[k] = length;
+    }
+}
+
+/// The run-outs of the strokes ([`Stroke::run_out`]) as UV segments with the metric of
+/// their end face, bucketed on a UV grid for distance queries within a reach (mm).
+pub(crate) struct RunOuts {
+    cell: f64,
+    reach: f64,
+    segs: Vec<(Vec2, Vec2, Metric)>,
+    buckets: std::collections::HashMap<(u32, i64, i64), Vec<u32>>,
+}
+
+impl RunOuts {
+    /// Empty, with buckets of `cell` UV units and queries answered within `reach` mm.
+    pub(crate) fn new(cell: f64, reach: f64) -> RunOuts {
+        RunOuts { cell, reach, segs: Vec::new(), buckets: Default::default() }
+    }
+
+    /// The run-outs of all `strokes`.
+    pub(crate) fn of(
+        dom: &Domain,
+        strokes: &[Stroke],
+        d_sep: f64,
+        spacing: Spacing,
+        metric: impl Fn(u32) -> Metric,
+    ) -> RunOuts {
+        let mut r = RunOuts::new(pitch_of(dom, d_sep, spacing), RUN_OUT_REACH * d_sep);
+        for s in strokes {
+            r.add_stroke(dom, s, &metric);
+        }
+        r
+    }
+
+    /// Add the run-outs of `s` (each found only from its end's chart: charts may overlap
+    /// in UV).
+    pub(crate) fn add_stroke(&mut self, dom: &Domain, s: &Stroke, metric: impl Fn(u32) -> Metric) {
+        let n = s.uv.len();
+        for (k, (end, face)) in
+            [(s.uv[0], s.faces[0]), (s.uv[n - 1], s.faces[n - 1])].into_iter().enumerate()
+        {
+            if let Some(p) = s.run_out[k] {
+                self.add(dom.chart[face as usize], end, p, metric(face));
+            }
+        }
+    }
+
+    fn add(&mut self, chart: u32, a: Vec2, b: Vec2, m: Metric) {
+        // Smallest eigenvalue of the metric: a UV step of 1 is at least √λ mm on the part.
+        let h = 0.5 * (m.e - m.g);
+        let lambda = 0.5 * (m.e + m.g) - (h * h + m.f * m.f).sqrt();
+        let pad = self.reach / lambda.max(1e-12).sqrt();
+        let id = self.segs.len() as u32;
+        self.segs.push((a, b, m));
+        let c = |x: f64| (x / self.cell).floor() as i64;
+        let (i0, i1) = (c(a[0].min(b[0]) - pad), c(a[0].max(b[0]) + pad));
+        let (j0, j1) = (c(a[1].min(b[1]) - pad), c(a[1].max(b[1]) + pad));
+        if (i1 - i0 + 1).saturating_mul(j1 - j0 + 1) > 1 << 16 {
+            return; // a degenerate metric: not found by queries (they only under-count).
+        }
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                self.buckets.entry((chart, i, j)).or_default().push(id);
+            }
+        }
+    }
+
+    /// Distance on the part (the run-out's metric) from `p` on chart `chart` to the nearest
+    /// run-out of that chart; exact when it is within the reach, else a distance to some
+    /// run-out or infinity.
+    pub(crate) fn distance(&self, chart: u32, p: Vec2) -> f64 {
+        let c = |x: f64| (x / self.cell).floor() as i64;
+        let key = (chart, c(p[0]), c(p[1]));
+        let Some(ids) = self.buckets.get(&key) else { return f64::INFINITY };
+        let mut best = f64::INFINITY;
+        for &id in ids {
+            let (a, b, m) = self.segs[id as usize];
+            let (ab, ap) = (sub(b, a), sub(p, a));
+            let t = (m.inner(ap, ab) / m.inner(ab, ab).max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+            best = best.min(m.length(sub(ap, scale(ab, t))));
+        }
+        best
+    }
+}
 
 fn dom_centroid(dom: &Domain, f: u32) -> Vec2 {
     let c = dom.corners(f);
@@ -541,17 +707,25 @@ fn candidates(dom: &Domain, s: &Stroke, index: &StrokeIndex, d_sep: f64) -> Vec<
             if i > 0 {
                 since += index.metric(dom, s.faces[k]).length(sub(pts[i], pts[i - 1]));
             }
-            if since < 0.5 * d_sep && i + 1 < pts.len() {
+            // The pitch is often a whole number of full tracing steps (a 6 mm brush traced
+            // in 1 mm steps): `TIE` decides such ties the same way at any scale (units).
+            if since < 0.5 * d_sep * (1.0 - TIE) && i + 1 < pts.len() {
                 continue;
             }
             since = 0.0;
             let f = s.faces[k];
             let m: Metric = index.metric(dom, f);
-            let t = sub(pts[(i + 1).min(pts.len() - 1)], pts[i.saturating_sub(1)]);
-            let l = m.length(t);
-            if l <= 0.0 {
+            // The chord between the neighbours, widened past (nearly) repeated points: a
+            // stroke can end with its point on the chart edge repeated within rounding, whose
+            // chord has no direction (`TIE · d_sep`: a length relative to the part, so the
+            // same chord is taken in any unit).
+            let chord = |w: usize| {
+                let t = sub(pts[(i + w).min(pts.len() - 1)], pts[i.saturating_sub(w)]);
+                (t, m.length(t))
+            };
+            let Some((t, l)) = (1..pts.len()).map(chord).find(|&(_, l)| l > TIE * d_sep) else {
                 continue;
-            }
+            };
             out.push((pts[i], f, m.unit_normal(scale(t, 1.0 / l))));
         }
     }

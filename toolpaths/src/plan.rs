@@ -14,9 +14,11 @@
 //!   tilt is measured from the radial direction.
 //!
 //! A pass is: (lead-in ramp) → (overtravel before, if the stroke starts on the chart
-//! boundary) → the stroke → (overtravel after) → (lead-out ramp). Leads are tangent
-//! extensions in XY of length `lead_in`/`lead_out`, rising `ramp_height` above the cutting
-//! Z at their free end, so the tool touches down while moving.
+//! boundary) → the stroke → (overtravel after) → (lead-out ramp). Overtravel (the larger of
+//! `overtravel` and the stroke's run-out past the part's edge) continues the machine path
+//! along its tangent, Z included (`passes.rs`, R1). Leads are tangent extensions in XY of
+//! length `lead_in`/`lead_out`, rising `ramp_height` above the cutting Z at their free end, so
+//! the tool touches down while moving.
 
 use crate::error::{Result, ToolpathError};
 use crate::geom::{cross, Vec2, Vec3};
@@ -360,7 +362,9 @@ fn make_items(
         .filter(|(p, _)| p.len() >= 2)
         .collect();
     let mut stops = [s.start, s.end];
+    let mut over = s.overtravel;
     if rev {
+        over.swap(0, 1);
         pieces.reverse();
         for (p, f) in &mut pieces {
             p.reverse();
@@ -385,6 +389,7 @@ fn make_items(
             faces,
             machine,
             stops,
+            overtravel: over,
             length: s.length,
         }];
     }
@@ -404,6 +409,10 @@ fn make_items(
                 faces: vec![piece.1],
                 machine,
                 stops: st,
+                overtravel: [
+                    if k == 0 { over[0] } else { 0.0 },
+                    if k + 1 == np { over[1] } else { 0.0 },
+                ],
                 length: s.length,
             }
         })

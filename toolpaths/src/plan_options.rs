@@ -93,7 +93,9 @@ pub struct PlanOptions {
     pub lead_out: f64,
     /// Height of the lead ramps above the cutting Z at their free ends, mm. Default 0.
     pub ramp_height: f64,
-    /// Extension past the part edge at strokes that end on a chart boundary, mm. Default 0.
+    /// Extension past the part edge at strokes that end on a chart boundary, mm, along the
+    /// machine path's tangent (Z included); the stroke's own run-out
+    /// (`PlacementOptions::overtravel`) when that is longer. Default 0.
     pub overtravel: f64,
     /// Ordering options.
     pub order: OrderOptions,

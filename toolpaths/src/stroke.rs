@@ -61,9 +61,34 @@ pub struct Stroke {
     /// A gap-filling stroke (placed after the evenly spaced ones to cover the strips along
     /// chart edges and the wider gaps between diverging strokes; see [`crate::place_strokes`]).
     pub fill: bool,
+    /// Where the brush's centre runs to past each end (first, last), in UV: a straight run
+    /// along the end's tangent, `PlacementOptions::overtravel` long on the part (measured
+    /// with the end face's metric), at ends that stopped on the part's real edge (a chart
+    /// boundary that is not a UV seam). The brush runs past the edge there so the whole edge
+    /// beside the stroke is brushed; only the part of its swept band inside the part counts as
+    /// coverage. The program runs it along the machine path's tangent (`passes.rs`, R1).
+    /// `None` at other ends (inside the part, at a singularity, on a seam, closed loops).
+    pub run_out: [Option<Vec2>; 2],
+    /// Length of each run-out on the part, mm (0 without one).
+    pub overtravel: [f64; 2],
 }
 
 impl Stroke {
+    /// Length the brush runs at cutting feed: the stroke plus its run-outs, mm.
+    pub fn brushed_length(&self) -> f64 {
+        self.length + self.overtravel[0] + self.overtravel[1]
+    }
+
+    /// The UV polyline the brush's centre follows: the run-out points (when present) before
+    /// the first and after the last point.
+    pub fn brushed_uv(&self) -> Vec<Vec2> {
+        let mut out = Vec::with_capacity(self.uv.len() + 2);
+        out.extend(self.run_out[0]);
+        out.extend_from_slice(&self.uv);
+        out.extend(self.run_out[1]);
+        out
+    }
+
     /// Whether the stroke is a closed loop.
     pub fn is_closed(&self) -> bool {
         self.end == StopReason::ClosedLoop
@@ -108,5 +133,7 @@ pub(crate) fn join(back: Half, fwd: Half) -> Stroke {
         end: fwd.stop,
         length: back.length + fwd.length,
         fill: false,
+        run_out: [None; 2],
+        overtravel: [0.0; 2],
     }
 }

@@ -429,6 +429,8 @@ impl<'a> Tracer<'a> {
                 end: StopReason::ClosedLoop,
                 length: fwd.length,
                 fill: false,
+                run_out: [None; 2],
+                overtravel: [0.0; 2],
             });
         }
         let back = self.trace_half(seed, face, [-d[0], -d[1]], -1.0, &mut blocked);

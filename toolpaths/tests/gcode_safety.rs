@@ -188,20 +188,21 @@ fn gcode_units_in_emits_consistent_program() {
     assert_eq!(words(&gi, 'F'), words(&gm, 'F'));
     assert!(words(&gi, 'F').contains(&1016.0) && words(&gi, 'F').contains(&254.0));
     assert!(gi.contains("G0 Z5.080\n"));
-    // The sheet is 10 mm = 0.3937 in wide: X reaches 10 mm in both programs.
+    // The sheet is 10 mm = 0.3937 in wide and the strokes along X run out one width (1 mm,
+    // 1/25.4 in) past its edges: X reaches 11 mm in both programs.
     for g in [&gi, &gm] {
         let xmax = words(g, 'X').into_iter().fold(f64::MIN, f64::max);
-        assert!((xmax - 10.0).abs() < 1e-9, "{xmax}");
+        assert!((xmax - 11.0).abs() < 1e-9, "{xmax}");
     }
-    // The envelope is in inches: X ≤ 0.39 in is left by 0.0037 in, and the message says so.
+    // The envelope is in inches: X ≤ 0.43 in is left by 0.0031 in, and the message says so.
     let mut tight = ji.clone();
     tight.gcode.as_mut().unwrap().envelope =
-        Some(Envelope { min: [-0.1, -0.1, -0.1], max: [0.39, 10.0, 1.0] });
+        Some(Envelope { min: [-0.1, -0.1, -0.1], max: [0.43, 10.0, 1.0] });
     match generate(sheet(s), &tight) {
         Err(e @ ToolpathError::OutsideEnvelope { axis: 'X', .. }) => {
             let msg = e.to_string();
             assert!(
-                msg.contains("X = 0.393701 in (as printed)") && msg.contains("by 0.003701 in"),
+                msg.contains("X = 0.433071 in (as printed)") && msg.contains("by 0.003071 in"),
                 "{msg}"
             );
         }
@@ -228,7 +229,7 @@ fn gcode_units_in_emits_consistent_program() {
             )
         };
         let (a, b) = (bbox(&c[0].0), bbox(&c[1].0));
-        assert!((a.0 - b.0).abs() < 2e-3 && (a.1 - 10.0).abs() < 2e-3 && (b.1 - 10.0).abs() < 2e-3);
+        assert!((a.0 - b.0).abs() < 2e-3 && (a.1 - 11.0).abs() < 2e-3 && (b.1 - 11.0).abs() < 2e-3);
     }
 }
 

@@ -61,12 +61,22 @@ fn orientation_is_global_and_ordering_shortens_travel() {
 }
 
 /// Lead-in starts `lead_in + overtravel` before the stroke along its tangent, `ramp_height`
-/// above the cutting depth; lead-out mirrors it at the end.
+/// above the cutting depth; lead-out mirrors it at the end. The overtravel is the plan's
+/// (strokes placed without run-outs), or the strokes' run-outs (one width) when longer.
 #[test]
 fn leads_and_overtravel_geometry() {
     let mesh = field_mesh(rect_mesh(10.0, 6.0, 10, 6), Symmetry::Vector, |_| [0.0, 1.0]);
     let dom = Domain::new(mesh).unwrap();
-    let pl = place_strokes(&dom, &PlacementOptions::new(2.0, 0.0)).unwrap();
+    let bare = PlacementOptions { overtravel: Some(0.0), ..PlacementOptions::new(2.0, 0.0) };
+    leads_and_overtravel(&dom, &place_strokes(&dom, &bare).unwrap(), 0.5);
+    leads_and_overtravel(
+        &dom,
+        &place_strokes(&dom, &PlacementOptions::new(2.0, 0.0)).unwrap(),
+        2.0,
+    );
+}
+
+fn leads_and_overtravel(dom: &Domain, pl: &Placement, over: f64) {
     let o = PlanOptions {
         contact_depth: 0.25,
         lead_in: 2.0,
@@ -76,17 +86,18 @@ fn leads_and_overtravel_geometry() {
         z_mode: ZMode::Flat { surface_z: 10.0 },
         ..Default::default()
     };
-    let plan = plan_toolpath(&dom, &pl, &o).unwrap();
+    let plan = plan_toolpath(dom, pl, &o).unwrap();
+    assert!(!plan.passes.is_empty());
     for p in &plan.passes {
         let x = p.uv[0][0][0];
         // Strokes run +V from v = 0 to v = 6.
         let close = |a: Vec3, b: Vec3| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9);
-        assert!(close(p.start, [x, -2.5, 10.75]), "{:?}", p.start);
+        assert!(close(p.start, [x, -2.0 - over, 10.75]), "{:?}", p.start);
         let kinds: Vec<MoveKind> = p.moves.iter().map(|m| m.0).collect();
         assert_eq!(kinds.first(), Some(&MoveKind::LeadIn));
         assert_eq!(kinds.last(), Some(&MoveKind::LeadOut));
-        assert!(close(p.moves[0].1.end(), [x, -0.5, 9.75]));
-        assert!(close(p.moves.last().unwrap().1.end(), [x, 9.5, 10.75]));
+        assert!(close(p.moves[0].1.end(), [x, -over, 9.75]));
+        assert!(close(p.moves.last().unwrap().1.end(), [x, 9.0 + over, 10.75]));
         for (k, m) in &p.moves {
             if *k == MoveKind::Cut {
                 assert_eq!(m.end()[2], 9.75);

@@ -35,8 +35,26 @@ fn constant_field_gives_parallel_strokes_d_sep_apart() {
     }
     // Covering: the strips left at the sides are narrower than d_sep.
     assert!(xs[0] < d_sep && w - xs[xs.len() - 1] < d_sep, "xs = {xs:?}");
-    // Strokes shorter than min_length (here: all, 6 mm long) are dropped and counted.
-    let short = PlacementOptions { min_length: Some(6.5), ..opts };
+    // Both ends are on the part's edge: each stroke runs out one width (1 mm) past it,
+    // straight on (issue 31, item 3).
+    for s in &pl.strokes {
+        let x0 = s.uv[0][0];
+        let (a, b) = (s.run_out[0].unwrap(), s.run_out[1].unwrap());
+        let (lo, hi) = if a[1] < b[1] { (a, b) } else { (b, a) };
+        assert!((lo[0] - x0).abs() < 1e-9 && (hi[0] - x0).abs() < 1e-9, "{lo:?} {hi:?}");
+        assert!((lo[1] + 1.0).abs() < 1e-6 && (hi[1] - (h + 1.0)).abs() < 1e-6, "{lo:?} {hi:?}");
+        assert!((s.brushed_length() - (h + 2.0)).abs() < 1e-6);
+    }
+    // Strokes shorter than min_length are dropped and counted: without run-outs all of them
+    // (6 mm on the part) for 6.5 mm; with the run-outs (a stroke from air to air, 8 mm
+    // brushed, 6 on the part) none for 6.5 mm, all for 8.5 mm.
+    let no_run_out =
+        PlacementOptions { min_length: Some(6.5), overtravel: Some(0.0), ..opts.clone() };
+    let pl = place_strokes(&dom, &no_run_out).unwrap();
+    assert!(pl.strokes.is_empty() && pl.dropped_short > 0);
+    let kept = place_strokes(&dom, &PlacementOptions { min_length: Some(6.5), ..opts.clone() });
+    assert_eq!(kept.unwrap().strokes.len(), xs.len());
+    let short = PlacementOptions { min_length: Some(8.5), ..opts };
     let pl = place_strokes(&dom, &short).unwrap();
     assert!(pl.strokes.is_empty() && pl.dropped_short > 0);
 }

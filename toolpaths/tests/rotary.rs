@@ -109,25 +109,33 @@ impl Body {
         fm
     }
 
-    /// Exact distance from `p` to the surface: min over h of the distance in the meridian
-    /// half-plane of `p` (dense samples, then golden-section refinement).
+    /// The radius at `h`, the body continued past its rims by its tangent cones
+    /// (`r(0) + r'(0) h` below 0, `r(len) + r'(len) (h − len)` above `len`): where a run-out
+    /// past the rim goes on along the surface's tangent (docs/toolpaths.md, "Run-outs").
+    fn r_ext(&self, h: f64) -> f64 {
+        if h < 0.0 {
+            (self.r)(0.0) + (self.dr)(0.0) * h
+        } else if h > self.len {
+            (self.r)(self.len) + (self.dr)(self.len) * (h - self.len)
+        } else {
+            (self.r)(h)
+        }
+    }
+
+    /// Exact distance from `p` to the surface continued `RIM` past each rim by its tangent
+    /// cone: min over h of the distance in the meridian half-plane of `p` (dense samples, then
+    /// golden-section refinement).
     fn distance(&self, p: V3) -> f64 {
         let q = sub(p, self.c);
         let x = dot(q, self.d);
         let rho = norm([0, 1, 2].map(|k| q[k] - x * self.d[k]));
-        let f = |h: f64| ((x - h).powi(2) + (rho - (self.r)(h)).powi(2)).sqrt();
+        let f = |h: f64| ((x - h).powi(2) + (rho - self.r_ext(h)).powi(2)).sqrt();
+        let (h0, h1) = (-RIM, self.len + RIM);
         let n = 4000;
-        let k = (0..=n)
-            .min_by(|&a, &b| {
-                let h = |i: usize| self.len * i as f64 / n as f64;
-                f(h(a)).total_cmp(&f(h(b)))
-            })
-            .unwrap();
-        let step = self.len / n as f64;
-        let (mut lo, mut hi) = (
-            (self.len * k as f64 / n as f64 - step).max(0.0),
-            (self.len * k as f64 / n as f64 + step).min(self.len),
-        );
+        let at = |i: usize| h0 + (h1 - h0) * i as f64 / n as f64;
+        let k = (0..=n).min_by(|&a, &b| f(at(a)).total_cmp(&f(at(b)))).unwrap();
+        let step = (h1 - h0) / n as f64;
+        let (mut lo, mut hi) = ((at(k) - step).max(h0), (at(k) + step).min(h1));
         for _ in 0..60 {
             let (a, b) = (lo + 0.382 * (hi - lo), lo + 0.618 * (hi - lo));
             if f(a) < f(b) {
@@ -138,7 +146,17 @@ impl Body {
         }
         f(0.5 * (lo + hi))
     }
+
+    /// How far past the rims `p` lies along the axis (0 on the part).
+    fn past_rim(&self, p: V3) -> f64 {
+        let x = dot(sub(p, self.c), self.d);
+        (-x).max(x - self.len).max(0.0)
+    }
 }
+
+/// How far the tangent continuation past the rims is allowed: the run-out (one brush width,
+/// 3 mm) and some.
+const RIM: f64 = 5.0;
 
 /// The fixture as the program's header states it: `(rotary: point … direction … zero …)`.
 struct Header {
@@ -272,7 +290,10 @@ fn measure(body: &Body, out: &JobOutput, depth: f64) -> Figures {
             let pts = along(&h, w[0], w[1], pieces, depth);
             for p in &pts {
                 f.surface = f.surface.max(body.distance(*p));
-                f.stroke_match = f.stroke_match.max(poly_dist(*p, s3));
+                // On the part the path is the stroke; past a rim it is the stroke's run-out.
+                if body.past_rim(*p) <= 1e-9 {
+                    f.stroke_match = f.stroke_match.max(poly_dist(*p, s3));
+                }
             }
             // The true path of the contact point and the time the inverse-time F gives it.
             let len: f64 = along(&h, w[0], w[1], 40 * pieces, depth)
@@ -354,14 +375,23 @@ fn check_with_rs274(name: &str, g: &str, report: &Report, body: &Body, depth: f6
     assert!((ours - theirs).abs() <= 0.1 * theirs, "{ours} vs {theirs}");
     let h = Header::parse(g);
     let moves = canon_feeds(&c);
-    let mut worst: f64 = 0.0;
-    // Every feed move (the plunges and the cuts; no leads here) ends on the part.
+    let (mut worst, mut past): (f64, f64) = (0.0, 0.0);
+    // Every feed move (the plunges, the cuts and the run-outs past the rims; no leads here)
+    // ends on the part, or on its continuation past a rim by the tangent cone.
     for (_, p, _) in moves.iter().filter(|m| !m.0) {
         assert!(p[1] == 0.0, "a Y move in a rotary program");
-        worst = worst.max(body.distance(h.to_part(p[0], p[3], p[2] + depth)));
+        let q = h.to_part(p[0], p[3], p[2] + depth);
+        worst = worst.max(body.distance(q));
+        past = past.max(body.past_rim(q));
     }
-    eprintln!("{name}: rs274's feed moves mapped back lie within {worst:.4} mm of the part");
+    eprintln!(
+        "{name}: rs274's feed moves mapped back lie within {worst:.4} mm of the part (continued \
+         past the rims by its tangent cones); the run-outs reach {past:.3} mm past a rim"
+    );
     assert!(worst <= tol, "{worst}");
+    // Strokes ending on a rim run out past it (one width, 3 mm, along the helix: its axial
+    // part), never farther.
+    assert!(past > 0.5 && past <= 3.0 + tol, "run-outs past the rims: {past} mm");
 }
 
 fn run_body(name: &str, body: &Body, alpha: f64, depth: f64, axis: AxisSpec) -> Figures {

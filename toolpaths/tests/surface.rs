@@ -130,15 +130,43 @@ fn surface_following_z_and_tilt() {
         ..Default::default()
     };
     let plan = plan_toolpath(&dom, &pl, &plan_opts(60.0, TiltPolicy::Error)).unwrap();
+    let mut run_outs = 0;
     for pass in &plan.passes {
-        for (_, m) in &pass.moves {
+        let mut from = pass.start;
+        let mut cut = false;
+        for (kind, m) in &pass.moves {
             let p = m.end();
-            // Find the sphere height above this XY: z = sqrt(R² − x² − y²).
-            let z = (R * R - p[0] * p[0] - p[1] * p[1]).sqrt() - 0.3;
-            // Chords of a 1.2-rad patch on a 30 × 30 mesh sit below the sphere by < 0.06 mm.
-            assert!((p[2] - z).abs() < 0.06, "Z {} vs surface {}", p[2], z);
+            if *kind == MoveKind::Overtravel {
+                // A run-out past the patch's edge (both ends of every stroke are on it): it
+                // runs 2 mm (one width) from the stroke's end on the sphere along the sphere's
+                // tangent, so it is perpendicular to the normal there, leaves the patch and
+                // lies above the sphere by at most √(R² + 2²) − R (0.0998 mm).
+                let (on, off) = if cut { (from, p) } else { (p, from) };
+                let lift = |q: Vec3| [q[0], q[1], q[2] + 0.3];
+                let (on, off) = (lift(on), lift(off));
+                let d = [off[0] - on[0], off[1] - on[1], off[2] - on[2]];
+                let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                assert!((len - 2.0).abs() < 1e-9, "run-out {len} mm long");
+                // The mesh's facets span 0.04 rad: the lifted stroke's tangent is within
+                // 0.03 rad of the sphere's tangent plane, the run-out's end within 2 × 0.03 mm.
+                let n_dot = (d[0] * on[0] + d[1] * on[1] + d[2] * on[2]) / (len * R);
+                assert!(n_dot.abs() < 0.03, "run-out leaves the tangent plane: cos {n_dot}");
+                let r = (off[0].powi(2) + off[1].powi(2) + off[2].powi(2)).sqrt();
+                assert!(r > R - 0.06 && r < (R * R + 4.0).sqrt() + 0.06, "run-out end at {r}");
+                let (lat, lon) = ((off[1] / r).asin(), off[0].atan2(off[2]));
+                assert!(lat.abs().max(lon.abs()) > 0.6 + 0.05, "run-out ends on the patch");
+                run_outs += 1;
+            } else {
+                cut = cut || *kind == MoveKind::Cut;
+                // Find the sphere height above this XY: z = sqrt(R² − x² − y²).
+                let z = (R * R - p[0] * p[0] - p[1] * p[1]).sqrt() - 0.3;
+                // Chords of a 1.2-rad patch on a 30 × 30 mesh sit below the sphere by < 0.06.
+                assert!((p[2] - z).abs() < 0.06, "Z {} vs surface {}", p[2], z);
+            }
+            from = p;
         }
     }
+    assert_eq!(run_outs, 2 * plan.passes.len(), "every stroke runs out past both edges");
     // The patch tilts up to ~45° at its corners.
     match plan_toolpath(&dom, &pl, &plan_opts(20.0, TiltPolicy::Error)) {
         Err(ToolpathError::TiltExceeded { by_deg, .. }) => assert!(by_deg > 0.0),

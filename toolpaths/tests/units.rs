@@ -80,6 +80,20 @@ fn same_program(a: &str, b: &str) -> usize {
     numbers
 }
 
+/// A placement's lengths (stroke lengths and run-outs, width, spacing) divided by `k`: the
+/// same strokes in a unit `k` mm long.
+fn in_unit(pl: &Placement, k: f64) -> Placement {
+    let mut pl = pl.clone();
+    for s in &mut pl.strokes {
+        s.length /= k;
+        s.overtravel = s.overtravel.map(|x| x / k);
+    }
+    (pl.width, pl.d_sep, pl.d_test, pl.min_length) =
+        (pl.width / k, pl.d_sep / k, pl.d_test / k, pl.min_length / k);
+    pl.exclusion_radius /= k;
+    pl
+}
+
 /// The strokes placed in millimetres (the dome's UV is the same in both units), planned and
 /// written in millimetres and in inches: one program. Leads, ramps, overtravel and a contact
 /// depth are given (in each unit); the plan tolerance, clearance and feeds are defaults.
@@ -99,7 +113,7 @@ fn inch_and_millimetre_plans_of_one_placement_give_one_program() {
             ..o.plan.clone()
         };
         let dom = Domain::new(dome(k)).unwrap();
-        let plan = plan_toolpath(&dom, &mm.placement, &plan_o).unwrap();
+        let plan = plan_toolpath(&dom, &in_unit(&mm.placement, k), &plan_o).unwrap();
         programs.push(write_gcode(&plan, o.gcode.as_ref().unwrap()).unwrap());
     }
     let n = same_program(&programs[0], &programs[1]);
@@ -112,4 +126,40 @@ fn inch_and_millimetre_plans_of_one_placement_give_one_program() {
                 && g.contains("\nG64 P0.010\n")
         );
     }
+}
+
+/// The whole job — placement, plan and program — on the dome in millimetres and on the dome
+/// scaled by 1/25.4 in inches: the same strokes (point for point within 1e-9 mm), the same
+/// passes and run-outs past the dome's edges (move for move within 1e-9 mm after × 25.4) and
+/// one program, printed in mm, to the last digit.
+#[test]
+fn inch_and_millimetre_runs_of_one_part_give_one_program() {
+    let mm = generate(dome(1.0), &job(LengthUnit::Mm)).unwrap();
+    let inch = generate(dome(25.4), &job(LengthUnit::In)).unwrap();
+    let (a, b) = (&mm.placement.strokes, &inch.placement.strokes);
+    assert_eq!(a.len(), b.len(), "strokes");
+    for (s, t) in a.iter().zip(b) {
+        assert_eq!(s.uv.len(), t.uv.len());
+        assert!((s.length - 25.4 * t.length).abs() < 1e-9, "{} vs {}", s.length, t.length);
+        assert_eq!((s.start, s.end, s.fill), (t.start, t.end, t.fill));
+    }
+    let (p, q) = (&mm.plan.passes, &inch.plan.passes);
+    assert_eq!(p.len(), q.len(), "passes");
+    let mut run_outs = 0;
+    for (x, y) in p.iter().zip(q) {
+        assert_eq!((x.stroke, x.reversed, x.moves.len()), (y.stroke, y.reversed, y.moves.len()));
+        for ((k, m), (l, n)) in x.moves.iter().zip(&y.moves) {
+            assert_eq!(k, l);
+            let (u, v) = (m.end(), n.end());
+            assert!((0..3).all(|i| (u[i] - 25.4 * v[i]).abs() < 1e-9), "{u:?} vs {v:?} × 25.4");
+            run_outs += usize::from(*k == MoveKind::Overtravel);
+        }
+    }
+    let n = same_program(mm.gcode.as_ref().unwrap(), inch.gcode.as_ref().unwrap());
+    eprintln!(
+        "{} strokes, {} passes, {run_outs} run-outs, {n} numbers printed alike",
+        a.len(),
+        p.len()
+    );
+    assert!(run_outs > 10 && n > 1000);
 }
