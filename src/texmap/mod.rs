@@ -292,7 +292,7 @@ pub fn bake(input: &BakeInput) -> Result<Baked> {
 }
 
 /// The grain a map gives at every face corner, in 3D (unit, in the corner's tangent plane):
-/// the field fitted to the texels inside the face ([`fit`]), or where that fails the map
+/// the field fitted to the texels inside the face (the `fit` module), or where that fails the map
 /// sampled at the corner's texture coordinates ([`GrainMap::sample`]) in the corner's
 /// MikkTSpace frame. A direction map's vector is the direction across the grain, n × u, so
 /// u = (n × u) × n. `None` where the map's texels cancel or the frame is degenerate.
