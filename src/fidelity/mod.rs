@@ -13,11 +13,14 @@
 //! optimizer's input) and C1 of the field after the solve, both restricted to the faces with a
 //! corner in the edit's support:
 //!
-//! - **bend / expand**: the target is W(C0): C0's segments projected to the brush plane
-//!   ((x, y) = [eₓ e_y]ᵀ(p − o)/r, src/edit/support.rs), every point mapped by the warp W, the
-//!   image resampled every `sample_spacing` of arc length; only samples within `compare_radius`
-//!   of the centre count. Distance: planar, to the nearest projected C1 segment that has an
-//!   endpoint in the unit disk; in units of r.
+//! - **bend / expand**: the target is W(C0): C0's segments in the brush chart (geodesic polar
+//!   coordinates in units of r, src/edit/chart.rs; without a chart, the brush plane's
+//!   (x, y) = [eₓ e_y]ᵀ(p − o)/r), every point mapped by the warp W, the image resampled every
+//!   `sample_spacing` of arc length; only samples within `compare_radius` of the centre count.
+//!   Distance: in the chart, to the nearest C1 segment that has an endpoint in the unit disk; in
+//!   units of r. The chart follows the surface's own geodesic polar coordinates (a scan's noise
+//!   does not stretch it), so a reader measuring in those from FIELD.json finds the same figures
+//!   (docs/math.md §10, "Measured again from the outputs").
 //! - **curve**: the target is the drawn curve (3D polylines; UV curves lifted through the mesh's
 //!   UV map, [`lift_uv_polylines`]) resampled every `sample_spacing`·r of arc length, less one
 //!   radius at each end of each polyline. Distance: in space, to the nearest C1 segment, divided
