@@ -14,7 +14,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::path::Path::new(&dir);
     std::fs::create_dir_all(dir)?;
     let scan = ScanOptions::default();
-    let rock = ScanOptions { noise: 0.06, ..ScanOptions::default() };
+    let rock = ScanOptions { cell: 1.4, noise: 0.06, ..ScanOptions::default() };
     let sculpt = SculptOptions::default();
     let parts: [(&str, Mesh, bool); 4] = [
         ("bust_scan", scan::bust_scan(&scan)?, true),
