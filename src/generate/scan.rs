@@ -245,8 +245,9 @@ fn head_radius(d: &V3, a: f64, l: f64) -> f64 {
 }
 
 /// A sculpted, UV-mapped head (module table): 40–60k vertices with the defaults. UVs are
-/// (longitude / 2π + ½, colatitude / π) about the vertical axis through the centre, with a
-/// seam where the longitude wraps (the back of the head, −x).
+/// (longitude / 2π + ½, 1 − colatitude / π) about the vertical axis through the centre, with a
+/// seam where the longitude wraps (the back of the head, −x); u runs east and v north, so the
+/// chart is not mirrored.
 pub fn uv_character(o: &SculptOptions) -> Result<Mesh> {
     check_sculpt(o)?;
     let (s, a, l) = (o.scale, o.wrinkle_height, o.wrinkle_wavelength);
@@ -273,7 +274,7 @@ fn lat_long(mesh: &Mesh) -> CornerAttribute<Vector2<f64>> {
         .iter()
         .map(|p| {
             let u = p.y.atan2(p.x) / TAU + 0.5;
-            let v = (p.z / p.norm().max(1e-300)).clamp(-1.0, 1.0).acos() / PI;
+            let v = 1.0 - (p.z / p.norm().max(1e-300)).clamp(-1.0, 1.0).acos() / PI;
             Vector2::new(u, v)
         })
         .collect();
