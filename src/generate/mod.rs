@@ -4,8 +4,11 @@
 //! generated mesh is also a UV-mapped part. Closed directions (a cylinder's circumference, a
 //! torus) share vertices across the wrap and carry a UV seam there. [`cad`] makes closed
 //! CAD-like parts instead: no UVs, tessellated as CAD exports STL, with their analytic faces.
+//! [`scan`] makes scanned and sculpted parts: marching tetrahedra over implicit surfaces, with a
+//! scan's noise or a sculpt's fine detail.
 
 pub mod cad;
+pub mod scan;
 
 use nalgebra::{Vector2, Vector3};
 

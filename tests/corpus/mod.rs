@@ -12,10 +12,10 @@
 //!   highlight C0 = {hᵀu = 0} runs across the part's front.
 //! - **Placement** ([`place`]): C0 is chained into polylines; a *stretch* is a run of C0 facing
 //!   the eye, turning by less than 30° between the chords a quarter warp radius before and after
-//!   each point, and at least one warp radius away from
-//!   boundaries, critical points, creases (dihedral > 45°) and the initial field's singular
-//!   triangles. On the longest stretch the brush centre is the point with the largest clearance
-//!   (capped at half the curve's length), preferring the middle. Bend and expand: strength 0.8,
+//!   each point, and at least one warp radius away from boundaries, critical points, creases
+//!   (dihedral > 45°; on a part the run finds noisy, between the faces' fitted corner normals)
+//!   and the initial field's singular triangles. On the longest stretch the brush centre is the
+//!   point with the largest clearance (capped at half the curve's length), preferring the middle. Bend and expand: strength 0.8,
 //!   radius 6 % of the diagonal, centred there, pushing across C0. Curve: an S-curve 25 % of the
 //!   diagonal long through the centre, crossing C0 at about 50°, radius 2 % of the diagonal, traced
 //!   on the surface as a 3D polyline.

@@ -40,15 +40,25 @@ pub struct Placement {
 }
 
 /// Points to stay away from: boundary vertices, critical points, crease vertices (dihedral
-/// angle above 45°) and the centroids of the initial field's singular triangles.
+/// angle above 45°, on the fitted normals of a noisy part) and the centroids of the initial field's singular triangles.
 fn obstacles(mesh: &Mesh, p: &Prepared) -> (Vec<V3>, [usize; 4]) {
     let pos = &mesh.positions;
+    // A noisy part (the run fits its normals over a ball, `field.noise`) is judged on the surface
+    // the run sees: a face's normal is the mean of its corners' fitted normals, so the noise's
+    // slivers are not creases; a clean part on its facets, so a CAD crease is.
+    let fitted = p.noise.as_ref().is_some_and(|n| n.fit_radius.is_some());
+    let geom = &p.field.geometry;
     let fn_: Vec<V3> = mesh
         .faces
         .iter()
         .map(|f| {
-            let [a, b, c] = f.map(|i| pos[i as usize]);
-            (b - a).cross(&(c - a)).try_normalize(0.0).unwrap_or_else(V3::zeros)
+            let n = if fitted {
+                f.iter().map(|&i| geom.normal(i as usize)).sum::<V3>()
+            } else {
+                let [a, b, c] = f.map(|i| pos[i as usize]);
+                (b - a).cross(&(c - a))
+            };
+            n.try_normalize(0.0).unwrap_or_else(V3::zeros)
         })
         .collect();
     let mut edges: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
@@ -357,9 +367,14 @@ pub fn place(mesh: &Mesh, p: &Prepared, eye: &V3) -> Result<Placement, String> {
     let Some((length, pts, cl)) = best else {
         return Err(format!(
             "no stretch of the key highlight ({} segments) facing the eye and {:.1} from \
-             boundaries, critical points, creases and singularities",
+             boundaries, critical points, creases and singularities ({} boundary edges, {} \
+             creases, {} critical vertices, {} singular triangles)",
             segments.len(),
-            r_warp
+            r_warp,
+            obstacles[0],
+            obstacles[1],
+            obstacles[2],
+            obstacles[3]
         ));
     };
     // Arc positions of the segment midpoints; score = capped clearance, minus distance from
