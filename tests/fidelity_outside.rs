@@ -26,9 +26,11 @@
 //! surface, so the highlight moved that much less on the part than in the chart.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-use nalgebra::{Vector2, Vector3};
+mod common;
+
+use common::{grainline, ok, read_json, scratch_dir};
+use nalgebra::{SVector, Vector2, Vector3};
 
 type V2 = Vector2<f64>;
 type V3 = Vector3<f64>;
@@ -43,26 +45,6 @@ const STRENGTH: f64 = 0.8;
 /// Tolerance and compare radius of the measure, units of r.
 const TOLERANCE: f64 = 0.05;
 const COMPARE: f64 = 0.85;
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir()
-        .join(format!("grainline-fidelity-outside-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn grainline(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap()
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-fn json(p: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
-}
 
 /// The noisy ellipsoid: an icosphere of 6 subdivisions (40 962 vertices) stretched to `AXES`,
 /// each vertex moved along its radius by a fixed LCG's draw in ±`NOISE`.
@@ -106,7 +88,7 @@ fn vectors(v: &serde_json::Value, key: &str) -> Vec<V3> {
 }
 
 fn read_field(p: &Path) -> Field {
-    let v = json(p);
+    let v = read_json(p);
     let index = |i: &serde_json::Value| i.as_u64().unwrap() as usize;
     let faces = v["faces"].as_array().expect("FIELD.json version 2 has faces");
     let faces = faces
@@ -148,17 +130,8 @@ fn highlight(f: &Field, u: &[V3], faces: &[usize]) -> Vec<(usize, [V3; 2])> {
     out
 }
 
-fn distance2(p: &V2, a: &V2, b: &V2) -> f64 {
-    let d = b - a;
-    let t = if d.norm_squared() > 0.0 {
-        ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + d * t)).norm()
-}
-
-fn distance3(p: &V3, a: &V3, b: &V3) -> f64 {
+/// Distance from p to the segment ab, in the plane or in space.
+fn distance<const D: usize>(p: &SVector<f64, D>, a: &SVector<f64, D>, b: &SVector<f64, D>) -> f64 {
     let d = b - a;
     let t = if d.norm_squared() > 0.0 {
         ((p - a).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
@@ -225,14 +198,14 @@ fn outside_warp(f: &Field, tool: &str, centre: &V3, radius: f64, direction: &V3)
         resample(&warped, 0.01).into_iter().filter(|p| p.norm() < COMPARE).collect();
     let within = samples
         .iter()
-        .filter(|p| c1.iter().any(|s| distance2(p, &s[0], &s[1]) <= TOLERANCE))
+        .filter(|p| c1.iter().any(|s| distance(p, &s[0], &s[1]) <= TOLERANCE))
         .count();
     (within as f64 / samples.len().max(1) as f64, samples.len())
 }
 
 /// A curve's share within tolerance and its sample count: distances in the plane of C1's face.
 fn outside_curve(f: &Field, line: &[V3], radius: f64) -> (f64, usize) {
-    let near = |p: &V3| line.windows(2).any(|w| distance3(p, &w[0], &w[1]) < radius);
+    let near = |p: &V3| line.windows(2).any(|w| distance(p, &w[0], &w[1]) < radius);
     let faces: Vec<usize> =
         (0..f.faces.len()).filter(|&k| f.faces[k].iter().any(|&c| near(&f.pos[c]))).collect();
     let c1: Vec<([V3; 2], V3)> = highlight(f, &f.u, &faces)
@@ -262,7 +235,7 @@ fn outside_curve(f: &Field, line: &[V3], radius: f64) -> (f64, usize) {
         .collect();
     let in_plane = |p: &V3, (s, n): &([V3; 2], V3)| {
         let q = p - n * (p - s[0]).dot(n);
-        distance3(&q, &s[0], &s[1])
+        distance(&q, &s[0], &s[1])
     };
     let within =
         samples.iter().filter(|p| c1.iter().any(|c| in_plane(p, c) <= TOLERANCE * radius)).count();
@@ -291,7 +264,7 @@ fn run(d: &Path, name: &str, edits: &str) -> (serde_json::Value, Field) {
     let rep = d.join(format!("{name}.report.json"));
     let sc = scene(d, edits, &out);
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]));
-    let report = json(&rep);
+    let report = read_json(&rep);
     assert!(report["noise"]["fit_radius"].is_number(), "the scan is noisy: {}", report["noise"]);
     (report["optimize"]["fidelity"][0].clone(), read_field(&d.join(out)))
 }
@@ -318,7 +291,7 @@ fn compare(tool: &str, fid: &serde_json::Value, (outside, samples): (f64, usize)
 
 #[test]
 fn the_report_agrees_with_a_measure_from_field_json_on_a_noisy_scan() {
-    let d = dir("ellipsoid");
+    let d = scratch_dir("fidelity-outside", "ellipsoid");
     std::fs::write(d.join("scan.obj"), noisy_ellipsoid_obj()).unwrap();
     ok(&grainline(&["--quiet", "run", scene(&d, "[]", "initial.json").to_str().unwrap()]));
     let initial = read_field(&d.join("initial.json"));

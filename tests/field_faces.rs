@@ -12,29 +12,11 @@
 //! and finds that curve where the run report's fidelity says the edit landed.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
+mod common;
+
+use common::{grainline, ok, read_json, scratch_dir};
 use nalgebra::Vector3;
-
-fn dir(name: &str) -> PathBuf {
-    let d =
-        std::env::temp_dir().join(format!("grainline-field-faces-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn grainline(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap()
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-fn json(p: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
-}
 
 const PANEL: &str = "v -50 -30 0\nv 50 -30 0\nv 50 30 0\nv -50 30 0\n\
                      vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
@@ -191,11 +173,11 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
 
 #[test]
 fn field_json_of_a_refined_part_rebuilds_its_triangles_and_its_highlight_issue_33() {
-    let d = dir("refined");
+    let d = scratch_dir("field-faces", "refined");
     let sc = panel_scene(&d);
     let rep = d.join("report.json");
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]));
-    let (field, report) = (json(&d.join("o/field.json")), json(&rep));
+    let (field, report) = (read_json(&d.join("o/field.json")), read_json(&rep));
     assert_eq!(field["version"], 2);
     let pos = vectors(&field, "position");
     let (normal, u) = (vectors(&field, "normal"), vectors(&field, "u"));
@@ -242,7 +224,7 @@ fn field_json_of_a_refined_part_rebuilds_its_triangles_and_its_highlight_issue_3
 #[test]
 fn field_json_of_a_part_cut_into_patches_holds_the_copies_faces() {
     // A cube is cut along its twelve sharp edges into six patches: its faces name the copies.
-    let d = dir("patches");
+    let d = scratch_dir("field-faces", "patches");
     let cube = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube_uv.obj");
     let text = std::fs::read_to_string(&cube).unwrap();
     std::fs::write(d.join("cube.obj"), &text).unwrap();
@@ -255,7 +237,7 @@ fn field_json_of_a_part_cut_into_patches_holds_the_copies_faces() {
     )
     .unwrap();
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap()]));
-    let field = json(&d.join("field.json"));
+    let field = read_json(&d.join("field.json"));
     let pos = vectors(&field, "position");
     let copies = field["patch_copies"].as_array().expect("the cube was split").len();
     assert_eq!(pos.len(), 8 + copies);
@@ -282,7 +264,7 @@ fn field_json_of_a_part_cut_into_patches_holds_the_copies_faces() {
         "--out",
         out.to_str().unwrap(),
     ]));
-    let plain = json(&out);
+    let plain = read_json(&out);
     assert_eq!(plain["version"], 2);
     assert_eq!(faces(&plain, 8).len(), 12);
     std::fs::remove_dir_all(&d).ok();
@@ -290,10 +272,10 @@ fn field_json_of_a_part_cut_into_patches_holds_the_copies_faces() {
 
 #[test]
 fn field_option_reads_version_1_and_checks_version_2s_faces() {
-    let d = dir("versions");
+    let d = scratch_dir("field-faces", "versions");
     let sc = panel_scene(&d);
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap()]));
-    let v2 = json(&d.join("o/field.json"));
+    let v2 = read_json(&d.join("o/field.json"));
     let render = |field: &Path, png: &str| {
         grainline(&[
             "--quiet",

@@ -23,3 +23,27 @@ pub fn shared_mesh(name: &str) -> Option<PathBuf> {
 mod rs274;
 #[allow(unused_imports)] // not every test binary runs check-gcode
 pub use rs274::{ensure_rs274, run_checker};
+
+/// A fresh scratch directory `grainline-{prefix}-{pid}-{name}` under the system's temporary
+/// directory (emptied first).
+pub fn scratch_dir(prefix: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("grainline-{prefix}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs the `grainline` binary built with the tests.
+pub fn grainline(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_grainline")).args(args).output().unwrap()
+}
+
+/// Asserts the command succeeded, showing its standard error when it did not.
+pub fn ok(o: &std::process::Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// A JSON file, parsed.
+pub fn read_json(p: &std::path::Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+}
