@@ -510,7 +510,7 @@ mod tests {
         let want = request.finest();
         let options = RefineOptions { max_levels: 12, ..Default::default() };
         let retarget = |p: &[Vector3<f64>; 3], _: f64| request.child_target(p);
-        let near = refine_with(&m, &request.faces, &options, &retarget).unwrap();
+        let near = refine_with(&m, &request.faces, &options, &retarget, None).unwrap();
         let whole = refine(&m, &request.faces, &options).unwrap();
         // New vertices more than three radii from the centre (the longest-edge closure may
         // carry a few splits down a sliver; the strip's length is 10 radii each way).

@@ -12,7 +12,10 @@
 //! the linear term g tilts the normal: n ← normalize(n − g₁t − g₂b), and the fit is repeated in
 //! the new frame. The 1-ring is used for interior vertices of valence ≥ 6; boundary and
 //! low-valence vertices (valence 5 would be exactly determined) use the 2-ring, and a vertex
-//! whose ring is still degenerate (collinear neighbours, slivers) grows it up to the 4-ring.
+//! whose ring is still degenerate (collinear neighbours, slivers) grows it up to the 4-ring —
+//! and so does one whose fit leans the normal by more than [`MAX_FIT_TILT_DEG`] or whose slope
+//! the part's height noise would tilt by more than [`MAX_NOISE_TILT_DEG`]
+//! ([`MAX_SLOPE_VARIANCE`]): the marks of a ring too thin to tell the plane.
 //! A vertex with no usable ring gets W = 0 and is counted.
 
 use nalgebra::{Matrix2, Vector3};
@@ -78,6 +81,16 @@ fn scaled_offsets(
 /// Cholesky factorization written out for this size (nalgebra's generic one was 11 % of the
 /// 1M-vertex core benchmark).
 fn fit_scaled(d: &[Vector3<f64>], inv_h: f64, frame: &Frame) -> Option<(Matrix2<f64>, [f64; 2])> {
+    fit_scaled_checked(d, inv_h, frame, false).map(|(w, slope, _)| (w, slope))
+}
+
+/// [`fit_scaled`], and when `check`, the fit's [`slope_variance`] (else 0).
+fn fit_scaled_checked(
+    d: &[Vector3<f64>],
+    inv_h: f64,
+    frame: &Frame,
+    check: bool,
+) -> Option<(Matrix2<f64>, [f64; 2], f64)> {
     // a[tri(r, c)] = Σ row_r row_c for c ≤ r.
     let mut a = [0.0; 15];
     let mut b = [0.0; 5];
@@ -105,10 +118,12 @@ fn fit_scaled(d: &[Vector3<f64>], inv_h: f64, frame: &Frame) -> Option<(Matrix2<
             *b += r * z;
         }
     }
-    let c = solve_spd5(&a, &b)?;
+    let (l, inv) = cholesky5(&a)?;
+    let c = solve_factored5(&l, &inv, &b)?;
     // Undo the scaling: x' = x/h, z' = z/h ⇒ slopes unchanged, second derivatives × 1/h.
     let w = Matrix2::new(c[2], c[3], c[3], c[4]) * inv_h;
-    Some((w, [c[0], c[1]]))
+    let variance = if check { slope_variance(&l, &inv) } else { 0.0 };
+    Some((w, [c[0], c[1]], variance))
 }
 
 /// Index of entry (r, c), c ≤ r, in a packed lower triangle stored row by row.
@@ -117,10 +132,10 @@ const fn tri(r: usize, c: usize) -> usize {
     r * (r + 1) / 2 + c
 }
 
-/// Solves `A x = b` for a symmetric 5×5 `A` given by its packed lower triangle, by Cholesky
-/// `A = LLᵀ`. `None` when `A` is rank-deficient: a pivot L_kk² below 1e-10 × A_kk means the
-/// neighbours do not span the quadric's monomials. Also `None` on a non-finite solution.
-fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
+/// The Cholesky factor `A = LLᵀ` of a symmetric 5×5 `A` given by its packed lower triangle,
+/// with the reciprocals of its diagonal. `None` when `A` is rank-deficient: a pivot L_kk²
+/// below 1e-10 × A_kk means the neighbours do not span the quadric's monomials.
+fn cholesky5(a: &[f64; 15]) -> Option<([f64; 15], [f64; 5])> {
     let mut l = [0.0; 15];
     // 1 / L_jj: one division per column, multiplications elsewhere.
     let mut inv = [0.0; 5];
@@ -144,6 +159,11 @@ fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
             l[tri(i, j)] = s * inv[j];
         }
     }
+    Some((l, inv))
+}
+
+/// Solves `LLᵀ x = b` with the factor of [`cholesky5`]; `None` on a non-finite solution.
+fn solve_factored5(l: &[f64; 15], inv: &[f64; 5], b: &[f64; 5]) -> Option<[f64; 5]> {
     // L y = b, then Lᵀ x = y.
     let mut x = *b;
     for i in 0..5 {
@@ -161,6 +181,32 @@ fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
+/// Solves `A x = b` for a symmetric 5×5 `A` given by its packed lower triangle, by Cholesky
+/// ([`cholesky5`]). `None` when `A` is rank-deficient or the solution is not finite.
+#[cfg(test)]
+fn solve_spd5(a: &[f64; 15], b: &[f64; 5]) -> Option<[f64; 5]> {
+    let (l, inv) = cholesky5(a)?;
+    solve_factored5(&l, &inv, b)
+}
+
+/// (A⁻¹)₀₀ + (A⁻¹)₁₁ from the factor of [`cholesky5`]: how much the fitted slope moves per
+/// unit of the neighbours' height error (‖L⁻¹e₀‖² + ‖L⁻¹e₁‖², two forward substitutions).
+fn slope_variance(l: &[f64; 15], inv: &[f64; 5]) -> f64 {
+    let mut sum = 0.0;
+    for unit in 0..2 {
+        let mut y = [0.0; 5];
+        y[unit] = 1.0;
+        for i in 0..5 {
+            for k in 0..i {
+                y[i] -= l[tri(i, k)] * y[k];
+            }
+            y[i] *= inv[i];
+        }
+        sum += y.iter().map(|v| v * v).sum::<f64>();
+    }
+    sum
+}
+
 /// Per-vertex scratch of [`JetRings::fit`]: the scaled offsets of each ring depth tried so far
 /// at the current vertex (they do not depend on the frame).
 #[derive(Default)]
@@ -176,6 +222,9 @@ pub(crate) struct JetRings {
     /// scaled offsets, or `None` when it holds too few vertices.
     ball: Option<Option<(f64, Vec<Vector3<f64>>)>>,
     seen: std::collections::HashSet<u32>,
+    /// The RMS height error of the part's vertices (scene units; 0: exact), against which a
+    /// ring's fit is judged ([`MAX_SLOPE_VARIANCE`]).
+    pub height_noise: f64,
 }
 
 /// Most vertices a fit over a ball uses (`field.fit_radius`): the nearest in breadth-first
@@ -269,13 +318,45 @@ impl JetRings {
                 self.valid[k] = true;
             }
             if let Some(inv_h) = self.inv_h[k] {
-                if let Some((w, slope)) = fit_scaled(&self.offsets[k], inv_h, frame) {
-                    return JetFit { w, slope, ring: depth as u8 };
+                let fit = fit_scaled_checked(&self.offsets[k], inv_h, frame, depth < 4);
+                if let Some((w, slope, variance)) = fit {
+                    if depth == 4 || determined(slope, variance, self.height_noise * inv_h) {
+                        return JetFit { w, slope, ring: depth as u8 };
+                    }
                 }
             }
         }
         JetFit { w: Matrix2::zeros(), slope: [0.0; 2], ring: 0 }
     }
+}
+
+/// The steepest tangent plane a ring's fit may give, relative to the normal it was made in:
+/// 30°. The start normal (angle-weighted) is never that far from the surface's unless the
+/// ring cannot tell the plane — a sculpt's or scan's slivers put a vertex's 1-ring neighbours
+/// almost on a line, and five coefficients fitted through six such points tilt the normal
+/// anywhere, even over. Such a fit is not taken: the next ring is (as for a ring that
+/// determines no quadric at all).
+pub const MAX_FIT_TILT_DEG: f64 = 30.0;
+
+/// Above this slope variance (the fit's (A⁻¹)₀₀ + (A⁻¹)₁₁) a ring's fit is judged against the part's height noise: the
+/// fitted slope moves by √variance times the neighbours' height errors (in units of the ring's
+/// radius). A regular ring of six gives 2/3 and the 1-rings of the shared clean meshes at most
+/// 6.4, so they are never judged; a mesher's slivers give up to 10³ (their neighbours bunch
+/// along a line). A CAD part's strips bunch as much, but its positions are exact.
+pub const MAX_SLOPE_VARIANCE: f64 = 10.0;
+
+/// The tilt the part's height noise may give a ring's fitted normal through its slope
+/// variance, degrees; a ring that would tilt it more is not taken (the next ring is).
+pub const MAX_NOISE_TILT_DEG: f64 = 1.0;
+
+/// Whether a ring's fit determines the tangent plane: a slope within [`MAX_FIT_TILT_DEG`], and
+/// a [`slope_variance`] within [`MAX_SLOPE_VARIANCE`] or, beyond it, a tilt from the height
+/// noise (`relative_noise`: its RMS over the ring's radius) within [`MAX_NOISE_TILT_DEG`].
+fn determined(slope: [f64; 2], variance: f64, relative_noise: f64) -> bool {
+    let t = MAX_FIT_TILT_DEG.to_radians().tan();
+    let noise_tilt = variance.sqrt() * relative_noise;
+    slope[0] * slope[0] + slope[1] * slope[1] <= t * t
+        && (variance <= MAX_SLOPE_VARIANCE || noise_tilt <= MAX_NOISE_TILT_DEG.to_radians().tan())
 }
 
 /// Jet fit at vertex `i`, growing the ring as needed (see the module docs).
@@ -289,8 +370,13 @@ pub fn jet_fit(
     let start = if adj.valence(i) >= 6 && !adj.is_boundary_vertex(i) { 1 } else { 2 };
     for depth in start..=4 {
         gather_ring(adj, i, depth, &mut bufs.0, &mut bufs.1);
-        if let Some((w, slope)) = fit_quadric(positions, i, frame, &bufs.0) {
-            return JetFit { w, slope, ring: depth as u8 };
+        let mut d = Vec::new();
+        let fit = scaled_offsets(positions, i, &bufs.0, &mut d)
+            .and_then(|inv_h| fit_scaled_checked(&d, inv_h, frame, depth < 4));
+        if let Some((w, slope, variance)) = fit {
+            if depth == 4 || determined(slope, variance, 0.0) {
+                return JetFit { w, slope, ring: depth as u8 };
+            }
         }
     }
     JetFit { w: Matrix2::zeros(), slope: [0.0; 2], ring: 0 }
@@ -340,6 +426,36 @@ impl Principal {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Offsets at unit radius around the vertex at the given angles (degrees), on z = 0.
+    fn ring(angles: &[f64]) -> Vec<Vector3<f64>> {
+        angles
+            .iter()
+            .map(|a| Vector3::new(a.to_radians().cos(), a.to_radians().sin(), 0.0))
+            .collect()
+    }
+
+    #[test]
+    fn a_regular_ring_is_taken_and_a_bunched_one_grows() {
+        let frame = Frame::from_normal(Vector3::z());
+        // Six neighbours evenly around: (A⁻¹)₀₀ = (A⁻¹)₁₁ = 1/Σx² = 1/3 (odd and even moments
+        // decouple), so the slope variance is 2/3.
+        let even = ring(&[0.0, 60.0, 120.0, 180.0, 240.0, 300.0]);
+        let (_, slope, v) = fit_scaled_checked(&even, 1.0, &frame, true).unwrap();
+        assert!((v - 2.0 / 3.0).abs() < 1e-12, "{v}");
+        assert!(determined(slope, v, 0.01));
+        // A sliver's ring: five of six neighbours within 6° of one line. The quadric is still
+        // determined (Cholesky succeeds), but a height error moves the slope tens of times over:
+        // with errors of 1 % of the ring's radius (a mesher's) it is not taken; exact (a CAD
+        // part's strips), it is.
+        let bunched = ring(&[0.0, 3.0, 90.0, 177.0, 180.0, 186.0]);
+        let (_, slope, v) = fit_scaled_checked(&bunched, 1.0, &frame, true).unwrap();
+        assert!(v > MAX_SLOPE_VARIANCE, "{v}");
+        assert!(!determined(slope, v, 0.01));
+        assert!(determined(slope, v, 0.0));
+        // A plane tilted by 40° is not taken from a ring either.
+        assert!(!determined([40f64.to_radians().tan(), 0.0], 1.0, 0.0));
+    }
 
     #[test]
     fn principal_of_diagonal() {

@@ -44,6 +44,10 @@ pub struct GeometryOptions {
     /// 1-ring (`field.fit_radius`, docs/math.md §5.6): a scan's noise averaged out at that
     /// scale. `None` (the default): the 1-ring, grown only where it is degenerate.
     pub fit_radius: Option<f64>,
+    /// The RMS height error of the vertices (scene units), the noise estimate's σ
+    /// ([`noise::NoiseEstimate`]); 0 (the default) takes positions as exact. A ring fit whose
+    /// slope that error would tilt by more than [`curvature::MAX_NOISE_TILT_DEG`] grows.
+    pub height_noise: f64,
 }
 
 impl Default for GeometryOptions {
@@ -53,6 +57,7 @@ impl Default for GeometryOptions {
             normal_refinements: 1,
             frame_twist_seed: None,
             fit_radius: None,
+            height_noise: 0.0,
         }
     }
 }
@@ -82,6 +87,7 @@ fn fit_vertex(
     rings: &mut curvature::JetRings,
 ) -> (Frame, curvature::JetFit) {
     rings.start(i);
+    rings.height_noise = options.height_noise;
     let fit_in = |rings: &mut curvature::JetRings, frame: &Frame| match options.fit_radius {
         Some(r) => rings.fit_in_ball(&mesh.positions, adjacency, frame, r),
         None => rings.fit(&mesh.positions, adjacency, frame),
@@ -152,17 +158,19 @@ impl Geometry {
         mesh: &Mesh,
         options: &GeometryOptions,
     ) -> (Self, Vec<(&'static str, f64)>) {
-        Self::compute_keeping(mesh, options, &[])
+        Self::compute_keeping(mesh, options, &[], &[])
     }
 
     /// [`Geometry::compute_timed`] with the first `kept.len()` vertices' normals given (their
     /// jet fits do not tilt them): a part refined inside the brushes keeps its own vertices'
     /// normals as they were before the refinement (docs/math.md §12), however the split faces
-    /// around them now lie.
+    /// around them now lie. The next `start.len()` vertices' fits start from the normals in
+    /// `start` instead of their faces' (the jet fit still tilts them).
     pub fn compute_keeping(
         mesh: &Mesh,
         options: &GeometryOptions,
         kept: &[Vector3<f64>],
+        start: &[Vector3<f64>],
     ) -> (Self, Vec<(&'static str, f64)>) {
         let mut timings = Vec::with_capacity(7);
         let mut clock = std::time::Instant::now();
@@ -188,6 +196,11 @@ impl Geometry {
         for (i, n) in kept.iter().enumerate().take(normals.len()) {
             normals[i] = *n;
             pinned[i] = true;
+        }
+        for (i, n) in start.iter().enumerate() {
+            if let Some(slot) = normals.get_mut(kept.len() + i) {
+                *slot = *n;
+            }
         }
         drop(face_n);
         lap("normals");

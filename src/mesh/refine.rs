@@ -55,6 +55,10 @@ pub struct Refined {
     /// For the k-th added vertex (index `original + k`), the edge (two vertex indices, either
     /// possibly added earlier) whose midpoint it is.
     pub parents: Vec<[u32; 2]>,
+    /// The unit normal the Phong points were placed with, per vertex of the refined mesh: the
+    /// input's (given, or Max-weighted, or its flat region's plane), and for each new vertex
+    /// the normalised mean of its edge's two (its plane's inside a flat region).
+    pub normals: Vec<Vector3<f64>>,
     /// Levels of splitting done.
     pub levels: usize,
     /// Faces of the input that were split.
@@ -93,7 +97,7 @@ const PHONG_ALPHA: f64 = 0.5;
 /// length per face, scene units; `f64::INFINITY` where nothing is asked). Refuses, naming
 /// `options.budget_key`, when more than `options.max_new_vertices` would be added.
 pub fn refine(mesh: &Mesh, target: &[f64], options: &RefineOptions) -> Result<Refined> {
-    refine_with(mesh, target, options, &|_, inherited| inherited)
+    refine_with(mesh, target, options, &|_, inherited| inherited, None)
 }
 
 /// The target length of a face a split makes, from its corners and its parent's target.
@@ -103,11 +107,19 @@ pub type Retarget<'a> = &'a dyn Fn(&[Vector3<f64>; 3], f64) -> f64;
 /// its parent's target in, its own out; [`refine`] keeps the parent's). A target that follows
 /// where a face is — the edits' regions — keeps a long sliver touched by a brush from being
 /// split along its whole length.
+///
+/// `normals`, one per input vertex, replace the Max-weighted normals the Phong points are
+/// placed with (the planes of flat regions still take precedence). A scan's 1-ring normals
+/// are as noisy as its slivers are thin — Max's weights grow as 1/|e|, so a sliver's face
+/// decides — and Phong points placed with them fold the split faces over; the geometry's
+/// normals fitted at the noise's scale ([`crate::mesh`] has none: the caller passes them)
+/// keep the new vertices on the surface the fit sees.
 pub fn refine_with(
     mesh: &Mesh,
     target: &[f64],
     options: &RefineOptions,
     retarget: Retarget<'_>,
+    normals: Option<&[Vector3<f64>]>,
 ) -> Result<Refined> {
     if target.len() != mesh.num_faces() {
         return Err(Error::invalid_arg(
@@ -115,7 +127,17 @@ pub fn refine_with(
             format!("{} targets for {} faces", target.len(), mesh.num_faces()),
         ));
     }
-    let (nrm, face_plane) = face_planes(mesh);
+    if normals.is_some_and(|n| n.len() != mesh.num_vertices()) {
+        return Err(Error::invalid_arg(
+            "refine",
+            format!(
+                "normals for {} of {} vertices",
+                normals.map_or(0, <[_]>::len),
+                mesh.num_vertices()
+            ),
+        ));
+    }
+    let (nrm, face_plane) = face_planes(mesh, normals);
     let mut state = State {
         pos: mesh.positions.clone(),
         nrm,
@@ -165,6 +187,7 @@ pub fn refine_with(
     };
     Ok(Refined {
         mesh: refined,
+        normals: state.nrm,
         parents: state.parents,
         levels,
         faces_split: split.iter().filter(|s| **s).count(),
@@ -257,8 +280,14 @@ fn rim_planes(
 /// part, not a strip of a fillet). An edge inside such a region splits on the plane (the Phong
 /// point of normals that lean towards a tangent fillet would lift the flat face), and so does
 /// an edge between two of its fixed vertices (their normals are the plane's).
-fn face_planes(mesh: &Mesh) -> (Vec<Vector3<f64>>, Vec<Option<Vector3<f64>>>) {
-    let mut nrm = vertex_normals(mesh);
+fn face_planes(
+    mesh: &Mesh,
+    given: Option<&[Vector3<f64>]>,
+) -> (Vec<Vector3<f64>>, Vec<Option<Vector3<f64>>>) {
+    let mut nrm = match given {
+        Some(n) => n.iter().map(|v| v.try_normalize(1e-300).unwrap_or_else(Vector3::z)).collect(),
+        None => vertex_normals(mesh),
+    };
     let regions = super::planar::planar_regions(mesh);
     let vf = super::VertexFaces::new(mesh);
     let mut is_face = vec![false; regions.normal.len()];

@@ -189,7 +189,8 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     let LoadedPart { mut mesh, mesh_name, lighting, mut directions, map, layout, patches } = part;
     let noise = estimate_noise(s, &mesh);
     let fit_radius = scene.field.fit_radius.or(noise.and_then(|e| e.fit_radius));
-    let refinement = refine_for_edits(s, &mut mesh, fit_radius, stages)?;
+    let height_noise = noise.map_or(0.0, |e| e.sigma);
+    let refinement = refine_for_edits(s, &mut mesh, (fit_radius, height_noise), stages)?;
     if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
         // A line or vector field read per vertex: each new vertex gets the mean of its edge's
         // two directions (aligned first, so a line field's ±u do not cancel).
@@ -205,9 +206,11 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     field_options.gradient_form = scene.field.gradient_form;
     field_options.geometry.normals = scene.field.normals;
     field_options.geometry.fit_radius = fit_radius;
+    field_options.geometry.height_noise = height_noise;
     field_options.critical_threshold = scene.field.critical_threshold;
     if let Some(r) = &refinement {
         field_options.kept_normals = r.kept_normals.clone();
+        field_options.start_normals = r.start_normals.clone();
     }
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
@@ -360,6 +363,8 @@ struct Refinement {
     report: RefinementReport,
     /// The normals of the part's own vertices before the refinement.
     kept_normals: Vec<nalgebra::Vector3<f64>>,
+    /// The normals the new vertices' fits start from (empty: from their faces).
+    start_normals: Vec<nalgebra::Vector3<f64>>,
 }
 
 /// The mesh refinement made for the edits (`mesh.refine`, docs/math.md §12).
@@ -402,7 +407,7 @@ pub fn refine_request(
 fn refine_for_edits(
     s: &LoadedScene,
     mesh: &mut Mesh,
-    fit_radius: Option<f64>,
+    (fit_radius, height_noise): (Option<f64>, f64),
     stages: &mut Stages,
 ) -> Result<Option<Refinement>> {
     let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
@@ -416,10 +421,27 @@ fn refine_for_edits(
         budget_key: "mesh.refine.max_vertices",
         ..Default::default()
     };
+    // The part's own vertices keep the normals they have without the refinement: a sliver
+    // split near a brush must not turn the normal, and so the grain, of its far end.
+    let geometry = crate::geometry::GeometryOptions {
+        normals: s.scene.field.normals,
+        fit_radius,
+        height_noise,
+        ..Default::default()
+    };
+    let kept_normals: Vec<nalgebra::Vector3<f64>> =
+        crate::geometry::Geometry::compute(mesh, &geometry).frames.iter().map(|f| f.n).collect();
     // The faces a split makes are asked again where they are (a sliver's far children are
-    // left alone: docs/math.md §12).
+    // left alone: docs/math.md §12). The Phong points use those fitted normals, not the
+    // facets' (a scan's noise and a mesher's slivers tilt those every way: math.md §12).
     let retarget = |p: &[nalgebra::Vector3<f64>; 3], _: f64| target.child_target(p);
-    let refined = crate::mesh::refine::refine_with(mesh, &target.faces, &options, &retarget)?;
+    let refined = crate::mesh::refine::refine_with(
+        mesh,
+        &target.faces,
+        &options,
+        &retarget,
+        Some(&kept_normals),
+    )?;
     if refined.added() == 0 {
         return Ok(None);
     }
@@ -430,17 +452,11 @@ fn refine_for_edits(
         levels: refined.levels,
         finest_edge: finest,
     };
-    // The part's own vertices keep the normals they have without the refinement: a sliver
-    // split near a brush must not turn the normal, and so the grain, of its far end.
-    let geometry = crate::geometry::GeometryOptions {
-        normals: s.scene.field.normals,
-        fit_radius,
-        ..Default::default()
-    };
-    let kept_normals =
-        crate::geometry::Geometry::compute(mesh, &geometry).frames.iter().map(|f| f.n).collect();
+    // ... and the new vertices' fits start from their edges' normals there: the split faces
+    // around a new vertex of a scan can stand on edge, and their normal point anywhere.
+    let start_normals = refined.normals[mesh.num_vertices()..].to_vec();
     *mesh = refined.mesh.clone();
-    Ok(Some(Refinement { refined, report, kept_normals }))
+    Ok(Some(Refinement { refined, report, kept_normals, start_normals }))
 }
 
 /// Makes sure `mesh` has a UV layout the toolpaths can use, as `options.mode` says: `auto`

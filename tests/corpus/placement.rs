@@ -39,26 +39,24 @@ pub struct Placement {
     pub obstacles: [usize; 4],
 }
 
-/// Points to stay away from: boundary vertices, critical points, crease vertices (dihedral
-/// angle above 45°, on the fitted normals of a noisy part) and the centroids of the initial field's singular triangles.
+/// Points to stay away from: boundary vertices, critical points, crease vertices (an angle
+/// above 45° between the fitted normals of two faces) and the centroids of the initial field's singular triangles.
 fn obstacles(mesh: &Mesh, p: &Prepared) -> (Vec<V3>, [usize; 4]) {
     let pos = &mesh.positions;
-    // A noisy part (the run fits its normals over a ball, `field.noise`) is judged on the surface
-    // the run sees: a face's normal is the mean of its corners' fitted normals, so the noise's
-    // slivers are not creases; a clean part on its facets, so a CAD crease is.
-    let fitted = p.noise.as_ref().is_some_and(|n| n.fit_radius.is_some());
+    // The part is judged on the surface the run sees: a face's normal is the mean of its
+    // corners' fitted normals. A CAD crease is a cut between two patches there (a boundary,
+    // each side with its own normals), and the slivers of a scan's noise or of a mesher,
+    // whose facets tilt every way, are not creases.
     let geom = &p.field.geometry;
     let fn_: Vec<V3> = mesh
         .faces
         .iter()
         .map(|f| {
-            let n = if fitted {
-                f.iter().map(|&i| geom.normal(i as usize)).sum::<V3>()
-            } else {
-                let [a, b, c] = f.map(|i| pos[i as usize]);
-                (b - a).cross(&(c - a))
-            };
-            n.try_normalize(0.0).unwrap_or_else(V3::zeros)
+            f.iter()
+                .map(|&i| geom.normal(i as usize))
+                .sum::<V3>()
+                .try_normalize(0.0)
+                .unwrap_or_else(V3::zeros)
         })
         .collect();
     let mut edges: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
