@@ -149,9 +149,10 @@ fn planar_faces(mesh: &Mesh) -> Vec<bool> {
 
 /// Joins every patch (root in `parent`) of less than [`MIN_PATCH_AREA_SHARE`] of the part's
 /// area to the neighbour across the greatest length of `sharp` edges, smallest patch first —
-/// unless every face of the patch is `feature` (a small face of a CAD part: a chamfer, a
-/// notch, a small hole's wall, which a shop brushes as a face of its own; joined, it would
-/// bend its neighbour's normals across the sharp edge between them).
+/// unless every face of the patch, and every face across its sharp edges, is `feature` (a
+/// small face of a CAD part: a chamfer, a notch, a small hole's wall, which a shop brushes as
+/// a face of its own; joined, it would bend its neighbour's normals across the sharp edge
+/// between them).
 fn join_small_patches(
     mesh: &Mesh,
     parent: &mut [u32],
@@ -172,6 +173,16 @@ fn join_small_patches(
     let mut all_feature = vec![true; mesh.num_faces()];
     for (f, &is) in feature.iter().enumerate() {
         all_feature[find(parent, f as u32) as usize] &= is;
+    }
+    // ... and every face across its sharp edges is of a CAD face too: a face of a CAD part
+    // meets faces of the part. Two coplanar slivers standing on a scan or a sculpt (one
+    // tetrahedron's cut, for a marching mesher) meet the mesher's triangles around them.
+    for &(a, b, _) in sharp {
+        let (ra, rb) = (find(parent, a), find(parent, b));
+        if ra != rb {
+            all_feature[ra as usize] &= feature[b as usize];
+            all_feature[rb as usize] &= feature[a as usize];
+        }
     }
     let mut small: Vec<(f64, u32)> = (0..mesh.num_faces() as u32)
         .filter(|&f| {
