@@ -6,16 +6,26 @@ mod corpus;
 
 use grainline::generate::scan::{self, ScanOptions};
 
+/// A generated part written as `NAME.obj` in a temporary directory (kept alive by the caller),
+/// made a corpus case and prepared: its initial field and the placement of its edits.
+fn prepared(
+    mesh: &grainline::mesh::Mesh,
+    name: &str,
+) -> (tempfile::TempDir, corpus::Case, corpus::PreparedCase) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(format!("{name}.obj"));
+    std::fs::write(&path, grainline::mesh::write::obj_string(mesh, name)).unwrap();
+    let case = corpus::mesh_case(name, &path, true, None, false).unwrap();
+    let p = corpus::prepare_case(&case).unwrap();
+    (dir, case, p)
+}
+
 #[test]
 fn a_bend_lands_on_a_noisy_scan_placed_without_hand_tuning() {
     // A small bust: half size, 1 mm grid (noise 0.08 mm at about 0.7 mm spacing).
     let mesh =
         scan::bust_scan(&ScanOptions { cell: 1.0, scale: 0.5, ..Default::default() }).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("bust_small.obj");
-    std::fs::write(&path, grainline::mesh::write::obj_string(&mesh, "bust")).unwrap();
-    let case = corpus::mesh_case("bust_small", &path, true, None, false).unwrap();
-    let p = corpus::prepare_case(&case).unwrap();
+    let (_dir, case, p) = prepared(&mesh, "bust_small");
     let noise = p.prepared.noise.expect("the run estimates the noise");
     assert!(noise.fit_radius.is_some(), "the scan is not found noisy: {noise:?}");
     let pl = p.placement.as_ref().expect("a placement on the scan");
@@ -63,11 +73,7 @@ fn refining_a_scan_for_a_curve_folds_no_face_and_adds_no_singular_triangle() {
     // normals flipped with them (the refinement must use the normals the run fits).
     let mesh =
         scan::rock_scan(&ScanOptions { cell: 1.0, scale: 0.5, ..Default::default() }).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("rock_small.obj");
-    std::fs::write(&path, grainline::mesh::write::obj_string(&mesh, "rock")).unwrap();
-    let case = corpus::mesh_case("rock_small", &path, true, None, false).unwrap();
-    let p = corpus::prepare_case(&case).unwrap();
+    let (_dir, case, p) = prepared(&mesh, "rock_small");
     let refined = refined_for(&p, "curve");
     assert!(refined.refinement.as_ref().is_some_and(|r| r.vertices_added > 1000));
     let first_new = p.prepared.mesh.num_vertices();
@@ -85,11 +91,7 @@ fn every_edit_lands_on_a_sculpted_part_meshed_with_slivers() {
     // their facets read as creases.
     let o = scan::SculptOptions { scale: 0.6, ..Default::default() };
     let mesh = scan::sculpt_creature(&o).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("creature_small.obj");
-    std::fs::write(&path, grainline::mesh::write::obj_string(&mesh, "creature")).unwrap();
-    let case = corpus::mesh_case("creature_small", &path, true, None, false).unwrap();
-    let p = corpus::prepare_case(&case).unwrap();
+    let (_dir, case, p) = prepared(&mesh, "creature_small");
     let (_, opposed) = folds(&p.prepared.mesh, &p.prepared.field.geometry, usize::MAX);
     assert_eq!(opposed, 0, "faces whose corners' normals oppose");
     for tool in corpus::TOOLS {

@@ -318,7 +318,9 @@ impl JetRings {
                 self.valid[k] = true;
             }
             if let Some(inv_h) = self.inv_h[k] {
-                let fit = fit_scaled_checked(&self.offsets[k], inv_h, frame, depth < 4);
+                // The slope variance matters only against a height noise (module docs).
+                let check = depth < 4 && self.height_noise > 0.0;
+                let fit = fit_scaled_checked(&self.offsets[k], inv_h, frame, check);
                 if let Some((w, slope, variance)) = fit {
                     if depth == 4 || determined(slope, variance, self.height_noise * inv_h) {
                         return JetFit { w, slope, ring: depth as u8 };
@@ -338,9 +340,9 @@ impl JetRings {
 /// determines no quadric at all).
 pub const MAX_FIT_TILT_DEG: f64 = 30.0;
 
-/// Above this slope variance (the fit's (A⁻¹)₀₀ + (A⁻¹)₁₁) a ring's fit is judged against the part's height noise: the
-/// fitted slope moves by √variance times the neighbours' height errors (in units of the ring's
-/// radius). A regular ring of six gives 2/3 and the 1-rings of the shared clean meshes at most
+/// Above this slope variance (the fit's (A⁻¹)₀₀ + (A⁻¹)₁₁) a ring's fit is judged against the
+/// part's height noise: the fitted slope moves by √variance times the neighbours' height errors
+/// (in units of the ring's radius). A regular ring of six gives 2/3 and the 1-rings of the shared clean meshes at most
 /// 6.4, so they are never judged; a mesher's slivers give up to 10³ (their neighbours bunch
 /// along a line). A CAD part's strips bunch as much, but its positions are exact.
 pub const MAX_SLOPE_VARIANCE: f64 = 10.0;
@@ -372,7 +374,7 @@ pub fn jet_fit(
         gather_ring(adj, i, depth, &mut bufs.0, &mut bufs.1);
         let mut d = Vec::new();
         let fit = scaled_offsets(positions, i, &bufs.0, &mut d)
-            .and_then(|inv_h| fit_scaled_checked(&d, inv_h, frame, depth < 4));
+            .and_then(|inv_h| fit_scaled_checked(&d, inv_h, frame, false));
         if let Some((w, slope, variance)) = fit {
             if depth == 4 || determined(slope, variance, 0.0) {
                 return JetFit { w, slope, ring: depth as u8 };

@@ -54,14 +54,11 @@ pub fn preview(p: &PreviewInput) -> Result<RenderOutput> {
     // already split at every crease that separates two of them; a sharp edge left inside a
     // patch — a crease that fades out, a sliver's fold on a scan or a sculpt — is not cut
     // again here (it would show as a speck of the sliver's facet in the shading).
-    let crease_angle =
-        scene.mesh.as_ref().map_or(crate::geometry::normals::DEFAULT_CREASE_ANGLE_DEG, |m| match m
-            .0
-            .patches
-        {
-            crate::scene::PatchMode::Split => 180.0,
-            crate::scene::PatchMode::None => m.crease_angle(),
-        });
+    let crease_angle = match scene.mesh.as_ref() {
+        None => crate::geometry::normals::DEFAULT_CREASE_ANGLE_DEG,
+        Some(m) if m.0.patches == crate::scene::PatchMode::Split => 180.0,
+        Some(m) => m.crease_angle(),
+    };
     let corner = {
         let m = &prepared.mesh;
         let vf = crate::mesh::VertexFaces::new(m);
