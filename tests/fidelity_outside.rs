@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{grainline, ok, read_json, scratch_dir};
+use common::{grainline, json_vectors, ok, read_json, scratch_dir};
 use nalgebra::{SVector, Vector2, Vector3};
 
 type V2 = Vector2<f64>;
@@ -77,16 +77,6 @@ struct Field {
     u_before: Vec<V3>,
 }
 
-fn vectors(v: &serde_json::Value, key: &str) -> Vec<V3> {
-    let a = v[key].as_array().unwrap_or_else(|| panic!("FIELD.json has no {key}"));
-    a.iter()
-        .map(|p| {
-            let c: Vec<f64> = p.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-            V3::new(c[0], c[1], c[2])
-        })
-        .collect()
-}
-
 fn read_field(p: &Path) -> Field {
     let v = read_json(p);
     let index = |i: &serde_json::Value| i.as_u64().unwrap() as usize;
@@ -98,9 +88,16 @@ fn read_field(p: &Path) -> Field {
             [index(&f[0]), index(&f[1]), index(&f[2])]
         })
         .collect();
-    let u = vectors(&v, "u");
-    let u_before = if v.get("u_before").is_some() { vectors(&v, "u_before") } else { u.clone() };
-    Field { pos: vectors(&v, "position"), faces, normal: vectors(&v, "normal"), u, u_before }
+    let u = json_vectors(&v, "u");
+    let u_before =
+        if v.get("u_before").is_some() { json_vectors(&v, "u_before") } else { u.clone() };
+    Field {
+        pos: json_vectors(&v, "position"),
+        faces,
+        normal: json_vectors(&v, "normal"),
+        u,
+        u_before,
+    }
 }
 
 /// The half vector at p from the scene's light and eye.

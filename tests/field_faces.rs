@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{grainline, ok, read_json, scratch_dir};
+use common::{grainline, json_vectors, ok, read_json, scratch_dir};
 use nalgebra::Vector3;
 
 const PANEL: &str = "v -50 -30 0\nv 50 -30 0\nv 50 30 0\nv -50 30 0\n\
@@ -44,16 +44,6 @@ fn panel_scene(d: &Path) -> PathBuf {
     let p = d.join("scene.json");
     std::fs::write(&p, s).unwrap();
     p
-}
-
-fn vectors(v: &serde_json::Value, key: &str) -> Vec<Vector3<f64>> {
-    let a = v[key].as_array().unwrap_or_else(|| panic!("FIELD.json has no {key}"));
-    a.iter()
-        .map(|p| {
-            let c: Vec<f64> = p.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-            Vector3::new(c[0], c[1], c[2])
-        })
-        .collect()
 }
 
 /// FIELD.json's faces, each index checked to be in range and the corners distinct.
@@ -179,8 +169,8 @@ fn field_json_of_a_refined_part_rebuilds_its_triangles_and_its_highlight_issue_3
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]));
     let (field, report) = (read_json(&d.join("o/field.json")), read_json(&rep));
     assert_eq!(field["version"], 2);
-    let pos = vectors(&field, "position");
-    let (normal, u) = (vectors(&field, "normal"), vectors(&field, "u"));
+    let pos = json_vectors(&field, "position");
+    let (normal, u) = (json_vectors(&field, "normal"), json_vectors(&field, "u"));
     let tris = faces(&field, pos.len());
     // The part was refined inside the brush: the faces are the refined mesh's, as the report
     // counts them.
@@ -238,13 +228,13 @@ fn field_json_of_a_part_cut_into_patches_holds_the_copies_faces() {
     .unwrap();
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap()]));
     let field = read_json(&d.join("field.json"));
-    let pos = vectors(&field, "position");
+    let pos = json_vectors(&field, "position");
     let copies = field["patch_copies"].as_array().expect("the cube was split").len();
     assert_eq!(pos.len(), 8 + copies);
     let tris = faces(&field, pos.len());
     assert_eq!(tris.len(), 12);
     assert!(tris.iter().flatten().any(|&c| c >= 8), "no face names a copy");
-    let normal = vectors(&field, "normal");
+    let normal = json_vectors(&field, "normal");
     check_triangles(&pos, &normal, &tris, obj_area(&text));
     // Each patch is flat: a face's corners carry its own normal.
     for t in &tris {

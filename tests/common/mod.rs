@@ -47,3 +47,14 @@ pub fn ok(o: &std::process::Output) {
 pub fn read_json(p: &std::path::Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
 }
+
+/// FIELD.json's per-vertex vectors under `key` (positions, normals, `u`, …).
+pub fn json_vectors(v: &serde_json::Value, key: &str) -> Vec<nalgebra::Vector3<f64>> {
+    let a = v[key].as_array().unwrap_or_else(|| panic!("FIELD.json has no {key}"));
+    a.iter()
+        .map(|p| {
+            let c: Vec<f64> = p.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            nalgebra::Vector3::new(c[0], c[1], c[2])
+        })
+        .collect()
+}
