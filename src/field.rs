@@ -33,12 +33,9 @@ pub struct FieldOptions {
     pub critical_threshold: f64,
     /// The normals of the first vertices, kept as given ([`Geometry::compute_keeping`]): a
     /// part refined inside the brushes keeps its own vertices' normals from before the
-    /// refinement. Empty: every normal computed.
+    /// refinement, and its new vertices the ones the refinement interpolated. Empty: every
+    /// normal computed.
     pub kept_normals: Vec<Vector3<f64>>,
-    /// The normals the fits of the vertices after the kept ones start from (not kept: the jet
-    /// fit tilts them) — a refined scan's new vertices, from their edges' normals. Empty: from
-    /// their faces.
-    pub start_normals: Vec<Vector3<f64>>,
 }
 
 impl FieldOptions {
@@ -52,7 +49,6 @@ impl FieldOptions {
             geometry: GeometryOptions::default(),
             critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
             kept_normals: Vec::new(),
-            start_normals: Vec::new(),
         }
     }
 }
@@ -82,13 +78,7 @@ pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult>
     if !(options.critical_threshold.is_finite() && options.critical_threshold <= 1.0) {
         return Err(Error::invalid_arg("critical-threshold", "must be a finite number ≤ 1"));
     }
-    let geometry = Geometry::compute_keeping(
-        mesh,
-        &options.geometry,
-        &options.kept_normals,
-        &options.start_normals,
-    )
-    .0;
+    let geometry = Geometry::compute_keeping(mesh, &options.geometry, &options.kept_normals).0;
     let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
     let normals: Vec<Vector3<f64>> = geometry.frames.par_iter().map(|f| f.n).collect();
     let h = half_vectors(&options.lighting, &mesh.positions, &normals);

@@ -100,3 +100,27 @@ fn every_edit_lands_on_a_sculpted_part_meshed_with_slivers() {
         assert!(f.landed, "{tool}: {f:?}");
     }
 }
+
+#[test]
+fn refining_where_the_half_vector_turns_keeps_a_sculpt_s_bend_and_expand_regular() {
+    // The full-size creature: its skin folds turn the key light's half vector by tens of
+    // degrees along one edge, and a grain designed from it (φ* = θ(h̄) + ψ*) by a right angle:
+    // singular triangles the target does not ask for, unless the refinement splits those faces
+    // (`mesh.refine.turn`, default 20°). At 180° (nothing asked) the bend adds some.
+    let mesh = scan::sculpt_creature(&scan::SculptOptions::default()).unwrap();
+    let (_dir, case, mut p) = prepared(&mesh, "creature");
+    let mut added = Vec::new();
+    for turn in [180.0, grainline::edit::resolution::DEFAULT_MAX_TURN_DEG] {
+        p.scene.scene.mesh.as_mut().expect("a mesh section").0.refine.turn = turn;
+        for tool in ["bend", "expand"] {
+            let o = corpus::run_edit(&case, &p, tool, "position").unwrap().unwrap();
+            let f = o.figures.as_ref().unwrap_or_else(|| panic!("{tool}: {:?}", o.error));
+            added.push((turn, tool, f.singular_after as i64 - f.singular_before as i64));
+            if turn < 180.0 {
+                assert!(f.landed, "{tool}: {f:?}");
+            }
+        }
+    }
+    assert!(added[..2].iter().any(|a| a.2 > 0), "turn 180 adds none: {added:?}");
+    assert!(added[2..].iter().all(|a| a.2 <= 0), "{added:?}");
+}

@@ -87,6 +87,10 @@ fn ranges_are_checked_with_key_paths() {
             "field.fit_radius",
         ),
         (
+            r#"{"mesh": {"path": "p.obj", "refine": {"turn": 2}}, "lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#,
+            "mesh.refine.turn",
+        ),
+        (
             r#"{"lights": [{"type": "directional", "direction": [0, 0, 1]}], "view": {"eye": [0, -5, 2]}}"#,
             "mesh",
         ),

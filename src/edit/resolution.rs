@@ -10,6 +10,17 @@
 //! turns across half the tube: `CURVE_EDGE`). Stencils and the light tools set
 //! directions, not positions, and ask for nothing.
 //!
+//! **The half vector's turn.** The grain a bend, an expand or a curve designs is an angle from
+//! h̄, the tangent part of the key light's half vector: φ* = θ(h̄ᵢ) + ψ*, ψ* the grain's angle
+//! from h̄ where the target comes from (docs/math.md §9). Where the part folds at the scale of
+//! its triangles — a sculpt's skin folds, a scan's ridges — θ(h̄) turns by tens of degrees
+//! along one edge, ψ* as much again, and a grain that turns by more than a right angle along an
+//! edge is no longer a grain but a singular triangle. So inside a region every face along
+//! which h̄ turns by more than `max_turn` (`mesh.refine.turn`, default 20°) asks for its
+//! longest edge × max_turn / turn, and the faces a split makes are asked again with their own
+//! normals (the ones the Phong points were placed with), down to [`MIN_TURN_SCALE`] × the
+//! region's edge. A smooth part turns h̄ by a few degrees per edge and asks for nothing more.
+//!
 //! The regions are Euclidean balls and tubes: they contain the geodesic supports the tools
 //! use later, so a face of a support is never left coarse.
 //!
@@ -29,12 +40,26 @@ use super::curve::read_svg_polylines;
 use super::support::Centre;
 use super::warp::{finest_scale, WarpKind};
 use super::{at_edit, Edit};
+use crate::highlight::lighting::half_vector;
+use crate::highlight::Lighting;
 use crate::mesh::Mesh;
 use crate::Result;
 
 /// The smallest reach, as a share of the part's bounding-box diagonal, for which a region that
 /// holds no vertex is refined (module docs): 1 mm on a 200 mm part.
 pub const MIN_REACH_SHARE: f64 = 0.005;
+
+/// The finest edge the half vector's turn may ask for, as a share of its region's edge (at most
+/// three levels of splitting past the region's request: bounded work near a critical point,
+/// where h̄ turns a half-turn at any size).
+pub const MIN_TURN_SCALE: f64 = 0.125;
+
+/// The default of `mesh.refine.turn`: the largest turn of h̄ along an edge inside a region,
+/// degrees (module docs, "the half vector's turn").
+pub const DEFAULT_MAX_TURN_DEG: f64 = 20.0;
+
+/// |h̄| below which a corner counts as a critical point.
+const MIN_TANGENT_H: f64 = 1e-6;
 
 /// Most points a curve is sampled at when its tube holds no vertex (the work of marking the
 /// faces is at most this many closest-point queries per face near the curve).
@@ -66,18 +91,84 @@ struct Marked {
 
 /// What the edits ask of the refinement: the edge each face of the part needs, and the
 /// regions that asked, so that the faces a split makes can be asked again
-/// ([`Resolution::child_target`]). Two requests are equal when their faces' edges and their
-/// regions are: they refine the part the same way.
+/// ([`Resolution::child_target`]), with the turn of the key highlight's half vector they allow
+/// ([`Resolution::turn`]). Two requests are equal when their faces' edges, their regions and
+/// their turns are: they refine the part the same way.
 #[derive(Clone, Debug)]
 pub struct Resolution {
-    /// The edge length each face of the part needs (`f64::INFINITY` where none asks).
+    /// The edge length each face of the part needs (`f64::INFINITY` where none asks), from the
+    /// regions alone: the turn's request needs the part's normals
+    /// ([`Resolution::turned_faces`]).
     pub faces: Vec<f64>,
     marked: Vec<Marked>,
+    /// How far the key highlight's half vector may turn along an edge inside a region
+    /// (`None`: no limit).
+    pub turn: Option<HalfVectorTurn>,
+}
+
+/// Inside the edits' regions, how far the tangent part h̄ of the key light's half vector may
+/// turn along one edge (module docs, "the half vector's turn").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HalfVectorTurn {
+    /// The key light and the view the edits see.
+    pub lighting: Lighting,
+    /// The largest turn along an edge, radians.
+    pub max_turn: f64,
+}
+
+impl HalfVectorTurn {
+    /// The largest turn of h̄ along the edges of a triangle with corners `p` and unit normals
+    /// `n`: h̄ at one end transported to the other's tangent plane by the rotation that takes
+    /// one normal to the other, and measured there (radians, in [0, π]). π where h̄ (nearly)
+    /// vanishes at a corner (a critical point, h ∥ n: every direction is its direction).
+    pub fn turn(&self, p: &[Vector3<f64>; 3], n: &[Vector3<f64>; 3]) -> f64 {
+        let l = &self.lighting;
+        let hb = |k: usize| {
+            let h = half_vector(&l.omega_in(&p[k]), &l.omega_out(&p[k]), &n[k]);
+            h - n[k] * n[k].dot(&h)
+        };
+        let hb = [hb(0), hb(1), hb(2)];
+        if hb.iter().any(|h| !(h.norm() > MIN_TANGENT_H)) {
+            return std::f64::consts::PI;
+        }
+        (0..3)
+            .map(|k| {
+                let (a, b) = (k, (k + 1) % 3);
+                let w = transport(&hb[b], &n[b], &n[a]);
+                n[a].dot(&hb[a].cross(&w)).atan2(hb[a].dot(&w)).abs()
+            })
+            .fold(0.0, |m: f64, t| if t.is_nan() { std::f64::consts::PI } else { m.max(t) })
+    }
+
+    /// The edge a triangle (corners `p`, unit normals `n`) of a region asking for `edge` needs
+    /// so that h̄ turns by at most [`HalfVectorTurn::max_turn`] along it: its longest edge ×
+    /// max_turn / turn, no shorter than [`MIN_TURN_SCALE`] × `edge`; `f64::INFINITY` when it
+    /// turns less.
+    pub fn want(&self, p: &[Vector3<f64>; 3], n: &[Vector3<f64>; 3], edge: f64) -> f64 {
+        let turn = self.turn(p, n);
+        if !(turn > self.max_turn) {
+            return f64::INFINITY;
+        }
+        let longest = (0..3).map(|k| (p[(k + 1) % 3] - p[k]).norm()).fold(0.0, f64::max);
+        (longest * self.max_turn / turn).max(MIN_TURN_SCALE * edge)
+    }
+}
+
+/// `w`, tangent at unit normal `from`, turned by the smallest rotation that takes `from` to
+/// `to` (Rodrigues with axis `from` × `to`); unchanged when the normals are opposed.
+fn transport(w: &Vector3<f64>, from: &Vector3<f64>, to: &Vector3<f64>) -> Vector3<f64> {
+    let c = from.dot(to);
+    if !(c > -1.0 + 1e-9) {
+        return *w;
+    }
+    let a = from.cross(to);
+    w + a.cross(w) + a.cross(&a.cross(w)) / (1.0 + c)
 }
 
 impl PartialEq for Resolution {
     fn eq(&self, other: &Self) -> bool {
         self.faces == other.faces
+            && self.turn == other.turn
             && self.marked.len() == other.marked.len()
             && self
                 .marked
@@ -109,6 +200,39 @@ impl Resolution {
         }
         t
     }
+
+    /// [`Resolution::child_target`] with the turn's request: the smaller of the regions' edge
+    /// and the one the half vector's turn across the face asks for ([`HalfVectorTurn::want`]
+    /// with the face's corners `p` and their unit normals `n`), inside a region only.
+    pub fn face_target(&self, p: &[Vector3<f64>; 3], n: &[Vector3<f64>; 3]) -> f64 {
+        let edge = self.child_target(p);
+        match &self.turn {
+            Some(turn) if edge.is_finite() => edge.min(turn.want(p, n, edge)),
+            _ => edge,
+        }
+    }
+
+    /// The edge each face of `mesh` needs ([`Resolution::faces`] with the turn's request on the
+    /// faces a region reaches), with `normals` the unit normals of its vertices.
+    pub fn turned_faces(&self, mesh: &Mesh, normals: &[Vector3<f64>]) -> Vec<f64> {
+        let Some(turn) = &self.turn else { return self.faces.clone() };
+        (self.faces.iter().zip(&mesh.faces))
+            .map(|(&edge, face)| {
+                let at = |v: &u32| normals.get(*v as usize).copied();
+                match (
+                    face.map(|v| mesh.positions.get(v as usize).copied()),
+                    face.each_ref().map(at),
+                ) {
+                    ([Some(a), Some(b), Some(c)], [Some(na), Some(nb), Some(nc)])
+                        if edge.is_finite() =>
+                    {
+                        edge.min(turn.want(&[a, b, c], &[na, nb, nc], edge))
+                    }
+                    _ => edge,
+                }
+            })
+            .collect()
+    }
 }
 
 /// The edge length each face of `mesh` needs for `edits` (`f64::INFINITY` where none asks),
@@ -129,7 +253,7 @@ pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Resolut
             marked.push(Marked { region, want, grid });
         }
     }
-    Ok(Resolution { faces: target, marked })
+    Ok(Resolution { faces: target, marked, turn: None })
 }
 
 /// The segments of a region's polylines (a lone point as a segment of length 0), bucketed in
@@ -509,7 +633,8 @@ mod tests {
         let request = edit_resolution(&m, &[bend], 1.0 / 3.0).unwrap();
         let want = request.finest();
         let options = RefineOptions { max_levels: 12, ..Default::default() };
-        let retarget = |p: &[Vector3<f64>; 3], _: f64| request.child_target(p);
+        let retarget =
+            |p: &[Vector3<f64>; 3], _: &[Vector3<f64>; 3], _: f64| request.child_target(p);
         let near = refine_with(&m, &request.faces, &options, &retarget, None).unwrap();
         let whole = refine(&m, &request.faces, &options).unwrap();
         // New vertices more than three radii from the centre (the longest-edge closure may
@@ -555,5 +680,61 @@ mod tests {
         let t = edit_resolution(&m, &[curve], 0.5).unwrap().faces;
         assert!((t[0] - 0.05625).abs() < 1e-12, "{}", t[0]);
         assert!(t[19].is_infinite());
+    }
+
+    /// A light and a view both along +z: h = z, and h̄ on the unit sphere points to the pole.
+    fn overhead() -> HalfVectorTurn {
+        let z = Vector3::z();
+        let lighting = Lighting::new(z, crate::highlight::lighting::View::Direction(z)).unwrap();
+        HalfVectorTurn { lighting, max_turn: 10f64.to_radians() }
+    }
+
+    fn on_sphere(theta: f64, phi: f64) -> Vector3<f64> {
+        Vector3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+    }
+
+    /// On the unit sphere the smallest rotation between two normals is the parallel transport
+    /// along the great circle through them, so h̄'s turn along a chord of a latitude θ spanning
+    /// Δφ is π − 2β, β the base angle of the isosceles spherical triangle the chord makes with
+    /// the pole: tan β = cot(Δφ/2) / cos θ (Napier's rule on its halves).
+    #[test]
+    fn the_turn_along_a_latitude_is_the_sphere_s_holonomy() {
+        let t = overhead();
+        for (theta, dphi) in
+            [(0.3f64, 0.2f64), (0.7, 0.5), (1.2, 1.0), (std::f64::consts::FRAC_PI_2, 0.4)]
+        {
+            let (a, b) = (on_sphere(theta, 0.1), on_sphere(theta, 0.1 + dphi));
+            let beta = (1.0 / ((dphi / 2.0).tan() * theta.cos())).atan();
+            let want = std::f64::consts::PI - 2.0 * beta;
+            let got = t.turn(&[a, b, b], &[a, b, b]);
+            assert!((got - want).abs() < 1e-9, "θ {theta} Δφ {dphi}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn a_face_asks_for_its_longest_edge_scaled_by_the_turn_it_allows() {
+        let t = overhead();
+        let (a, b) = (on_sphere(0.3, 0.0), on_sphere(0.3, 0.5));
+        let turn = t.turn(&[a, b, b], &[a, b, b]);
+        assert!(turn > t.max_turn);
+        let chord = (b - a).norm();
+        let want = t.want(&[a, b, b], &[a, b, b], 0.1);
+        assert!((want - chord * t.max_turn / turn).abs() < 1e-12, "{want}");
+        // Never finer than MIN_TURN_SCALE of the region's edge.
+        assert_eq!(t.want(&[a, b, b], &[a, b, b], 100.0), MIN_TURN_SCALE * 100.0);
+        // Along the equator h̄ = −z everywhere: no turn, no request.
+        let eq = std::f64::consts::FRAC_PI_2;
+        let (c, d) = (on_sphere(eq, 0.0), on_sphere(eq, 0.5));
+        assert!(t.want(&[c, d, d], &[c, d, d], 1.0).is_infinite());
+    }
+
+    #[test]
+    fn a_critical_corner_turns_half_a_turn() {
+        let t = overhead();
+        let (pole, a) = (Vector3::z(), on_sphere(0.01, 0.0));
+        assert_eq!(t.turn(&[pole, a, a], &[pole, a, a]), std::f64::consts::PI);
+        // A NaN normal is treated as critical, never as "no turn".
+        let nan = Vector3::new(f64::NAN, 0.0, 1.0);
+        assert_eq!(t.turn(&[a, a, a], &[a, nan, a]), std::f64::consts::PI);
     }
 }

@@ -158,19 +158,18 @@ impl Geometry {
         mesh: &Mesh,
         options: &GeometryOptions,
     ) -> (Self, Vec<(&'static str, f64)>) {
-        Self::compute_keeping(mesh, options, &[], &[])
+        Self::compute_keeping(mesh, options, &[])
     }
 
     /// [`Geometry::compute_timed`] with the first `kept.len()` vertices' normals given (their
     /// jet fits do not tilt them): a part refined inside the brushes keeps its own vertices'
-    /// normals as they were before the refinement (docs/math.md §12), however the split faces
-    /// around them now lie. The next `start.len()` vertices' fits start from the normals in
-    /// `start` instead of their faces' (the jet fit still tilts them).
+    /// normals as they were before the refinement, and its new vertices the normalised means
+    /// the refinement carried to them (docs/math.md §12), however the split faces around them
+    /// lie.
     pub fn compute_keeping(
         mesh: &Mesh,
         options: &GeometryOptions,
         kept: &[Vector3<f64>],
-        start: &[Vector3<f64>],
     ) -> (Self, Vec<(&'static str, f64)>) {
         let mut timings = Vec::with_capacity(7);
         let mut clock = std::time::Instant::now();
@@ -196,11 +195,6 @@ impl Geometry {
         for (i, n) in kept.iter().enumerate().take(normals.len()) {
             normals[i] = *n;
             pinned[i] = true;
-        }
-        for (i, n) in start.iter().enumerate() {
-            if let Some(slot) = normals.get_mut(kept.len() + i) {
-                *slot = *n;
-            }
         }
         drop(face_n);
         lap("normals");

@@ -97,14 +97,15 @@ const PHONG_ALPHA: f64 = 0.5;
 /// length per face, scene units; `f64::INFINITY` where nothing is asked). Refuses, naming
 /// `options.budget_key`, when more than `options.max_new_vertices` would be added.
 pub fn refine(mesh: &Mesh, target: &[f64], options: &RefineOptions) -> Result<Refined> {
-    refine_with(mesh, target, options, &|_, inherited| inherited, None)
+    refine_with(mesh, target, options, &|_, _, inherited| inherited, None)
 }
 
-/// The target length of a face a split makes, from its corners and its parent's target.
-pub type Retarget<'a> = &'a dyn Fn(&[Vector3<f64>; 3], f64) -> f64;
+/// The target length of a face a split makes, from its corners, their unit normals (the ones
+/// the Phong points were placed with: [`Refined::normals`]) and its parent's target.
+pub type Retarget<'a> = &'a dyn Fn(&[Vector3<f64>; 3], &[Vector3<f64>; 3], f64) -> f64;
 
-/// [`refine`] asking `retarget` for the target of every face a split makes (its corners and
-/// its parent's target in, its own out; [`refine`] keeps the parent's). A target that follows
+/// [`refine`] asking `retarget` for the target of every face a split makes (its corners, their
+/// normals and its parent's target in, its own out; [`refine`] keeps the parent's). A target that follows
 /// where a face is — the edits' regions — keeps a long sliver touched by a brush from being
 /// split along its whole length.
 ///
@@ -570,7 +571,8 @@ impl State {
                 faces.push(face);
                 origin.push(self.origin[f]);
                 target.push(if split {
-                    retarget(&face.map(|v| self.pos[v as usize]), self.target[f])
+                    let corners = face.map(|v| self.pos[v as usize]);
+                    retarget(&corners, &face.map(|v| self.nrm[v as usize]), self.target[f])
                 } else {
                     self.target[f]
                 });

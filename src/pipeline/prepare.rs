@@ -210,7 +210,6 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     field_options.critical_threshold = scene.field.critical_threshold;
     if let Some(r) = &refinement {
         field_options.kept_normals = r.kept_normals.clone();
-        field_options.start_normals = r.start_normals.clone();
     }
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
@@ -361,10 +360,9 @@ pub fn initial_field_file(p: &Prepared) -> Result<crate::field::FieldFile> {
 struct Refinement {
     refined: crate::mesh::refine::Refined,
     report: RefinementReport,
-    /// The normals of the part's own vertices before the refinement.
+    /// The normals the geometry keeps: the part's own vertices' before the refinement, then
+    /// the new vertices' as the refinement interpolated them.
     kept_normals: Vec<nalgebra::Vector3<f64>>,
-    /// The normals the new vertices' fits start from (empty: from their faces).
-    start_normals: Vec<nalgebra::Vector3<f64>>,
 }
 
 /// The mesh refinement made for the edits (`mesh.refine`, docs/math.md §12).
@@ -380,6 +378,9 @@ pub struct RefinementReport {
     pub levels: usize,
     /// The longest edge allowed inside the finest brush, scene units.
     pub finest_edge: f64,
+    /// Faces of the part that the key light's half vector turns across by more than
+    /// `mesh.refine.turn` inside a brush, and that asked for finer edges than the brush does.
+    pub turned_faces: usize,
 }
 
 /// The edge length each face of `mesh` needs for the scene's edits
@@ -396,9 +397,17 @@ pub fn refine_request(
     }
     let edits = super::optimize::resolved_edits(s);
     let key = |e: Error| crate::scene::prefix("edits", e);
-    let target =
+    let mut target =
         crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
-    Ok(target.finest().is_finite().then_some(target))
+    if !target.finest().is_finite() {
+        return Ok(None);
+    }
+    if settings.turn < 180.0 {
+        let lighting = key_light(&s.scene)?.lighting(s.scene.view.view(), mesh)?;
+        let max_turn = settings.turn.to_radians();
+        target.turn = Some(crate::edit::resolution::HalfVectorTurn { lighting, max_turn });
+    }
+    Ok(Some(target))
 }
 
 /// Refines the part inside the edits' brushes where its triangles are coarser than
@@ -414,7 +423,6 @@ fn refine_for_edits(
     let Some(target) = refine_request(s, mesh)? else {
         return Ok(None);
     };
-    let finest = target.finest();
     stages.start("refine");
     let options = crate::mesh::refine::RefineOptions {
         max_new_vertices: settings.max_vertices,
@@ -434,29 +442,34 @@ fn refine_for_edits(
     // The faces a split makes are asked again where they are (a sliver's far children are
     // left alone: docs/math.md §12). The Phong points use those fitted normals, not the
     // facets' (a scan's noise and a mesher's slivers tilt those every way: math.md §12).
-    let retarget = |p: &[nalgebra::Vector3<f64>; 3], _: f64| target.child_target(p);
-    let refined = crate::mesh::refine::refine_with(
-        mesh,
-        &target.faces,
-        &options,
-        &retarget,
-        Some(&kept_normals),
-    )?;
+    // Inside a region, h̄ may turn by at most `mesh.refine.turn` along an edge (the request's
+    // turn, on the fitted normals: math.md §12).
+    let faces = target.turned_faces(mesh, &kept_normals);
+    let retarget = |p: &[nalgebra::Vector3<f64>; 3], n: &[nalgebra::Vector3<f64>; 3], _: f64| {
+        target.face_target(p, n)
+    };
+    let refined =
+        crate::mesh::refine::refine_with(mesh, &faces, &options, &retarget, Some(&kept_normals))?;
     if refined.added() == 0 {
         return Ok(None);
     }
+    let turned_faces = faces.iter().zip(&target.faces).filter(|(t, r)| t < r).count();
     let report = RefinementReport {
         vertices_before: mesh.num_vertices(),
         vertices_added: refined.added(),
         faces_split: refined.faces_split,
         levels: refined.levels,
-        finest_edge: finest,
+        finest_edge: target.finest(),
+        turned_faces,
     };
-    // ... and the new vertices' fits start from their edges' normals there: the split faces
-    // around a new vertex of a scan can stand on edge, and their normal point anywhere.
-    let start_normals = refined.normals[mesh.num_vertices()..].to_vec();
+    // ... and the new vertices keep the normalised means of their edges' normals the Phong
+    // points were placed with: fitted again, on split faces that can stand on edge around a
+    // scan's new vertex or resolve a sculpt's folds past what the part's own fits saw, they
+    // turned h̄ by more than the refinement was made to allow (math.md §12).
+    let mut kept_normals = kept_normals;
+    kept_normals.extend_from_slice(&refined.normals[mesh.num_vertices()..]);
     *mesh = refined.mesh.clone();
-    Ok(Some(Refinement { refined, report, kept_normals, start_normals }))
+    Ok(Some(Refinement { refined, report, kept_normals }))
 }
 
 /// Makes sure `mesh` has a UV layout the toolpaths can use, as `options.mode` says: `auto`

@@ -87,6 +87,11 @@ pub struct RefineSettings {
     /// Most vertices refinement may add (default 2,000,000); past it the scene is refused.
     #[serde(default = "default_refine_budget")]
     pub max_vertices: usize,
+    /// The largest turn, in degrees, of the key light's half vector (its tangent part) along
+    /// an edge inside a bend, expand or curve (default 20): faces along which it turns more
+    /// are split further, down to ⅛ of the edge `edge` asks for. 180 asks for nothing.
+    #[serde(default = "default_refine_turn")]
+    pub turn: f64,
 }
 
 /// `mesh.refine.mode`.
@@ -106,6 +111,10 @@ fn default_refine_edge() -> f64 {
     1.0 / 3.0
 }
 
+fn default_refine_turn() -> f64 {
+    crate::edit::resolution::DEFAULT_MAX_TURN_DEG
+}
+
 fn default_refine_budget() -> usize {
     2_000_000
 }
@@ -116,6 +125,7 @@ impl Default for RefineSettings {
             mode: RefineMode::Edits,
             edge: default_refine_edge(),
             max_vertices: default_refine_budget(),
+            turn: default_refine_turn(),
         }
     }
 }
@@ -125,12 +135,22 @@ impl RefineSettings {
         *self == RefineSettings::default()
     }
 
-    /// Range-checks `edge` (in [0.05, 2]); keys are relative to `mesh.refine`.
+    /// Range-checks `edge` (in [0.05, 2]) and `turn` (in [5, 180]); keys are relative to
+    /// `mesh.refine`.
     pub fn validate(&self) -> Result<()> {
         if !(self.edge.is_finite() && (0.05..=2.0).contains(&self.edge)) {
             return Err(Error::setting(
                 "edge",
                 format!("must be within [0.05, 2], got {}", crate::error::fmt_num(self.edge)),
+            ));
+        }
+        if !(self.turn.is_finite() && (5.0..=180.0).contains(&self.turn)) {
+            return Err(Error::setting(
+                "turn",
+                format!(
+                    "must be within [5, 180] degrees, got {}",
+                    crate::error::fmt_num(self.turn)
+                ),
             ));
         }
         Ok(())
