@@ -219,3 +219,35 @@ fn a_fit_over_a_ball_keeps_a_clean_sphere() {
     eprintln!("clean sphere, ball of 6: max relative curvature error {:.2e}", m1.max(m2));
     assert!(m1.max(m2) < 0.02);
 }
+
+/// A mesher's micro-feature: a vertex whose six faces are a tiny corner (here a crinkled fan
+/// 0.03 across, tilted 27°) inside a flat surface of unit edges. Its 1-ring fit is the fan's
+/// tilt; its 2-ring is the surface's, and the fit takes it (MIN_RING_SHARE).
+#[test]
+fn a_micro_feature_s_vertex_takes_the_surface_s_normal() {
+    // Ring `k` of `n` at radius r on the plane z = tilt · x, crinkled by ±crinkle · r.
+    let ring = |r: f64, k: usize, n: usize, tilt: f64, crinkle: f64| {
+        let a = std::f64::consts::TAU * k as f64 / n as f64;
+        let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
+        Vector3::new(r * a.cos(), r * a.sin(), tilt * r * a.cos() + sign * crinkle * r)
+    };
+    let mut pos = vec![Vector3::zeros()];
+    pos.extend((0..6).map(|k| ring(0.03, k, 6, 0.5, 0.2)));
+    pos.extend((0..6).map(|k| ring(1.0, k, 6, 0.0, 0.0)));
+    pos.extend((0..12).map(|k| ring(2.0, k, 12, 0.0, 0.0)));
+    let (tiny, r1, r2) = (1u32, 7u32, 13u32);
+    let mut faces = Vec::new();
+    for k in 0..6u32 {
+        let j = (k + 1) % 6;
+        faces.push([0, tiny + k, tiny + j]);
+        faces.push([tiny + k, r1 + k, r1 + j]);
+        faces.push([tiny + k, r1 + j, tiny + j]);
+        faces.push([r1 + k, r2 + 2 * k, r2 + 2 * k + 1]);
+        faces.push([r1 + k, r2 + 2 * k + 1, r1 + j]);
+        faces.push([r1 + j, r2 + 2 * k + 1, r2 + (2 * k + 2) % 12]);
+    }
+    let mesh = grainline::mesh::Mesh::from_triangles(pos, faces);
+    let g = geom(&mesh);
+    let tilt = g.normal(0).angle(&Vector3::z()).to_degrees();
+    assert!(tilt < 3.0, "the micro-feature's normal is {tilt:.1}° off the surface's");
+}

@@ -15,7 +15,9 @@
 //! whose ring is still degenerate (collinear neighbours, slivers) grows it up to the 4-ring —
 //! and so does one whose fit leans the normal by more than [`MAX_FIT_TILT_DEG`] or whose slope
 //! the part's height noise would tilt by more than [`MAX_NOISE_TILT_DEG`]
-//! ([`MAX_SLOPE_VARIANCE`]): the marks of a ring too thin to tell the plane.
+//! ([`MAX_SLOPE_VARIANCE`]): the marks of a ring too thin to tell the plane. A 1-ring much
+//! smaller than its neighbours' ([`MIN_RING_SHARE`]) is not taken either: it samples a mesher's
+//! micro-feature, not the part.
 //! A vertex with no usable ring gets W = 0 and is counted.
 
 use nalgebra::{Matrix2, Vector3};
@@ -225,6 +227,9 @@ pub(crate) struct JetRings {
     /// The RMS height error of the part's vertices (scene units; 0: exact), against which a
     /// ring's fit is judged ([`MAX_SLOPE_VARIANCE`]).
     pub height_noise: f64,
+    /// The mean of the current vertex's neighbours' 1-ring radii ([`ring_radii`]), against which
+    /// its own 1-ring is judged ([`MIN_RING_SHARE`]); 0: not judged.
+    pub neighbour_radius: f64,
 }
 
 /// Most vertices a fit over a ball uses (`field.fit_radius`): the nearest in breadth-first
@@ -318,6 +323,10 @@ impl JetRings {
                 self.valid[k] = true;
             }
             if let Some(inv_h) = self.inv_h[k] {
+                // A 1-ring much smaller than its neighbours' is a micro-feature (module docs).
+                if depth == 1 && MIN_RING_SHARE * self.neighbour_radius * inv_h > 1.0 {
+                    continue;
+                }
                 // The slope variance matters only against a height noise (module docs).
                 let check = depth < 4 && self.height_noise > 0.0;
                 let fit = fit_scaled_checked(&self.offsets[k], inv_h, frame, check);
@@ -346,6 +355,42 @@ pub const MAX_FIT_TILT_DEG: f64 = 30.0;
 /// 6.4, so they are never judged; a mesher's slivers give up to 10³ (their neighbours bunch
 /// along a line). A CAD part's strips bunch as much, but its positions are exact.
 pub const MAX_SLOPE_VARIANCE: f64 = 10.0;
+
+/// The smallest RMS radius of a 1-ring fit, as a share of the mean of its neighbours' 1-ring
+/// radii: a mesher's micro-feature — a marching-cubes corner 0.03 mm across on a surface of
+/// 0.7 mm edges, its six faces along the grid's axes — has a 1-ring twenty times smaller than
+/// its neighbours' (more than ten times is the rule), whose fit gives the corner's diagonal as the normal (20° off the surface's
+/// around it) and a speck in every highlight. Its 2-ring is the surface's. A regular mesh has
+/// neighbours' rings of the vertex's own size, a graded one within a factor of two.
+pub const MIN_RING_SHARE: f64 = 0.1;
+
+/// The RMS distance of each vertex's 1-ring neighbours to it (0 for an isolated vertex): the
+/// scale a vertex's [`neighbour_radius`] is taken from.
+pub fn ring_radii(positions: &[Vector3<f64>], adj: &Adjacency) -> Vec<f64> {
+    use rayon::prelude::*;
+    (0..positions.len())
+        .into_par_iter()
+        .map(|i| {
+            let n = adj.neighbors(i);
+            let s: f64 =
+                n.iter().map(|&j| (positions[j as usize] - positions[i]).norm_squared()).sum();
+            if n.is_empty() {
+                0.0
+            } else {
+                (s / n.len() as f64).sqrt()
+            }
+        })
+        .collect()
+}
+
+/// The mean of `radii` over the neighbours of vertex `i` (0 without neighbours).
+pub fn neighbour_radius(radii: &[f64], adj: &Adjacency, i: usize) -> f64 {
+    let n = adj.neighbors(i);
+    if n.is_empty() {
+        return 0.0;
+    }
+    n.iter().map(|&j| radii[j as usize]).sum::<f64>() / n.len() as f64
+}
 
 /// The tilt the part's height noise may give a ring's fitted normal through its slope
 /// variance, degrees; a ring that would tilt it more is not taken (the next ring is).

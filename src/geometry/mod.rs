@@ -217,6 +217,7 @@ impl Geometry {
             .map(|_| Principal { k1: 0.0, k2: 0.0, d1: [1.0, 0.0] })
             .collect();
         let mut rings = vec![0u8; nv];
+        let radii = curvature::ring_radii(&mesh.positions, &adjacency);
         frames
             .par_chunks_mut(FIT_CHUNK)
             .zip(weingarten.par_chunks_mut(FIT_CHUNK))
@@ -227,6 +228,13 @@ impl Geometry {
                 for k in 0..fr.len() {
                     let i = c * FIT_CHUNK + k;
                     let refine = if pinned[i] { 0 } else { refinements };
+                    // A normal fixed by its flat faces (or kept) is not fitted: its 1-ring is not
+                    // judged against its neighbours' (a CAD face's fans are all sizes).
+                    bufs.neighbour_radius = if pinned[i] {
+                        0.0
+                    } else {
+                        curvature::neighbour_radius(&radii, &adjacency, i)
+                    };
                     let (frame, fit) =
                         fit_vertex(mesh, &adjacency, options, refine, &normals[i], i, bufs);
                     fr[k] = frame;
