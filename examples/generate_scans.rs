@@ -15,9 +15,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
     let scan = ScanOptions::default();
     let rock = ScanOptions { cell: 1.4, noise: 0.06, ..ScanOptions::default() };
+    // A rougher scanner: 0.25 mm of noise at the same 1 mm spacing (facet dihedrals of about
+    // 35° RMS, docs/math.md §3, "Creases on a noisy part").
+    let rough = ScanOptions { noise: 0.25, seed: 2, ..ScanOptions::default() };
     let sculpt = SculptOptions::default();
-    let parts: [(&str, Mesh, bool); 4] = [
+    let parts: [(&str, Mesh, bool); 5] = [
         ("bust_scan", scan::bust_scan(&scan)?, true),
+        ("bust_scan_rough", scan::bust_scan(&rough)?, true),
         ("rock_scan", scan::rock_scan(&rock)?, true),
         ("sculpt_creature", scan::sculpt_creature(&sculpt)?, false),
         ("uv_character", scan::uv_character(&sculpt)?, false),

@@ -124,3 +124,22 @@ fn refining_where_the_half_vector_turns_keeps_a_sculpt_s_bend_and_expand_regular
     assert!(added[..2].iter().any(|a| a.2 > 0), "turn 180 adds none: {added:?}");
     assert!(added[2..].iter().all(|a| a.2 <= 0), "{added:?}");
 }
+
+#[test]
+fn a_rough_scan_stays_one_patch_and_a_bend_lands_on_it() {
+    // The small bust with 0.2 mm of noise at about 0.7 mm spacing: facet dihedrals of about
+    // 35° RMS, which a 40° crease angle cut into hundreds of patches (no stretch of the key
+    // highlight left to place an edit on). The noise is estimated first, and a dihedral the
+    // noise can make is no crease.
+    let o = ScanOptions { cell: 1.0, scale: 0.5, noise: 0.2, seed: 2 };
+    let mesh = scan::bust_scan(&o).unwrap();
+    let (_dir, case, p) = prepared(&mesh, "bust_rough");
+    let noise = p.prepared.noise.expect("the run estimates the noise");
+    // The case scales the part to the corpus's size (`mesh.scale`).
+    assert!((noise.sigma / case.scale - 0.2).abs() < 0.02, "{noise:?}, scale {}", case.scale);
+    let cut = p.prepared.patches.as_ref().map(|r| (r.patches, r.sharp_edges));
+    assert!(cut.is_none(), "cut into (patches, sharp edges) {cut:?}");
+    let o = corpus::run_edit(&case, &p, "bend", "position").unwrap().unwrap();
+    let f = o.figures.as_ref().expect("figures");
+    assert!(f.landed, "{f:?}");
+}

@@ -121,6 +121,9 @@ pub struct LoadedPart {
     pub layout: Option<crate::layout::LayoutReport>,
     /// The part's split into smooth patches (`mesh.patches`), if any vertex was split.
     pub patches: Option<PatchReport>,
+    /// The part's noise as loaded (`field.noise: "auto"`), estimated before the cut into
+    /// patches; `None` with `field.noise: "off"` or a `field.fit_radius` given.
+    pub noise: Option<crate::geometry::noise::NoiseEstimate>,
 }
 
 /// The first half of [`prepare_with`]: loads the part (or meshes its outline), checks the
@@ -137,7 +140,9 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
     let (mut mesh, mesh_name) = load_part(s)?;
     // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
     check_scene_work(scene, &mesh)?;
-    let patches = split_into_patches(s, &mut mesh);
+    // The noise first: on a noisy part a dihedral within the noise's reach is no crease.
+    let noise = estimate_noise(s, &mesh);
+    let patches = split_into_patches(s, &mut mesh, noise.as_ref());
     let lighting = key.lighting(scene.view.view(), &mesh).map_err(|e| match (key, e) {
         (KeyLight::Point(p), Error::InvalidArgument { name, .. })
             if name == "light position − part centre" =>
@@ -178,7 +183,8 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
         (InitKind::Map, Some(m)) => Some(crate::texmap::read_map(&s.input(&m.path), m.kind)?),
         _ => None,
     };
-    Ok(LoadedPart { mesh, mesh_name, lighting, directions, map, layout: layout_report, patches })
+    let layout = layout_report;
+    Ok(LoadedPart { mesh, mesh_name, lighting, directions, map, layout, patches, noise })
 }
 
 /// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
@@ -186,8 +192,8 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
 /// initial field and its highlights on the result.
 pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
-    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, map, layout, patches } = part;
-    let noise = estimate_noise(s, &mesh);
+    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, map, layout, patches, noise } =
+        part;
     let fit_radius = scene.field.fit_radius.or(noise.and_then(|e| e.fit_radius));
     let height_noise = noise.map_or(0.0, |e| e.sigma);
     let refinement = refine_for_edits(s, &mut mesh, (fit_radius, height_noise), stages)?;
@@ -217,10 +223,10 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
 }
 
 /// The part's noise and the fit radius it asks for (`field.noise: "auto"`, docs/math.md §5.6,
-/// "Noise scale"), estimated on the part as loaded and split into its patches, before any
-/// refinement; `None` when the scene sets `field.fit_radius` or `field.noise: "off"`.
-/// Its time (about 0.1 s for 100k vertices) counts in the stage before, `load` or `layout`: the
-/// report's stage list is unchanged.
+/// "Noise scale"), estimated on the part as loaded, before it is split into patches (which it
+/// tells the noise's folds from creases: [`split_into_patches`]) and before any refinement;
+/// `None` when the scene sets `field.fit_radius` or `field.noise: "off"`. Its time (about
+/// 0.1 s for 100k vertices) counts in the `load` stage.
 fn estimate_noise(s: &LoadedScene, mesh: &Mesh) -> Option<crate::geometry::noise::NoiseEstimate> {
     let field = &s.scene.field;
     if field.fit_radius.is_some() || field.noise == crate::scene::NoiseMode::Off {
@@ -323,14 +329,22 @@ impl NarrowPatches {
 
 /// Cuts `mesh` into its smooth patches (`mesh.patches: "split"`, the default, at
 /// `mesh.crease_angle`); `None` when nothing was split (a smooth part, an outline's panel, or
-/// `mesh.patches: "none"`). With a `toolpaths` section, the patches narrower than its brush
-/// are reported.
-fn split_into_patches(s: &LoadedScene, mesh: &mut Mesh) -> Option<PatchReport> {
+/// `mesh.patches: "none"`). On a part `noise` finds noisy (it chose a fit radius), a dihedral
+/// the noise can make is not a crease (docs/math.md §3, "Patches"). With a `toolpaths`
+/// section, the patches narrower than its brush are reported.
+fn split_into_patches(
+    s: &LoadedScene,
+    mesh: &mut Mesh,
+    noise: Option<&crate::geometry::noise::NoiseEstimate>,
+) -> Option<PatchReport> {
     let m = s.scene.mesh.as_ref()?;
     if m.0.patches == crate::scene::PatchMode::None {
         return None;
     }
-    let patches = crate::geometry::patches::patches(mesh, m.crease_angle());
+    let height_noise = noise.filter(|n| n.fit_radius.is_some()).map_or(0.0, |n| n.sigma);
+    let options =
+        crate::geometry::patches::PatchOptions { crease_angle_deg: m.crease_angle(), height_noise };
+    let patches = crate::geometry::patches::patches_with(mesh, &options);
     let split = crate::geometry::patches::split_patches(mesh, &patches)?;
     let narrow = s
         .scene
