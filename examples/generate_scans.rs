@@ -19,11 +19,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // 35° RMS, docs/math.md §3, "Creases on a noisy part").
     let rough = ScanOptions { noise: 0.25, seed: 2, ..ScanOptions::default() };
     let sculpt = SculptOptions::default();
-    let parts: [(&str, Mesh, bool); 5] = [
+    // Deeper, tighter folds on a smaller creature: slopes of about 45°, dozens of critical
+    // points of the key light's half vector under one brush (docs/benchmarks.md).
+    let deep =
+        SculptOptions { cell: 0.9, wrinkle_height: 0.5, wrinkle_wavelength: 3.0, scale: 0.8 };
+    let parts: [(&str, Mesh, bool); 6] = [
         ("bust_scan", scan::bust_scan(&scan)?, true),
         ("bust_scan_rough", scan::bust_scan(&rough)?, true),
         ("rock_scan", scan::rock_scan(&rock)?, true),
         ("sculpt_creature", scan::sculpt_creature(&sculpt)?, false),
+        ("sculpt_creature_deep", scan::sculpt_creature(&deep)?, false),
         ("uv_character", scan::uv_character(&sculpt)?, false),
     ];
     for (name, mesh, ply) in &parts {
