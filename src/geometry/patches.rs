@@ -23,6 +23,8 @@
 //! edge is sharp only when its dihedral is also beyond [`NOISE_CREASE_SIGMAS`] σ_d: an angle
 //! the noise makes at no more than a few edges in a thousand, which close no patch.
 
+use std::collections::HashMap;
+
 use nalgebra::Vector3;
 
 use crate::mesh::planar::{planar_regions, NO_REGION};
@@ -272,14 +274,28 @@ fn join_small_patches(
         .map(|f| (patch_area[f as usize], f))
         .collect();
     small.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    // Per patch (by root), the sharp edges out of it (indices into `sharp`), merged smaller
+    // into larger as patches join: a noisy part's thousands of small patches each scanning
+    // every sharp edge made this quadratic.
+    let mut edges_of: HashMap<u32, Vec<u32>> = HashMap::new();
+    for (i, &(a, b, _)) in sharp.iter().enumerate() {
+        let (ra, rb) = (find(parent, a), find(parent, b));
+        if ra != rb {
+            edges_of.entry(ra).or_default().push(i as u32);
+            edges_of.entry(rb).or_default().push(i as u32);
+        }
+    }
     for (_, root) in small {
         let r = find(parent, root);
         if patch_area[r as usize] >= MIN_PATCH_AREA_SHARE * total {
             continue; // grown by an earlier join
         }
-        // The shared sharp length with each neighbouring patch.
+        // The shared sharp length with each neighbouring patch, summed in the edges' order.
+        let mut own = edges_of.remove(&r).unwrap_or_default();
+        own.sort_unstable();
+        own.dedup();
         let mut shared: Vec<(u32, f64)> = Vec::new();
-        for &(a, b, len) in sharp {
+        for &(a, b, len) in own.iter().map(|&i| &sharp[i as usize]) {
             let (ra, rb) = (find(parent, a), find(parent, b));
             let other = match (ra == r, rb == r) {
                 (true, false) => rb,
@@ -301,7 +317,16 @@ fn join_small_patches(
         if let Some((q, _)) = best {
             let joined = patch_area[r as usize] + patch_area[q as usize];
             union(parent, r, q);
-            patch_area[find(parent, r) as usize] = joined;
+            let n = find(parent, r);
+            patch_area[n as usize] = joined;
+            let mut other = edges_of.remove(&q).unwrap_or_default();
+            if other.len() < own.len() {
+                std::mem::swap(&mut other, &mut own);
+            }
+            other.extend(own);
+            edges_of.insert(n, other);
+        } else {
+            edges_of.insert(r, own);
         }
     }
 }
@@ -433,9 +458,9 @@ mod tests {
         assert!(split_patches(&cube, &p).is_none());
     }
 
-    /// A 40 × 40 grid of unit squares, folded up by 90° along x = 20 when `fold`, each vertex
-    /// moved along its side's normal by Gaussian noise of RMS `sigma` (a fixed LCG and
-    /// Box–Muller: the same mesh every run).
+    /// A 40 × 40 grid of unit squares ([`crate::generate::Grid`]), folded up by 90° along
+    /// x = 20 when `fold`, each vertex moved along its side's normal by Gaussian noise of RMS
+    /// `sigma` (a fixed LCG and Box–Muller: the same mesh every run).
     fn noisy_sheet(sigma: f64, fold: bool) -> Mesh {
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut uniform = || {
@@ -444,28 +469,17 @@ mod tests {
                 .wrapping_add(1_442_695_040_888_963_407);
             ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
         };
-        let n = 40;
-        let mut pos = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let g = (-2.0 * uniform().ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos();
-                let (x, y) = (i as f64, j as f64);
-                pos.push(if fold && x > 20.0 {
-                    Vector3::new(20.0 - sigma * g, y, x - 20.0)
-                } else {
-                    Vector3::new(x, y, sigma * g)
-                });
-            }
+        let mut mesh = crate::generate::Grid::new(40, 40)
+            .build(|s, t| Vector3::new((40.0 * s).round(), (40.0 * t).round(), 0.0));
+        for p in &mut mesh.positions {
+            let g = (-2.0 * uniform().ln()).sqrt() * (std::f64::consts::TAU * uniform()).cos();
+            *p = if fold && p.x > 20.0 {
+                Vector3::new(20.0 - sigma * g, p.y, p.x - 20.0)
+            } else {
+                Vector3::new(p.x, p.y, sigma * g)
+            };
         }
-        let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut faces = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                faces.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-                faces.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-            }
-        }
-        Mesh::from_triangles(pos, faces)
+        mesh
     }
 
     /// Equilateral faces of edge s: σ_d = 4σ / (√3 s).

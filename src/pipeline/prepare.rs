@@ -121,8 +121,8 @@ pub struct LoadedPart {
     pub layout: Option<crate::layout::LayoutReport>,
     /// The part's split into smooth patches (`mesh.patches`), if any vertex was split.
     pub patches: Option<PatchReport>,
-    /// The part's noise as loaded (`field.noise: "auto"`), estimated before the cut into
-    /// patches; `None` with `field.noise: "off"` or a `field.fit_radius` given.
+    /// The part's noise (`field.noise: "auto"`), estimated on the part cut at its creases;
+    /// `None` with `field.noise: "off"` or a `field.fit_radius` given.
     pub noise: Option<crate::geometry::noise::NoiseEstimate>,
 }
 
@@ -140,9 +140,19 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
     let (mut mesh, mesh_name) = load_part(s)?;
     // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
     check_scene_work(scene, &mesh)?;
-    // The noise first: on a noisy part a dihedral within the noise's reach is no crease.
-    let noise = estimate_noise(s, &mesh);
-    let patches = split_into_patches(s, &mut mesh, noise.as_ref());
+    // The part cut at its creases and its noise estimated there (a CAD face's vertices all
+    // sit on sharp edges, which would read as noise on the part uncut); a part found noisy is
+    // cut again where its creases are more than its noise could make.
+    let mut split = split_into_patches(s, &mesh, 0.0);
+    let noise = estimate_noise(s, split.as_ref().map_or(&mesh, |(m, _)| m));
+    let noisy = noise.filter(|n| n.fit_radius.is_some()).map(|n| n.sigma);
+    if let (Some(sigma), Some(_)) = (noisy, &split) {
+        split = split_into_patches(s, &mesh, sigma);
+    }
+    let patches = split.map(|(m, report)| {
+        mesh = m;
+        report
+    });
     let lighting = key.lighting(scene.view.view(), &mesh).map_err(|e| match (key, e) {
         (KeyLight::Point(p), Error::InvalidArgument { name, .. })
             if name == "light position − part centre" =>
@@ -223,8 +233,9 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
 }
 
 /// The part's noise and the fit radius it asks for (`field.noise: "auto"`, docs/math.md §5.6,
-/// "Noise scale"), estimated on the part as loaded, before it is split into patches (which it
-/// tells the noise's folds from creases: [`split_into_patches`]) and before any refinement;
+/// "Noise scale"), estimated on the part as loaded and cut at its creases (a part found noisy
+/// is then cut again, its noise's folds told from creases: [`split_into_patches`]), before any
+/// refinement;
 /// `None` when the scene sets `field.fit_radius` or `field.noise: "off"`. Its time (about
 /// 0.1 s for 100k vertices) counts in the `load` stage.
 fn estimate_noise(s: &LoadedScene, mesh: &Mesh) -> Option<crate::geometry::noise::NoiseEstimate> {
@@ -327,21 +338,20 @@ impl NarrowPatches {
     }
 }
 
-/// Cuts `mesh` into its smooth patches (`mesh.patches: "split"`, the default, at
+/// `mesh` cut into its smooth patches (`mesh.patches: "split"`, the default, at
 /// `mesh.crease_angle`); `None` when nothing was split (a smooth part, an outline's panel, or
-/// `mesh.patches: "none"`). On a part `noise` finds noisy (it chose a fit radius), a dihedral
-/// the noise can make is not a crease (docs/math.md §3, "Patches"). With a `toolpaths`
-/// section, the patches narrower than its brush are reported.
+/// `mesh.patches: "none"`). With `height_noise` (the RMS height of a part found noisy, else 0)
+/// a dihedral the noise can make is not a crease (docs/math.md §3, "Creases on a noisy
+/// part"). With a `toolpaths` section, the patches narrower than its brush are reported.
 fn split_into_patches(
     s: &LoadedScene,
-    mesh: &mut Mesh,
-    noise: Option<&crate::geometry::noise::NoiseEstimate>,
-) -> Option<PatchReport> {
+    mesh: &Mesh,
+    height_noise: f64,
+) -> Option<(Mesh, PatchReport)> {
     let m = s.scene.mesh.as_ref()?;
     if m.0.patches == crate::scene::PatchMode::None {
         return None;
     }
-    let height_noise = noise.filter(|n| n.fit_radius.is_some()).map_or(0.0, |n| n.sigma);
     let options =
         crate::geometry::patches::PatchOptions { crease_angle_deg: m.crease_angle(), height_noise };
     let patches = crate::geometry::patches::patches_with(mesh, &options);
@@ -359,8 +369,7 @@ fn split_into_patches(
         copies_of: split.copies_of,
         narrow,
     };
-    *mesh = split.mesh;
-    Some(report)
+    Some((split.mesh, report))
 }
 
 /// FIELD.json of the initial field of `p`, with its patches' copies.
