@@ -25,7 +25,8 @@
 //! highlight by code — and per highlight energy (`solver.highlight_energy`; an energy this
 //! build's scene loader does not know is skipped, and "tensor" then runs today's solver). Prints
 //! a markdown table: the share of the target highlight within 0.05 r of the solved one, its
-//! 95th-percentile distance (× r), the singular triangles inside the support before → after,
+//! 95th-percentile distance (× r), the singular triangles inside the support before → after
+//! (with the number the solved highlight forces, docs/math.md §10, when it is not 0),
 //! the iterations, the stop reason and the wall time of the optimize stage (the edits, the solve
 //! and the fidelity measure).
 //!
@@ -199,7 +200,8 @@ fn main() {
         .count();
     println!();
     println!(
-        "{landed} of {} edits landed (within ≥ 0.9, p95 ≤ 0.10 r, no new singular triangle).",
+        "{landed} of {} edits landed (within ≥ 0.9, p95 ≤ 0.10 r, no new singular triangle but \
+         those forced).",
         rows.len()
     );
     for n in notes {
@@ -263,8 +265,10 @@ fn row(o: &Outcome) -> String {
         };
         format!("{:.1} %{off} | {:.3} | {:.3}", 100.0 * f.within, f.p95, f.median)
     };
+    let forced = f.singular_forced_after.saturating_sub(f.singular_forced_before);
+    let forced = if forced > 0 { format!(" ({forced} forced)") } else { String::new() };
     format!(
-        "| {} | {} | {} | {} | {} | {} → {} | {} | {}{mono} | {:.2} | {:.2} |",
+        "| {} | {} | {} | {} | {} | {} → {}{forced} | {} | {}{mono} | {:.2} | {:.2} |",
         o.case,
         vertices(o),
         o.edit,

@@ -578,3 +578,49 @@ fn a_warped_highlight_beyond_the_support_is_out_of_reach_and_reported() {
     assert!(!f.landed, "{f:?}");
     assert!(f.note.as_deref().unwrap().contains("out of reach"), "{f:?}");
 }
+
+/// Forced singularities (docs/math.md §10) on a bowl and a saddle z = (x² ± y²)/2, lit so that
+/// h ∥ n at (−0.1, ∓0.05): a critical point of index +1 (bowl) or −1 (saddle). A grain at 45°
+/// from h̄ everywhere has no highlight, so it must turn around the point: the measure says two
+/// half-index triangles are forced, and the field's own singularities there add up to the
+/// point's index. A grain along x puts its highlight through the point and is forced nothing.
+#[test]
+fn a_critical_point_no_highlight_passes_forces_its_index() {
+    use grainline::fidelity::forced_singular;
+    let h = Vector3::new(0.1, 0.05, 1.0).normalize();
+    for (c02, index) in [(1.0, 1.0), (-1.0, -1.0)] {
+        let mesh = generate::quadric_patch([1.0, 0.0, c02], 1.5, Grid::new(61, 61));
+        let geom = Geometry::compute(&mesh, &GeometryOptions::default());
+        let hs = vec![h; mesh.num_vertices()];
+        let faces: Vec<usize> = (0..mesh.num_faces()).collect();
+        let theta: Vec<f64> = geom
+            .frames
+            .iter()
+            .map(|f| {
+                let hb = f.to_local(&h);
+                hb.y.atan2(hb.x)
+            })
+            .collect();
+        let dirs = |phi: Vec<f64>| geom.directions_of(&phi);
+        let tilted = dirs(theta.iter().map(|t| t + std::f64::consts::FRAC_PI_4).collect());
+        let along_x = dirs(geom.frames.iter().map(|f| f.angle_of(&Vector3::x())).collect());
+        let critical = Vector2::new(-0.1, -0.05 * c02);
+        let near = |u: &[Vector3<f64>]| -> f64 {
+            let phi = geom.angles_of(u);
+            grainline::solve::singularities(&mesh, &geom, &phi, 2)
+                .iter()
+                .filter(|s| (Vector2::new(s.position[0], s.position[1]) - critical).norm() < 0.5)
+                .map(|s| s.index)
+                .sum()
+        };
+        let f = forced_singular(&mesh, &geom, &hs, &tilted, Symmetry::Line, &faces);
+        assert_eq!((f.critical_points, f.passed_by, f.singular), (1, 1, 2), "{c02}: {f:?}");
+        assert_eq!(near(&tilted), index, "{c02}");
+        let f = forced_singular(&mesh, &geom, &hs, &along_x, Symmetry::Line, &faces);
+        assert_eq!((f.critical_points, f.passed_by, f.singular), (1, 0, 0), "{c02}: {f:?}");
+        assert_eq!(near(&along_x), 0.0, "{c02}");
+        // An oriented field needs one triangle of index ±1.
+        let f = forced_singular(&mesh, &geom, &hs, &tilted, Symmetry::Oriented, &faces);
+        assert_eq!(f.singular, 1, "{c02}: {f:?}");
+    }
+}

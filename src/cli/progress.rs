@@ -104,9 +104,11 @@ pub fn missed_lines(fidelity: &[grainline::fidelity::EditFidelity]) -> Vec<Strin
                 let why = f.note.as_deref().unwrap_or("nothing to compare");
                 return format!("{head} could not be measured: {why}");
             }
+            let forced = f.singular_forced_after.saturating_sub(f.singular_forced_before);
+            let forced = if forced > 0 { format!(" ({forced} forced)") } else { String::new() };
             format!(
                 "{head} missed: {:.0} % of the target highlight within {tolerance} r (goal {:.0} \
-                 %), p95 {:.2} r, singular triangles {} → {}",
+                 %), p95 {:.2} r, singular triangles {} → {}{forced}",
                 100.0 * f.within,
                 100.0 * grainline::fidelity::GOAL_WITHIN,
                 f.p95,

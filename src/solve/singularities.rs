@@ -34,32 +34,41 @@ pub struct Singularity {
 /// The singular faces of the field `phi` (angles in the geometry's frames) of symmetry `k`,
 /// by increasing face.
 pub fn singularities(mesh: &Mesh, geometry: &Geometry, phi: &[f64], k: u32) -> Vec<Singularity> {
-    let kf = k as f64;
-    let adj = &geometry.adjacency;
     let mut out = Vec::new();
-    for (f, tri) in mesh.faces.iter().enumerate() {
-        let (mut sum_d, mut sum_rho) = (0.0, 0.0);
-        let mut ok = true;
-        for e in 0..3 {
-            let (i, j) = (tri[e] as usize, tri[(e + 1) % 3]);
-            let Some(s) = adj.slot(i, j) else {
-                ok = false;
-                break;
-            };
-            let rho = geometry.transport[s];
-            sum_rho += rho;
-            sum_d += wrap_angle(kf * (phi[j as usize] + rho - phi[i])) / kf;
-        }
-        if !ok {
-            continue;
-        }
-        let turns = (sum_d - wrap_angle(sum_rho)) / std::f64::consts::TAU;
-        let n = (turns * kf).round();
-        if n != 0.0 && n.is_finite() {
+    for f in 0..mesh.num_faces() {
+        let n = face_index(mesh, geometry, phi, f, k);
+        if n != 0 {
             let p = mesh.face_positions(f);
             let c: Vector3<f64> = (p[0] + p[1] + p[2]) / 3.0;
-            out.push(Singularity { face: f as u32, position: [c.x, c.y, c.z], index: n / kf });
+            out.push(Singularity {
+                face: f as u32,
+                position: [c.x, c.y, c.z],
+                index: n as f64 / k as f64,
+            });
         }
     }
     out
+}
+
+/// The index of face `f` in units of 1/k (0 on a face with an edge the adjacency lacks, or with
+/// a non-finite angle).
+pub fn face_index(mesh: &Mesh, geometry: &Geometry, phi: &[f64], f: usize, k: u32) -> i32 {
+    let kf = k as f64;
+    let adj = &geometry.adjacency;
+    let tri = mesh.faces[f];
+    let (mut sum_d, mut sum_rho) = (0.0, 0.0);
+    for e in 0..3 {
+        let (i, j) = (tri[e] as usize, tri[(e + 1) % 3]);
+        let Some(s) = adj.slot(i, j) else { return 0 };
+        let rho = geometry.transport[s];
+        sum_rho += rho;
+        sum_d += wrap_angle(kf * (phi[j as usize] + rho - phi[i])) / kf;
+    }
+    let turns = (sum_d - wrap_angle(sum_rho)) / std::f64::consts::TAU;
+    let n = (turns * kf).round();
+    if n.is_finite() {
+        n as i32
+    } else {
+        0
+    }
 }
