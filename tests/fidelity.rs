@@ -624,3 +624,32 @@ fn a_critical_point_no_highlight_passes_forces_its_index() {
         assert_eq!(f.singular, 1, "{c02}: {f:?}");
     }
 }
+
+/// A flat plate lit and seen straight on: h ∥ n everywhere, h̄ ≡ 0 up to round-off (here 10⁻⁹
+/// in a direction that turns from vertex to vertex, as round-off does: its angles have an index
+/// on most faces). It holds no isolated critical point, so nothing is forced, whatever the grain.
+#[test]
+fn a_plate_facing_the_light_has_no_critical_point_to_count() {
+    use grainline::fidelity::forced_singular;
+    let pl = Plane::new();
+    let hs: Vec<Vector3<f64>> = (0..pl.mesh.num_vertices())
+        .map(|i| {
+            let a = 2.399_963 * i as f64;
+            Vector3::new(1e-9 * a.cos(), 1e-9 * a.sin(), 1.0).normalize()
+        })
+        .collect();
+    let theta: Vec<f64> = hs.iter().map(|h| h.y.atan2(h.x)).collect();
+    let noisy = grainline::solve::singularities(&pl.mesh, &pl.geom, &theta, 1).len();
+    assert!(noisy > 1000, "round-off angles with an index on {noisy} faces");
+    let faces: Vec<usize> = (0..pl.mesh.num_faces()).collect();
+    let radial: Vec<Vector3<f64>> = pl
+        .mesh
+        .positions
+        .iter()
+        .map(|p| Vector3::new(p.x - 0.0131, p.y - 0.0072, 0.0).normalize())
+        .collect();
+    for symmetry in [Symmetry::Oriented, Symmetry::Line] {
+        let f = forced_singular(&pl.mesh, &pl.geom, &hs, &radial, symmetry, &faces);
+        assert_eq!((f.critical_points, f.singular), (0, 0), "{symmetry:?}: {f:?}");
+    }
+}

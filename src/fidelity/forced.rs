@@ -12,7 +12,8 @@
 //!
 //! Discretely: θᵢ is the angle of h̄ in vertex i's frame, and a face where the field θ has a
 //! non-zero index (the connection's index, [`crate::solve::singularities()`] with k = 1) holds a
-//! zero of h̄. Each zero's *neighbourhood* is the vertices within [`NEIGHBOURHOOD_RINGS`] edges
+//! zero of h̄ — counted only where |h̄| ≥ 10⁻⁶ at every corner (a flat region facing the light,
+//! h̄ ≡ 0, holds no isolated zero, and its round-off angles no index). Each zero's *neighbourhood* is the vertices within [`NEIGHBOURHOOD_RINGS`] edges
 //! of its corners; zeros whose neighbourhoods share a vertex form a group. A group whose
 //! neighbourhood's rim (its vertices with a neighbour outside) has no edge where g changes sign
 //! (a line field's second vertex aligned to the first) forces |Σ ind| · k singular triangles,
@@ -51,9 +52,17 @@ pub fn forced_singular(
     symmetry: Symmetry,
     faces: &[usize],
 ) -> Forced {
-    let theta = h_angles(geometry, h);
-    let zeros: Vec<usize> =
-        faces.iter().copied().filter(|&f| face_index(mesh, geometry, &theta, f, 1) != 0).collect();
+    let (theta, defined) = h_angles(geometry, h);
+    // θ's index only where h̄ has a direction at every corner: a flat region facing the light
+    // (h̄ ≡ 0) holds no isolated zero, and its round-off angles no index.
+    let index = |f: usize| {
+        if mesh.faces[f].iter().all(|&v| defined[v as usize]) {
+            face_index(mesh, geometry, &theta, f, 1) as i64
+        } else {
+            0
+        }
+    };
+    let zeros: Vec<usize> = faces.iter().copied().filter(|&f| index(f) != 0).collect();
     if zeros.is_empty() {
         return Forced::default();
     }
@@ -74,7 +83,7 @@ pub fn forced_singular(
         let sum: i64 = around
             .iter()
             .filter(|&&f| mesh.faces[f].iter().all(|&v| is_in(v as usize)))
-            .map(|&f| face_index(mesh, geometry, &theta, f, 1) as i64)
+            .map(|&f| index(f))
             .sum();
         if sum != 0 && !rim_crossed(geometry, h, u, symmetry, &inside, &is_in) {
             forced.passed_by += members.len();
@@ -84,17 +93,20 @@ pub fn forced_singular(
     forced
 }
 
-/// θᵢ, the angle of h̄ in vertex i's frame.
-fn h_angles(geometry: &Geometry, h: &[Vector3<f64>]) -> Vec<f64> {
+/// |h̄| (of a unit h) below which h̄ has no direction.
+const MIN_TANGENT_H: f64 = 1e-6;
+
+/// θᵢ, the angle of h̄ in vertex i's frame, and whether |h̄ᵢ| ≥ [`MIN_TANGENT_H`] |hᵢ|.
+fn h_angles(geometry: &Geometry, h: &[Vector3<f64>]) -> (Vec<f64>, Vec<bool>) {
     geometry
         .frames
         .iter()
         .zip(h)
         .map(|(f, h)| {
             let hb = f.to_local(h);
-            hb.y.atan2(hb.x)
+            (hb.y.atan2(hb.x), hb.norm() >= MIN_TANGENT_H * h.norm())
         })
-        .collect()
+        .unzip()
 }
 
 /// Whether the highlight crosses the rim of the vertex set `inside`: an edge between two of its
