@@ -13,8 +13,9 @@
 //! Discretely: θᵢ is the angle of h̄ in vertex i's frame, and a face where the field θ has a
 //! non-zero index (the connection's index, [`crate::solve::singularities()`] with k = 1) holds a
 //! zero of h̄ — counted only where |h̄| ≥ 10⁻⁶ at every corner (a flat region facing the light,
-//! h̄ ≡ 0, holds no isolated zero, and its round-off angles no index). Each zero's *neighbourhood* is the vertices within [`NEIGHBOURHOOD_RINGS`] edges
-//! of its corners; zeros whose neighbourhoods share a vertex form a group. A group whose
+//! h̄ ≡ 0, holds no isolated zero, and its round-off angles no index). Each zero's
+//! *neighbourhood* is the vertices within [`NEIGHBOURHOOD_RINGS`] edges of its corners; zeros
+//! whose neighbourhoods share a vertex form a group. A group whose
 //! neighbourhood's rim (its vertices with a neighbour outside) has no edge where g changes sign
 //! (a line field's second vertex aligned to the first) forces |Σ ind| · k singular triangles,
 //! Σ over the faces with every corner in the neighbourhood: the rim is the loop of the argument
@@ -27,8 +28,8 @@ use crate::highlight::Symmetry;
 use crate::mesh::{Mesh, VertexFaces};
 use crate::solve::singularities::face_index;
 
-/// The rings of vertices around a zero's face whose faces the highlight must miss for the zero
-/// to force a singularity.
+/// The rings of vertices around a zero's face: the neighbourhood whose rim the highlight must
+/// not cross for the zero to force a singularity.
 pub const NEIGHBOURHOOD_RINGS: usize = 2;
 
 /// What the critical points inside a support force on a field.
