@@ -53,45 +53,88 @@ pub fn forced_singular(
     symmetry: Symmetry,
     faces: &[usize],
 ) -> Forced {
-    let (theta, defined) = h_angles(geometry, h);
-    // θ's index only where h̄ has a direction at every corner: a flat region facing the light
-    // (h̄ ≡ 0) holds no isolated zero, and its round-off angles no index.
-    let index = |f: usize| {
-        if mesh.faces[f].iter().all(|&v| defined[v as usize]) {
-            face_index(mesh, geometry, &theta, f, 1) as i64
-        } else {
-            0
+    CriticalGroups::new(mesh, geometry, h, faces).forced(geometry, h, u, symmetry)
+}
+
+/// The critical points of h̄ among some faces, grouped, with what does not depend on the grain:
+/// each group's neighbourhood and the sum of the indices inside it.
+pub struct CriticalGroups {
+    /// Faces holding a zero of h̄.
+    critical_points: usize,
+    /// Per group: its members, its neighbourhood's vertices (ascending) and Σ ind inside.
+    groups: Vec<(usize, Vec<usize>, i64)>,
+}
+
+impl CriticalGroups {
+    /// The zeros of h̄ (half vectors `h`) among `faces` (ascending), grouped.
+    pub fn new(
+        mesh: &Mesh,
+        geometry: &Geometry,
+        h: &[Vector3<f64>],
+        faces: &[usize],
+    ) -> CriticalGroups {
+        let (theta, defined) = h_angles(geometry, h);
+        // θ's index only where h̄ has a direction at every corner: a flat region facing the
+        // light (h̄ ≡ 0) holds no isolated zero, and its round-off angles no index.
+        let index = |f: usize| {
+            if mesh.faces[f].iter().all(|&v| defined[v as usize]) {
+                face_index(mesh, geometry, &theta, f, 1) as i64
+            } else {
+                0
+            }
+        };
+        let zeros: Vec<usize> = faces.iter().copied().filter(|&f| index(f) != 0).collect();
+        if zeros.is_empty() {
+            return CriticalGroups { critical_points: 0, groups: Vec::new() };
         }
-    };
-    let zeros: Vec<usize> = faces.iter().copied().filter(|&f| index(f) != 0).collect();
-    if zeros.is_empty() {
-        return Forced::default();
+        let vf = VertexFaces::new(mesh);
+        let hoods: Vec<Vec<usize>> =
+            zeros.iter().map(|&f| within_rings(mesh, geometry, f)).collect();
+        let groups = groups(&hoods)
+            .into_iter()
+            .map(|members| {
+                let mut inside: Vec<usize> =
+                    members.iter().flat_map(|&z| hoods[z].iter().copied()).collect();
+                inside.sort_unstable();
+                inside.dedup();
+                let is_in = |v: u32| inside.binary_search(&(v as usize)).is_ok();
+                // Σ ind over the faces with every corner inside (zeros beyond the support too).
+                let mut around: Vec<usize> = inside
+                    .iter()
+                    .flat_map(|&v| vf.of(v).iter().map(|&(f, _)| f as usize))
+                    .collect();
+                around.sort_unstable();
+                around.dedup();
+                let sum: i64 = around
+                    .iter()
+                    .filter(|&&f| mesh.faces[f].iter().all(|&v| is_in(v)))
+                    .map(|&f| index(f))
+                    .sum();
+                (members.len(), inside, sum)
+            })
+            .collect();
+        CriticalGroups { critical_points: zeros.len(), groups }
     }
-    let vf = VertexFaces::new(mesh);
-    let hoods: Vec<Vec<usize>> = zeros.iter().map(|&f| within_rings(mesh, geometry, f)).collect();
-    let k = symmetry.k() as u64;
-    let mut forced = Forced { critical_points: zeros.len(), ..Default::default() };
-    for members in groups(&hoods, mesh.num_vertices()) {
-        let mut inside: Vec<usize> = members.iter().flat_map(|&z| hoods[z].clone()).collect();
-        inside.sort_unstable();
-        inside.dedup();
-        let is_in = |v: usize| inside.binary_search(&v).is_ok();
-        // Σ ind over the faces with every corner inside (zeros beyond the support included).
-        let mut around: Vec<usize> =
-            inside.iter().flat_map(|&v| vf.of(v).iter().map(|&(f, _)| f as usize)).collect();
-        around.sort_unstable();
-        around.dedup();
-        let sum: i64 = around
-            .iter()
-            .filter(|&&f| mesh.faces[f].iter().all(|&v| is_in(v as usize)))
-            .map(|&f| index(f))
-            .sum();
-        if sum != 0 && !rim_crossed(geometry, h, u, symmetry, &inside, &is_in) {
-            forced.passed_by += members.len();
-            forced.singular += (sum.unsigned_abs() * k) as usize;
+
+    /// What they force on the field `u` (world-space unit grain vectors; the same `h`).
+    pub fn forced(
+        &self,
+        geometry: &Geometry,
+        h: &[Vector3<f64>],
+        u: &[Vector3<f64>],
+        symmetry: Symmetry,
+    ) -> Forced {
+        let k = symmetry.k() as u64;
+        let mut forced = Forced { critical_points: self.critical_points, ..Default::default() };
+        for (members, inside, sum) in &self.groups {
+            let is_in = |v: usize| inside.binary_search(&v).is_ok();
+            if *sum != 0 && !rim_crossed(geometry, h, u, symmetry, inside, &is_in) {
+                forced.passed_by += members;
+                forced.singular += (sum.unsigned_abs() * k) as usize;
+            }
         }
+        forced
     }
-    forced
 }
 
 /// |h̄| (of a unit h) below which h̄ has no direction.
@@ -160,7 +203,7 @@ fn within_rings(mesh: &Mesh, geometry: &Geometry, f: usize) -> Vec<usize> {
 
 /// The groups of zeros whose vertex sets share a vertex (union–find), each ascending, in the
 /// order of their first member.
-fn groups(sets: &[Vec<usize>], num_vertices: usize) -> Vec<Vec<usize>> {
+fn groups(sets: &[Vec<usize>]) -> Vec<Vec<usize>> {
     fn root(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
             parent[i] = parent[parent[i]];
@@ -172,7 +215,6 @@ fn groups(sets: &[Vec<usize>], num_vertices: usize) -> Vec<Vec<usize>> {
     let mut owner = std::collections::HashMap::<usize, usize>::new();
     for (z, set) in sets.iter().enumerate() {
         for &v in set {
-            debug_assert!(v < num_vertices);
             if let Some(&other) = owner.get(&v) {
                 let (a, b) = (root(&mut parent, z), root(&mut parent, other));
                 if a != b {

@@ -55,7 +55,7 @@ mod segments;
 
 pub use crate::edit::shape::{warp_shape, EditShape};
 pub use crate::edit::uv_lift::lift_uv_polylines;
-pub use forced::{forced_singular, Forced, NEIGHBOURHOOD_RINGS};
+pub use forced::{forced_singular, CriticalGroups, Forced, NEIGHBOURHOOD_RINGS};
 use grid::{point_segment_distance, SegmentGrid, TriangleGrid};
 pub use segments::highlight_segments;
 use segments::{indexed_segments, segments_with_normals};
@@ -367,11 +367,11 @@ pub fn edit_fidelity(
     // Singular triangles inside the support.
     fid.singular_before = fields.singular_in(&any, u_before);
     fid.singular_after = fields.singular_in(&any, u_after);
-    let forced = |u: &[Vector3<f64>]| forced_singular(mesh, geometry, h, u, symmetry, &any);
-    let before = forced(u_before);
+    let critical = CriticalGroups::new(mesh, geometry, h, &any);
+    let before = critical.forced(geometry, h, u_before, symmetry);
     fid.critical_points = before.critical_points;
     fid.singular_forced_before = before.singular;
-    fid.singular_forced_after = forced(u_after).singular;
+    fid.singular_forced_after = critical.forced(geometry, h, u_after, symmetry).singular;
 
     // Distances of the target samples, in units of r.
     let target = target_distances(&fields, &any, shape, options);
