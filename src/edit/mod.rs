@@ -29,6 +29,7 @@ pub mod resolution;
 pub mod shape;
 pub mod stencil;
 pub mod support;
+pub mod untangle;
 pub mod uv_lift;
 pub mod warp;
 
@@ -73,11 +74,14 @@ pub struct EditOptions {
     /// Weight of the "keep the current ℓ" targets of the vertices outside every edit
     /// (default 1; 0 leaves them without a target).
     pub outside_weight: f64,
+    /// Untangle the designed grain where it turns by more than a right angle within a triangle
+    /// ([`untangle`]; default true).
+    pub untangle: bool,
 }
 
 impl Default for EditOptions {
     fn default() -> Self {
-        EditOptions { outside_weight: 1.0 }
+        EditOptions { outside_weight: 1.0, untangle: true }
     }
 }
 
@@ -317,6 +321,18 @@ impl EditBase {
         let mut state = self.state.clone();
         let mut reports = self.reports.clone();
         reports.extend(apply_in_order(&ctx, &mut state, more, self.reports.len())?);
+        if options.untangle {
+            let u = untangle::untangle(&ctx, &mut state);
+            if let (Some(last), true) = (reports.last_mut(), u.parts_filled > 0) {
+                last.notes.push(format!(
+                    "the designed grain turned by more than a right angle within {} triangles \
+                     (critical points of the key light close together, as on skin folds finer \
+                     than the brush); untangling turned {} vertices and left {} of them \
+                     (docs/math.md §10, \"Untangling\")",
+                    u.singular_designed, u.vertices_turned, u.singular_left
+                ));
+            }
+        }
         state.finish(options, reports)
     }
 }

@@ -50,7 +50,8 @@ impl DragBase {
     /// Applies the `committed` scene's edits to `p` and keeps what the drag steps reuse.
     pub fn new(committed: &LoadedScene, p: &Prepared) -> Result<DragBase> {
         let settings = &committed.scene.solver;
-        let options = EditOptions { outside_weight: settings.outside_weight };
+        let options =
+            EditOptions { outside_weight: settings.outside_weight, untangle: settings.untangle };
         let input = edit_input(p);
         let edits = EditBase::new(&input, &resolved_edits(committed), &options)
             .map_err(|e| crate::scene::prefix("edits", e))?;

@@ -134,7 +134,8 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
     stages.start("edits");
     let settings = &s.scene.solver;
     let edits = resolved_edits(s);
-    let options = EditOptions { outside_weight: settings.outside_weight };
+    let options =
+        EditOptions { outside_weight: settings.outside_weight, untangle: settings.untangle };
     let er = apply_edits(&edit_input(p), &edits, &options)
         .map_err(|e| crate::scene::prefix("edits", e))?;
     stages.start("solve");

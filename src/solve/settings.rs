@@ -147,6 +147,10 @@ pub struct SolverSettings {
     /// Weight of the "keep the current ℓ" targets of vertices outside every edit (≥ 0, default
     /// 1.0; used by the edit module when it builds the targets).
     pub outside_weight: f64,
+    /// Untangle the grain an edit designs where it turns by more than a right angle within a
+    /// triangle (skin folds finer than the brush; docs/math.md §10, "Untangling"; default
+    /// true; used by the edit module).
+    pub untangle: bool,
     /// Which highlight energy the edits' targets drive (default `position`).
     pub highlight_energy: HighlightEnergy,
     /// Fabrication constraints.
@@ -183,6 +187,7 @@ impl Default for SolverSettings {
             harmonic_start: true,
             margin_rings: 2,
             outside_weight: 1.0,
+            untangle: true,
             highlight_energy: HighlightEnergy::Position,
             constraints: Constraints::default(),
         }

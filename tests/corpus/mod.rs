@@ -418,7 +418,19 @@ pub fn run_edit(
     tool: &str,
     energy: &str,
 ) -> Result<Option<Outcome>, String> {
-    let Some((settings, key)) = solver_settings(energy)? else { return Ok(None) };
+    run_edit_with(case, p, tool, energy, &|_| {})
+}
+
+/// [`run_edit`] with the solver settings changed by `adjust`.
+pub fn run_edit_with(
+    case: &Case,
+    p: &PreparedCase,
+    tool: &str,
+    energy: &str,
+    adjust: &dyn Fn(&mut grainline::solve::SolverSettings),
+) -> Result<Option<Outcome>, String> {
+    let Some((mut settings, key)) = solver_settings(energy)? else { return Ok(None) };
+    adjust(&mut settings);
     let pl = p.placement.as_ref().map_err(|e| format!("{}: {e}", case.name))?;
     let (_, edit) = edits(pl).into_iter().find(|(n, _)| *n == tool).ok_or("unknown tool")?;
     let mut scene = p.scene.clone();
