@@ -17,7 +17,10 @@
 //! (on the corpus of docs/benchmarks.md a third to a half of a drawn curve got no highlight).
 //!
 //! [`coherent_start`] chooses one branch per vertex so that neighbours agree. Vertices without a
-//! position row (fixed, or free without a target) keep their angle and are *decided*. Every edge
+//! position row (fixed, or free without a target), and those whose angle meets their row already
+//! (the grain a tool designed, untangled where it tangled: `edit::untangle`; on the deep-folded
+//! sculpt of docs/benchmarks.md re-choosing their branches added up to 12 singular triangles), keep
+//! their angle and are *decided*. Every edge
 //! says which relative choice of its two vertices agrees better — the agreement of two grains
 //! being sᵢⱼ cos(φᵢ − φⱼ − ρᵢⱼ), ρ the transport, sᵢⱼ = ±1 the relative orientation of the two
 //! grains at the start for a line field (the targets' signs are stated in those orientations;
@@ -41,6 +44,9 @@ use super::position_term::TARGET_BOUND;
 /// Weight of a vertex's preference for the branch nearer its own start, relative to one
 /// decided neighbour.
 const SELF_PREFERENCE: f64 = 0.25;
+
+/// |ĝ − ĝ*| within which a vertex's angle meets its row: it keeps its angle (the design's).
+const MET_ROW: f64 = 1e-9;
 
 /// |h̄| below which a vertex keeps its angle (a critical point: every grain puts the highlight
 /// through it).
@@ -215,6 +221,13 @@ pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option
             continue;
         }
         let theta = hb.y.atan2(hb.x);
+        // A vertex whose angle meets its row already (a tool designed it, untangled where it
+        // tangled: edit::untangle) is decided: its branch is the design's.
+        let (sn, cs) = phi[i].sin_cos();
+        let g = (cs * hb.x + sn * hb.y) / hb.norm();
+        if (g - t.clamp(-TARGET_BOUND, TARGET_BOUND)).abs() <= MET_ROW {
+            continue;
+        }
         let a = t.clamp(-TARGET_BOUND, TARGET_BOUND).acos();
         cand[i] = Some([nearest_turn(theta + a, phi[i]), nearest_turn(theta - a, phi[i])]);
         any = true;
