@@ -266,3 +266,44 @@ fn conjugate_gradient_is_byte_identical_at_any_thread_count() {
     assert!(e(&a) < a.initial_energy.total());
     assert_eq!(e(&a).to_bits(), e(&b).to_bits());
 }
+
+/// A bounded turn on degenerate input (docs/math.md §10): no free vertex, zero weights, a
+/// target that is not a number, a free region with no rim, a zero-area face inside — each gives
+/// a finite answer or none, never a panic.
+#[test]
+fn bounded_turns_of_degenerate_input() {
+    use grainline::solve::turn::{bounded_turn, TurnInput, TurnOptions};
+    let mut mesh = generate::plane(1.0, Grid::new(12, 12));
+    // Collapse one interior vertex onto its neighbour: two zero-area faces.
+    let (a, b) = (6 * 13 + 6, 6 * 13 + 7);
+    mesh.positions[a] = mesh.positions[b];
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let n = mesh.num_vertices();
+    let phi = vec![0.3; n];
+    let target: Vec<f64> = (0..n).map(|i| 0.2 * mesh.positions[i].x).collect();
+    let inner: Vec<u32> = (0..n as u32)
+        .filter(|&i| {
+            mesh.positions[i as usize].x.abs() < 0.7 && mesh.positions[i as usize].y.abs() < 0.7
+        })
+        .collect();
+    let options = TurnOptions { bound: 0.8, smoothness: 0.0 };
+    let check = |free: &[u32], weight: &[f64], target: &[f64]| {
+        let input = TurnInput { phi: &phi, target, free, weight, k: 2 };
+        let out = bounded_turn(&g, &input, &options);
+        if let Some(d) = &out {
+            assert_eq!(d.len(), free.len());
+            assert!(d.iter().all(|x| x.is_finite()));
+        }
+        out
+    };
+    assert_eq!(check(&[], &[], &target).map(|d| d.len()), Some(0), "nothing to turn");
+    let ones = vec![1.0; inner.len()];
+    let zeros = vec![0.0; inner.len()];
+    assert!(check(&inner, &ones, &target).is_some(), "with the zero-area faces");
+    assert!(check(&inner, &zeros, &target).is_some(), "zero weights: the rim decides");
+    let mut nan = target.clone();
+    nan[inner[3] as usize] = f64::NAN;
+    assert!(check(&inner, &ones, &nan).is_none(), "a target that is not a number");
+    let all: Vec<u32> = (0..n as u32).collect();
+    assert!(check(&all, &vec![1.0; n], &target).is_none(), "no rim to hold");
+}

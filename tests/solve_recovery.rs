@@ -200,3 +200,65 @@ fn conjugate_gradient_steps_are_the_same_at_any_thread_count() {
         );
     }
 }
+
+/// A bounded turn removes the windings of its target and adds none (docs/math.md §10): on a
+/// curved patch with a regular field, a target rotation with a ±½ pair (the rotation that
+/// would put two singular faces there) comes back as a real rotation whose field is as regular
+/// as the one turned, every edge within the bound, most vertices on their target; a target with
+/// a lone ½ (a rim around a net winding) is refused.
+#[test]
+fn a_bounded_turn_adds_no_singularity_and_keeps_its_target_away_from_the_pair() {
+    use grainline::solve::singularities::face_index;
+    use grainline::solve::turn::{bounded_turn, TurnInput, TurnOptions};
+    let mesh = generate::quadric_patch([0.3, 0.1, -0.2], 1.0, Grid::new(40, 40));
+    let g = Geometry::compute(&mesh, &GeometryOptions::default());
+    let n = mesh.num_vertices();
+    let phi: Vec<f64> =
+        (0..n).map(|i| g.frames[i].angle_of(&Vector3::new(1.0, 0.2, 0.0))).collect();
+    let p = |i: usize| mesh.positions[i];
+    let arg = |i: usize, c: (f64, f64)| (p(i).y - c.1).atan2(p(i).x - c.0);
+    let (a, b) = ((-0.26, 0.11), (0.24, -0.09));
+    let pair: Vec<f64> = (0..n).map(|i| 0.4 + 0.5 * (arg(i, a) - arg(i, b))).collect();
+    let free: Vec<u32> = (0..n as u32)
+        .filter(|&i| p(i as usize).x.abs() < 0.8 && p(i as usize).y.abs() < 0.8)
+        .collect();
+    let weight = vec![1.0; free.len()];
+    let singular =
+        |f: &[f64]| (0..mesh.num_faces()).filter(|&t| face_index(&mesh, &g, f, t, 2) != 0).count();
+    assert_eq!(singular(&phi), 0);
+    let direct: Vec<f64> = (0..n).map(|i| phi[i] + pair[i]).collect();
+    assert_eq!(singular(&direct), 2, "the target winds around the pair");
+    let options = TurnOptions { bound: 0.8, smoothness: 0.0 };
+    let input = TurnInput { phi: &phi, target: &pair, free: &free, weight: &weight, k: 2 };
+    let turn = bounded_turn(&g, &input, &options).expect("a pair's rim closes");
+    // Δ on the free vertices, the target (lifted near 0) elsewhere.
+    let mut delta: Vec<f64> = pair.iter().map(|&t| wrap_angle(2.0 * t) / 2.0).collect();
+    for (&v, d) in free.iter().zip(&turn) {
+        delta[v as usize] = *d;
+    }
+    let turned: Vec<f64> = (0..n).map(|i| phi[i] + delta[i]).collect();
+    assert_eq!(singular(&turned), 0, "a bounded turn adds no singular face");
+    let adj = &g.adjacency;
+    let beta = 0.8 * std::f64::consts::FRAC_PI_2;
+    for &v in &free {
+        let i = v as usize;
+        for s in adj.slots(i) {
+            let j = adj.target(s);
+            let d = wrap_angle(2.0 * (phi[j] + g.transport[s] - phi[i])) / 2.0;
+            // The rim's lift is not returned: there the turn is read mod π.
+            let mut turn = d + delta[j] - delta[i];
+            if free.binary_search(&(j as u32)).is_err() {
+                turn = wrap_angle(2.0 * turn) / 2.0;
+            }
+            assert!(turn.abs() <= beta + 1e-9, "edge {i}–{j} over the bound");
+        }
+    }
+    let kept = free
+        .iter()
+        .filter(|&&v| (wrap_angle(2.0 * (delta[v as usize] - pair[v as usize])) / 2.0).abs() < 1e-3)
+        .count();
+    assert!(kept as f64 >= 0.8 * free.len() as f64, "{kept} of {} on their target", free.len());
+    let lone: Vec<f64> = (0..n).map(|i| 0.5 * arg(i, a)).collect();
+    let input = TurnInput { target: &lone, ..input };
+    assert!(bounded_turn(&g, &input, &options).is_none(), "a lone ½ has no bounded turn");
+}

@@ -323,7 +323,7 @@ impl EditBase {
         reports.extend(apply_in_order(&ctx, &mut state, more, self.reports.len())?);
         if options.untangle {
             let u = untangle::untangle(&ctx, &mut state);
-            if let (Some(last), true) = (reports.last_mut(), u.parts_filled > 0) {
+            if let (Some(last), true) = (reports.last_mut(), u.singular_designed > 0) {
                 last.notes.push(format!(
                     "the designed grain turned by more than a right angle within {} triangles \
                      (critical points of the key light close together, as on skin folds finer \

@@ -8,99 +8,180 @@
 //! the design meets every position row but turns the grain by more than a right angle within a
 //! triangle, in pairs of singular faces no highlight asks for.
 //!
-//! The design's singular faces are grown into *parts* ([`PASS_RINGS`] rings of the support
-//! around them, in connected components). In each part the rotation the edits ask for,
-//! Δ = φ* − φ_before (a number per vertex, mod 2π/k: it has no winding of its own), is replaced
-//! by its harmonic fill from the part's rim, holding
+//! The rotation the edits ask for, Δ = φ* − φ_before, is a number per vertex read mod 2π/k, and
+//! those faces are where it winds. Around them it is replaced by a *real* rotation
+//! ([`crate::solve::turn`]), which cannot add a singular face: the nearest to the design whose
+//! every edge turns the grain by less than a wrap, the design weighted by 1 at the vertices
+//! that hold the key highlight as it draws it (an edge where ĝ changes sign, |ĝ*| ≤ [`HOLD`],
+//! h̄ resolved, not within [`RELEASE_RINGS`] rings of a critical point of h̄, through which every
+//! smooth grain puts a highlight), by [`DARK_WEIGHT`] elsewhere, and hardly at all where h̄ is
+//! not resolved. The parts are grown [`TURN_RINGS`] rings around the singular faces, then as
+//! wide around the paths that pair them ([`pairs`]: a rim around a net winding has no real
+//! rotation), within the support and [`REACH_RINGS`] rings beyond it (the solve's free
+//! region). Where a pair was, the grain turns by a half turn across a band, and the highlight
+//! takes the detour through the critical points the design passed by. A part's turn is kept
+//! when its faces hold fewer singular ones; its ĝ becomes the position target there (the solve
+//! then starts from it and keeps it).
 //!
-//! - the key highlight as the design draws it: the vertices at an edge where ĝ changes sign,
-//!   with |ĝ*| ≤ [`HOLD`] and h̄ resolved (|h̄| ≥ [`MIN_RESOLVED_H`]), keep their design — except
-//!   within [`RELEASE_RINGS`] rings of a critical point of h̄, through which every smooth grain
-//!   puts a highlight (§10), so the highlight may pass it there;
-//! - the dark: a filled vertex whose ĝ falls below [`BAND`] on the side of h̄ the design gave it
-//!   (near a critical point, on either side) is held at the band's edge and the fill repeated
-//!   (at most [`BAND_ROUNDS`] times), so that the fill adds no glow and, away from the critical
-//!   points, no highlight.
+//! Before that, a vertex to which a tool gave a position row but no design, among designed
+//! neighbours, is designed at the root of its row nearest its angle (`meet_rows`).
 //!
-//! A part's fill is kept when its faces hold fewer singular ones than the design's; its ĝ
-//! becomes the position target there (the solve then starts from it and keeps it). The parts
-//! still singular are grown further in the next pass.
-//!
-//! Work: per pass one scan of the support's faces and one sparse solve per part and band round;
-//! [`PASS_RINGS`] and [`BAND_ROUNDS`] bound the passes and rounds.
+//! Work: per pass one scan of the reach's faces and one bounded turn per part (at most
+//! [`crate::solve::turn::ROUNDS`] sparse solves); [`TURN_RINGS`] bounds the passes and
+//! [`pairs::MAX_VISITS`] the pairing.
 
 use std::collections::HashSet;
 
+pub mod pairs;
+
 use super::{g_hat, Context, State};
 use crate::geometry::connection::wrap_angle;
-use crate::solve::fill::rotation_fill;
 use crate::solve::singularities::face_index;
+use crate::solve::turn::{bounded_turn, TurnInput, TurnOptions};
 
-/// The rings of the support grown around the design's singular faces, one pass each.
-pub const PASS_RINGS: [usize; 3] = [4, 8, 16];
-
-/// |ĝ*| up to which a vertex at a key-highlight crossing keeps its design.
+/// |ĝ*| up to which a vertex at a key-highlight crossing holds it.
 pub const HOLD: f64 = 0.3;
-
-/// |ĝ| a filled vertex keeps: no glow where the edit asked for dark.
-pub const BAND: f64 = 0.5;
-
-/// Rounds of holding the filled vertices that left the band.
-pub const BAND_ROUNDS: usize = 6;
 
 /// Rings around a critical point of h̄ within which the highlight may move.
 pub const RELEASE_RINGS: usize = 3;
 
 /// |h̄| (of a unit h) below which the mesh does not resolve θ at a vertex: its crossing is not
-/// held and its band not kept (within 3° of h ∥ n).
+/// held and its design hardly weighs (within 3° of h ∥ n).
 pub const MIN_RESOLVED_H: f64 = 0.05;
+
+/// The rings grown around the design's singular faces (then around the paths pairing them),
+/// one pass each.
+pub const TURN_RINGS: [usize; 3] = [2, 4, 8];
+
+/// The weight of the design at a vertex that holds no crossing (1 at one that does).
+pub const DARK_WEIGHT: f64 = 0.1;
+
+/// The weight of the design where h̄ is not resolved (|h̄| < [`MIN_RESOLVED_H`]):
+/// there the grain hardly moves the highlight, and the turn may take its half turns.
+pub const UNRESOLVED_WEIGHT: f64 = 1e-4;
+
+/// The rings beyond the support in which bounded turns may turn the grain: the solve's free
+/// region with its default margin (`solver.margin_rings`).
+pub const REACH_RINGS: usize = 2;
+
+/// The largest turn of a bounded turn's result along an edge, as a share of a wrap.
+pub const TURN_BOUND: f64 = 0.8;
 
 /// What untangling did, summed over its passes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Untangled {
-    /// Singular faces the design added inside the support.
+    /// Singular faces the design added inside the support (and [`REACH_RINGS`] beyond).
     pub singular_designed: usize,
-    /// Of them, or new ones, those left after the fills.
+    /// Of them, those left.
     pub singular_left: usize,
-    /// Parts whose fill was kept.
-    pub parts_filled: usize,
-    /// Vertices those fills turned.
+    /// Parts whose turn was kept.
+    pub parts_turned: usize,
+    /// Vertices those turns turned.
     pub vertices_turned: usize,
 }
 
 /// Untangles the designed grain of `st` inside the edits' support (see the module docs).
 pub(crate) fn untangle(ctx: &Context, st: &mut State) -> Untangled {
     let before: Vec<f64> = st.phi.iter().zip(&st.designed).map(|(p, d)| d.unwrap_or(*p)).collect();
-    let mut left = designed_singular(ctx, st, &before);
-    let mut out = Untangled { singular_designed: left.len(), ..Default::default() };
-    if left.is_empty() {
+    meet_rows(ctx, st);
+    let support = st.support.clone();
+    let mut reach = vec![false; support.len()];
+    grow(
+        &ctx.geom.adjacency,
+        (0..reach.len() as u32).filter(|&v| support[v as usize]),
+        REACH_RINGS,
+        |w| !std::mem::replace(&mut reach[w], true),
+    );
+    let mut out = Untangled {
+        singular_designed: designed_singular(ctx, st, &before, &reach).len(),
+        ..Default::default()
+    };
+    if out.singular_designed == 0 {
         return out;
     }
-    let weights = vec![1.0; ctx.geom.adjacency.num_slots()];
-    for rings in PASS_RINGS {
-        for part in parts(ctx, st, &left, rings) {
-            if let Some(n) = fill_part(ctx, st, &before, &part, &weights) {
-                out.parts_filled += 1;
-                out.vertices_turned += n;
-            }
-        }
-        left = designed_singular(ctx, st, &before);
-        if left.is_empty() {
-            break;
-        }
-    }
-    out.singular_left = left.len();
+    out.singular_left = turn_passes(ctx, st, &before, &reach, &mut out);
     out
 }
 
-/// The faces inside the support, with a corner the edits designed, whose index differs from
-/// the field's before the edits and is not 0; ascending.
-fn designed_singular(ctx: &Context, st: &State, before: &[f64]) -> Vec<usize> {
+/// The bounded turns, around the design's singular faces and then around the paths that pair
+/// them (see the module docs), inside `reach`; the singular faces left.
+fn turn_passes(
+    ctx: &Context,
+    st: &mut State,
+    before: &[f64],
+    reach: &[bool],
+    out: &mut Untangled,
+) -> usize {
+    let (mesh, k) = (ctx.mesh, ctx.symmetry.k());
+    let theta: Vec<f64> =
+        (0..mesh.num_vertices()).map(|i| st.h_angle(ctx, i).unwrap_or(f64::NAN)).collect();
+    let mut left = designed_singular(ctx, st, before, reach);
+    for paired in [false, true] {
+        for rings in TURN_RINGS {
+            if left.is_empty() {
+                return 0;
+            }
+            // The rotation the edits ask for (the parts of a pass are disjoint).
+            let target: Vec<f64> = st.phi.iter().zip(before).map(|(p, b)| p - b).collect();
+            let parts = if paired {
+                let charge = |f: usize| {
+                    face_index(mesh, ctx.geom, &st.phi, f, k)
+                        - face_index(mesh, ctx.geom, before, f, k)
+                };
+                let paths = pairs::pair_paths(ctx, reach, &left, charge);
+                parts_around(ctx, reach, paths.into_iter().flatten(), rings)
+            } else {
+                parts(ctx, reach, &left, rings)
+            };
+            for part in parts {
+                if let Some(n) = turn_part(ctx, st, (before, &target, &theta), &part) {
+                    out.parts_turned += 1;
+                    out.vertices_turned += n;
+                }
+            }
+            left = designed_singular(ctx, st, before, reach);
+        }
+    }
+    left.len()
+}
+
+/// Designs the vertices whose position row a tool set without designing their grain (its
+/// source straddles a turn of ψ, or h̄ vanishes there), among designed neighbours (a stencil's
+/// rows, with none, are the solve's to meet): the root of the row nearest the vertex's angle,
+/// so that every row is met before the turns (the solve would otherwise pick their branches
+/// alone, and a lone pick can turn the grain within a triangle).
+fn meet_rows(ctx: &Context, st: &mut State) {
+    let bound = crate::solve::position_term::TARGET_BOUND;
+    for i in 0..ctx.mesh.num_vertices() {
+        let adj = &ctx.geom.adjacency;
+        if st.designed[i].is_some()
+            || st.edit_weight_g[i].is_none()
+            || !adj.neighbors(i).iter().any(|&j| st.designed[j as usize].is_some())
+        {
+            continue;
+        }
+        let Some(theta) = st.h_angle(ctx, i) else { continue };
+        let t = st.target_g[i].clamp(-bound, bound);
+        if (st.g[i] - t).abs() <= 1e-9 || !t.is_finite() {
+            continue;
+        }
+        let a = t.acos();
+        let near = |r: f64| st.phi[i] + wrap_angle(r - st.phi[i]);
+        let (p, m) = (near(theta + a), near(theta - a));
+        let phi = if (p - st.phi[i]).abs() <= (m - st.phi[i]).abs() { p } else { m };
+        let g = st.design(ctx, i, phi);
+        st.target_g[i] = g;
+    }
+}
+
+/// The faces with every corner in `region` and one the edits designed, whose index differs
+/// from the field's before the edits and is not 0; ascending.
+fn designed_singular(ctx: &Context, st: &State, before: &[f64], region: &[bool]) -> Vec<usize> {
     let (mesh, k) = (ctx.mesh, ctx.symmetry.k());
     (0..mesh.num_faces())
         .filter(|&f| {
             let c = mesh.faces[f];
-            c.iter().all(|&v| st.support[v as usize])
+            c.iter().all(|&v| region[v as usize])
                 && c.iter().any(|&v| st.designed[v as usize].is_some())
         })
         .filter(|&f| {
@@ -110,14 +191,24 @@ fn designed_singular(ctx: &Context, st: &State, before: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-/// The support's vertices within `rings` rings of the `faces`, in connected parts (each
+/// The vertices of `region` within `rings` rings of the `faces`, in connected parts (each
 /// ascending, the parts by their first vertex).
-fn parts(ctx: &Context, st: &State, faces: &[usize], rings: usize) -> Vec<Vec<u32>> {
+fn parts(ctx: &Context, region: &[bool], faces: &[usize], rings: usize) -> Vec<Vec<u32>> {
+    parts_around(ctx, region, faces.iter().flat_map(|&f| ctx.mesh.faces[f]), rings)
+}
+
+/// The vertices of `region` within `rings` rings of the `seeds`, in connected parts (as
+/// [`parts`]).
+fn parts_around(
+    ctx: &Context,
+    region: &[bool],
+    seeds: impl Iterator<Item = u32>,
+    rings: usize,
+) -> Vec<Vec<u32>> {
     let adj = &ctx.geom.adjacency;
     let n = ctx.mesh.num_vertices();
     let mut mark = vec![false; n];
-    let seeds = faces.iter().flat_map(|&f| ctx.mesh.faces[f]);
-    grow(adj, seeds, rings, |w| st.support[w] && !std::mem::replace(&mut mark[w], true));
+    grow(adj, seeds, rings, |w| region[w] && !std::mem::replace(&mut mark[w], true));
     let mut seen = vec![false; n];
     let mut out = Vec::new();
     for v in 0..n {
@@ -164,22 +255,19 @@ fn grow(
     }
 }
 
-/// One part's fill (see the module docs): the number of vertices turned, or `None` when the
-/// fill is not kept.
-fn fill_part(
+/// One part's bounded turn (see the module docs) towards the rotation `target` (one per
+/// vertex, mod 2π/k), with θ the angle of h̄ (NaN where it has none): the number of vertices
+/// turned, or `None` when it is not kept.
+fn turn_part(
     ctx: &Context,
     st: &mut State,
-    before: &[f64],
+    (before, target, theta): (&[f64], &[f64], &[f64]),
     part: &[u32],
-    weights: &[f64],
 ) -> Option<usize> {
     let (mesh, adj, k) = (ctx.mesh, &ctx.geom.adjacency, ctx.symmetry.k());
     let kf = k as f64;
     let in_part = |v: u32| part.binary_search(&v).is_ok();
-    let mut faces: Vec<usize> =
-        part.iter().flat_map(|&v| ctx.vf.of(v as usize).iter().map(|&(f, _)| f as usize)).collect();
-    faces.sort_unstable();
-    faces.dedup();
+    let faces = part_faces(ctx, part);
     let singular =
         |phi: &[f64]| faces.iter().filter(|&&f| face_index(mesh, ctx.geom, phi, f, k) != 0).count();
     let interior: Vec<u32> = part
@@ -187,87 +275,92 @@ fn fill_part(
         .copied()
         .filter(|&v| adj.neighbors(v as usize).iter().all(|&w| in_part(w)))
         .collect();
-    let released = near_critical_points(ctx, st, &faces);
-    let resolved = |i: usize| ctx.geom.frames[i].to_local(&st.h[i]).norm() >= MIN_RESOLVED_H;
-    // The rotation the edits ask for, mod 2π/k.
-    let mut delta: Vec<f64> =
-        st.phi.iter().zip(before).map(|(p, b)| wrap_angle(kf * (p - b)) / kf).collect();
-    let mut free: Vec<u32> = interior
+    let released = near_critical_points(ctx, theta, &faces);
+    let weight: Vec<f64> = interior
         .iter()
-        .copied()
-        .filter(|&v| {
+        .map(|&v| {
             let i = v as usize;
-            let held = st.h_angle(ctx, i).is_some()
-                && resolved(i)
-                && !released.contains(&v)
-                && st.target_g[i].abs() <= HOLD
-                && on_crossing(ctx, st, i);
-            !held
+            if st.h_angle(ctx, i).is_none() || !resolved(ctx, st, i) {
+                UNRESOLVED_WEIGHT
+            } else if holds_crossing(ctx, st, &released, v) {
+                1.0
+            } else {
+                DARK_WEIGHT
+            }
         })
         .collect();
-    let mut filled = rotation_fill(ctx.geom, weights, &delta, &free, k)?;
-    for _ in 0..BAND_ROUNDS {
-        let before_len = free.len();
-        free.retain(|&v| {
+    let input = TurnInput { phi: before, target, free: &interior, weight: &weight, k };
+    let options = TurnOptions { bound: TURN_BOUND, smoothness: 0.0 };
+    let delta = bounded_turn(ctx.geom, &input, &options)?;
+    // The turned angles, each the representative nearest the design's (ĝ's sign is stated in
+    // its orientation); tried in place, then put back.
+    let turned: Vec<(u32, f64)> = interior
+        .iter()
+        .zip(&delta)
+        .map(|(&v, d)| {
             let i = v as usize;
-            let Some(theta) = st.h_angle(ctx, i).filter(|_| resolved(i)) else { return true };
-            let psi = wrap_angle(before[i] + filled[i] - theta);
-            // The design's side of h̄ (near a critical point, the fill's own).
-            let side_of = |a: f64| if a.cos() < 0.0 { -1.0 } else { 1.0 };
-            let side = if released.contains(&v) {
-                side_of(psi)
-            } else {
-                side_of(before[i] + delta[i] - theta)
-            };
-            if side * psi.cos() >= BAND {
-                return true;
-            }
-            let edge = (side * BAND).acos().copysign(psi);
-            delta[i] = filled[i] + wrap_angle(theta + edge - (before[i] + filled[i]));
-            false
-        });
-        if free.len() == before_len {
-            break;
-        }
-        filled = rotation_fill(ctx.geom, weights, &delta, &free, k)?;
+            (v, st.phi[i] + wrap_angle(kf * (before[i] + d - st.phi[i])) / kf)
+        })
+        .collect();
+    let was = singular(&st.phi);
+    let old: Vec<f64> = interior.iter().map(|&v| st.phi[v as usize]).collect();
+    for &(v, a) in &turned {
+        st.phi[v as usize] = a;
     }
-    let mut phi = st.phi.clone();
-    for &v in &interior {
-        let i = v as usize;
-        let d = if free.binary_search(&v).is_ok() { filled[i] } else { delta[i] };
-        phi[i] = st.phi[i] + wrap_angle(kf * (before[i] + d - st.phi[i])) / kf;
+    let now = singular(&st.phi);
+    for (&v, a) in interior.iter().zip(old) {
+        st.phi[v as usize] = a;
     }
-    if singular(&phi) >= singular(&st.phi) {
-        return None;
-    }
-    let mut turned = 0;
-    for &v in &interior {
-        let i = v as usize;
-        if phi[i] == st.phi[i] {
-            continue;
-        }
-        turned += 1;
-        let g = st.design(ctx, i, phi[i]);
-        if st.edit_weight_g[i].is_some() {
-            st.target_g[i] = g;
-        }
-    }
-    Some(turned)
+    (now < was).then(|| keep(ctx, st, &turned))
 }
 
-/// The vertices within [`RELEASE_RINGS`] rings of a face among `faces` around which θ, the
-/// angle of h̄, winds (a critical point of h̄; only where h̄ has a direction at every corner).
-fn near_critical_points(ctx: &Context, st: &State, faces: &[usize]) -> HashSet<u32> {
-    let mesh = ctx.mesh;
-    let mut theta = vec![f64::NAN; mesh.num_vertices()];
-    for &f in faces {
-        for &v in &mesh.faces[f] {
-            theta[v as usize] = st.h_angle(ctx, v as usize).unwrap_or(f64::NAN);
+/// The faces with a corner in `part`, ascending.
+fn part_faces(ctx: &Context, part: &[u32]) -> Vec<usize> {
+    let mut faces: Vec<usize> =
+        part.iter().flat_map(|&v| ctx.vf.of(v as usize).iter().map(|&(f, _)| f as usize)).collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
+}
+
+/// Whether h̄ is resolved at vertex `i` (|h̄| ≥ [`MIN_RESOLVED_H`]).
+fn resolved(ctx: &Context, st: &State, i: usize) -> bool {
+    ctx.geom.frames[i].to_local(&st.h[i]).norm() >= MIN_RESOLVED_H
+}
+
+/// Whether vertex `v` holds the key highlight as the design draws it (see the module docs).
+fn holds_crossing(ctx: &Context, st: &State, released: &HashSet<u32>, v: u32) -> bool {
+    let i = v as usize;
+    st.h_angle(ctx, i).is_some()
+        && resolved(ctx, st, i)
+        && !released.contains(&v)
+        && st.target_g[i].abs() <= HOLD
+        && on_crossing(ctx, st, i)
+}
+
+/// Makes the `turned` angles the design (and their ĝ their position target): the number that
+/// changed.
+fn keep(ctx: &Context, st: &mut State, turned: &[(u32, f64)]) -> usize {
+    let mut changed = 0;
+    for &(v, a) in turned {
+        let i = v as usize;
+        if a == st.phi[i] {
+            continue;
         }
+        changed += 1;
+        // The row follows (beyond the support too, where it kept the grain before the edits).
+        st.target_g[i] = st.design(ctx, i, a);
     }
+    changed
+}
+
+/// The vertices within [`RELEASE_RINGS`] rings of a face among `faces` around which `theta`, the
+/// angle of h̄, winds (a critical point of h̄; only where h̄ has a direction at every corner).
+fn near_critical_points(ctx: &Context, theta: &[f64], faces: &[usize]) -> HashSet<u32> {
+    let mesh = ctx.mesh;
     let critical = faces.iter().copied().filter(|&f| {
         mesh.faces[f].iter().all(|&v| theta[v as usize].is_finite())
-            && face_index(mesh, ctx.geom, &theta, f, 1) != 0
+            && face_index(mesh, ctx.geom, theta, f, 1) != 0
     });
     let mut out = HashSet::new();
     let seeds = critical.flat_map(|f| mesh.faces[f]).collect::<Vec<_>>();

@@ -34,32 +34,6 @@ pub fn harmonic_fill(
     free: &[u32],
     k: u32,
 ) -> Option<Vec<f64>> {
-    fill_with(geometry, weights, phi, free, k, true)
-}
-
-/// The harmonic fill of a rotation field `delta` (angles by which a field turns, not directions:
-/// no transport between vertices) on the `free` vertices, mod 2π/k; as [`harmonic_fill`]
-/// otherwise.
-pub fn rotation_fill(
-    geometry: &Geometry,
-    weights: &[f64],
-    delta: &[f64],
-    free: &[u32],
-    k: u32,
-) -> Option<Vec<f64>> {
-    fill_with(geometry, weights, delta, free, k, false)
-}
-
-/// The fill of either: `transported` uses the connection's ρᵢⱼ (directions), else none
-/// (rotations).
-fn fill_with(
-    geometry: &Geometry,
-    weights: &[f64],
-    phi: &[f64],
-    free: &[u32],
-    k: u32,
-    transported: bool,
-) -> Option<Vec<f64>> {
     let nv = geometry.num_vertices();
     let adj = &geometry.adjacency;
     let kf = k as f64;
@@ -83,7 +57,7 @@ fn fill_with(
                 continue;
             }
             let j = adj.target(s);
-            let a = if transported { kf * geometry.transport[s] } else { 0.0 };
+            let a = kf * geometry.transport[s];
             let e = c64::new(a.cos(), a.sin());
             diag[c] += w;
             if col[j] != u32::MAX {

@@ -16,6 +16,7 @@ pub mod position_term;
 pub mod settings;
 pub mod singularities;
 pub mod smoothness;
+pub mod turn;
 
 pub use fabrication::{GradientHinge, HingeKind};
 pub use highlight_term::{HighlightTerm, VertexJacobian};
