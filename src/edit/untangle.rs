@@ -14,8 +14,7 @@
 //! every edge turns the grain by less than a wrap, the design weighted by 1 at the vertices
 //! that hold the key highlight as it draws it (an edge where ĝ changes sign, |ĝ*| ≤ [`HOLD`],
 //! h̄ resolved, not within [`RELEASE_RINGS`] rings of a critical point of h̄, through which every
-//! smooth grain puts a highlight), by [`DARK_WEIGHT`] elsewhere, and hardly at all where h̄ is
-//! not resolved. The parts are grown [`TURN_RINGS`] rings around the singular faces, then as
+//! smooth grain puts a highlight), by [`DARK_WEIGHT`] elsewhere. The parts are grown [`TURN_RINGS`] rings around the singular faces, then as
 //! wide around the paths that pair them ([`pairs`]: a rim around a net winding has no real
 //! rotation), within the support and [`REACH_RINGS`] rings beyond it (the solve's free
 //! region). Where a pair was, the grain turns by a half turn across a band, and the highlight
@@ -55,10 +54,6 @@ pub const TURN_RINGS: [usize; 3] = [2, 4, 8];
 
 /// The weight of the design at a vertex that holds no crossing (1 at one that does).
 pub const DARK_WEIGHT: f64 = 0.1;
-
-/// The weight of the design where h̄ is not resolved (|h̄| < [`MIN_RESOLVED_H`]):
-/// there the grain hardly moves the highlight, and the turn may take its half turns.
-pub const UNRESOLVED_WEIGHT: f64 = 1e-4;
 
 /// The rings beyond the support in which bounded turns may turn the grain: the solve's free
 /// region with its default margin (`solver.margin_rings`).
@@ -278,16 +273,7 @@ fn turn_part(
     let released = near_critical_points(ctx, theta, &faces);
     let weight: Vec<f64> = interior
         .iter()
-        .map(|&v| {
-            let i = v as usize;
-            if st.h_angle(ctx, i).is_none() || !resolved(ctx, st, i) {
-                UNRESOLVED_WEIGHT
-            } else if holds_crossing(ctx, st, &released, v) {
-                1.0
-            } else {
-                DARK_WEIGHT
-            }
-        })
+        .map(|&v| if holds_crossing(ctx, st, &released, v) { 1.0 } else { DARK_WEIGHT })
         .collect();
     let input = TurnInput { phi: before, target, free: &interior, weight: &weight, k };
     let options = TurnOptions { bound: TURN_BOUND, smoothness: 0.0 };
