@@ -1,6 +1,6 @@
-//! Pairing the singular faces the fills left, so that each pair can be turned away in a tube
-//! around the path that joins it (a tube around a pair of opposite charges has no net winding
-//! on its rim, a grown ring around a lone charge has).
+//! Pairing a design's singular faces, so that each pair can be turned away in a tube around the
+//! path that joins it (a tube around a pair of opposite charges has no net winding on its rim,
+//! a grown ring around a lone charge has).
 //!
 //! Each face carries a charge, its index less the field's before the edits (in units of 1/k).
 //! Greedily, nearest first: from every positive unit charge a breadth-first search over the
@@ -35,7 +35,8 @@ pub(super) fn pair_paths(
     if pos.is_empty() || neg.is_empty() || pos.len() + neg.len() > MAX_CHARGES {
         return Vec::new();
     }
-    // Each negative face's charges, by the corner vertices that reach it.
+    // Every (positive, negative) pair a search reached, with its distance and path (a charge's
+    // partner may have to be far: a part holding one unpaired charge has no bounded turn).
     let mut candidates: Vec<(usize, usize, usize, Vec<u32>)> = Vec::new();
     let mut budget = MAX_VISITS;
     let mut searched: Vec<usize> = pos.clone();
