@@ -14,10 +14,10 @@
 //! every edge turns the grain by less than a wrap, the design weighted by 1 at the vertices
 //! that hold the key highlight as it draws it (an edge where ĝ changes sign, |ĝ*| ≤ [`HOLD`],
 //! h̄ resolved, not within [`RELEASE_RINGS`] rings of a critical point of h̄, through which every
-//! smooth grain puts a highlight), by [`DARK_WEIGHT`] elsewhere. The parts are grown [`TURN_RINGS`] rings around the singular faces, then as
-//! wide around the paths that pair them ([`pairs`]: a rim around a net winding has no real
-//! rotation), within the support and [`REACH_RINGS`] rings beyond it (the solve's free
-//! region). Where a pair was, the grain turns by a half turn across a band, and the highlight
+//! smooth grain puts a highlight), by [`DARK_WEIGHT`] elsewhere. The parts are grown
+//! [`TURN_RINGS`] rings around the singular faces, then as wide around the paths that pair them
+//! ([`pairs`]: a rim around a net winding has no real rotation), within the support and
+//! [`REACH_RINGS`] rings beyond it (the solve's free region). Where a pair was, the grain turns by a half turn across a band, and the highlight
 //! takes the detour through the critical points the design passed by. A part's turn is kept
 //! when its faces hold fewer singular ones; its ĝ becomes the position target there (the solve
 //! then starts from it and keeps it).
@@ -45,7 +45,7 @@ pub const HOLD: f64 = 0.3;
 pub const RELEASE_RINGS: usize = 3;
 
 /// |h̄| (of a unit h) below which the mesh does not resolve θ at a vertex: its crossing is not
-/// held and its design hardly weighs (within 3° of h ∥ n).
+/// held (within 3° of h ∥ n).
 pub const MIN_RESOLVED_H: f64 = 0.05;
 
 /// The rings grown around the design's singular faces (then around the paths pairing them),
