@@ -1,4 +1,4 @@
-//! Writes the four generated CAD parts (`grainline::generate::cad`) as binary STL, the way CAD
+//! Writes the five generated CAD parts (`grainline::generate::cad`) as binary STL, the way CAD
 //! systems export them, and prints their counts.
 //!
 //! ```text
@@ -11,11 +11,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::env::args().nth(1).unwrap_or_else(|| "target/cad-parts".to_owned());
     let dir = std::path::Path::new(&dir);
     std::fs::create_dir_all(dir)?;
-    let parts: [CadPart; 4] = [
+    let parts: [CadPart; 5] = [
         cad::housing(&Default::default())?,
         cad::plate(&Default::default())?,
         cad::bracket(&Default::default())?,
         cad::turned(&Default::default())?,
+        cad::knob(&Default::default())?,
     ];
     for part in &parts {
         let path = dir.join(format!("{}.stl", part.name));

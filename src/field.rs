@@ -36,6 +36,10 @@ pub struct FieldOptions {
     /// refinement, and its new vertices the ones the refinement interpolated. Empty: every
     /// normal computed.
     pub kept_normals: Vec<Vector3<f64>>,
+    /// The exact geometry of the vertices on recognized surfaces
+    /// ([`crate::geometry::surfaces`], [`Geometry::compute_exact`]); applied after
+    /// `kept_normals`. Empty: none.
+    pub surface_points: Vec<Option<crate::geometry::surfaces::SurfacePoint>>,
 }
 
 impl FieldOptions {
@@ -49,6 +53,7 @@ impl FieldOptions {
             geometry: GeometryOptions::default(),
             critical_threshold: DEFAULT_CRITICAL_THRESHOLD,
             kept_normals: Vec::new(),
+            surface_points: Vec::new(),
         }
     }
 }
@@ -78,7 +83,13 @@ pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult>
     if !(options.critical_threshold.is_finite() && options.critical_threshold <= 1.0) {
         return Err(Error::invalid_arg("critical-threshold", "must be a finite number ≤ 1"));
     }
-    let geometry = Geometry::compute_keeping(mesh, &options.geometry, &options.kept_normals).0;
+    let geometry = Geometry::compute_exact(
+        mesh,
+        &options.geometry,
+        &options.kept_normals,
+        &options.surface_points,
+    )
+    .0;
     let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
     let normals: Vec<Vector3<f64>> = geometry.frames.par_iter().map(|f| f.n).collect();
     let h = half_vectors(&options.lighting, &mesh.positions, &normals);

@@ -18,6 +18,7 @@ fn parts() -> Vec<(CadPart, u32)> {
         (cad::plate(&Default::default()).unwrap(), 5),
         (cad::bracket(&Default::default()).unwrap(), 2),
         (cad::turned(&Default::default()).unwrap(), 0),
+        (cad::knob(&Default::default()).unwrap(), 0),
     ]
 }
 
@@ -141,7 +142,7 @@ fn triangle_areas_per_face_match_the_analytic_areas() {
         // are all bounded by circles).
         let exact = part.tolerances.iter().filter(|t| t.area == 0.0).count();
         assert!(
-            exact > 0 || part.name == "turned",
+            exact > 0 || part.name == "turned" || part.name == "knob",
             "{}: no face bounded by straight edges",
             part.name
         );
@@ -181,7 +182,12 @@ fn fillets_and_bends_are_tangent_and_the_other_edges_sharp() {
             let tangent = dot > 1.0 - 1e-9;
             let chamfer =
                 [f, g].iter().any(|&k| matches!(part.faces[k as usize], AnalyticFace::Cone { .. }));
-            if chamfer {
+            if chamfer && part.name == "knob" {
+                // The shallow chamfer meets the skirt at 26.57° and the shoulder at 63.43°.
+                let ok =
+                    [2.0 / 5f64.sqrt(), 1.0 / 5f64.sqrt()].iter().any(|c| (dot - c).abs() < 1e-9);
+                assert!(ok, "{}: chamfer at {dot}", part.name);
+            } else if chamfer {
                 // The 45° chamfer meets the shank and the top at 45°.
                 assert!((dot - 0.5f64.sqrt()).abs() < 1e-9, "{}: chamfer at {dot}", part.name);
             } else {
@@ -203,6 +209,8 @@ fn fillets_and_bends_are_tangent_and_the_other_edges_sharp() {
             "bracket" => 8 + 8,
             // The fillet's two rings, to the shoulder and to the shank.
             "turned" => 2 * 30,
+            // The round's two rings, to the boss and to the crown.
+            "knob" => 2 * 30,
             _ => unreachable!(),
         };
         assert_eq!(tangent_pairs, expected, "{}", part.name);
@@ -219,6 +227,8 @@ fn bad_options_are_refused() {
     assert!(cad::bracket(&b).is_err());
     let t = cad::TurnedOptions { step_deg: 0.0, ..Default::default() };
     assert!(cad::turned(&t).is_err());
+    let k = cad::KnobOptions { boss_radius: 19.5, ..Default::default() };
+    assert!(cad::knob(&k).is_err());
 }
 
 #[test]

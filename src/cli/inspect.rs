@@ -4,6 +4,7 @@
 //! elements, inconsistent orientation) and reports them; only unreadable files fail.
 
 use clap::Args;
+use grainline::geometry::surfaces::{Primitive, SurfaceReport};
 use grainline::mesh::report::{InspectReport, QualityReport};
 use grainline::mesh::topology::Topology;
 use grainline::mesh::uv_charts::UvCharts;
@@ -18,6 +19,9 @@ pub struct InspectArgs {
     /// Print JSON instead of text (fields in docs/formats.md, "inspect --json").
     #[arg(long)]
     json: bool,
+    /// Do not recognize the part's surfaces (planes, cylinders, cones, spheres, tori).
+    #[arg(long)]
+    no_surfaces: bool,
 }
 
 /// Runs `grainline inspect`.
@@ -28,12 +32,98 @@ pub fn run(args: InspectArgs, _quiet: bool) -> anyhow::Result<()> {
     let charts = loaded.mesh.uv.as_ref().map(|uv| UvCharts::new(topo.halfedges(), uv));
     let report =
         InspectReport::new(path, &loaded, &topo, charts.as_ref(), QualityReport::new(&loaded));
+    let surfaces = recognize(&loaded.mesh, args.no_surfaces);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        let out = InspectOutput { report: &report, surfaces: surfaces.as_ref() };
+        println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         print!("{}", text(&report));
+        if let Some(s) = &surfaces {
+            print!("{}", surfaces_text(s, report.units));
+        }
     }
     Ok(())
+}
+
+/// `inspect --json`: the mesh report, and the surfaces recognized on the part.
+#[derive(serde::Serialize)]
+struct InspectOutput<'a> {
+    #[serde(flatten)]
+    report: &'a InspectReport,
+    /// Absent with `--no-surfaces`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    surfaces: Option<&'a SurfaceReport>,
+}
+
+fn recognize(mesh: &grainline::mesh::Mesh, off: bool) -> Option<SurfaceReport> {
+    (!off).then(|| grainline::geometry::surfaces::recognize(mesh).report(mesh))
+}
+
+fn surfaces_text(r: &SurfaceReport, u: impl std::fmt::Display) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    if r.surfaces.is_empty() {
+        let _ = writeln!(
+            s,
+            "  surfaces: none recognized (no planes, cylinders, cones, spheres or tori: a \
+             free-form part, a scan or a sculpt; its geometry is fitted to its vertices)"
+        );
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "  surfaces: {} recognized (within {:.3e} {u}); {} face(s), {:.1} % of the area, on none",
+        r.surfaces.len(),
+        r.tolerance,
+        r.unrecognized_faces,
+        100.0 * r.unrecognized_area_share
+    );
+    for (i, x) in r.surfaces.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "    #{i} {}: {} faces, area {:.6} {u}^2, residual rms {:.2e} max {:.2e} {u}",
+            describe(&x.primitive, &u),
+            x.faces,
+            x.area,
+            x.rms_residual,
+            x.max_residual
+        );
+    }
+    let _ = writeln!(s, "  creases between surfaces: {}", r.creases.len());
+    for c in &r.creases {
+        let _ = writeln!(
+            s,
+            "    #{} | #{}: {} edge(s), length {:.6} {u}, normals {:.2}° apart",
+            c.surfaces[0], c.surfaces[1], c.edges, c.length, c.angle_deg
+        );
+    }
+    s
+}
+
+fn describe(p: &Primitive, u: &impl std::fmt::Display) -> String {
+    let v = |a: &[f64; 3]| format!("[{:.6}, {:.6}, {:.6}]", a[0], a[1], a[2]);
+    match p {
+        Primitive::Plane { normal, offset } => {
+            format!("plane, normal {}, offset {offset:.6} {u}", v(normal))
+        }
+        Primitive::Cylinder { point, axis, radius } => {
+            format!("cylinder, radius {radius:.6} {u}, axis {} through {}", v(axis), v(point))
+        }
+        Primitive::Cone { apex, axis, half_angle } => format!(
+            "cone, half-angle {:.4}°, axis {} from apex {}",
+            half_angle.to_degrees(),
+            v(axis),
+            v(apex)
+        ),
+        Primitive::Sphere { center, radius } => {
+            format!("sphere, radius {radius:.6} {u}, centre {}", v(center))
+        }
+        Primitive::Torus { center, axis, major, minor } => format!(
+            "torus, tube radius {minor:.6} {u}, major radius {major:.6} {u}, axis {} through {}",
+            v(axis),
+            v(center)
+        ),
+    }
 }
 
 fn text(r: &InspectReport) -> String {

@@ -32,10 +32,12 @@
 mod bracket;
 mod build;
 mod earcut;
+mod knob;
 mod prismatic;
 mod turned;
 
 pub use bracket::{bracket, BracketOptions};
+pub use knob::{knob, KnobOptions};
 pub use prismatic::{housing, plate, HousingOptions, PlateOptions};
 pub use turned::{turned, TurnedOptions};
 
@@ -96,6 +98,15 @@ pub enum AnalyticFace {
         /// Area of the face.
         area: f64,
     },
+    /// The sphere `|p − center| = radius` (a knob's crown).
+    Sphere {
+        /// Centre.
+        center: Vector3<f64>,
+        /// Radius.
+        radius: f64,
+        /// Area of the face.
+        area: f64,
+    },
 }
 
 impl AnalyticFace {
@@ -105,7 +116,8 @@ impl AnalyticFace {
             AnalyticFace::Plane { area, .. }
             | AnalyticFace::Cylinder { area, .. }
             | AnalyticFace::Cone { area, .. }
-            | AnalyticFace::Torus { area, .. } => area,
+            | AnalyticFace::Torus { area, .. }
+            | AnalyticFace::Sphere { area, .. } => area,
         }
     }
 
@@ -131,6 +143,7 @@ impl AnalyticFace {
                 let rho = self.axis_distance(p);
                 ((rho - major_radius).hypot(h) - minor_radius).abs()
             }
+            AnalyticFace::Sphere { center, radius, .. } => ((p - center).norm() - radius).abs(),
         }
     }
 
@@ -153,13 +166,14 @@ impl AnalyticFace {
                 let core = center + radial(center, axis_dir) * major_radius;
                 (p - core).normalize()
             }
+            AnalyticFace::Sphere { center, .. } => (p - center).normalize(),
         }
     }
 
     /// Distance of `p` from the surface's axis (0 for a plane).
     pub fn axis_distance(&self, p: &Vector3<f64>) -> f64 {
         let (o, d) = match *self {
-            AnalyticFace::Plane { .. } => return 0.0,
+            AnalyticFace::Plane { .. } | AnalyticFace::Sphere { .. } => return 0.0,
             AnalyticFace::Cylinder { axis_point, axis_dir, .. } => (axis_point, axis_dir),
             AnalyticFace::Cone { apex, axis_dir, .. } => (apex, axis_dir),
             AnalyticFace::Torus { center, axis_dir, .. } => (center, axis_dir),

@@ -16,6 +16,7 @@ pub mod normals;
 pub mod patches;
 pub mod quality;
 pub mod rings;
+pub mod surfaces;
 
 use nalgebra::{Matrix2, Vector3};
 use rayon::prelude::*;
@@ -109,6 +110,15 @@ fn fit_vertex(
     (frame, fit)
 }
 
+/// The Weingarten map of math.md §1 in `frame` of a surface whose normal has the shape
+/// operator `shape` = dn/dp (world): W = −[tᵀSt tᵀSb; bᵀSt bᵀSb].
+fn surface_weingarten(frame: &Frame, shape: &nalgebra::Matrix3<f64>) -> Matrix2<f64> {
+    let (t, b) = (frame.t, frame.b);
+    let (st, sb) = (shape * t, shape * b);
+    let off = -0.5 * (t.dot(&sb) + b.dot(&st));
+    Matrix2::new(-t.dot(&st), off, off, -b.dot(&sb))
+}
+
 /// Counts of vertices where a fallback was used, so degenerate input is visible, never silent.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct GeometryDiagnostics {
@@ -171,6 +181,20 @@ impl Geometry {
         options: &GeometryOptions,
         kept: &[Vector3<f64>],
     ) -> (Self, Vec<(&'static str, f64)>) {
+        Self::compute_exact(mesh, options, kept, &[])
+    }
+
+    /// [`Geometry::compute_keeping`] with the exact geometry of the vertices that lie on
+    /// recognized surfaces (`exact[i]`, docs/math.md §3, "Recognized surfaces"): their normal
+    /// is the surface's, not fitted, and their Weingarten map the surface's shape operator
+    /// in their frame (W = −[tᵀSt tᵀSb; bᵀSt bᵀSb]). `exact` may be shorter than the
+    /// vertices, or empty.
+    pub fn compute_exact(
+        mesh: &Mesh,
+        options: &GeometryOptions,
+        kept: &[Vector3<f64>],
+        exact: &[Option<surfaces::SurfacePoint>],
+    ) -> (Self, Vec<(&'static str, f64)>) {
         let mut timings = Vec::with_capacity(7);
         let mut clock = std::time::Instant::now();
         let mut lap = |name: &'static str| {
@@ -195,6 +219,12 @@ impl Geometry {
         for (i, n) in kept.iter().enumerate().take(normals.len()) {
             normals[i] = *n;
             pinned[i] = true;
+        }
+        for (i, e) in exact.iter().enumerate().take(normals.len()) {
+            if let Some(e) = e {
+                normals[i] = e.normal;
+                pinned[i] = true;
+            }
         }
         drop(face_n);
         lap("normals");
@@ -238,8 +268,11 @@ impl Geometry {
                     let (frame, fit) =
                         fit_vertex(mesh, &adjacency, options, refine, &normals[i], i, bufs);
                     fr[k] = frame;
-                    w[k] = fit.w;
-                    pr[k] = Principal::from_weingarten(&fit.w);
+                    w[k] = match exact.get(i) {
+                        Some(Some(e)) => surface_weingarten(&frame, &e.shape),
+                        _ => fit.w,
+                    };
+                    pr[k] = Principal::from_weingarten(&w[k]);
                     rg[k] = fit.ring;
                 }
             });

@@ -27,6 +27,7 @@ use std::collections::HashMap;
 
 use nalgebra::Vector3;
 
+use super::surfaces::Surfaces;
 use crate::mesh::planar::{planar_regions, NO_REGION};
 use crate::mesh::Mesh;
 
@@ -145,6 +146,20 @@ pub fn noise_dihedral(
 /// then every patch smaller than [`MIN_PATCH_AREA_SHARE`] of the part joined to the neighbour
 /// it shares the longest sharp edges with. A face of zero area joins its neighbours.
 pub fn patches_with(mesh: &Mesh, options: &PatchOptions) -> Patches {
+    patches_on_surfaces(mesh, options, None)
+}
+
+/// [`patches_with`] on a part whose surfaces were recognized
+/// ([`crate::geometry::surfaces`]): an edge between two faces on recognized surfaces is sharp
+/// exactly when the surfaces meet there at a crease ([`Surfaces::crease_between`]: one
+/// surface's strips never, a tangent junction never, a chamfer's shallow edge always);
+/// other edges as [`patches_with`] says. A patch of recognized faces is a face of the part,
+/// never joined to a neighbour for its size.
+pub fn patches_on_surfaces(
+    mesh: &Mesh,
+    options: &PatchOptions,
+    surfaces: Option<&Surfaces>,
+) -> Patches {
     let crease_angle_deg = options.crease_angle_deg;
     let cos_theta = crease_angle_deg.clamp(0.0, 180.0).to_radians().cos();
     let normal = |f: usize| {
@@ -183,7 +198,12 @@ pub fn patches_with(mesh: &Mesh, options: &PatchOptions) -> Patches {
         let first = run[0].2 as usize;
         for e in &run[1..] {
             let f = e.2 as usize;
+            // `mesh.crease_angle` 180 keeps every component whole, recognized or not.
+            let recognized = surfaces
+                .filter(|_| crease_angle_deg < 180.0)
+                .and_then(|s| s.crease_between(mesh, first, f, run[0].0, run[0].1));
             let is_sharp = match (normals[first], normals[f]) {
+                _ if recognized.is_some() => recognized == Some(true),
                 (Some(a), Some(b)) => {
                     let dot = a.dot(&b);
                     crease_angle_deg < 180.0
@@ -201,7 +221,12 @@ pub fn patches_with(mesh: &Mesh, options: &PatchOptions) -> Patches {
             }
         }
     }
-    let feature = planar_faces(mesh);
+    let mut feature = planar_faces(mesh);
+    if let Some(s) = surfaces {
+        for (f, &id) in s.face_surface.iter().enumerate().take(feature.len()) {
+            feature[f] |= id != super::surfaces::NO_SURFACE;
+        }
+    }
     join_small_patches(mesh, &mut parent, &sharp, &feature);
     let mut label = vec![u32::MAX; mesh.num_faces()];
     let mut face_patch = vec![0u32; mesh.num_faces()];

@@ -31,6 +31,19 @@ pub struct Prepared {
     /// The part's noise (`field.noise: "auto"`) and the fit radius it chose; `None` with
     /// `field.noise: "off"` or a `field.fit_radius` given.
     pub noise: Option<crate::geometry::noise::NoiseEstimate>,
+    /// The surfaces recognized on the part (`mesh.surfaces`) and its vertices on them, if any.
+    pub surfaces: Option<RecognizedPart>,
+}
+
+/// The surfaces a CAD part was read as ([`crate::geometry::surfaces`]), and per vertex of the
+/// part as prepared (cut into patches, refined) the surfaces it lies on.
+#[derive(Clone, Debug)]
+pub struct RecognizedPart {
+    /// The surfaces, numbering the faces of the part as loaded (and cut into patches, which
+    /// keeps the faces' order).
+    pub surfaces: crate::geometry::surfaces::Surfaces,
+    /// Per vertex, its surfaces.
+    pub vertices: crate::geometry::surfaces::VertexSurfaces,
 }
 
 /// The highlight model's key light as the scene gives it.
@@ -124,6 +137,8 @@ pub struct LoadedPart {
     /// The part's noise (`field.noise: "auto"`), estimated on the part cut at its creases;
     /// `None` with `field.noise: "off"` or a `field.fit_radius` given.
     pub noise: Option<crate::geometry::noise::NoiseEstimate>,
+    /// The surfaces recognized on the part, if any.
+    pub surfaces: Option<RecognizedPart>,
 }
 
 /// The first half of [`prepare_with`]: loads the part (or meshes its outline), checks the
@@ -140,18 +155,23 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
     let (mut mesh, mesh_name) = load_part(s)?;
     // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
     check_scene_work(scene, &mesh)?;
+    let surfaces = recognize_surfaces(s, &mesh);
     // The part cut at its creases and its noise estimated there (a CAD face's vertices all
     // sit on sharp edges, which would read as noise on the part uncut); a part found noisy is
     // cut again where its creases are more than its noise could make.
-    let mut split = split_into_patches(s, &mesh, 0.0);
+    let mut split = split_into_patches(s, &mesh, 0.0, surfaces.as_ref());
     let noise = estimate_noise(s, split.as_ref().map_or(&mesh, |(m, _)| m));
     let noisy = noise.filter(|n| n.fit_radius.is_some()).map(|n| n.sigma);
     if let (Some(sigma), Some(_)) = (noisy, &split) {
-        split = split_into_patches(s, &mesh, sigma);
+        split = split_into_patches(s, &mesh, sigma, surfaces.as_ref());
     }
     let patches = split.map(|(m, report)| {
         mesh = m;
         report
+    });
+    let surfaces = surfaces.map(|surfaces| RecognizedPart {
+        vertices: crate::geometry::surfaces::VertexSurfaces::new(&mesh, &surfaces),
+        surfaces,
     });
     let lighting = key.lighting(scene.view.view(), &mesh).map_err(|e| match (key, e) {
         (KeyLight::Point(p), Error::InvalidArgument { name, .. })
@@ -194,7 +214,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
         _ => None,
     };
     let layout = layout_report;
-    Ok(LoadedPart { mesh, mesh_name, lighting, directions, map, layout, patches, noise })
+    Ok(LoadedPart { mesh, mesh_name, lighting, directions, map, layout, patches, noise, surfaces })
 }
 
 /// The second half of [`prepare_with`]: refines `part` inside the scene's edits' brushes
@@ -202,11 +222,26 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
 /// initial field and its highlights on the result.
 pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> Result<Prepared> {
     let scene = &s.scene;
-    let LoadedPart { mut mesh, mesh_name, lighting, mut directions, map, layout, patches, noise } =
-        part;
+    let LoadedPart {
+        mut mesh,
+        mesh_name,
+        lighting,
+        mut directions,
+        map,
+        layout,
+        patches,
+        noise,
+        mut surfaces,
+    } = part;
     let fit_radius = scene.field.fit_radius.or(noise.and_then(|e| e.fit_radius));
     let height_noise = noise.map_or(0.0, |e| e.sigma);
     let refinement = refine_for_edits(s, &mut mesh, (fit_radius, height_noise), stages)?;
+    if let (Some(r), Some(rec)) = (&refinement, surfaces.as_mut()) {
+        // New vertices inside a recognized surface are moved onto it (the midpoints of its
+        // chords stand off it by the chords' sagitta).
+        rec.vertices.extend(&r.refined.parents);
+        rec.vertices.project(&mut mesh, &rec.surfaces, r.report.vertices_before);
+    }
     if let (Some(r), Some(d)) = (&refinement, directions.as_mut()) {
         // A line or vector field read per vertex: each new vertex gets the mean of its edge's
         // two directions (aligned first, so a line field's ±u do not cancel).
@@ -227,9 +262,22 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
     if let Some(r) = &refinement {
         field_options.kept_normals = r.kept_normals.clone();
     }
+    if let Some(rec) = &surfaces {
+        field_options.surface_points = rec.vertices.points(&mesh, &rec.surfaces);
+    }
     let field = compute_field(&mesh, &field_options)?;
     let refinement = refinement.map(|r| r.report);
-    Ok(Prepared { mesh, mesh_name, field_options, field, layout, refinement, patches, noise })
+    Ok(Prepared {
+        mesh,
+        mesh_name,
+        field_options,
+        field,
+        layout,
+        refinement,
+        patches,
+        noise,
+        surfaces,
+    })
 }
 
 /// The part's noise and the fit radius it asks for (`field.noise: "auto"`, docs/math.md §5.6,
@@ -347,6 +395,7 @@ fn split_into_patches(
     s: &LoadedScene,
     mesh: &Mesh,
     height_noise: f64,
+    surfaces: Option<&crate::geometry::surfaces::Surfaces>,
 ) -> Option<(Mesh, PatchReport)> {
     let m = s.scene.mesh.as_ref()?;
     if m.0.patches == crate::scene::PatchMode::None {
@@ -354,7 +403,7 @@ fn split_into_patches(
     }
     let options =
         crate::geometry::patches::PatchOptions { crease_angle_deg: m.crease_angle(), height_noise };
-    let patches = crate::geometry::patches::patches_with(mesh, &options);
+    let patches = crate::geometry::patches::patches_on_surfaces(mesh, &options, surfaces);
     let split = crate::geometry::patches::split_patches(mesh, &patches)?;
     let narrow = s
         .scene
@@ -370,6 +419,18 @@ fn split_into_patches(
         narrow,
     };
     Some((split.mesh, report))
+}
+
+/// The surfaces of a part loaded from a mesh file (`mesh.surfaces: "recognize"`, the
+/// default; docs/math.md §3, "Recognized surfaces"); `None` for an outline's panel, with
+/// `mesh.surfaces: "off"`, or when nothing was recognized (a scan, a sculpt).
+fn recognize_surfaces(s: &LoadedScene, mesh: &Mesh) -> Option<crate::geometry::surfaces::Surfaces> {
+    let m = s.scene.mesh.as_ref()?;
+    if m.0.surfaces == crate::scene::SurfaceMode::Off {
+        return None;
+    }
+    let surfaces = crate::geometry::surfaces::recognize(mesh);
+    (!surfaces.is_empty()).then_some(surfaces)
 }
 
 /// FIELD.json of the initial field of `p`, with its patches' copies.

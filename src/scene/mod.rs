@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 pub use sections::{
     FieldSection, InitKind, MapSource, MeshFull, MeshSection, NoiseMode, OutlineSection, PatchMode,
-    RefineMode, RefineSettings, SymmetryKind, ViewModel, ViewSection,
+    RefineMode, RefineSettings, SurfaceMode, SymmetryKind, ViewModel, ViewSection,
 };
 
 use crate::{Error, Result};

@@ -44,6 +44,11 @@ pub struct MeshFull {
     /// (docs/math.md §3, "Patches"); `none` keeps the part whole, averaging across sharp edges.
     #[serde(default, skip_serializing_if = "PatchMode::is_default")]
     pub patches: PatchMode,
+    /// `recognize` (the default) reads a CAD export's curved faces as the planes, cylinders,
+    /// cones, spheres and tori they approximate, and takes normals, frames and curvatures
+    /// from those surfaces (docs/math.md §3, "Recognized surfaces"); `off` reads the facets.
+    #[serde(default, skip_serializing_if = "SurfaceMode::is_default")]
+    pub surfaces: SurfaceMode,
     /// Refinement of the part inside the edits' brushes (default: where an edit needs it;
     /// docs/math.md §12).
     #[serde(default, skip_serializing_if = "RefineSettings::is_default")]
@@ -66,6 +71,25 @@ pub enum PatchMode {
 impl PatchMode {
     fn is_default(&self) -> bool {
         *self == PatchMode::Split
+    }
+}
+
+/// `mesh.surfaces`: whether the part's surfaces are recognized.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceMode {
+    /// Recognize planes, cylinders, cones, spheres and tori (the default).
+    #[default]
+    Recognize,
+    /// Read the facets as they are.
+    Off,
+}
+
+impl SurfaceMode {
+    fn is_default(&self) -> bool {
+        *self == SurfaceMode::Recognize
     }
 }
 

@@ -131,7 +131,9 @@ impl Builder {
         let rel = match face {
             AnalyticFace::Plane { .. } => 0.0,
             AnalyticFace::Cylinder { .. } => 1.0 / 12.0,
-            AnalyticFace::Cone { .. } | AnalyticFace::Torus { .. } => 0.25,
+            AnalyticFace::Cone { .. }
+            | AnalyticFace::Torus { .. }
+            | AnalyticFace::Sphere { .. } => 0.25,
         };
         let area = face.area() * self.step * self.step * rel;
         self.part.faces.push(face);
@@ -229,6 +231,7 @@ impl Builder {
         for (f, face) in self.part.faces.iter().enumerate() {
             let minor = match face {
                 AnalyticFace::Torus { minor_radius, .. } => *minor_radius,
+                AnalyticFace::Sphere { radius, .. } => *radius,
                 _ => 0.0,
             };
             self.part.tolerances[f].sagitta = (rho[f] + minor) * s;

@@ -1,0 +1,309 @@
+//! Turned faces read along their profile (module docs of [`super`], steps 3 and 4): the
+//! bands a growth finds (each a cone or a cylinder between two rings) joined into the spheres
+//! and tori their rings lie on, and chains of bands with a free profile left to the jet fit.
+
+use nalgebra::Vector3;
+
+use super::grow::{best_fit, region_on, Kinds, RegionGraph};
+use super::primitive::{Primitive, SurfaceKind};
+use super::{G1_TOLERANCE_DEG, MAX_CHORD_DEVIATION_DEG};
+use crate::mesh::Mesh;
+
+type V3 = Vector3<f64>;
+
+/// A grown surface: its primitive and its regions.
+pub(super) type Grown = (Primitive, Vec<u32>);
+
+/// The distinct vertices of `regions`, as points.
+fn points(g: &RegionGraph, mesh: &Mesh, regions: &[u32]) -> Vec<V3> {
+    let mut vs: Vec<u32> = regions.iter().flat_map(|&r| g.verts(r).iter().copied()).collect();
+    vs.sort_unstable();
+    vs.dedup();
+    vs.iter().map(|&v| mesh.positions[v as usize]).collect()
+}
+
+/// The distinct heights along the axis of the points (rings), up to `tol`.
+fn rings(prim: &Primitive, points: &[V3], tol: f64) -> Vec<f64> {
+    let Some((o, a)) = prim.axis() else { return vec![] };
+    let mut hs: Vec<f64> = points.iter().map(|p| (p - o).dot(&a)).collect();
+    hs.sort_by(f64::total_cmp);
+    hs.dedup_by(|x, y| (*x - *y).abs() <= 4.0 * tol);
+    hs
+}
+
+fn coaxial(p: &Primitive, q: &Primitive) -> bool {
+    let (Some((op, ap)), Some((oq, aq))) = (p.axis(), q.axis()) else { return false };
+    ap.cross(&aq).norm() < 1e-3 && (oq - op).cross(&ap).norm() <= 1e-3 * (oq - op).norm().max(1.0)
+}
+
+/// Per surface, the surfaces next to it (sorted, unique).
+fn neighbours(g: &RegionGraph, grown: &[Grown]) -> Vec<Vec<usize>> {
+    let mut owner = vec![usize::MAX; g.regions.normal.len()];
+    for (k, (_, rs)) in grown.iter().enumerate() {
+        for &r in rs {
+            owner[r as usize] = k;
+        }
+    }
+    grown
+        .iter()
+        .enumerate()
+        .map(|(k, (_, rs))| {
+            let mut out: Vec<usize> = rs
+                .iter()
+                .flat_map(|&r| g.neighbours(r).iter().map(|&(s, _)| owner[s as usize]))
+                .filter(|&j| j != usize::MAX && j != k)
+                .collect();
+            out.sort_unstable();
+            out.dedup();
+            out
+        })
+        .collect()
+}
+
+/// Step 3: runs of coaxial bands (cones and cylinders between two rings) whose rings lie on
+/// one sphere (three rings or more) or one torus (four or more: a circle through three
+/// profile points always exists) become that surface.
+pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f64) -> Vec<Grown> {
+    let n = grown.len();
+    let band: Vec<bool> = grown
+        .iter()
+        .map(|(p, rs)| {
+            let pts = points(g, mesh, rs);
+            matches!(p.kind(), SurfaceKind::Cylinder | SurfaceKind::Cone)
+                && rings(p, &pts, tol).len() == 2
+        })
+        .collect();
+    let nb = neighbours(g, &grown);
+    let band_nb = |k: usize| -> Vec<usize> {
+        nb[k].iter().copied().filter(|&j| band[j] && coaxial(&grown[k].0, &grown[j].0)).collect()
+    };
+    // Chains: walk from each band with at most one band neighbour (or any, for a closed loop).
+    let mut chained = vec![false; n];
+    let mut chains: Vec<Vec<usize>> = Vec::new();
+    for start in (0..n).filter(|&k| band[k]) {
+        if chained[start] || band_nb(start).len() > 1 {
+            continue;
+        }
+        let mut chain = vec![start];
+        chained[start] = true;
+        let mut at = start;
+        while let Some(next) = band_nb(at).into_iter().find(|&j| !chained[j]) {
+            chained[next] = true;
+            chain.push(next);
+            at = next;
+        }
+        chains.push(chain);
+    }
+    let mut merged: Vec<Option<Grown>> = grown.into_iter().map(Some).collect();
+    let mut out: Vec<Grown> = Vec::new();
+    for chain in chains {
+        let mut i = 0;
+        while i < chain.len() {
+            let mut best: Option<(usize, Primitive)> = None;
+            for j in i + 1..chain.len() {
+                let regions: Vec<u32> = chain[i..=j]
+                    .iter()
+                    .flat_map(|&k| merged[k].as_ref().map_or(vec![], |m| m.1.clone()))
+                    .collect();
+                match profile_fit(g, mesh, &regions, tol, j - i + 2) {
+                    Some(p) => best = Some((j, p)),
+                    None if j - i + 2 >= 4 => break,
+                    None => {}
+                }
+            }
+            match best {
+                Some((j, prim)) => {
+                    let regions = chain[i..=j]
+                        .iter()
+                        .flat_map(|&k| merged[k].take().map_or(vec![], |m| m.1))
+                        .collect();
+                    out.push((prim, regions));
+                    i = j + 1;
+                }
+                None => i += 1,
+            }
+        }
+    }
+    out.extend(merged.into_iter().flatten());
+    out
+}
+
+/// A sphere (three rings or more) or a torus (four or more) through the regions, each of
+/// them a chord of it.
+fn profile_fit(
+    g: &RegionGraph,
+    mesh: &Mesh,
+    regions: &[u32],
+    tol: f64,
+    rings: usize,
+) -> Option<Primitive> {
+    let pts = points(g, mesh, regions);
+    let normals: Vec<V3> = regions.iter().map(|&r| g.regions.normal[r as usize]).collect();
+    let lines: Vec<(V3, V3)> =
+        regions.iter().map(|&r| (g.centroid[r as usize], g.regions.normal[r as usize])).collect();
+    let prim = best_fit(&pts, &normals, &lines, tol, Kinds::All)?;
+    let enough = match prim {
+        Primitive::Sphere { .. } => rings >= 3,
+        Primitive::Torus { .. } => rings >= 4,
+        _ => false,
+    };
+    let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
+    (enough && regions.iter().all(|&r| region_on(g, mesh, r, &prim, tol, spread))).then_some(prim)
+}
+
+/// The export's angular step on a surface: the largest angle between two of its regions
+/// that share an edge, or on a surface of revolution meshed as a turned face the angle
+/// between its meridians (360° over the distinct azimuths of its vertices; a band's
+/// trapezoids meet at less than that where the surface leans towards its axis), whichever
+/// is larger; `None` for a surface of one region.
+fn internal_step(
+    g: &RegionGraph,
+    mesh: &Mesh,
+    (prim, regions): &Grown,
+    owner: &[u32],
+    k: u32,
+) -> Option<f64> {
+    let dihedral = regions
+        .iter()
+        .flat_map(|&r| g.neighbours(r).iter().filter(|(s, _)| owner[*s as usize] == k))
+        .map(|&(_, angle)| angle)
+        .reduce(f64::max)?;
+    let azimuth = azimuth_step(prim, &points(g, mesh, regions)).unwrap_or(0.0);
+    Some(dihedral.max(azimuth))
+}
+
+/// 2π over the number of distinct azimuths of the points about the primitive's axis (rings
+/// of a turned face share their azimuths), or `None` for fewer than eight.
+fn azimuth_step(prim: &Primitive, points: &[V3]) -> Option<f64> {
+    let (o, a) = prim.axis()?;
+    let f = crate::geometry::frames::Frame::from_normal(a);
+    let mut az: Vec<f64> = points
+        .iter()
+        .filter_map(|p| {
+            let v = p - o;
+            let (x, y) = (v.dot(&f.t), v.dot(&f.b));
+            (x.hypot(y) > 1e-9 * (x.abs() + y.abs() + v.dot(&a).abs())).then(|| y.atan2(x))
+        })
+        .collect();
+    az.sort_by(f64::total_cmp);
+    az.dedup_by(|x, y| (*x - *y).abs() <= 1e-6);
+    (az.len() >= 8).then(|| std::f64::consts::TAU / az.len() as f64)
+}
+
+/// Adjacent curved surfaces of one kind, tangent to each other, with radii within 5 % and
+/// axes within 5° (or centres within 5 % of the radius): no CAD part is built so, but a
+/// free-form face whose strips each fit a circle is (a dome's rows of quads, each a
+/// cylinder within the file's rounding). Both are a free form.
+pub(super) fn twins(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>) -> Vec<Grown> {
+    let n = grown.len();
+    let nb = neighbours(g, &grown);
+    let alike = |p: &Primitive, q: &Primitive| {
+        if p.kind() != q.kind() {
+            return false;
+        }
+        let close = |a: f64, b: f64| (a - b).abs() <= 0.05 * a.abs().max(b.abs());
+        let axes = match (p.axis(), q.axis()) {
+            (Some((_, a)), Some((_, b))) => a.cross(&b).norm() <= 5f64.to_radians().sin(),
+            _ => true,
+        };
+        match (*p, *q) {
+            (Primitive::Cone { half_angle: a, .. }, Primitive::Cone { half_angle: b, .. }) => {
+                axes && close(a, b)
+            }
+            (
+                Primitive::Sphere { center: c, radius: a },
+                Primitive::Sphere { center: d, radius: b },
+            ) => close(a, b) && (V3::from(c) - V3::from(d)).norm() <= 0.05 * a,
+            (
+                Primitive::Torus { major: a, minor: r, .. },
+                Primitive::Torus { major: b, minor: t, .. },
+            ) => axes && close(a, b) && close(r, t),
+            _ => axes && close(p.radius(), q.radius()),
+        }
+    };
+    let mut twin = vec![false; n];
+    for k in 0..n {
+        for &j in &nb[k] {
+            if alike(&grown[k].0, &grown[j].0) {
+                twin[k] = true;
+                twin[j] = true;
+            }
+        }
+    }
+    let _ = mesh;
+    grown.into_iter().enumerate().filter(|(k, _)| !twin[*k]).map(|(_, p)| p).collect()
+}
+
+/// Step 4: coaxial surfaces of revolution that meet at an angle neither tangent nor beyond
+/// the export's angular step are a free profile: a chain of three or more of them, and in a
+/// chain of two each single band (a cone or a cylinder between two rings).
+pub(super) fn free_profiles(
+    g: &RegionGraph,
+    mesh: &Mesh,
+    grown: Vec<Grown>,
+    tol: f64,
+) -> Vec<Grown> {
+    let n = grown.len();
+    let mut owner = vec![u32::MAX; g.regions.normal.len()];
+    for (k, (_, rs)) in grown.iter().enumerate() {
+        for &r in rs {
+            owner[r as usize] = k as u32;
+        }
+    }
+    let step: Vec<Option<f64>> =
+        (0..n).map(|k| internal_step(g, mesh, &grown[k], &owner, k as u32)).collect();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    let g1 = G1_TOLERANCE_DEG.to_radians();
+    for (k, (pk, rs)) in grown.iter().enumerate() {
+        let Some(step_k) = step[k] else { continue };
+        for &r in rs {
+            for &(s, _) in g.neighbours(r) {
+                let j = owner[s as usize] as usize;
+                if j >= n || j == k {
+                    continue;
+                }
+                let pj = &grown[j].0;
+                let Some(step_j) = step[j] else { continue };
+                if !coaxial(pk, pj) {
+                    continue;
+                }
+                // The profile's turn between them: the angle between their normals at a vertex
+                // the two regions share.
+                let Some(&v) = g.verts(r).iter().find(|v| g.verts(s).binary_search(v).is_ok())
+                else {
+                    continue;
+                };
+                let at = mesh.positions[v as usize];
+                let turn = pk.normal_at(&at).dot(&pj.normal_at(&at)).clamp(-1.0, 1.0).acos();
+                if turn > g1 && turn <= 1.01 * step_k.max(step_j) {
+                    let (a, b) = (root(&mut parent, k), root(&mut parent, j));
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+    }
+    let mut size = vec![0usize; n];
+    for k in 0..n {
+        size[root(&mut parent, k)] += 1;
+    }
+    // A single band (two rings) fixes no profile of its own: next to a face it meets at less
+    // than a step, it is a chord of that face's continuation, not a cone.
+    let single: Vec<bool> =
+        grown.iter().map(|(p, rs)| rings(p, &points(g, mesh, rs), tol).len() == 2).collect();
+    grown
+        .into_iter()
+        .enumerate()
+        .filter(|(k, _)| {
+            let s = size[root(&mut parent, *k)];
+            s == 1 || (s == 2 && !single[*k])
+        })
+        .map(|(_, p)| p)
+        .collect()
+}
