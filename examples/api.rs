@@ -10,8 +10,9 @@ use grainline::field::{compute_field, FieldOptions};
 use grainline::highlight::tensor::default_epsilon;
 use grainline::highlight::{highlight_field_near, InitialField, Lighting, Symmetry, View};
 use grainline::mesh::load::{load_obj, LoadOptions};
+use grainline::pipeline::trace::{trace, TraceInput};
+use grainline::scene::toolpaths::ToolpathSection;
 use grainline::solve::{optimize, SolverSettings};
-use grainline::uvfield::{run_toolpaths, ToolpathSection};
 use nalgebra::Vector3;
 
 fn main() -> grainline::Result<()> {
@@ -76,11 +77,22 @@ fn main() -> grainline::Result<()> {
         }
     );
 
-    // Brush strokes 4 mm wide on the part, exported as G-code.
+    // Brush strokes 4 mm wide on the part, exported as G-code: the trace stage of `grainline
+    // run`, with the solver's fabrication constraints (none here) measured on the strokes.
     let mut section: ToolpathSection =
         serde_json::from_str(r#"{"placement": {"width": 4}}"#).expect("a valid toolpaths section");
     section.gcode = Some("kettle.ngc".into());
-    let (job, uv) = run_toolpaths(&mesh, g, &solved.phi, options.symmetry, &section)?;
+    let traced = trace(&TraceInput {
+        toolpaths: Some(&section),
+        constraints: &settings.constraints,
+        mesh: &mesh,
+        geometry: g,
+        phi: &solved.phi,
+        symmetry: options.symmetry,
+        keep_map: false,
+        keep_field_mesh: false,
+    })?;
+    let (job, uv) = (&traced.job, &traced.uv);
     println!(
         "{} strokes, {:.0} mm brushed on the part, flat layout scale {:.1}, G-code {} lines",
         job.report.stroke_count,

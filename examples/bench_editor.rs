@@ -93,9 +93,48 @@ fn main() {
         last = Some(full);
     }
     let last = last.unwrap();
-    // Where a step's time goes: the stages of optimize_stage ("edits": targets, "solve": the
-    // solver incl. the highlight field before/after, fidelity, critical points), then the
-    // page's grain and highlight curves.
+    time_step_parts(&session, &dir, steps, &edit);
+    let t = Instant::now();
+    let json_len = session.field_json(&last).unwrap().len();
+    let json_ms = t.elapsed().as_secs_f64() * 1e3;
+    times.sort_by(f64::total_cmp);
+    full_times.sort_by(f64::total_cmp);
+    let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
+    let qf = |p: f64| full_times[((full_times.len() - 1) as f64 * p).round() as usize];
+    println!(
+        "bench_editor: {n} vertices, brush radius {radius} mm with {support} vertices in its \
+         support, {steps} drag steps (bend, strength 0.05 → 0.95)"
+    );
+    println!(
+        "  one drag step (targets, solve, grain, highlight curves, encoding): median {:.1} ms, \
+         p90 {:.1} ms, min {:.1} ms, max {:.1} ms",
+        q(0.5),
+        q(0.9),
+        times[0],
+        times[times.len() - 1]
+    );
+    println!(
+        "  the whole stage for the same edit (a commit; a drag step before the incremental \
+         path): median {:.1} ms, p90 {:.1} ms, min {:.1} ms",
+        qf(0.5),
+        qf(0.9),
+        full_times[0]
+    );
+    println!("  session open (load, geometry, initial field): {:.0} ms", open_s * 1e3);
+    println!("  FIELD.json when asked for: {json_ms:.0} ms ({:.1} MB)", json_len as f64 / 1e6);
+    println!("  solver: {}; fidelity: {:?}", last.stop, last.fidelity.first().map(|f| f.landed));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Where a step's time goes, printed: the stages of optimize_stage ("edits": targets, "solve":
+/// the solver incl. the highlight field before/after, fidelity, critical points), the page's
+/// grain and highlight curves, then the incremental step alone.
+fn time_step_parts(
+    session: &Session,
+    dir: &std::path::Path,
+    steps: usize,
+    edit: &dyn Fn(usize) -> Edit,
+) {
     let loaded = grainline::scene::LoadedScene::read(&dir.join("scene.json")).unwrap();
     let mut parts: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     for k in 0..steps.min(10) {
@@ -151,34 +190,4 @@ fn main() {
         v.sort_by(f64::total_cmp);
         println!("  {name}: median {:.1} ms", v[v.len() / 2] * 1e3);
     }
-    let t = Instant::now();
-    let json_len = session.field_json(&last).unwrap().len();
-    let json_ms = t.elapsed().as_secs_f64() * 1e3;
-    times.sort_by(f64::total_cmp);
-    full_times.sort_by(f64::total_cmp);
-    let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
-    let qf = |p: f64| full_times[((full_times.len() - 1) as f64 * p).round() as usize];
-    println!(
-        "bench_editor: {n} vertices, brush radius {radius} mm with {support} vertices in its \
-         support, {steps} drag steps (bend, strength 0.05 → 0.95)"
-    );
-    println!(
-        "  one drag step (targets, solve, grain, highlight curves, encoding): median {:.1} ms, \
-         p90 {:.1} ms, min {:.1} ms, max {:.1} ms",
-        q(0.5),
-        q(0.9),
-        times[0],
-        times[times.len() - 1]
-    );
-    println!(
-        "  the whole stage for the same edit (a commit; a drag step before the incremental \
-         path): median {:.1} ms, p90 {:.1} ms, min {:.1} ms",
-        qf(0.5),
-        qf(0.9),
-        full_times[0]
-    );
-    println!("  session open (load, geometry, initial field): {:.0} ms", open_s * 1e3);
-    println!("  FIELD.json when asked for: {json_ms:.0} ms ({:.1} MB)", json_len as f64 / 1e6);
-    println!("  solver: {}; fidelity: {:?}", last.stop, last.fidelity.first().map(|f| f.landed));
-    let _ = std::fs::remove_dir_all(&dir);
 }

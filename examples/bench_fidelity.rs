@@ -46,49 +46,7 @@ fn list(s: &str) -> Vec<String> {
 }
 
 fn main() {
-    let mut energies = vec!["position".to_string(), "tensor".to_string()];
-    let mut cases: Option<Vec<String>> = None;
-    let mut tools: Vec<String> = corpus::TOOLS.iter().map(|s| s.to_string()).collect();
-    let mut size = Size::Full;
-    let mut dump: Option<std::path::PathBuf> = None;
-    let mut meshes: Vec<std::path::PathBuf> = Vec::new();
-    let mut weld: Option<f64> = None;
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        match a.as_str() {
-            "--energy" => match args.next().as_deref() {
-                Some("both") => {}
-                Some(e @ ("position" | "tensor")) => energies = vec![e.to_string()],
-                other => usage(&format!("--energy takes position, tensor or both, got {other:?}")),
-            },
-            "--cases" => cases = Some(list(&args.next().unwrap_or_default())),
-            "--edits" => tools = list(&args.next().unwrap_or_default()),
-            "--small" => size = Size::Small,
-            "--dump" => dump = args.next().map(Into::into),
-            "--mesh" => match args.next() {
-                Some(m) => meshes.push(m.into()),
-                None => usage("--mesh takes a mesh file"),
-            },
-            "--weld" => match args.next().and_then(|w| w.parse::<f64>().ok()) {
-                Some(w) if w >= 0.0 => weld = Some(w),
-                _ => usage("--weld takes a distance ≥ 0 in the file's units"),
-            },
-            "--field" => {
-                let extra = args.next().unwrap_or_default();
-                if !serde_json::from_str::<serde_json::Value>(&extra).is_ok_and(|v| v.is_object()) {
-                    usage(&format!("--field takes a JSON object of `field` keys, got {extra:?}"));
-                }
-                // SAFETY: single-threaded here, before any thread starts.
-                unsafe { std::env::set_var("GRAINLINE_CORPUS_FIELD", extra) }
-            }
-            // SAFETY: single-threaded here, before any thread starts.
-            "--solver" => unsafe {
-                std::env::set_var("GRAINLINE_CORPUS_SOLVER", args.next().unwrap_or_default())
-            },
-            "-h" | "--help" => usage(""),
-            other => usage(&format!("unknown argument {other:?}")),
-        }
-    }
+    let Args { energies, cases, tools, size, dump, meshes, weld } = parse_args();
     if let Some(t) = tools.iter().find(|t| !corpus::TOOLS.contains(&t.as_str())) {
         usage(&format!("unknown edit {t:?} (bend, expand, curve)"));
     }
@@ -105,33 +63,7 @@ fn main() {
         }
     }
     let names = cases.as_deref();
-    let mut all = Vec::new();
-    if meshes.is_empty() {
-        match corpus::generated_cases(size, names) {
-            Ok(c) => all.extend(c),
-            Err(e) => fail(&e),
-        };
-        match corpus::shared_cases(names) {
-            Ok(c) => all.extend(c),
-            Err(e) => fail(&e),
-        }
-    }
-    for m in &meshes {
-        let name = m.file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
-        // Non-manifold vertices are accepted when a weld is asked for (welded patches, as
-        // the teapot's, leave some).
-        match corpus::mesh_case(&name, m, true, weld, weld.is_some()) {
-            Ok(c) => all.push(c),
-            Err(e) => fail(&format!("{}: {e}", m.display())),
-        }
-    }
-    if let Some(n) = names {
-        for want in n {
-            if !all.iter().any(|c| &c.name == want) {
-                eprintln!("note: no case named {want:?} (or its mesh is absent)");
-            }
-        }
-    }
+    let all = gather_cases(size, names, &meshes, weld);
     let mut rows: Vec<Outcome> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
     for case in &all {
@@ -207,6 +139,104 @@ fn main() {
     for n in notes {
         println!("- {n}");
     }
+}
+
+/// The cases to run: the generated and shared corpus (`names` only, when given), or the
+/// `--mesh` parts.
+fn gather_cases(
+    size: Size,
+    names: Option<&[String]>,
+    meshes: &[std::path::PathBuf],
+    weld: Option<f64>,
+) -> Vec<corpus::Case> {
+    let mut all = Vec::new();
+    if meshes.is_empty() {
+        match corpus::generated_cases(size, names) {
+            Ok(c) => all.extend(c),
+            Err(e) => fail(&e),
+        };
+        match corpus::shared_cases(names) {
+            Ok(c) => all.extend(c),
+            Err(e) => fail(&e),
+        }
+    }
+    for m in meshes {
+        let name = m.file_stem().map_or("mesh".into(), |s| s.to_string_lossy().into_owned());
+        // Non-manifold vertices are accepted when a weld is asked for (welded patches, as
+        // the teapot's, leave some).
+        match corpus::mesh_case(&name, m, true, weld, weld.is_some()) {
+            Ok(c) => all.push(c),
+            Err(e) => fail(&format!("{}: {e}", m.display())),
+        }
+    }
+    if let Some(n) = names {
+        for want in n {
+            if !all.iter().any(|c| &c.name == want) {
+                eprintln!("note: no case named {want:?} (or its mesh is absent)");
+            }
+        }
+    }
+    all
+}
+
+/// The command line (see the module docs).
+struct Args {
+    energies: Vec<String>,
+    cases: Option<Vec<String>>,
+    tools: Vec<String>,
+    size: Size,
+    dump: Option<std::path::PathBuf>,
+    meshes: Vec<std::path::PathBuf>,
+    weld: Option<f64>,
+}
+
+/// Reads the command line; `--field` and `--solver` are passed on to the corpus through the
+/// environment.
+fn parse_args() -> Args {
+    let mut energies = vec!["position".to_string(), "tensor".to_string()];
+    let mut cases: Option<Vec<String>> = None;
+    let mut tools: Vec<String> = corpus::TOOLS.iter().map(|s| s.to_string()).collect();
+    let mut size = Size::Full;
+    let mut dump: Option<std::path::PathBuf> = None;
+    let mut meshes: Vec<std::path::PathBuf> = Vec::new();
+    let mut weld: Option<f64> = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--energy" => match args.next().as_deref() {
+                Some("both") => {}
+                Some(e @ ("position" | "tensor")) => energies = vec![e.to_string()],
+                other => usage(&format!("--energy takes position, tensor or both, got {other:?}")),
+            },
+            "--cases" => cases = Some(list(&args.next().unwrap_or_default())),
+            "--edits" => tools = list(&args.next().unwrap_or_default()),
+            "--small" => size = Size::Small,
+            "--dump" => dump = args.next().map(Into::into),
+            "--mesh" => match args.next() {
+                Some(m) => meshes.push(m.into()),
+                None => usage("--mesh takes a mesh file"),
+            },
+            "--weld" => match args.next().and_then(|w| w.parse::<f64>().ok()) {
+                Some(w) if w >= 0.0 => weld = Some(w),
+                _ => usage("--weld takes a distance ≥ 0 in the file's units"),
+            },
+            "--field" => {
+                let extra = args.next().unwrap_or_default();
+                if !serde_json::from_str::<serde_json::Value>(&extra).is_ok_and(|v| v.is_object()) {
+                    usage(&format!("--field takes a JSON object of `field` keys, got {extra:?}"));
+                }
+                // SAFETY: single-threaded here, before any thread starts.
+                unsafe { std::env::set_var("GRAINLINE_CORPUS_FIELD", extra) }
+            }
+            // SAFETY: single-threaded here, before any thread starts.
+            "--solver" => unsafe {
+                std::env::set_var("GRAINLINE_CORPUS_SOLVER", args.next().unwrap_or_default())
+            },
+            "-h" | "--help" => usage(""),
+            other => usage(&format!("unknown argument {other:?}")),
+        }
+    }
+    Args { energies, cases, tools, size, dump, meshes, weld }
 }
 
 /// Writes the edited scene of one row (see `--dump`).

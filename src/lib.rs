@@ -10,23 +10,26 @@
 //! ## Layers
 //!
 //! The modules stand on each other in one direction. Bottom to top, a module uses only modules
-//! of its own layer or below, and no modules use each other in a cycle (`tests/structure.rs`
-//! reads this list and the sources, and fails on an upward use or a cycle):
+//! of lower layers: modules of one layer do not use each other, and no modules use each other
+//! in a cycle (`tests/structure.rs` reads this list and the sources, and fails on a use within
+//! a layer or upward, or a cycle):
 //!
-//! 1. `error`, `limits`, `output`, `factor`, `allocator` — the error type, the budgets, the
-//!    outputs written atomically, the bounded sparse Cholesky factor, the allocator.
-//! 2. `mesh` — loading (OBJ, STL, PLY), validation, topology, UV charts, refinement.
-//! 3. `svg_read`, `generate` — SVG drawings read as polylines; analytic test parts.
-//! 4. `geometry`, `texmap` — normals, frames, areas, connection, curvature, ∇φ, face angles;
+//! 1. `error`, `limits`, `output`, `allocator` — the error type, the budgets, the outputs
+//!    written atomically, the allocator.
+//! 2. `factor` — the bounded sparse Cholesky factor.
+//! 3. `mesh` — loading (OBJ, STL, PLY), validation, topology, UV charts, refinement.
+//! 4. `svg_read`, `generate` — SVG drawings read as polylines; analytic test parts.
+//! 5. `geometry`, `texmap` — normals, frames, areas, connection, curvature, ∇φ, face angles;
 //!    the grain as a texture in UV space (MikkTSpace frames, baking, maps read back).
-//! 5. `highlight`, `layout`, `panel`, `appearance` — ℓ and the initial fields; UV layouts;
-//!    panels from outlines; materials, lights and BRDFs.
-//! 6. `edit`, `solve`, `field`, `uvfield` — the edit tools; the solver; FIELD.json; the grain
-//!    carried into the UV layout.
-//! 7. `fidelity`, `render`, `export` — did an edit land; the CPU preview; glTF.
-//! 8. `scene` — the scene file.
-//! 9. `pipeline` — the staged run: a plan, one file per stage, a short sequencer.
-//! 10. `editor` — `grainline edit`'s server and session.
+//! 6. `highlight`, `layout`, `panel`, `appearance` — ℓ, the initial fields and the field's
+//!    singularities; UV layouts; panels from outlines; materials, lights and BRDFs.
+//! 7. `solve`, `field`, `uvfield` — the solver; FIELD.json; the grain carried into the UV
+//!    layout.
+//! 8. `edit` — the edit tools (they start the solver's designed grain).
+//! 9. `fidelity`, `render`, `export` — did an edit land; the CPU preview; glTF.
+//! 10. `scene` — the scene file.
+//! 11. `pipeline` — the staged run: a plan, one file per stage, a short sequencer.
+//! 12. `editor` — `grainline edit`'s server and session.
 //!
 //! The binary's `cli` (src/cli) sits on top and uses the library by its public paths.
 //!
@@ -80,4 +83,3 @@ pub mod texmap;
 pub mod uvfield;
 
 pub use error::{Error, Result};
-pub use highlight::parse_vec3;

@@ -218,6 +218,6 @@ fn item15_toolpath_errors_print_strokes_without_option_text() {
     assert_no_debug_text(&a);
     assert_no_debug_text(&b);
     // Through the scene mapping: the floor under its own key.
-    let e = grainline::uvfield::toolpath_error(floor);
+    let e = grainline::scene::toolpaths::toolpath_error(floor);
     assert!(e.to_string().starts_with("gcode_options.z_floor: Z = -0.5"), "{e}");
 }

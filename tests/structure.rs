@@ -1,7 +1,9 @@
 //! The code's structure, read from the sources: the layer order of src's top-level modules
 //! written in the crate docs (src/lib.rs, "Layers") is the one the code obeys — no module uses
-//! one on a higher layer, and no set of modules uses each other in a cycle —, the files of
-//! toolpaths/src form no cycle, and no function outside tests is longer than 120 lines.
+//! one on its own or a higher layer, and no set of modules uses each other in a cycle —, the files of
+//! toolpaths/src and of every folder of src and toolpaths/src form no cycle, nothing is
+//! imported through a re-export of src/lib.rs, and no function outside tests (nor an
+//! example's `main`) is longer than 120 lines.
 //!
 //! A use is any `crate::name` path in code (comments, doc links and `#[cfg(test)]` items are
 //! not code). The checks are plain text scans: they need no build of the crate they read.
@@ -335,7 +337,7 @@ fn src_modules_use_only_their_layer_and_below() {
     let mut upward = Vec::new();
     for (m, uses) in &graph {
         for (u, files) in uses {
-            if layers[u] > layers[m] {
+            if layers[u] >= layers[m] {
                 upward.push(format!(
                     "{m} (layer {}) uses {u} (layer {}) in {files:?}",
                     layers[m], layers[u]
@@ -343,7 +345,7 @@ fn src_modules_use_only_their_layer_and_below() {
             }
         }
     }
-    assert!(upward.is_empty(), "uses of a higher layer:\n{}", upward.join("\n"));
+    assert!(upward.is_empty(), "uses of the same or a higher layer:\n{}", upward.join("\n"));
     let c = cycles(&graph);
     assert!(c.is_empty(), "src's modules use each other in cycles: {c:?} ({graph:?})");
 }
@@ -375,6 +377,131 @@ fn toolpaths_files_form_no_cycle() {
     }
     let c = cycles(&graph);
     assert!(c.is_empty(), "toolpaths' files use each other in cycles: {c:?}");
+}
+
+/// The module path (`crate::` segments) of the files directly in `dir`, a folder under the
+/// crate's `src`: `src/mesh` is `mesh`, `src/edit/untangle` is `edit::untangle`.
+fn folder_module(src: &Path, dir: &Path) -> String {
+    let rel = dir.strip_prefix(src).unwrap();
+    rel.components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join("::")
+}
+
+/// The cycles among the files of one folder: a file uses a sibling through `super::x` or
+/// through its full path (`crate::folder::x`). A folder's `mod.rs` (or `lib.rs`, `main.rs`)
+/// is the folder's own module, not a sibling, and is left out.
+fn folder_cycles(src: &Path, dir: &Path) -> Vec<Vec<String>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+        .collect();
+    files.sort();
+    let stem = |p: &Path| p.file_stem().unwrap().to_string_lossy().into_owned();
+    let facade = |name: &str| matches!(name, "mod" | "lib" | "main");
+    let known: BTreeSet<String> = files.iter().map(|f| stem(f)).filter(|n| !facade(n)).collect();
+    let module = folder_module(src, dir);
+    let full = if module.is_empty() { "crate::".to_string() } else { format!("crate::{module}::") };
+    let mut graph = Graph::new();
+    for f in &files {
+        let name = stem(f);
+        if facade(&name) {
+            continue;
+        }
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        let mut uses = used_modules(&code, "super::");
+        uses.extend(used_modules(&code, &full));
+        add_uses(&mut graph, &name, f.strip_prefix(src).unwrap(), uses, &known);
+    }
+    cycles(&graph)
+}
+
+fn folders(dir: &Path, out: &mut Vec<PathBuf>) {
+    out.push(dir.to_path_buf());
+    let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    entries.sort();
+    for p in entries.into_iter().filter(|p| p.is_dir()) {
+        folders(&p, out);
+    }
+}
+
+#[test]
+fn the_files_of_a_folder_form_no_cycle() {
+    let mut found = Vec::new();
+    for crate_src in ["src", "toolpaths/src"] {
+        let src = root().join(crate_src);
+        let mut dirs = Vec::new();
+        folders(&src, &mut dirs);
+        for dir in dirs {
+            for c in folder_cycles(&src, &dir) {
+                found.push(format!("{}: {c:?}", dir.strip_prefix(root()).unwrap().display()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "files of one folder use each other in cycles:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The names src/lib.rs re-exports (`pub use a::{B, c};` gives `B` and `c`).
+fn lib_reexports() -> BTreeSet<String> {
+    let lib = code_only(&std::fs::read_to_string(root().join("src/lib.rs")).unwrap());
+    let mut names = BTreeSet::new();
+    for item in lib.split(';').filter_map(|i| i.trim().strip_prefix("pub use ")) {
+        let tail = item.rsplit("::").next().unwrap_or(item);
+        for name in tail.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')) {
+            if !name.is_empty() && name != "self" {
+                names.insert(name.to_string());
+            }
+        }
+    }
+    names
+}
+
+#[test]
+fn nothing_is_imported_through_a_lib_reexport() {
+    // The crate's error type is named at the top, as every crate names its own.
+    let allowed = ["Error", "Result"];
+    let reexports: BTreeSet<String> =
+        lib_reexports().into_iter().filter(|n| !allowed.contains(&n.as_str())).collect();
+    assert!(
+        reexports.is_empty(),
+        "src/lib.rs re-exports more than the error type: {reexports:?}; import each name \
+         from the module that defines it"
+    );
+    let mut files = Vec::new();
+    for dir in ["src", "examples", "tests"] {
+        rust_files(&root().join(dir), &mut files);
+    }
+    let mut through = Vec::new();
+    for f in files.iter().filter(|f| !f.ends_with("src/lib.rs")) {
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        // Outside src, `crate::` is the test's or the example's own crate.
+        let prefixes: &[&str] = if f.starts_with(root().join("src")) {
+            &["crate::", "grainline::"]
+        } else {
+            &["grainline::"]
+        };
+        for prefix in prefixes {
+            for name in used_modules(&code, prefix) {
+                let defined = root().join("src").join(&name);
+                let module = defined.is_dir() || defined.with_extension("rs").is_file();
+                if !module && !allowed.contains(&name.as_str()) {
+                    through.push(format!(
+                        "{}: {prefix}{name}",
+                        f.strip_prefix(root()).unwrap().display()
+                    ));
+                }
+            }
+        }
+    }
+    through.sort();
+    through.dedup();
+    assert!(through.is_empty(), "imports through src/lib.rs's re-exports:\n{}", through.join("\n"));
 }
 
 /// Every `fn` item's first and last line in `code` (1-based), with its name.
@@ -434,6 +561,24 @@ fn no_function_outside_tests_is_longer_than_120_lines() {
         }
     }
     assert!(long.is_empty(), "functions over {MAX_FUNCTION_LINES} lines:\n{}", long.join("\n"));
+}
+
+#[test]
+fn no_example_main_is_longer_than_120_lines() {
+    let mut files = Vec::new();
+    rust_files(&root().join("examples"), &mut files);
+    let mut long = Vec::new();
+    for f in &files {
+        let code = code_only(&std::fs::read_to_string(f).unwrap());
+        for (name, first, last) in functions(&code) {
+            let n = last + 1 - first;
+            if name == "main" && n > MAX_FUNCTION_LINES {
+                let rel = f.strip_prefix(root()).unwrap();
+                long.push(format!("{}:{first} main: {n} lines", rel.display()));
+            }
+        }
+    }
+    assert!(long.is_empty(), "example mains over {MAX_FUNCTION_LINES} lines:\n{}", long.join("\n"));
 }
 
 #[test]

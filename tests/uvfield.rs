@@ -7,7 +7,10 @@ use grainline::generate::{cylinder, plane, Grid};
 use grainline::geometry::{Geometry, GeometryOptions};
 use grainline::highlight::Symmetry;
 use grainline::mesh::Mesh;
-use grainline::uvfield::{as_brushed, field_mesh, run_toolpaths, ToolpathSection, UvFieldOptions};
+use grainline::pipeline::trace::{trace, TraceInput};
+use grainline::scene::toolpaths::ToolpathSection;
+use grainline::solve::settings::Constraints;
+use grainline::uvfield::{as_brushed, field_mesh, UvFieldOptions};
 use grainline_toolpaths::{
     generate, Directions, JobOptions, PlacementOptions, StopReason, SvgOptions,
 };
@@ -266,8 +269,27 @@ fn toolpath_section_refuses_unknown_keys_and_names_bad_ones() {
     assert!(text.contains("test_ratio") && text.contains("surface_following"));
 }
 
+/// The trace stage on `section` with no fabrication constraint.
+fn trace_with(mesh: &Mesh, g: &Geometry, phi: &[f64], section: &ToolpathSection) -> TraceOut {
+    let constraints = Constraints::default();
+    let t = trace(&TraceInput {
+        toolpaths: Some(section),
+        constraints: &constraints,
+        mesh,
+        geometry: g,
+        phi,
+        symmetry: Symmetry::Line,
+        keep_map: false,
+        keep_field_mesh: false,
+    })
+    .unwrap();
+    (t.job, t.uv)
+}
+
+type TraceOut = (grainline_toolpaths::JobOutput, grainline::uvfield::UvFieldReport);
+
 #[test]
-fn run_toolpaths_writes_the_requested_outputs() {
+fn the_trace_stage_writes_the_requested_outputs() {
     let mesh = plane(10.0, Grid::new(8, 8));
     let (g, phi) = setup(&mesh, uniform);
     let section = ToolpathSection {
@@ -276,13 +298,13 @@ fn run_toolpaths_writes_the_requested_outputs() {
         svg_options: SvgOptions { title: "t".into(), ..Default::default() },
         ..Default::default()
     };
-    let (out, rep) = run_toolpaths(&mesh, &g, &phi, Symmetry::Line, &section).unwrap();
+    let (out, rep) = trace_with(&mesh, &g, &phi, &section);
     assert_eq!(rep.triangles, 128);
     assert!(out.svg.is_some() && out.gcode.is_some() && out.strokes_json.is_none());
     // The cycle time is in the report with or without a program (then from gcode_options).
     let written = out.report.cycle_time_s.unwrap();
     let none = ToolpathSection { gcode: None, ..section };
-    let (out, _) = run_toolpaths(&mesh, &g, &phi, Symmetry::Line, &none).unwrap();
+    let (out, _) = trace_with(&mesh, &g, &phi, &none);
     assert!(out.gcode.is_none());
     assert_eq!(out.report.cycle_time_s, Some(written));
 }

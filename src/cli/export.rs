@@ -87,10 +87,8 @@ pub fn run(args: ExportArgs, quiet: bool) -> anyhow::Result<()> {
         RunOptions { out_dir: None, field: args.field.clone(), report: args.report.clone() };
     let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
+    super::progress::report_tail(&report, false, quiet);
     if !quiet {
-        for o in &report.outputs {
-            eprintln!("wrote {o}");
-        }
         if let Some(x) = &report.export {
             eprintln!(
                 "glTF: {} vertices ({} mesh vertices, {} split), {} triangles, {} strokes",

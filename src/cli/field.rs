@@ -8,7 +8,7 @@ use grainline::field::{compute_field, read_directions, FieldFile, FieldOptions};
 use grainline::geometry::NormalSource;
 use grainline::highlight::{InitialField, Lighting, Symmetry, View};
 
-use super::progress::Stages;
+use super::progress::Spinner;
 use super::MeshArgs;
 
 /// Arguments of `grainline field`.
@@ -64,19 +64,21 @@ fn parse_normals(s: &str) -> Result<NormalSource, String> {
 
 /// Runs `grainline field`.
 pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
-    let stages = Stages::new(quiet);
+    let stages = Spinner::new(quiet);
     let view = match (&args.eye, &args.view) {
-        (Some(e), _) => View::Eye(grainline::parse_vec3("eye", e)?),
-        (None, Some(v)) => View::Direction(grainline::parse_vec3("view", v)?),
+        (Some(e), _) => View::Eye(grainline::highlight::parse_vec3("eye", e)?),
+        (None, Some(v)) => View::Direction(grainline::highlight::parse_vec3("view", v)?),
         (None, None) => anyhow::bail!("give --view X,Y,Z or --eye X,Y,Z"),
     };
     let light_position = match &args.light_position {
-        Some(p) => Some(grainline::parse_vec3("light-position", p)?),
+        Some(p) => Some(grainline::highlight::parse_vec3("light-position", p)?),
         None => None,
     };
     let light = match (&light_position, &args.light) {
         (Some(_), _) => None,
-        (None, Some(l)) => Some(Lighting::new(grainline::parse_vec3("light", l)?, view)?),
+        (None, Some(l)) => {
+            Some(Lighting::new(grainline::highlight::parse_vec3("light", l)?, view)?)
+        }
         (None, None) => anyhow::bail!("give --light X,Y,Z or --light-position X,Y,Z"),
     };
     let mut plan = grainline::output::OutputPlan::new();

@@ -6,16 +6,16 @@ use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// A stage spinner.
-pub struct Stages {
+/// A stage spinner; it observes the library's pipeline stages.
+pub struct Spinner {
     bar: Option<ProgressBar>,
 }
 
-impl Stages {
+impl Spinner {
     /// A spinner, or nothing when `quiet` or stderr is not a terminal.
     pub fn new(quiet: bool) -> Self {
         if quiet || !std::io::stderr().is_terminal() {
-            return Stages { bar: None };
+            return Spinner { bar: None };
         }
         let bar = ProgressBar::new_spinner();
         bar.set_style(
@@ -23,7 +23,7 @@ impl Stages {
                 .expect("valid template"),
         );
         bar.enable_steady_tick(Duration::from_millis(100));
-        Stages { bar: Some(bar) }
+        Spinner { bar: Some(bar) }
     }
 
     /// Shows the stage now running.
@@ -34,7 +34,7 @@ impl Stages {
     }
 }
 
-impl Drop for Stages {
+impl Drop for Spinner {
     fn drop(&mut self) {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
@@ -42,12 +42,31 @@ impl Drop for Stages {
     }
 }
 
-/// A [`Stages`] spinner that also observes the library's pipeline stages.
-pub type Spinner = Stages;
-
-impl grainline::pipeline::Observer for Stages {
+impl grainline::pipeline::Observer for Spinner {
     fn stage(&self, name: &str) {
-        Stages::stage(self, name);
+        Spinner::stage(self, name);
+    }
+}
+
+/// What a scene command prints after its run: when `strokes`, the strokes' warnings (an empty
+/// G-code program written with `allow_empty`, a stroke-level constraint broken), even with
+/// `--quiet` (the run report carries them too); then, unless `quiet`, one `wrote PATH` per
+/// output.
+pub fn report_tail(report: &grainline::pipeline::run::RunReport, strokes: bool, quiet: bool) {
+    if strokes {
+        for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
+            eprintln!("warning: {w}");
+        }
+        for w in report.toolpaths.iter().filter_map(|t| t.stroke_constraints.as_ref()) {
+            for line in w.warnings() {
+                eprintln!("grainline: warning: {line}");
+            }
+        }
+    }
+    if !quiet {
+        for o in &report.outputs {
+            eprintln!("wrote {o}");
+        }
     }
 }
 

@@ -67,10 +67,8 @@ pub fn run(args: RenderArgs, quiet: bool) -> anyhow::Result<()> {
         RunOptions { out_dir: None, field: args.field.clone(), report: args.report.clone() };
     let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
+    super::progress::report_tail(&report, false, quiet);
     if !quiet {
-        for o in &report.outputs {
-            eprintln!("wrote {o}");
-        }
         if let Some(r) = &report.render {
             let passes: Vec<String> =
                 r.passes.iter().map(|p| format!("{} {:.0} ms", p.name, p.ms)).collect();

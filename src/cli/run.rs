@@ -51,21 +51,8 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     if let Some(n) = report.patches.as_ref().and_then(|p| p.narrow.as_ref()) {
         eprintln!("grainline: warning: {}", n.warning());
     }
-    // Warnings (an empty G-code program written with `allow_empty`) are printed even with
-    // --quiet; the run report carries them too.
-    for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
-        eprintln!("warning: {w}");
-    }
-    // Stroke-level constraint figures that break a constraint (issue 17).
-    for w in report.toolpaths.iter().filter_map(|t| t.stroke_constraints.as_ref()) {
-        for line in w.warnings() {
-            eprintln!("grainline: warning: {line}");
-        }
-    }
+    super::progress::report_tail(&report, true, quiet);
     if !quiet {
-        for o in &report.outputs {
-            eprintln!("wrote {o}");
-        }
         let stages: Vec<String> =
             report.stages.iter().map(|s| format!("{} {:.2}s", s.stage, s.seconds)).collect();
         eprintln!(

@@ -74,21 +74,8 @@ pub fn run(args: TraceArgs, quiet: bool) -> anyhow::Result<()> {
         RunOptions { out_dir: None, field: args.field.clone(), report: args.report.clone() };
     let report = run_scene(&scene, &options, &spinner).map_err(|e| scene.wrap(e))?;
     drop(spinner);
-    // Warnings (an empty G-code program written with `allow_empty`) are printed even with
-    // --quiet; the run report carries them too.
-    for w in report.toolpaths.iter().flat_map(|t| &t.job.warnings) {
-        eprintln!("warning: {w}");
-    }
-    // Stroke-level constraint figures that break a constraint (issue 17).
-    for w in report.toolpaths.iter().filter_map(|t| t.stroke_constraints.as_ref()) {
-        for line in w.warnings() {
-            eprintln!("grainline: warning: {line}");
-        }
-    }
+    super::progress::report_tail(&report, true, quiet);
     if !quiet {
-        for o in &report.outputs {
-            eprintln!("wrote {o}");
-        }
         if let Some(t) = &report.toolpaths {
             let cycle = t
                 .job

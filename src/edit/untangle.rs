@@ -35,7 +35,7 @@ pub mod pairs;
 
 use super::{g_hat, Context, State};
 use crate::geometry::connection::wrap_angle;
-use crate::solve::singularities::face_index;
+use crate::highlight::singularities::face_index;
 use crate::solve::turn::{bounded_turn, TurnInput, TurnOptions};
 
 /// |ĝ*| up to which a vertex at a key-highlight crossing holds it.

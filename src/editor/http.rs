@@ -19,8 +19,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::server::MAX_BODY;
-
+/// The largest request body read (bytes).
+pub const MAX_BODY: usize = 1 << 20;
 /// Most connections handled at once; more are answered 503 and closed.
 pub const MAX_CONNECTIONS: usize = 32;
 /// Time for the request line and headers, in all.

@@ -29,7 +29,7 @@ use serde_json::json;
 
 use crate::edit::WarpKind;
 use crate::{Error, Result};
-pub use session::{Base, Change, ExportKind, Part, Session, Solved, StateView, Traced};
+pub use session::{Base, Change, ExportKind, PageStrokes, Part, Session, Solved, StateView};
 
 /// Options of [`Editor::bind`].
 #[derive(Clone, Debug, Default)]
@@ -206,10 +206,10 @@ pub fn grain_bytes(s: &Solved) -> Vec<u8> {
     out
 }
 
-/// `GET /api/strokes`: the strokes and the as-brushed grain of a solved field ([`Traced`]),
+/// `GET /api/strokes`: the strokes and the as-brushed grain of a solved field ([`PageStrokes`]),
 /// little-endian: `u32` strokes S, points P, vertices N, the part's id; S `u32` point counts;
 /// P × 3 `f32` points (world); N × 3 `f32` as-brushed directions (zero where unbrushed).
-pub fn strokes_bytes(t: &Traced, part: u32) -> Vec<u8> {
+pub fn strokes_bytes(t: &PageStrokes, part: u32) -> Vec<u8> {
     let points: usize = t.strokes.iter().map(Vec::len).sum();
     let mut out = Vec::with_capacity(16 + 4 * t.strokes.len() + 12 * (points + t.brushed_u.len()));
     for k in [t.strokes.len(), points, t.brushed_u.len(), part as usize] {

@@ -45,8 +45,6 @@ use serde_json::json;
 use super::http::{Request, Response};
 use super::session::{Change, ExportKind, Session};
 
-/// The largest request body read (bytes).
-pub const MAX_BODY: usize = 1 << 20;
 /// The longest request target (bytes).
 pub const MAX_TARGET: usize = 2048;
 /// How long `GET /api/state?after=V` waits for a newer solve.

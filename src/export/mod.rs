@@ -87,7 +87,7 @@ pub struct ExportInput<'a> {
     pub u: &'a [Vector3<f64>],
     /// k = 1 (oriented) or k = 2 (line field: oriented per triangle, vertices split).
     pub symmetry: Symmetry,
-    /// Faces of non-zero index (`solve::singularities`), isolated when k = 2.
+    /// Faces of non-zero index (`highlight::singularities`), isolated when k = 2.
     pub singular_faces: &'a [u32],
     /// Brush strokes (3D polylines, scene unit), written as a second node when given.
     pub strokes: Option<&'a [Vec<Vector3<f64>>]>,

@@ -11,7 +11,7 @@
 //! |ind| · k triangles of index ±½ as a generic field has them.
 //!
 //! Discretely: θᵢ is the angle of h̄ in vertex i's frame, and a face where the field θ has a
-//! non-zero index (the connection's index, [`crate::solve::singularities()`] with k = 1) holds a
+//! non-zero index (the connection's index, [`crate::highlight::singularities()`] with k = 1) holds a
 //! zero of h̄ — counted only where |h̄| ≥ 10⁻⁶ at every corner (a flat region facing the light,
 //! h̄ ≡ 0, holds no isolated zero, and its round-off angles no index). Each zero's
 //! *neighbourhood* is the vertices within [`NEIGHBOURHOOD_RINGS`] edges of its corners; zeros
@@ -24,9 +24,9 @@
 use nalgebra::Vector3;
 
 use crate::geometry::Geometry;
+use crate::highlight::singularities::face_index;
 use crate::highlight::Symmetry;
 use crate::mesh::{Mesh, VertexFaces};
-use crate::solve::singularities::face_index;
 
 /// The rings of vertices around a zero's face: the neighbourhood whose rim the highlight must
 /// not cross for the zero to force a singularity.

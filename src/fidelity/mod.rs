@@ -31,7 +31,7 @@
 //! capped at [`MAX_DISTANCE`] r (no C1 segment closer than that counts as that far), so every
 //! figure is finite. The figures: the share of samples within `tolerance`·r (`within`), the
 //! 95th percentile and the median of the distances (nearest rank), and the singular triangles
-//! ([`crate::solve::singularities()`]) among the faces with a corner in the support (a singular
+//! ([`crate::highlight::singularities()`]) among the faces with a corner in the support (a singular
 //! pair straddling the support's edge is the edit's doing too), before and after. An edit has
 //! *landed* when within ≥ [`GOAL_WITHIN`], p95 ≤ [`GOAL_P95`] and it added no singular
 //! triangle beyond those its highlight forces ([`forced_singular`]: a critical point of the key
@@ -425,7 +425,7 @@ impl Fields<'_> {
     fn singular_in(&self, any: &[usize], u: &[Vector3<f64>]) -> usize {
         let k = self.symmetry.k();
         let phi = self.geometry.angles_of(u);
-        let sing = crate::solve::singularities(self.mesh, self.geometry, &phi, k);
+        let sing = crate::highlight::singularities(self.mesh, self.geometry, &phi, k);
         sing.iter().filter(|s| any.binary_search(&(s.face as usize)).is_ok()).count()
     }
 }

@@ -5,12 +5,14 @@ pub mod critical;
 pub mod ell;
 pub mod init;
 pub mod lighting;
+pub mod singularities;
 pub mod smoothest;
 pub mod tensor;
 
 pub use ell::{highlight_field, highlight_field_near, HighlightField};
 pub use init::{initial_field, InitialField, InitialFieldResult};
 pub use lighting::{h_gradients, half_vectors, Lighting, View};
+pub use singularities::{singularities, Singularity};
 
 /// The rotational symmetry of a grain field.
 ///

@@ -49,78 +49,14 @@ use rayon::prelude::*;
 use super::degenerate::{self, Counts, Degeneracy};
 use super::halfedge::HalfEdges;
 use super::parse::{self, Values};
+use super::raw::{compact_vertices, dedup_by_value, zero_area_message};
 use super::scan::{self, Kind, Scan, NONE};
 use super::scan_parallel;
 use super::validate::{self, FileNames, Naming};
-use super::{weld, CornerAttribute, Mesh, Units};
+use super::{weld, CornerAttribute, Mesh};
 use crate::{Error, Result};
 
-/// What to do with zero-area faces.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DegeneratePolicy {
-    /// Drop them and count them in the report (the default).
-    #[default]
-    Drop,
-    /// Refuse the mesh with an error naming the first few.
-    Error,
-}
-
-/// Options of [`load_obj`].
-#[derive(Clone, Debug)]
-pub struct LoadOptions {
-    /// Keep only the object (or group) with this name; `None` merges every object.
-    pub object: Option<String>,
-    /// Weld positions closer than this distance (in file units) before anything else. `None`
-    /// welds nothing, except that [`load_mesh`] welds an STL at 0 (identical positions).
-    pub weld: Option<f64>,
-    /// Unit of the file's coordinates.
-    pub units: Units,
-    /// Uniform scale applied to the positions after loading.
-    pub scale: f64,
-    /// Accept non-manifold edges and vertices instead of refusing the mesh.
-    pub allow_nonmanifold: bool,
-    /// What to do with zero-area faces.
-    pub degenerate: DegeneratePolicy,
-    /// Accept faces oriented inconsistently with a neighbour instead of refusing the mesh.
-    pub allow_inconsistent_orientation: bool,
-}
-
-impl Default for LoadOptions {
-    fn default() -> Self {
-        LoadOptions {
-            object: None,
-            weld: None,
-            units: Units::Mm,
-            scale: 1.0,
-            allow_nonmanifold: false,
-            degenerate: DegeneratePolicy::Drop,
-            allow_inconsistent_orientation: false,
-        }
-    }
-}
-
-impl LoadOptions {
-    /// Options that accept every structural problem, to report it (what `inspect` uses).
-    pub fn tolerant(mut self) -> Self {
-        self.allow_nonmanifold = true;
-        self.allow_inconsistent_orientation = true;
-        self.degenerate = DegeneratePolicy::Drop;
-        self
-    }
-}
-
-/// The file formats grainline reads a mesh from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum MeshFormat {
-    /// Wavefront OBJ (text).
-    #[default]
-    Obj,
-    /// STL, binary or ASCII.
-    Stl,
-    /// PLY, ASCII or binary (either byte order).
-    Ply,
-}
+pub use super::loaded::{DegeneratePolicy, LoadOptions, LoadReport, LoadedMesh, MeshFormat};
 
 impl MeshFormat {
     /// The format of a file: by its content where that is unambiguous (a PLY's `ply` magic
@@ -145,15 +81,6 @@ impl MeshFormat {
             _ if scan::looks_like_obj(text) => MeshFormat::Obj,
             _ => return Err(unknown_format(path, ext.as_deref())),
         })
-    }
-
-    /// The format's name as messages and reports write it (`obj`, `stl`, `ply`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            MeshFormat::Obj => "obj",
-            MeshFormat::Stl => "stl",
-            MeshFormat::Ply => "ply",
-        }
     }
 }
 
@@ -209,58 +136,6 @@ fn unknown_format(path: &Path, ext: Option<&str>) -> Error {
              bytes) or a PLY (`ply` first line)"
         ),
     }
-}
-
-/// What loading did to the file's contents.
-#[derive(Clone, Debug, Default, serde::Serialize)]
-pub struct LoadReport {
-    /// The file's format.
-    pub format: MeshFormat,
-    /// Vertices as listed in the file.
-    pub file_vertices: usize,
-    /// Vertices removed because no face used them.
-    pub unreferenced_vertices: usize,
-    /// Vertices merged into another by welding.
-    pub welded_vertices: usize,
-    /// Zero-area faces dropped.
-    pub dropped_degenerate_faces: usize,
-    /// Triangles in the file (after splitting polygons, before dropping any).
-    pub file_triangles: usize,
-    /// Polygons with more than three corners that were split into triangles.
-    pub polygons_split: usize,
-    /// Object and group names in the file, in order, each once.
-    pub objects: Vec<String>,
-    /// Corners without a texture coordinate in a file with some (the UVs are then dropped).
-    pub corners_without_uv: usize,
-    /// Statements with an unknown keyword, ignored.
-    pub ignored_statements: usize,
-    /// Edges with three or more faces (only non-zero when accepted).
-    pub nonmanifold_edges: usize,
-    /// Vertices whose faces form several fans (only non-zero when accepted).
-    pub nonmanifold_vertices: usize,
-    /// Edges whose two faces are oriented inconsistently (only non-zero when accepted).
-    pub inconsistent_orientation_edges: usize,
-    /// 1-based file `v` number of every mesh vertex (for STL and PLY: 1 + its 0-based place
-    /// among the file's vertices, three per triangle in an STL).
-    #[serde(skip)]
-    pub source_vertex: Vec<u32>,
-    /// 1-based line of the `f` statement of every mesh face (of its facet or element in an
-    /// ASCII STL or PLY; 0 in a binary file).
-    #[serde(skip)]
-    pub face_line: Vec<u32>,
-    /// The file's number of every mesh face's element: the 1-based triangle of an STL, the
-    /// 0-based face element of a PLY; empty for an OBJ.
-    #[serde(skip)]
-    pub face_index: Vec<u32>,
-}
-
-/// A loaded mesh and the report of what loading did.
-#[derive(Clone, Debug)]
-pub struct LoadedMesh {
-    /// The mesh, in scene units.
-    pub mesh: Mesh,
-    /// What loading changed.
-    pub report: LoadReport,
 }
 
 /// One object and the range of corners it covers in the file's corner list, with tobj's
@@ -793,20 +668,6 @@ impl Builder<'_> {
     }
 }
 
-/// "no faces left: all N faces have zero area" (or are slivers), naming the weld tolerance when
-/// one was given (a tolerance beyond the part's size merges every vertex into one).
-pub(super) fn zero_area_message(counts: &Counts, options: &LoadOptions) -> String {
-    let weld = match options.weld {
-        Some(t) if t > 0.0 => format!(
-            " after welding vertices within {} (mesh.weld, --weld): is the tolerance larger \
-             than the part's edges?",
-            crate::error::fmt_num(t)
-        ),
-        _ => String::new(),
-    };
-    format!("no faces left: all {} faces {}{weld}", counts.total(), counts.describe())
-}
-
 trait AllFinite {
     fn all_finite(&self) -> bool;
 }
@@ -843,51 +704,6 @@ fn used_vertices(
         }
     }
     used
-}
-
-/// New index (file order) of every vertex used by a kept triangle, and the file index of each.
-pub(super) fn compact_vertices(
-    num_v: usize,
-    tris: &[u32],
-    corner_v: &[u32],
-    rep: &[u32],
-) -> (Vec<u32>, Vec<u32>) {
-    let mut new_id = vec![NONE; num_v];
-    for &t in tris {
-        for k in 0..3 {
-            new_id[rep[corner_v[3 * t as usize + k] as usize] as usize] = 0;
-        }
-    }
-    let mut source = Vec::new();
-    for (i, id) in new_id.iter_mut().enumerate() {
-        if *id == 0 {
-            *id = source.len() as u32;
-            source.push(i as u32);
-        }
-    }
-    (new_id, source)
-}
-
-/// For every value, the first (smallest) index holding a bit-identical value.
-pub(super) fn dedup_by_value(vals: &[Vector2<f64>]) -> Vec<u32> {
-    let mut keyed: Vec<(u64, u64, u32)> = vals
-        .par_iter()
-        .enumerate()
-        .map(|(i, v)| ((v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), i as u32))
-        .collect();
-    keyed.par_sort_unstable();
-    let mut canon = vec![0u32; vals.len()];
-    let mut k = 0;
-    while k < keyed.len() {
-        let first = keyed[k];
-        let mut j = k;
-        while j < keyed.len() && (keyed[j].0, keyed[j].1) == (first.0, first.1) {
-            canon[keyed[j].2 as usize] = first.2;
-            j += 1;
-        }
-        k = j;
-    }
-    canon
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@ pub mod adjacency;
 pub(crate) mod degenerate;
 pub mod halfedge;
 pub mod load;
+mod loaded;
 mod parse;
 pub mod planar;
 mod ply;

@@ -10,10 +10,8 @@ use rayon::prelude::*;
 
 use super::degenerate::{self, Counts};
 use super::halfedge::HalfEdges;
-use super::load::{
-    compact_vertices, dedup_by_value, DegeneratePolicy, LoadOptions, LoadReport, LoadedMesh,
-    MeshFormat,
-};
+use super::loaded::{DegeneratePolicy, LoadOptions, LoadReport, LoadedMesh, MeshFormat};
+use super::scan::NONE;
 use super::validate::{self, FileNames, Naming};
 use super::{weld, CornerAttribute, Mesh};
 use crate::limits::{MAX_COORDINATE, MIN_PART_SIZE};
@@ -152,7 +150,7 @@ pub(crate) fn build(
     }
     if tris.is_empty() {
         let message = if dropped > 0 {
-            super::load::zero_area_message(&counts, options)
+            zero_area_message(&counts, options)
         } else {
             "no faces: empty mesh".to_string()
         };
@@ -239,4 +237,63 @@ fn corner_attribute<T: Copy>(
     }
     let corners = tris.iter().map(|&t| faces[t as usize].map(|v| new_id[c(v) as usize])).collect();
     CornerAttribute { values, corners }
+}
+
+/// "no faces left: all N faces have zero area" (or are slivers), naming the weld tolerance when
+/// one was given (a tolerance beyond the part's size merges every vertex into one).
+pub(super) fn zero_area_message(counts: &Counts, options: &LoadOptions) -> String {
+    let weld = match options.weld {
+        Some(t) if t > 0.0 => format!(
+            " after welding vertices within {} (mesh.weld, --weld): is the tolerance larger \
+             than the part's edges?",
+            crate::error::fmt_num(t)
+        ),
+        _ => String::new(),
+    };
+    format!("no faces left: all {} faces {}{weld}", counts.total(), counts.describe())
+}
+
+/// New index (file order) of every vertex used by a kept triangle, and the file index of each.
+pub(super) fn compact_vertices(
+    num_v: usize,
+    tris: &[u32],
+    corner_v: &[u32],
+    rep: &[u32],
+) -> (Vec<u32>, Vec<u32>) {
+    let mut new_id = vec![NONE; num_v];
+    for &t in tris {
+        for k in 0..3 {
+            new_id[rep[corner_v[3 * t as usize + k] as usize] as usize] = 0;
+        }
+    }
+    let mut source = Vec::new();
+    for (i, id) in new_id.iter_mut().enumerate() {
+        if *id == 0 {
+            *id = source.len() as u32;
+            source.push(i as u32);
+        }
+    }
+    (new_id, source)
+}
+
+/// For every value, the first (smallest) index holding a bit-identical value.
+pub(super) fn dedup_by_value(vals: &[Vector2<f64>]) -> Vec<u32> {
+    let mut keyed: Vec<(u64, u64, u32)> = vals
+        .par_iter()
+        .enumerate()
+        .map(|(i, v)| ((v.x + 0.0).to_bits(), (v.y + 0.0).to_bits(), i as u32))
+        .collect();
+    keyed.par_sort_unstable();
+    let mut canon = vec![0u32; vals.len()];
+    let mut k = 0;
+    while k < keyed.len() {
+        let first = keyed[k];
+        let mut j = k;
+        while j < keyed.len() && (keyed[j].0, keyed[j].1) == (first.0, first.1) {
+            canon[keyed[j].2 as usize] = first.2;
+            j += 1;
+        }
+        k = j;
+    }
+    canon
 }

@@ -72,7 +72,7 @@ fn grain(x: &ExportStageInput) -> Grain {
         _ => (g.directions_of(x.phi), x.phi.to_vec()),
     };
     let singular: Vec<u32> = match symmetry {
-        Symmetry::Line => crate::solve::singularities::singularities(&prepared.mesh, g, &phi_e, 2)
+        Symmetry::Line => crate::highlight::singularities(&prepared.mesh, g, &phi_e, 2)
             .iter()
             .map(|s| s.face)
             .collect(),

@@ -192,6 +192,14 @@ fn finish_optimized(
     })
 }
 
+/// Angles `phi` as FIELD.json states them: u = direction(φ) in each vertex's frame, read back
+/// by atan2 — the angles a run given the written file (`--field`) traces, so that tracing the
+/// solved field and tracing its FIELD.json give the same outputs bit for bit (the solver's own
+/// φ may differ from them by whole turns, and cos/sin of φ + 2π by an ulp).
+pub fn field_file_angles(geometry: &crate::geometry::Geometry, phi: &[f64]) -> Vec<f64> {
+    geometry.angles_of(&geometry.directions_of(phi))
+}
+
 /// FIELD.json of an optimized field: the `field` format plus `phi_before`, `u_before`,
 /// `phi` and `target_ell`.
 pub fn optimized_field_file(p: &Prepared, o: &Optimized) -> Result<FieldFile> {

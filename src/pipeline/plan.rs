@@ -22,7 +22,8 @@ pub struct RunOptions {
     pub report: Option<PathBuf>,
 }
 
-/// Which stages a scene needs.
+/// Which stages a scene needs: decided once per run ([`StagePlan::for_run`]) and read by every
+/// stage, the output plan and the editor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct StagePlan {
     /// The scene has edits: apply them and solve.
@@ -37,6 +38,14 @@ pub struct StagePlan {
     pub export: bool,
     /// The scene asks for the grain maps (`export.maps`).
     pub maps: bool,
+    /// The preview shows the coverage gaps (`render.effects.gap`): the trace keeps its
+    /// coverage map and its field mesh.
+    #[serde(skip)]
+    pub gap: bool,
+    /// The part needs a UV layout, made at loading when it has none: the strokes, the glb's
+    /// texture and the maps live in it.
+    #[serde(skip)]
+    pub uv_layout: bool,
 }
 
 impl StagePlan {
@@ -53,35 +62,48 @@ impl StagePlan {
             .toolpaths
             .as_ref()
             .is_some_and(|t| t.svg.is_some() || t.gcode.is_some() || t.strokes_json.is_some());
+        let trace = toolpath_outputs || render_needs_strokes || export_needs_strokes;
+        let maps = scene.export.as_ref().is_some_and(|e| e.maps.is_some());
         StagePlan {
             solve: !scene.edits.is_empty(),
-            trace: toolpath_outputs || render_needs_strokes || export_needs_strokes,
+            trace,
             render: scene.render.is_some(),
             as_brushed,
             export: ex.is_some(),
-            maps: scene.export.as_ref().is_some_and(|e| e.maps.is_some()),
+            maps,
+            gap: fx.is_some_and(|f| f.gap.is_some()),
+            uv_layout: trace || ex.is_some() || maps,
         }
     }
 
-    /// Whether the part needs a UV layout: the strokes, the glb's texture and the maps live
-    /// in it.
-    pub fn needs_uv(&self) -> bool {
-        self.trace || self.export || self.maps
+    /// The stages of a run of `scene` with `options`: a given field (`--field`) takes the
+    /// place of the edits and the solve.
+    pub fn for_run(scene: &crate::scene::Scene, options: &RunOptions) -> StagePlan {
+        let mut plan = StagePlan::of(scene);
+        if options.field.is_some() {
+            plan.solve = false;
+        }
+        plan
+    }
+
+    /// Whether the trace keeps the field mesh it traced on: the as-brushed grain and the gaps
+    /// per vertex are read from it.
+    pub fn keeps_field_mesh(&self) -> bool {
+        self.as_brushed || self.gap
     }
 }
 
 /// The files a run of `s` writes (with their scene keys) and the files it reads, for
 /// [`OutputPlan::check`]: no output may be a directory, a device, a FIFO or a link, two
 /// outputs may not share a file, and no output may overwrite an input. A relative output that
-/// climbs out of its directory is refused here ([`output_path`]).
-pub fn output_plan(s: &LoadedScene, options: &RunOptions) -> Result<OutputPlan> {
+/// climbs out of its directory is refused here ([`output_path`]). `needs` is the run's plan.
+pub fn output_plan(s: &LoadedScene, needs: &StagePlan, options: &RunOptions) -> Result<OutputPlan> {
     let scene = &s.scene;
     let out = |key: &str, p: &str| output_path(s, options.out_dir.as_deref(), key, p);
     let mut plan = OutputPlan::new();
     if let Some(p) = &scene.field.output {
         plan.output("field.output", out("field.output", p)?);
     }
-    let needs = StagePlan::of(scene);
     if let Some(t) = scene.toolpaths.as_ref().filter(|_| needs.trace) {
         for (key, p) in [
             ("toolpaths.svg", &t.svg),
@@ -153,15 +175,19 @@ pub fn scene_inputs(s: &LoadedScene, plan: &mut OutputPlan) {
 /// solve, the strokes or the render start) and refused past its budget, naming the key:
 /// the strokes' samples (`toolpaths.placement.*`, over the part's surface area).
 /// The render's memory and the ordering's neighbours are checked with the scene itself
-/// (`Scene::validate`), the panel's triangles before the outline is meshed.
-pub fn check_scene_work(scene: &crate::scene::Scene, mesh: &crate::mesh::Mesh) -> Result<()> {
-    let traced = StagePlan::of(scene).trace;
-    if let (true, Some(t)) = (traced, &scene.toolpaths) {
+/// (`Scene::validate`), the panel's triangles before the outline is meshed. `plan` is the
+/// run's.
+pub fn check_scene_work(
+    scene: &crate::scene::Scene,
+    plan: &StagePlan,
+    mesh: &crate::mesh::Mesh,
+) -> Result<()> {
+    if let (true, Some(t)) = (plan.trace, &scene.toolpaths) {
         // Placement lengths are in scene units on the part, and the UV field is scaled to
         // the part's area, so the mesh's surface area is the area the strokes cover.
-        t.placement
-            .check_budget(mesh.area())
-            .map_err(|e| crate::scene::prefix("toolpaths", crate::uvfield::toolpath_error(e)))?;
+        t.placement.check_budget(mesh.area()).map_err(|e| {
+            crate::scene::prefix("toolpaths", crate::scene::toolpaths::toolpath_error(e))
+        })?;
     }
     Ok(())
 }

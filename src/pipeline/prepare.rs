@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 
-use super::plan::check_scene_work;
+use super::plan::{check_scene_work, StagePlan};
 use super::Stages;
 use crate::field::{compute_field, read_directions, FieldOptions, FieldResult};
 use crate::highlight::Lighting;
@@ -104,15 +104,17 @@ fn point_key_error(scene: &crate::scene::Scene, position: Vector3<f64>, mesh: &M
     Error::setting(format!("lights[{i}].position"), message)
 }
 
-/// Loads the part and computes the geometry, the initial field and its highlights.
+/// Loads the part and computes the geometry, the initial field and its highlights: the field
+/// alone, with no UV layout made for the scene's outputs.
 pub fn prepare(s: &LoadedScene, stages: &mut Stages) -> Result<Prepared> {
-    prepare_with(s, stages, false)
+    let plan = StagePlan { uv_layout: false, ..StagePlan::of(&s.scene) };
+    prepare_with(s, stages, &plan)
 }
 
-/// [`prepare`], and when `layout` is true (the toolpaths need UVs) the part's UV layout is
-/// checked, or made, right after loading and before any long stage ([`ensure_layout`]).
-pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<Prepared> {
-    let part = load_stage(s, stages, layout)?;
+/// [`prepare`] for a run's `plan`: when [`StagePlan::uv_layout`] is set the part's UV layout
+/// is checked, or made, right after loading and before any long stage ([`ensure_layout`]).
+pub fn prepare_with(s: &LoadedScene, stages: &mut Stages, plan: &StagePlan) -> Result<Prepared> {
+    let part = load_stage(s, stages, plan)?;
     prepare_part(s, part, stages)
 }
 
@@ -142,9 +144,9 @@ pub struct LoadedPart {
 }
 
 /// The first half of [`prepare_with`]: loads the part (or meshes its outline), checks the
-/// work the scene asks for, makes the UV layout when `layout` is true and reads the per-vertex
-/// directions. Nothing here depends on the scene's edits.
-pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<LoadedPart> {
+/// work the `plan` asks for, makes the UV layout when [`StagePlan::uv_layout`] is set and reads
+/// the per-vertex directions. Nothing here depends on the scene's edits.
+pub fn load_stage(s: &LoadedScene, stages: &mut Stages, plan: &StagePlan) -> Result<LoadedPart> {
     let scene = &s.scene;
     let key = key_light(scene).map_err(|e| s.wrap(e))?;
     if let KeyLight::Directional(d) = key {
@@ -154,7 +156,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
     stages.start("load");
     let (mut mesh, mesh_name) = load_part(s)?;
     // The work the scene asks for, estimated before any of it starts (issue 15, item 12).
-    check_scene_work(scene, &mesh)?;
+    check_scene_work(scene, plan, &mesh)?;
     let surfaces = recognize_surfaces(s, &mesh);
     // The part cut at its creases and its noise estimated there (a CAD face's vertices all
     // sit on sharp edges, which would read as noise on the part uncut); a part found noisy is
@@ -189,7 +191,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, layout: bool) -> Result<
         )));
     }
     // A grain map lives in the UVs: a part without them gets the layout the export would make.
-    let layout = layout || matches!(scene.field.init, InitKind::Map);
+    let layout = plan.uv_layout || matches!(scene.field.init, InitKind::Map);
     let layout_report = if layout {
         let options = scene.toolpaths.as_ref().map(|t| t.layout.clone()).unwrap_or_default();
         ensure_layout(&mut mesh, &mesh_name, &options, stages)?

@@ -8,7 +8,9 @@ use std::time::Instant;
 use nalgebra::{Matrix2, Vector3};
 use serde::Serialize;
 
-use super::optimize::{optimize_stage, optimized_field_file, OptimizeStageReport, Optimized};
+use super::optimize::{
+    field_file_angles, optimize_stage, optimized_field_file, OptimizeStageReport, Optimized,
+};
 pub use super::plan::{output_plan, scene_inputs, RunOptions, StagePlan};
 pub use super::trace::{toolpath_section, ToolpathFigures};
 use super::trace::{trace, TraceInput};
@@ -116,15 +118,12 @@ pub struct RunReport {
 /// ```
 pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Result<RunReport> {
     let start = Instant::now();
-    let mut plan = StagePlan::of(&s.scene);
+    let plan = StagePlan::for_run(&s.scene, options);
     let given = options.field.as_deref().map(FieldFile::read).transpose()?;
-    if given.is_some() {
-        plan.solve = false;
-    }
-    output_plan(s, options)?.check()?;
+    output_plan(s, &plan, options)?.check()?;
     let mut stages = Stages::new(observer);
     let mut staged = Staged::new();
-    let prepared = prepare_for_field(s, given.as_ref(), plan.needs_uv(), &mut stages)?;
+    let prepared = prepare_for_field(s, given.as_ref(), &plan, &mut stages)?;
     if plan.trace && prepared.mesh.uv.is_none() {
         // Checked before the solve, not after it.
         return Err(crate::Error::setting(
@@ -145,7 +144,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         }
         _ => None,
     };
-    let shown = Shown::of(&prepared, optimized.as_ref(), given_phi, s.scene.render.is_some());
+    let shown = ShownField::of(&prepared, optimized.as_ref(), given_phi, plan.render);
     let mut out = Outputs { s, options, staged: &mut staged };
     if let Some(p) = &s.scene.field.output {
         stages.start("write field");
@@ -156,7 +155,8 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     } else {
         None
     };
-    let field = Field { prepared: &prepared, shown: &shown, traced: traced.as_ref() };
+    let field =
+        ShownAndTraced { plan, prepared: &prepared, shown: &shown, traced: traced.as_ref() };
     let render_report = render_stage(&mut out, &field, &mut stages)?;
     let export_report = export_stage(&mut out, &field, &mut stages)?;
     let brushed = traced.as_ref().and_then(|t| t.brushed.as_ref());
@@ -218,17 +218,17 @@ impl Outputs<'_> {
 fn prepare_for_field(
     s: &LoadedScene,
     given: Option<&FieldFile>,
-    layout: bool,
+    plan: &StagePlan,
     stages: &mut Stages,
 ) -> Result<Prepared> {
-    let prepared = prepare_with(s, stages, layout)?;
+    let prepared = prepare_with(s, stages, plan)?;
     match (given, &prepared.refinement) {
         (Some(f), Some(r)) if f.u.len() == r.vertices_before => {
             let mut own = s.clone();
             if let Some(m) = own.scene.mesh.as_mut() {
                 m.0.refine.mode = crate::scene::RefineMode::None;
             }
-            prepare_with(&own, stages, layout)
+            prepare_with(&own, stages, plan)
         }
         _ => Ok(prepared),
     }
@@ -260,19 +260,17 @@ fn given_angles(f: &FieldFile, path: &Path, prepared: &Prepared) -> Result<Vec<f
 }
 
 /// The field the run's outputs show: the solved one, a given one, or the initial one.
-struct Shown<'a> {
+struct ShownField<'a> {
     optimized: Option<&'a Optimized>,
-    /// The solved angles as FIELD.json states them (u = direction(φ), read back by atan2), so
-    /// that tracing a written FIELD.json (`--field`) gives these outputs bit for bit: the
-    /// solver's own φ may differ from them by whole turns, and cos/sin of φ + 2π by an ulp.
-    /// Else the given field's angles.
+    /// The solved angles as FIELD.json states them ([`field_file_angles`]), else the given
+    /// field's angles.
     phi: Option<Vec<f64>>,
     /// ℓ (Eq. 7) of the given field (`--field`) under the scene's lighting, for the preview's
     /// LIC and statistics (issue 33, item 4: they showed the initial field's ℓ).
     given_ell: Option<Vec<Vector3<f64>>>,
 }
 
-impl<'a> Shown<'a> {
+impl<'a> ShownField<'a> {
     /// The field shown; `render`: ℓ of a given field is computed for the preview.
     fn of(
         p: &Prepared,
@@ -290,10 +288,10 @@ impl<'a> Shown<'a> {
             _ => None,
         };
         let phi = match optimized {
-            Some(o) => Some(g.angles_of(&g.directions_of(&o.phi))),
+            Some(o) => Some(field_file_angles(g, &o.phi)),
             None => given,
         };
-        Shown { optimized, phi, given_ell }
+        ShownField { optimized, phi, given_ell }
     }
     fn phi<'b>(&'b self, p: &'b Prepared) -> &'b [f64] {
         self.phi.as_deref().unwrap_or(&p.field.phi)
@@ -332,28 +330,28 @@ struct RunTraced {
 fn trace_stage(
     out: &mut Outputs,
     prepared: &Prepared,
-    shown: &Shown,
+    shown: &ShownField,
     plan: StagePlan,
     stages: &mut Stages,
 ) -> Result<RunTraced> {
     stages.start("toolpaths");
     let scene = &out.s.scene;
-    let want_gap = scene.render.as_ref().is_some_and(|r| r.effects.gap.is_some());
     let input = TraceInput {
-        scene,
+        toolpaths: scene.toolpaths.as_ref(),
+        constraints: &scene.solver.constraints,
         mesh: &prepared.mesh,
         geometry: &prepared.field.geometry,
         phi: shown.phi(prepared),
         symmetry: prepared.field_options.symmetry,
-        keep_map: want_gap,
-        keep_field_mesh: plan.as_brushed || want_gap,
+        keep_map: plan.gap,
+        keep_field_mesh: plan.keeps_field_mesh(),
     };
     let t = trace(&input)?;
     stages.start("write toolpaths");
     for (key, p, text) in t.outputs() {
         out.write(key, p, text.as_bytes())?;
     }
-    let gap = if want_gap { t.gap(prepared.mesh.num_vertices()) } else { None };
+    let gap = if plan.gap { t.gap(prepared.mesh.num_vertices()) } else { None };
     let brushed = if plan.as_brushed {
         stages.start("as-brushed");
         t.as_brushed(&input)?
@@ -380,13 +378,14 @@ fn write_field(
 }
 
 /// The field a run shows and what its trace stage made.
-struct Field<'a> {
+struct ShownAndTraced<'a> {
+    plan: StagePlan,
     prepared: &'a Prepared,
-    shown: &'a Shown<'a>,
+    shown: &'a ShownField<'a>,
     traced: Option<&'a RunTraced>,
 }
 
-impl Field<'_> {
+impl ShownAndTraced<'_> {
     fn strokes_3d(&self) -> &[Vec<Vector3<f64>>] {
         self.traced.map_or(&[][..], |t| t.strokes_3d.as_slice())
     }
@@ -396,8 +395,14 @@ impl Field<'_> {
 }
 
 /// The preview stage of a run (`render`), when the scene has a render section.
-fn render_stage(out: &mut Outputs, f: &Field, stages: &mut Stages) -> Result<Option<RenderReport>> {
-    let Some(settings) = &out.s.scene.render else { return Ok(None) };
+fn render_stage(
+    out: &mut Outputs,
+    f: &ShownAndTraced,
+    stages: &mut Stages,
+) -> Result<Option<RenderReport>> {
+    let Some(settings) = out.s.scene.render.as_ref().filter(|_| f.plan.render) else {
+        return Ok(None);
+    };
     stages.start("render");
     let (p, shown) = (f.prepared, f.shown);
     let r = super::preview::preview(&super::preview::PreviewInput {
@@ -426,11 +431,11 @@ fn render_stage(out: &mut Outputs, f: &Field, stages: &mut Stages) -> Result<Opt
 /// The export stage of a run (`export.glb`, `export.maps`).
 fn export_stage(
     out: &mut Outputs,
-    f: &Field,
+    f: &ShownAndTraced,
     stages: &mut Stages,
 ) -> Result<Option<crate::export::ExportReport>> {
     let scene = &out.s.scene;
-    let Some(e) = scene.export.as_ref().filter(|e| e.glb.is_some() || e.maps.is_some()) else {
+    let Some(e) = scene.export.as_ref().filter(|_| f.plan.export || f.plan.maps) else {
         return Ok(None);
     };
     stages.start("export");

@@ -10,10 +10,9 @@ use serde::Serialize;
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
-use crate::scene::Scene;
-use crate::uvfield::{
-    as_brushed, field_mesh, toolpath_error, AsBrushed, ToolpathSection, UvFieldReport,
-};
+use crate::scene::toolpaths::{toolpath_error, ToolpathSection};
+use crate::solve::settings::Constraints;
+use crate::uvfield::{as_brushed, field_mesh, AsBrushed, UvFieldReport};
 use crate::Result;
 
 /// Figures of the toolpath stage.
@@ -40,18 +39,17 @@ pub struct ToolpathFigures {
     pub stroke_constraints: Option<grainline_toolpaths::StrokeChecks>,
 }
 
-/// The toolpaths section a run traces with: the scene's (or the defaults), keeping the
-/// coverage map when `keep_map` (the gap effect), the tool's turning radius as the plan's
-/// (issue 17, item 4) unless the section sets its own, checked in the mesh's `units`.
+/// The toolpaths section a run traces with: `toolpaths` (the scene's) or the defaults, keeping
+/// the coverage map when `keep_map` (the gap effect), the tool's turning radius from
+/// `constraints` (the scene's `solver.constraints`) as the plan's unless the section sets its
+/// own, checked in the mesh's `units`.
 pub fn toolpath_section(
-    scene: &crate::scene::Scene,
+    toolpaths: Option<&ToolpathSection>,
+    constraints: &Constraints,
     units: crate::mesh::Units,
     keep_map: bool,
-) -> Result<crate::uvfield::ToolpathSection> {
-    let mut section = scene
-        .toolpaths
-        .clone()
-        .unwrap_or_else(|| crate::uvfield::ToolpathSection::default_in(units));
+) -> Result<ToolpathSection> {
+    let mut section = toolpaths.cloned().unwrap_or_else(|| ToolpathSection::default_in(units));
     if keep_map {
         let mut c = section.coverage.clone().unwrap_or_default();
         c.keep_map = true;
@@ -60,8 +58,7 @@ pub fn toolpath_section(
     // The tool's turning radius also cuts back stroke ends that turn tighter near a
     // boundary or a singularity, unless the section sets its own.
     if section.plan.min_turning_radius.is_none() {
-        section.plan.min_turning_radius =
-            scene.solver.constraints.turning_radius.as_ref().map(|t| t.radius);
+        section.plan.min_turning_radius = constraints.turning_radius.as_ref().map(|t| t.radius);
     }
     section.validate_in(units).map_err(|e| crate::scene::prefix("toolpaths", e))?;
     Ok(section)
@@ -69,8 +66,11 @@ pub fn toolpath_section(
 
 /// What [`trace`] traces: a field on a part, as a scene asks.
 pub struct TraceInput<'a> {
-    /// The scene (its `toolpaths` section, or the defaults, and its constraints).
-    pub scene: &'a Scene,
+    /// The scene's `toolpaths` section; `None`: the defaults in the mesh's units.
+    pub toolpaths: Option<&'a ToolpathSection>,
+    /// The scene's fabrication constraints (`solver.constraints`): the turning radius cuts
+    /// back stroke ends, and every constraint is measured on the strokes ([`TracedStrokes::figures`]).
+    pub constraints: &'a Constraints,
     /// The part, with its UV layout.
     pub mesh: &'a Mesh,
     /// The part's geometry (frames).
@@ -79,14 +79,14 @@ pub struct TraceInput<'a> {
     pub phi: &'a [f64],
     /// Line or vector field.
     pub symmetry: Symmetry,
-    /// Keep the coverage map, for the gaps per vertex ([`Traced::gap`]).
+    /// Keep the coverage map, for the gaps per vertex ([`TracedStrokes::gap`]).
     pub keep_map: bool,
-    /// Keep the field mesh, for [`Traced::gap`] and [`Traced::as_brushed`].
+    /// Keep the field mesh, for [`TracedStrokes::gap`] and [`TracedStrokes::as_brushed`].
     pub keep_field_mesh: bool,
 }
 
 /// The traced strokes and what the later steps of the stage read.
-pub struct Traced {
+pub struct TracedStrokes {
     /// The toolpaths section traced with ([`toolpath_section`]).
     pub section: ToolpathSection,
     /// The toolpaths crate's job: strokes, SVG, G-code, strokes JSON, report.
@@ -99,11 +99,12 @@ pub struct Traced {
     pub strokes_3d: Vec<Vec<Vector3<f64>>>,
 }
 
-/// Traces the strokes of `input`'s field. Errors found while tracing name their key from the
-/// scene's top (`toolpaths.…`).
-pub fn trace(input: &TraceInput) -> Result<Traced> {
+/// Traces the strokes of `input`'s field: the one trace stage of `grainline run`, its
+/// commands and the editor, and the library's way to make strokes. Errors found while tracing
+/// name their key from the scene's top (`toolpaths.…`).
+pub fn trace(input: &TraceInput) -> Result<TracedStrokes> {
     let units = input.mesh.units;
-    let section = toolpath_section(input.scene, units, input.keep_map)?;
+    let section = toolpath_section(input.toolpaths, input.constraints, units, input.keep_map)?;
     let (fm, uv) =
         field_mesh(input.mesh, input.geometry, input.phi, input.symmetry, &section.uv_field)?;
     let field_mesh = if input.keep_field_mesh { Some(fm.clone()) } else { None };
@@ -112,10 +113,10 @@ pub fn trace(input: &TraceInput) -> Result<Traced> {
     section.time_job(&mut job, units);
     let strokes_3d =
         job.strokes_3d.iter().map(|s| s.iter().map(|p| Vector3::from(*p)).collect()).collect();
-    Ok(Traced { section, job, field_mesh, uv, strokes_3d })
+    Ok(TracedStrokes { section, job, field_mesh, uv, strokes_3d })
 }
 
-impl Traced {
+impl TracedStrokes {
     /// The files the section asks for, with their scene keys and text: SVG, G-code, strokes
     /// JSON.
     pub fn outputs(&self) -> Vec<(&'static str, &str, &str)> {
@@ -165,7 +166,7 @@ impl Traced {
         let stroke_constraints = match super::stroke_constraints::check_options(
             input.mesh,
             input.geometry,
-            &input.scene.solver.constraints,
+            input.constraints,
             &self.uv.uv_to_vertex,
             input.symmetry.k(),
         )? {

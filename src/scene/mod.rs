@@ -9,6 +9,7 @@
 //! - relative paths are relative to the scene file.
 
 mod sections;
+pub mod toolpaths;
 
 use std::path::{Path, PathBuf};
 
@@ -56,7 +57,7 @@ pub struct Scene {
     pub solver: crate::solve::SolverSettings,
     /// Brush strokes and their exports (SVG, G-code); absent: no tracing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub toolpaths: Option<crate::uvfield::ToolpathSection>,
+    pub toolpaths: Option<toolpaths::ToolpathSection>,
     /// The preview image; absent: no rendering.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub render: Option<crate::render::RenderSettings>,

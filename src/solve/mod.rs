@@ -14,7 +14,6 @@ pub mod optimize;
 mod pattern;
 pub mod position_term;
 pub mod settings;
-pub mod singularities;
 pub mod smoothness;
 pub mod turn;
 
@@ -32,4 +31,6 @@ pub use optimize::{
 pub use settings::{
     Constraints, HighlightEnergy, SolverSettings, Splay, TriangleTerm, TurningRadius,
 };
-pub use singularities::{singularities, Singularity};
+// Field analysis lives with the highlight model (`crate::highlight::singularities`); the
+// solver's report carries it, and its paths here stay for the library's users.
+pub use crate::highlight::singularities::{self, singularities, Singularity};

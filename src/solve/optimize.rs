@@ -25,9 +25,9 @@ use super::lm::{
 };
 use super::locks::{angle_difference, resolve_locks, LockConflict};
 use super::settings::SolverSettings;
-use super::singularities::{singularities, Singularity};
 use crate::geometry::connection::wrap_angle;
 use crate::geometry::laplacian::cotan_weights;
+use crate::highlight::singularities::{singularities, Singularity};
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 

@@ -9,7 +9,7 @@
 //!    edge agree. A face is *consistent* when σ_ab σ_bc σ_ca = +1: then signs (1, σ_ab, σ_ac)
 //!    make all three pairs agree.
 //! 2. Faces that are not consistent (the line field turns by about π around them), and the
-//!    given singular faces (non-zero index, `solve::singularities`), get three vertices of their
+//!    given singular faces (non-zero index, `highlight::singularities`), get three vertices of their
 //!    own, so their turn does not leak into the neighbours.
 //! 3. The global sign ε_f of every consistent face is chosen by a breadth-first walk over the
 //!    faces (in face order, through shared edges, between consistent faces), so that the shared

@@ -42,7 +42,7 @@ use crate::{Error, Result};
 
 mod solve;
 
-pub use solve::{Solved, Traced};
+pub use solve::{PageStrokes, Solved};
 
 /// Undo steps kept (older ones are forgotten).
 pub const UNDO_DEPTH: usize = 200;
@@ -93,7 +93,7 @@ impl Base {
     fn new(gen: u64, light: Option<[f64; 3]>, loaded: LoadedScene) -> Result<Base> {
         let plan = StagePlan::of(&loaded.scene);
         let mut stages = Stages::new(&Silent);
-        let part = load_stage(&loaded, &mut stages, plan.trace).map_err(|e| loaded.wrap(e))?;
+        let part = load_stage(&loaded, &mut stages, &plan).map_err(|e| loaded.wrap(e))?;
         let mut bare = loaded.clone();
         bare.scene.edits.clear();
         let prepared =
@@ -587,7 +587,7 @@ impl Session {
                 let mut t = scene
                     .toolpaths
                     .take()
-                    .unwrap_or_else(|| crate::uvfield::ToolpathSection::default_in(units));
+                    .unwrap_or_else(|| crate::scene::toolpaths::ToolpathSection::default_in(units));
                 let (svg, gcode) = match what {
                     ExportKind::Svg => (Some(t.svg.clone().unwrap_or_else(|| beside("svg"))), None),
                     _ => (None, Some(t.gcode.clone().unwrap_or_else(|| beside("ngc")))),

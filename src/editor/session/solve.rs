@@ -9,7 +9,9 @@ use std::time::Instant;
 use crate::edit::Edit;
 use crate::editor::drag::DragBase;
 use crate::fidelity::{highlight_segments, EditFidelity};
-use crate::pipeline::optimize::{optimize_stage, optimized_field_file, Optimized};
+use crate::pipeline::optimize::{
+    field_file_angles, optimize_stage, optimized_field_file, Optimized,
+};
 use crate::pipeline::{Silent, Stages};
 use crate::{Error, Result};
 
@@ -33,7 +35,7 @@ pub struct Solved {
     /// The solved angles per vertex (the solver's own, before FIELD.json's round trip).
     phi: Vec<f64>,
     /// The strokes and the as-brushed grain, traced when first asked for ([`Session::traced`]).
-    traced: OnceLock<std::result::Result<Traced, String>>,
+    traced: OnceLock<std::result::Result<PageStrokes, String>>,
     /// The grain u per vertex (world space, unit), as FIELD.json's `u`.
     pub u: Vec<[f32; 3]>,
     /// The key light's highlight curves: segments of the zero set of g = hᵀu per triangle.
@@ -54,7 +56,7 @@ pub struct Solved {
 
 /// The brush strokes traced on a solved field and the grain rebuilt from them
 /// ([`Session::traced`]).
-pub struct Traced {
+pub struct PageStrokes {
     /// Each stroke's points on the part (world space), in brushing order.
     pub strokes: Vec<Vec<[f32; 3]>>,
     /// The as-brushed grain per vertex (unit; the zero vector where no stroke passes).
@@ -233,7 +235,7 @@ impl Session {
     /// from them, through the run's own trace stage ([`crate::pipeline::trace::trace`]) on the angles the run
     /// traces (FIELD.json's, after a solve). Made once per result; a part without a UV layout
     /// is told the key to add.
-    pub fn traced<'a>(&self, solved: &'a Solved) -> Result<&'a Traced> {
+    pub fn traced<'a>(&self, solved: &'a Solved) -> Result<&'a PageStrokes> {
         let made = solved.traced.get_or_init(|| self.trace(solved).map_err(|e| e.to_string()));
         match made {
             Ok(t) => Ok(t),
@@ -241,7 +243,7 @@ impl Session {
         }
     }
 
-    fn trace(&self, solved: &Solved) -> Result<Traced> {
+    fn trace(&self, solved: &Solved) -> Result<PageStrokes> {
         let p = &solved.part.prepared;
         if p.mesh.uv.is_none() {
             return Err(Error::setting(
@@ -259,10 +261,11 @@ impl Session {
         let phi = if solved.edits.is_empty() {
             solved.phi.clone()
         } else {
-            g.angles_of(&g.directions_of(&solved.phi))
+            field_file_angles(g, &solved.phi)
         };
         let input = crate::pipeline::trace::TraceInput {
-            scene: &s.scene,
+            toolpaths: s.scene.toolpaths.as_ref(),
+            constraints: &s.scene.solver.constraints,
             mesh: &p.mesh,
             geometry: g,
             phi: &phi,
@@ -275,7 +278,7 @@ impl Session {
             t.as_brushed(&input)?.ok_or_else(|| Error::invalid_arg("trace", "no field mesh"))?;
         let job = t.job;
         let f32s = |v: &[f64; 3]| v.map(|c| c as f32);
-        Ok(Traced {
+        Ok(PageStrokes {
             strokes: job.strokes_3d.iter().map(|s| s.iter().map(f32s).collect()).collect(),
             brushed_u: ab.u.iter().map(f32s).collect(),
         })
