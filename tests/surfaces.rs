@@ -41,7 +41,7 @@ fn axis_of(f: &AnalyticFace) -> Option<V3> {
 
 /// Whether face `k` of `part` exported at `step` degrees may be left unrecognized by the
 /// documented rule (docs/math.md §3, "Recognized surfaces", limits): a torus needs three
-/// strips along its profile and a sphere two bands besides its pole's fan (fewer rings are
+/// strips along its profile and a sphere one band besides its pole's fan (fewer rings are
 /// fitted exactly by other surfaces too), and a single band (a cylinder or a cone between two
 /// rings) next to a face of revolution it meets at less than the export's step, or next to
 /// an unrecognized curve tangentially, is read as a strip of a free profile. On the knob:
@@ -57,7 +57,7 @@ fn may_be_unread(part: &CadPart, step: f64, k: usize) -> bool {
         1 | 2 => step >= 26.57,
         4 => round,
         5 => round,
-        6 => strips(30.0) < 3,
+        6 => strips(30.0) < 2,
         _ => false,
     }
 }

@@ -94,6 +94,33 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
         }
         chains.push(chain);
     }
+    let owned = {
+        let mut o = vec![false; g.regions.normal.len()];
+        for (_, rs) in &grown {
+            for &r in rs {
+                o[r as usize] = true;
+            }
+        }
+        o
+    };
+    // A chain that ends at a pole continues into the fan of triangles around it: one more
+    // profile point for a sphere (a crown's last band and its fan).
+    let chains: Vec<Vec<Link>> = chains
+        .into_iter()
+        .map(|chain| {
+            let mut links: Vec<Link> = chain.iter().map(|&k| Link::Band(k)).collect();
+            if let Some(fan) = pole_fan(g, mesh, &grown[chain[0]], &owned, tol) {
+                links.insert(0, Link::Fan(fan));
+            }
+            let last = chain[chain.len() - 1];
+            if chain.len() > 1 || matches!(links[0], Link::Band(_)) {
+                if let Some(fan) = pole_fan(g, mesh, &grown[last], &owned, tol) {
+                    links.push(Link::Fan(fan));
+                }
+            }
+            links
+        })
+        .collect();
     let mut merged: Vec<Option<Grown>> = grown.into_iter().map(Some).collect();
     let mut out: Vec<Grown> = Vec::new();
     for chain in chains {
@@ -101,13 +128,19 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
         while i < chain.len() {
             let mut best: Option<(usize, Primitive)> = None;
             for j in i + 1..chain.len() {
-                let regions: Vec<u32> = chain[i..=j]
+                let run = &chain[i..=j];
+                let bands = run.iter().filter(|l| matches!(l, Link::Band(_))).count();
+                let rings = bands + 1 + (run.len() - bands);
+                let regions: Vec<u32> = run
                     .iter()
-                    .flat_map(|&k| merged[k].as_ref().map_or(vec![], |m| m.1.clone()))
+                    .flat_map(|l| match l {
+                        Link::Band(k) => merged[*k].as_ref().map_or(vec![], |m| m.1.clone()),
+                        Link::Fan(f) => f.clone(),
+                    })
                     .collect();
-                match profile_fit(g, mesh, &regions, tol, j - i + 2) {
+                match profile_fit(g, mesh, &regions, tol, rings) {
                     Some(p) => best = Some((j, p)),
-                    None if j - i + 2 >= 4 => break,
+                    None if rings >= 4 => break,
                     None => {}
                 }
             }
@@ -115,7 +148,10 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
                 Some((j, prim)) => {
                     let regions = chain[i..=j]
                         .iter()
-                        .flat_map(|&k| merged[k].take().map_or(vec![], |m| m.1))
+                        .flat_map(|l| match l {
+                            Link::Band(k) => merged[*k].take().map_or(vec![], |m| m.1),
+                            Link::Fan(f) => f.clone(),
+                        })
                         .collect();
                     out.push((prim, regions));
                     i = j + 1;
@@ -126,6 +162,38 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
     }
     out.extend(merged.into_iter().flatten());
     out
+}
+
+/// An element of a chain of bands: a band (a grown surface) or a pole's fan of triangles.
+enum Link {
+    Band(usize),
+    Fan(Vec<u32>),
+}
+
+/// The fan of regions no surface took around a vertex on `band`'s axis next to it (a
+/// sphere's pole), if there is one of eight triangles or more.
+fn pole_fan(
+    g: &RegionGraph,
+    mesh: &Mesh,
+    (prim, regions): &Grown,
+    owned: &[bool],
+    tol: f64,
+) -> Option<Vec<u32>> {
+    let (o, a) = prim.axis()?;
+    let mut fan: Vec<u32> = regions
+        .iter()
+        .flat_map(|&r| g.neighbours(r).iter().map(|&(s, _)| s))
+        .filter(|&s| !owned[s as usize] && g.regions.faces[s as usize] == 1)
+        .collect();
+    fan.sort_unstable();
+    fan.dedup();
+    if fan.len() < 8 {
+        return None;
+    }
+    let pole = *g.verts(fan[0]).iter().find(|v| fan.iter().all(|&r| g.verts(r).contains(v)))?;
+    let p = mesh.positions[pole as usize];
+    let off_axis = (p - o).cross(&a).norm();
+    (off_axis <= 16.0 * tol).then_some(fan)
 }
 
 /// A sphere (three rings or more) or a torus (four or more) through the regions, each of
