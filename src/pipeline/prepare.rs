@@ -44,6 +44,8 @@ pub struct RecognizedPart {
     pub surfaces: crate::geometry::surfaces::Surfaces,
     /// Per vertex, its surfaces.
     pub vertices: crate::geometry::surfaces::VertexSurfaces,
+    /// What the run report says of them (on the part as loaded and cut into patches).
+    pub report: crate::geometry::surfaces::SurfaceReport,
 }
 
 /// The highlight model's key light as the scene gives it.
@@ -173,6 +175,7 @@ pub fn load_stage(s: &LoadedScene, stages: &mut Stages, plan: &StagePlan) -> Res
     });
     let surfaces = surfaces.map(|surfaces| RecognizedPart {
         vertices: crate::geometry::surfaces::VertexSurfaces::new(&mesh, &surfaces),
+        report: surfaces.report(&mesh),
         surfaces,
     });
     let lighting = key.lighting(scene.view.view(), &mesh).map_err(|e| match (key, e) {

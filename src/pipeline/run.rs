@@ -70,6 +70,12 @@ pub struct RunReport {
     /// scene sets `field.fit_radius` or `field.noise: "off"`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub noise: Option<crate::geometry::noise::NoiseEstimate>,
+    /// The surfaces the part was read as (`mesh.surfaces: "recognize"`): planes, cylinders,
+    /// cones, spheres and tori with their parameters, area and fit residual, and the creases
+    /// between them; absent when none was recognized (a free-form part, a scan) or with
+    /// `mesh.surfaces: "off"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surfaces: Option<crate::geometry::surfaces::SurfaceReport>,
     /// Edits and the solve (iterations, energies, constraint violations, singularities).
     pub optimize: Option<OptimizeStageReport>,
     /// Strokes, coverage, lengths.
@@ -183,6 +189,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         layout: prepared.layout.clone(),
         patches: prepared.patches.clone(),
         noise: prepared.noise,
+        surfaces: prepared.surfaces.as_ref().map(|r| r.report.clone()),
         optimize: optimized.map(|o| o.report),
         toolpaths: traced.map(|t| t.figures),
         as_brushed: as_brushed_figures,

@@ -66,6 +66,14 @@ fn canonical(v: V3) -> V3 {
     }
 }
 
+/// The largest distance of the points from their best plane (0 for fewer than three).
+pub fn flatness(points: &[V3]) -> f64 {
+    let Some(n) = normalized(points) else { return 0.0 };
+    let m: Matrix3<f64> = n.q.iter().map(|q| q * q.transpose()).sum();
+    let (normal, _) = least_eigen(m);
+    n.q.iter().map(|q| q.dot(&normal).abs()).fold(0.0, f64::max) * n.scale
+}
+
 /// The sphere through the points (Kåsa).
 pub fn sphere(points: &[V3]) -> Option<Primitive> {
     let n = normalized(points)?;
@@ -82,7 +90,7 @@ pub fn sphere(points: &[V3]) -> Option<Primitive> {
     let x = a.cholesky()?.solve(&b);
     let c = V3::new(-0.5 * x[0], -0.5 * x[1], -0.5 * x[2]);
     let r2 = c.norm_squared() - x[3];
-    if !(r2 > 0.0) {
+    if r2.is_nan() || r2 <= 0.0 {
         return None;
     }
     let center = n.centre + c * n.scale;
@@ -116,7 +124,7 @@ pub fn cylinder(points: &[V3], normals: &[V3]) -> Option<Primitive> {
     }
     let m: Matrix3<f64> = normals.iter().map(|v| v * v.transpose()).sum();
     let (axis, ev) = least_eigen(m);
-    if !(ev[1] > 1e-10 * ev[2]) {
+    if ev[1].is_nan() || ev[1] <= 1e-10 * ev[2] {
         return None; // one normal direction: no axis
     }
     let axis = canonical(axis);
@@ -150,7 +158,7 @@ pub fn revolution_axis(lines: &[(V3, V3)]) -> Option<(V3, V3)> {
         dd += d * d.transpose();
     }
     let (_, ev) = least_eigen(dd);
-    if !(ev[0] > 1e-6 * ev[2]) {
+    if ev[0].is_nan() || ev[0] <= 1e-6 * ev[2] {
         return None; // normals in one plane: a cylinder (or a plane), not a cone or a torus
     }
     let dd_inv = dd.try_inverse()?;
@@ -242,7 +250,7 @@ pub fn torus(points: &[V3], o: &V3, a: &V3, tolerance: f64) -> Option<Primitive>
     let mean = prof.iter().sum::<Vector2<f64>>() / prof.len() as f64;
     let s =
         (prof.iter().map(|p| (p - mean).norm_squared()).sum::<f64>() / prof.len() as f64).sqrt();
-    if !(s > 0.0) {
+    if s.is_nan() || s <= 0.0 {
         return None;
     }
     let scaled: Vec<Vector2<f64>> = prof.iter().map(|p| (p - mean) / s).collect();
@@ -291,8 +299,11 @@ mod tests {
             for h in [2.0, 3.0, 4.5] {
                 pts.push(apex + a * h + r * (h * 0.4f64.tan()));
             }
+            // Normal lines from several parallels: from one alone they all pass through one
+            // point of the axis, and any line through it meets them all.
             let n = r * 0.4f64.cos() - a * 0.4f64.sin();
-            lines.push((apex + a * 3.0 + r * (3.0 * 0.4f64.tan()), n));
+            let h = [2.0, 3.0, 4.5][j % 3];
+            lines.push((apex + a * h + r * (h * 0.4f64.tan()), n));
         }
         let (o, axis) = revolution_axis(&lines).unwrap();
         assert!(axis.cross(&a).norm() < 1e-9);

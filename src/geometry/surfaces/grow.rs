@@ -147,16 +147,18 @@ pub(super) fn best_fit(
     let (lo, hi) = points.iter().fold((points[0], points[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
     let max_radius = 1e6 * (hi - lo).norm();
     let sound = |p: Option<Primitive>| p.filter(|p| p.is_sound(10.0 * tol, max_radius));
-    if let Some(c) = within(sound(fit::cylinder(points, normals))) {
-        return Some(c);
-    }
-    if let Some((o, a)) = fit::band_axis(lines) {
-        if let Some(c) = within(sound(fit::cone(points, &o, &a))) {
-            return Some(c);
+    let cylinder = within(sound(fit::cylinder(points, normals)));
+    let cone = fit::band_axis(lines).and_then(|(o, a)| within(sound(fit::cone(points, &o, &a))));
+    // A cone band that is nearly flat (a turned fillet's ring beside its plane) also fits a
+    // cylinder of a huge radius within the rounding: of two that fit, the closer one.
+    match (cylinder, cone) {
+        (Some(c), Some(k)) => {
+            let closer = fit::max_residual(&k, points) < fit::max_residual(&c, points);
+            return Some(if closer { k } else { c });
         }
-    }
-    if kinds == Kinds::Ruled {
-        return None;
+        (Some(c), None) | (None, Some(c)) => return Some(c),
+        (None, None) if kinds == Kinds::Ruled => return None,
+        (None, None) => {}
     }
     if let Some(s) = within(sound(fit::sphere(points))) {
         return Some(s);
@@ -207,19 +209,24 @@ pub(super) fn region_on(
 }
 
 /// Grows a cylinder or a cone from `seed` (module docs of [`super`], step 2); the regions it took and its primitive.
+///
+/// `id` stamps the vertices and regions this growth has seen (unique per call); regions in
+/// `banned` are not taken as the seed's first partner. On failure, the first partner taken
+/// (if any) is returned, so that the caller can try the seed again without it: two trapezoids
+/// of neighbouring bands of a finely exported turned face fit a sphere, and no cone after.
 pub(super) fn grow(
     g: &RegionGraph,
     mesh: &Mesh,
     taken: &[bool],
     (stamp, seen): (&mut [u32], &mut [u32]),
-    seed: u32,
+    (seed, id, banned): (u32, u32, &[u32]),
     tol: f64,
-) -> Option<(Vec<u32>, Primitive)> {
+) -> Result<(Vec<u32>, Primitive), Option<u32>> {
     let max_step = MAX_STEP_DEG.to_radians();
     let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
     let mut set = Growth { regions: vec![], points: vec![], normals: vec![], lines: vec![] };
     // Stamped with the seed: the vertices in the set, the regions queued.
-    set.push(g, mesh, stamp, seed, seed);
+    set.push(g, mesh, stamp, id, seed);
     // Regions as wide as the seed (within a factor of two: the strips of one surface) are
     // tried first, then the smoothest crossing first: a fillet's last strip meets the plate,
     // or a band the next face, across half a step, before it meets its own neighbours.
@@ -231,27 +238,27 @@ pub(super) fn grow(
     let mut heap: BinaryHeap<Reverse<(bool, u64, u32)>> = BinaryHeap::new();
     let enqueue = |heap: &mut BinaryHeap<Reverse<(bool, u64, u32)>>, seen: &mut [u32], r: u32| {
         for &(s, angle) in g.neighbours(r) {
-            if !taken[s as usize] && angle <= max_step && seen[s as usize] != seed {
-                seen[s as usize] = seed;
+            if !taken[s as usize] && angle <= max_step && seen[s as usize] != id {
+                seen[s as usize] = id;
                 heap.push(Reverse((unlike(s), angle.to_bits(), s)));
             }
         }
     };
-    seen[seed as usize] = seed;
+    seen[seed as usize] = id;
     enqueue(&mut heap, seen, seed);
     let mut model: Option<Primitive> = None;
     let mut refit_at = 6usize;
     while let Some(Reverse((_, _, r))) = heap.pop() {
         // A strip or a band is a quad at least (two triangles); lone triangles (a pole's fan,
         // a scan's) join a surface afterwards, if they lie on it.
-        if g.regions.faces[r as usize] < 2 {
+        if g.regions.faces[r as usize] < 2 || (set.regions.len() == 1 && banned.contains(&r)) {
             continue;
         }
         let accept = match &model {
             Some(m) => region_on(g, mesh, r, m, tol, spread),
             None => {
                 let mut trial: Vec<V3> = set.points.clone();
-                let new = g.verts(r).iter().filter(|&&v| stamp[v as usize] != seed);
+                let new = g.verts(r).iter().filter(|&&v| stamp[v as usize] != id);
                 trial.extend(new.map(|&v| mesh.positions[v as usize]));
                 let mut normals = set.normals.clone();
                 normals.push(g.regions.normal[r as usize]);
@@ -272,20 +279,31 @@ pub(super) fn grow(
         if !accept {
             continue;
         }
-        set.push(g, mesh, stamp, seed, r);
+        set.push(g, mesh, stamp, id, r);
         enqueue(&mut heap, seen, r);
         if set.regions.len() >= refit_at {
             refit_at *= 2;
             model = best_fit(&set.points, &set.normals, &set.lines, tol, Kinds::Ruled);
-            model?;
+            if model.is_none() {
+                return Err(set.regions.get(1).copied());
+            }
         }
     }
+    let partner = set.regions.get(1).copied();
     if set.regions.len() < 3 {
-        return None;
+        return Err(partner);
     }
-    let prim = best_fit(&set.points, &set.normals, &set.lines, tol, Kinds::Ruled)?;
-    Some((set.regions, prim))
+    match best_fit(&set.points, &set.normals, &set.lines, tol, Kinds::Ruled) {
+        Some(prim) if fit::flatness(&set.points) > MIN_BULGE * tol => Ok((set.regions, prim)),
+        _ => Err(partner),
+    }
 }
+
+/// How many times the tolerance a grown surface must stand off its own best plane to be read
+/// as curved: strips of a fine export whose chords' sagitta is within the file's rounding
+/// (a 2 mm fillet at 1° chords in float32) fit a cylinder of any large radius, and are left
+/// to the jet fit, which reads them well.
+pub const MIN_BULGE: f64 = 10.0;
 
 /// Module docs of [`super`], step 5: regions not yet on a surface (a sphere's pole fan, the
 /// end triangles of a strip) join a neighbouring surface they lie on, repeatedly.

@@ -64,11 +64,14 @@ pub const MAX_CHORD_DEVIATION_DEG: f64 = 25.0;
 
 /// Two surfaces whose normals differ by more than this along a shared edge meet at a crease
 /// (degrees). Tangent (G1) junctions agree to the file's rounding.
-pub const G1_TOLERANCE_DEG: f64 = 0.5;
+pub const G1_TOLERANCE_DEG: f64 = 2.0;
 
 /// The distance within which a vertex lies on a surface, as a multiple of the part's largest
 /// coordinate: float32 STL rounds to 6·10⁻⁸ of it, six-digit ASCII to 5·10⁻⁷.
 pub const RELATIVE_TOLERANCE: f64 = 4e-6;
+
+/// How many times a seed is grown, each time without the first partner a failed growth took.
+pub const SEED_TRIES: usize = 4;
 
 /// No surface: a face of an unrecognized region (a free-form face, a scan).
 pub const NO_SURFACE: u32 = u32::MAX;
@@ -104,7 +107,7 @@ pub struct Surfaces {
 pub fn recognize(mesh: &Mesh) -> Surfaces {
     let nf = mesh.num_faces();
     let tol = tolerance(mesh);
-    if nf == 0 || !(tol > 0.0) {
+    if nf == 0 || tol.is_nan() || tol <= 0.0 {
         return Surfaces { face_surface: vec![NO_SURFACE; nf], surfaces: vec![], tolerance: tol };
     }
     let g = grow::RegionGraph::new(mesh);
@@ -119,16 +122,30 @@ pub fn recognize(mesh: &Mesh) -> Surfaces {
     let mut stamp = vec![u32::MAX; mesh.num_vertices()];
     let mut seen = vec![u32::MAX; nr];
     let mut grown: Vec<profile::Grown> = Vec::new();
+    let mut attempt = 0u32;
     for (_, seed) in seeds {
         if taken[seed as usize] {
             continue;
         }
-        let found = grow::grow(&g, mesh, &taken, (&mut stamp, &mut seen), seed, tol);
-        if let Some((regions, prim)) = found {
-            for &r in &regions {
-                taken[r as usize] = true;
+        // A seed is tried again without the partner a failed growth took first, up to
+        // [`SEED_TRIES`] times (a quad has four neighbours).
+        let mut banned: Vec<u32> = Vec::new();
+        for _ in 0..SEED_TRIES {
+            let id = attempt;
+            attempt += 1;
+            let found =
+                grow::grow(&g, mesh, &taken, (&mut stamp, &mut seen), (seed, id, &banned), tol);
+            match found {
+                Ok((regions, prim)) => {
+                    for &r in &regions {
+                        taken[r as usize] = true;
+                    }
+                    grown.push((prim, regions));
+                    break;
+                }
+                Err(Some(partner)) => banned.push(partner),
+                Err(None) => break,
             }
-            grown.push((prim, regions));
         }
     }
     let grown = profile::join_bands(&g, mesh, grown, tol);
@@ -292,7 +309,7 @@ fn finish(
     let mut label = vec![NO_SURFACE; prims.len()];
     let mut order = Vec::new();
     let mut face_surface = vec![NO_SURFACE; nf];
-    for f in 0..nf {
+    for (f, out) in face_surface.iter_mut().enumerate() {
         let r = g.regions.face_region[f];
         if r == NO_REGION || region_surface[r as usize] == NO_SURFACE {
             continue;
@@ -302,13 +319,12 @@ fn finish(
             label[k] = order.len() as u32;
             order.push(k);
         }
-        face_surface[f] = label[k];
+        *out = label[k];
     }
     let mut faces = vec![0usize; order.len()];
     let mut area = vec![0.0; order.len()];
     let mut verts: Vec<Vec<u32>> = vec![Vec::new(); order.len()];
-    for f in 0..nf {
-        let s = face_surface[f];
+    for (f, &s) in face_surface.iter().enumerate() {
         if s == NO_SURFACE {
             continue;
         }
@@ -456,10 +472,9 @@ impl VertexSurfaces {
         for p in parents {
             let (a, b) = (self.of[p[0] as usize], self.of[p[1] as usize]);
             let mut slots = [NO_SURFACE; MAX_VERTEX_SURFACES];
-            let mut k = 0;
-            for s in a.iter().filter(|&&s| s != NO_SURFACE && b.contains(&s)) {
-                slots[k] = *s;
-                k += 1;
+            let common = a.iter().filter(|&&s| s != NO_SURFACE && b.contains(&s));
+            for (slot, s) in slots.iter_mut().zip(common) {
+                *slot = *s;
             }
             self.of.push(slots);
         }

@@ -219,6 +219,10 @@ fn profile_fit(
     (enough && regions.iter().all(|&r| region_on(g, mesh, r, &prim, tol, spread))).then_some(prim)
 }
 
+/// How far a turn between two surfaces may exceed the export's step and still read as a strip
+/// edge: the step is measured on fits whose normals the file's rounding tilts.
+const STEP_SLACK: f64 = 1.25;
+
 /// The export's angular step on a surface: the largest angle between two of its regions
 /// that share an edge, or on a surface of revolution meshed as a turned face the angle
 /// between its meridians (360° over the distinct azimuths of its vertices; a band's
@@ -350,7 +354,7 @@ pub(super) fn free_profiles(
                 };
                 let at = mesh.positions[v as usize];
                 let turn = pk.normal_at(&at).dot(&pj.normal_at(&at)).clamp(-1.0, 1.0).acos();
-                if turn > g1 && turn <= 1.01 * step_k.max(step_j) {
+                if turn > g1 && turn <= STEP_SLACK * step_k.max(step_j) {
                     let (a, b) = (root(&mut parent, k), root(&mut parent, j));
                     parent[a.max(b)] = a.min(b);
                 }
