@@ -144,6 +144,7 @@ impl PlacementOptions {
     /// Reject NaN and out-of-range values with a clear error.
     pub fn validate(&self) -> Result<()> {
         positive("placement.width", self.width)?;
+        crate::budget::lead_length("placement.width", self.width)?;
         in_range("placement.overlap", self.overlap, 0.0, 1.0, "must be in [0, 1)")?;
         positive("placement.test_ratio", self.test_ratio)?;
         if self.test_ratio > 1.0 {
