@@ -21,8 +21,9 @@ pub(super) fn check_elements(doc: &usvg::roxmltree::Document, name: &Path) -> Re
     let root = doc.root_element();
     for node in doc.descendants().filter(|n| n.is_element() && *n != root) {
         let tag = node.tag_name().name();
-        let line = doc.text_pos_at(node.range().start).row as usize;
+        // The line only for a message: `text_pos_at` scans the text from its start.
         let at = |message: String| {
+            let line = doc.text_pos_at(node.range().start).row as usize;
             parse_error(name, line, format!("{}: {message}", describe_element(&node, tag, line)))
         };
         if let Some(v) = node.attribute("transform") {
