@@ -18,7 +18,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// A syntax error in an input file, with the 1-based line where it was found (0 if unknown).
-    #[error("{path}:{line}: {message}")]
+    #[error("{}{}: {message}", path.display(), line_suffix(*line))]
     Parse {
         /// The file.
         path: PathBuf,
@@ -160,6 +160,34 @@ impl Error {
     pub fn setting(key: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Setting { key: key.into(), message: message.into() }
     }
+}
+
+/// `:L` for a known 1-based line, nothing when the line is unknown (0): no message names a
+/// "line 0".
+fn line_suffix(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}")
+    }
+}
+
+/// `text` with its control characters escaped (`\u{1b}` for ESC, `\n` for a newline), for
+/// printing paths and messages to a terminal: a scene's path may hold escape sequences.
+///
+/// ```
+/// assert_eq!(grainline::error::escape_control("a\u{1b}[31mb\nc"), "a\\u{1b}[31mb\\nc");
+/// ```
+pub fn escape_control(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// A number as messages print it: the shortest text that reads back as the same `f64`, in

@@ -56,6 +56,12 @@ pub const MAX_EDGE_FACES: usize = 64;
 /// longest edge `e`: the refinement's area bound per triangle, plus the boundary splits.
 pub const MAX_PANEL_TRIANGLES: f64 = 4e6;
 
+/// Largest |coordinate| of a panel outline (`outline`, `grainline panel`), after the SVG's
+/// units and viewBox: 10⁶ mm (1 km), beyond any sheet. A 10³⁰ mm rect took 15 s and 1.2 GB
+/// to refine (the triangulator's predicates lose every digit of a 0.1 mm feature there) and
+/// wrote triangles with 0.00° angles. Refused naming the file, the line and the element.
+pub const MAX_PANEL_COORDINATE_MM: f64 = 1e6;
+
 /// Most bytes a render may be estimated to hold (4 GiB): the per-sample buffers
 /// (visibility, radiance, overlay layers, LIC, highlight curves, the as-brushed shading) and
 /// the per-pixel ones, from [`crate::render::RenderSettings::memory_estimate`].
@@ -76,6 +82,21 @@ pub const MAX_SVG_POINTS: usize = 10_000_000;
 /// became infinity and its shape vanished ("no closed outline"); 1e30 leaves 10⁸ for the
 /// transforms and units. Refused naming the file, the line, the element and the attribute.
 pub const MAX_SVG_NUMBER: f64 = 1e30;
+
+/// Most elements an SVG may hold: 10⁵ (usvg's own limit is 10⁶). Counted on the parsed
+/// document before usvg resolves it; 2 × 10⁴ separate rects took 32 s in `panel`.
+pub const MAX_SVG_ELEMENTS: usize = 100_000;
+
+/// Deepest nesting of an SVG's elements: 256 (10⁵ nested groups kept usvg busy past 20 s).
+pub const MAX_SVG_DEPTH: usize = 256;
+
+/// Most steps an SVG's `<style>` selectors may be estimated to take to match: 10⁸. A
+/// selector with k descendant combinators (a space) and j general-sibling ones (`~`) may try
+/// S(D + 1, k) · S(W + 1, j) chains of ancestors and siblings for each of the N elements (D
+/// the deepest nesting, W the most children of one element); the estimate sums
+/// N · S(D + 1, k) · S(W + 1, j) over the selectors, S(n, k) = Σ_{i ≤ k} C(n, i) (2ⁿ when
+/// k ≥ n: a selector longer than the nesting tries every prefix before it fails).
+pub const MAX_SVG_SELECTOR_WORK: f64 = 1e8;
 
 /// Most stroke samples a placement may be estimated to take (`A / (d_sep · h)`; see
 /// [`grainline_toolpaths::budget`]).
@@ -100,6 +121,11 @@ pub const MAX_TURNING_RADIUS: f64 = 1e9;
 /// scene and the editor alike.
 pub const MAX_EDIT_RADIUS: f64 = 1e9;
 
+/// Largest weight of an edit (`weight`, `outside_weight`, …): 10⁶, as
+/// [`MAX_SMOOTHNESS`]. Weights are relative to the smoothness term; at 10³⁰⁸ the solve's
+/// energy overflowed and failed as a "numerical failure" naming no key.
+pub const MAX_EDIT_WEIGHT: f64 = 1e6;
+
 /// Longest output path a scene may give: 4096 bytes (Linux's `PATH_MAX`). A longer one is
 /// refused naming its key, and echoed shortened ([`crate::error::shorten`]).
 pub const MAX_OUTPUT_PATH_BYTES: usize = 4096;
@@ -112,6 +138,26 @@ pub const MAX_LIGHTS: usize = 64;
 /// 10⁵. Each point's segment is searched against the part, so 10⁶ points take tens of seconds
 /// and hundreds of MB.
 pub const MAX_CURVE_POINTS: usize = 100_000;
+
+/// Largest scene file: 64 MiB (a curve edit of [`MAX_CURVE_POINTS`] inline points is about
+/// 5 MB). Checked from the file's metadata before it is read, with the file's type (a FIFO,
+/// a device or a directory is refused unread).
+pub const MAX_SCENE_BYTES: u64 = 64 << 20;
+
+/// Largest SVG file (an outline or a curve edit's drawing): 64 MiB, checked as
+/// [`MAX_SCENE_BYTES`].
+pub const MAX_SVG_BYTES: u64 = 64 << 20;
+
+/// Most edits a scene may list: 1000. Each edit costs work over its support and the solve
+/// grows with them (1000 bends took 4 s, 10⁴ over 30 s); refused with the scene, before the
+/// part is loaded.
+pub const MAX_EDITS: usize = 1000;
+
+/// Most samples the fidelity figures take along one curve edit: 10⁵. The curve is sampled
+/// every `FidelityOptions::sample_spacing` (0.01) × its radius, or more sparsely when that would give more
+/// (each sample searches the solved highlight's segments around it: a zigzag of 2,000 points
+/// spent most of a 24 s run there).
+pub const MAX_FIDELITY_SAMPLES: usize = 100_000;
 
 /// `--threads` is capped at this many worker threads per available core.
 pub const THREADS_PER_CORE: usize = 4;

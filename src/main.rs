@@ -34,7 +34,7 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("grainline: error: {}", message(&e));
+            eprintln!("grainline: error: {}", grainline::error::escape_control(&message(&e)));
             ExitCode::from(1)
         }
     }

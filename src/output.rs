@@ -106,6 +106,45 @@ pub fn check_input_file(path: &Path) -> Result<()> {
     Err(refuse(path, format!("is {kind}, not a regular file; an input must be a regular file")))
 }
 
+/// Reads the input `path` whole, refusing it unread when it is not a regular file
+/// ([`check_input_file`]: a FIFO would block) or its size is over `max` bytes (from its
+/// metadata, before anything is read; the read itself stops at `max` + 1 bytes, should the
+/// file grow meanwhile). `what` names the budget in the message (e.g. `a scene file`).
+pub fn read_bounded(path: &Path, max: u64, what: &str) -> Result<Vec<u8>> {
+    use std::io::Read;
+    check_input_file(path)?;
+    let too_big = |size: u64| {
+        refuse(
+            path,
+            format!(
+                "is {size} bytes, over the {max} bytes {what} may have (docs/scene.md, \
+                 \"Limits\")"
+            ),
+        )
+    };
+    let size = std::fs::metadata(path).map_err(|e| io_error(path, e))?.len();
+    if size > max {
+        return Err(too_big(size));
+    }
+    let f = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+    let mut bytes = Vec::with_capacity(size as usize);
+    f.take(max + 1).read_to_end(&mut bytes).map_err(|e| io_error(path, e))?;
+    if bytes.len() as u64 > max {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// [`read_bounded`] as UTF-8 text; invalid UTF-8 is refused naming the file and the line.
+pub fn read_bounded_text(path: &Path, max: u64, what: &str) -> Result<String> {
+    let bytes = read_bounded(path, max, what)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
+        Error::Parse { path: path.to_path_buf(), line, message: "is not UTF-8 text".into() }
+    })
+}
+
 #[cfg(unix)]
 fn special_kind(ft: &std::fs::FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
@@ -304,6 +343,19 @@ impl Drop for Pending {
 #[derive(Default)]
 pub struct Staged {
     pending: Vec<Pending>,
+    /// Directories [`Staged::add`] created, deepest first: removed again (when empty) if the
+    /// outputs are dropped without a commit, so that a failed run leaves nothing behind.
+    created: Vec<PathBuf>,
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        // The temporaries first (each `Pending` deletes its own), then the directories.
+        self.pending.clear();
+        for d in self.created.drain(..) {
+            let _ = std::fs::remove_dir(&d);
+        }
+    }
 }
 
 impl Staged {
@@ -321,7 +373,15 @@ impl Staged {
             Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        let mut missing = Vec::new();
+        let mut d = dir.as_path();
+        while !d.as_os_str().is_empty() && std::fs::symlink_metadata(d).is_err() {
+            missing.push(d.to_path_buf());
+            d = d.parent().unwrap_or(Path::new(""));
+        }
         std::fs::create_dir_all(&dir).map_err(|e| io_error(&dir, e))?;
+        // Deepest first, after those of earlier outputs (which may hold these).
+        self.created.splice(0..0, missing);
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let prefix = format!(".{name}.");
         let mut builder = tempfile::Builder::new();
@@ -355,26 +415,37 @@ impl Staged {
         self.pending.iter().map(|p| p.target.as_path())
     }
 
-    /// Renames every temporary over its target, in the order staged (each target checked again
-    /// just before), then fsyncs the directories. Returns the targets.
+    /// Renames every temporary over its target, in the order staged, then fsyncs the
+    /// directories. Returns the targets.
+    ///
+    /// Every target is checked again before the first rename, so a target that became a
+    /// directory or a link meanwhile fails the commit with nothing renamed. The renames run
+    /// under the registry's lock: a signal handler's [`remove_temporaries`] waits for them,
+    /// so a SIGINT / SIGTERM / SIGHUP leaves either the old set of outputs (it came first:
+    /// the commit is refused) or the whole new one (it came during the renames), never a mix.
     pub fn commit(mut self) -> Result<Vec<PathBuf>> {
-        let mut done = Vec::new();
-        for mut p in std::mem::take(&mut self.pending) {
+        for p in &self.pending {
             check_output_target(&p.target)?;
+        }
+        let mut done = Vec::new();
+        let mut r = registry();
+        if r.closed && !self.pending.is_empty() {
+            return Err(refuse(&self.pending[0].target, "interrupted: no output was replaced"));
+        }
+        for mut p in std::mem::take(&mut self.pending) {
             let temp = p.temp.take().expect("a pending output holds its temporary");
-            {
-                let mut r = registry();
-                let tp: PathBuf = temp.to_path_buf();
-                let result = temp.persist(&p.target);
-                r.paths.retain(|q| q != &tp);
-                if let Err(e) = result {
-                    drop(r);
-                    drop(e.path); // deletes the temporary
-                    return Err(io_error(&p.target, e.error));
-                }
+            let tp: PathBuf = temp.to_path_buf();
+            let result = temp.persist(&p.target);
+            r.paths.retain(|q| q != &tp);
+            if let Err(e) = result {
+                drop(r);
+                drop(e.path); // deletes the temporary
+                return Err(io_error(&p.target, e.error));
             }
             done.push(p.target.clone());
         }
+        drop(r);
+        self.created.clear();
         #[cfg(unix)]
         {
             let mut dirs: Vec<PathBuf> = done
@@ -488,8 +559,8 @@ mod tests {
         let names = entries(&d);
         assert!(names.iter().any(|n| n.starts_with(".a.txt.") && n.ends_with(".tmp")), "{names:?}");
         drop(s);
-        assert_eq!(entries(&d), ["a.txt", "sub"]);
-        assert!(entries(&d.join("sub")).is_empty());
+        // Nothing left: the temporaries and the directory made for them are gone.
+        assert_eq!(entries(&d), ["a.txt"]);
         let mut s = Staged::new();
         s.add(&d.join("a.txt"), b"new a").unwrap();
         s.add(&d.join("sub/b.txt"), b"new b").unwrap();

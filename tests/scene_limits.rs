@@ -135,6 +135,43 @@ fn limits() -> Vec<Limit> {
                 polyline(grainline::limits::MAX_CURVE_POINTS + 1 + f.log10().abs() as usize)
             },
         },
+        // Issue 46: numbers in physical ranges, each naming its key.
+        Limit {
+            path: &["edits", "0", "weight"],
+            key: "edits[0].weight",
+            at: || vec![num(1e6), num(0.0)],
+            beyond: |f, k| above(1e6, f, k),
+        },
+        Limit {
+            path: &["toolpaths", "gcode_options", "safe_z"],
+            key: "toolpaths.gcode_options.safe_z",
+            at: || vec![num(1e6), num(-1e6), num(5.0)],
+            beyond: |f, k| num(if k % 2 == 0 { 1e6 } else { -1e6 } * (1.0 + f)),
+        },
+        Limit {
+            path: &["toolpaths", "gcode_options", "rapid_rate_mm_min"],
+            key: "toolpaths.gcode_options.rapid_rate_mm_min",
+            at: || vec![num(0.1), num(1e6)],
+            beyond: |f, k| if k % 2 == 0 { num(0.1 / (1.0 + f)) } else { num(1e6 * (1.0 + f)) },
+        },
+        Limit {
+            path: &["toolpaths", "placement", "width"],
+            key: "toolpaths.placement.width",
+            at: || vec![num(1e6), num(0.5)],
+            beyond: |f, k| above(1e6, f, k),
+        },
+        Limit {
+            path: &["toolpaths", "placement", "trace", "max_steps"],
+            key: "toolpaths.placement.trace.max_steps",
+            at: || vec![json!(1), json!(2_000_000)],
+            beyond: |_, _| json!(0),
+        },
+        Limit {
+            path: &["view", "target"],
+            key: "view.target",
+            at: || vec![json!([1e75, 0.0, 0.0]), json!([0.0, 0.0, 0.0])],
+            beyond: |f, k| json!([if k % 2 == 0 { 1e75 } else { -1e75 } * (1.0 + f), 0.0, 0.0]),
+        },
     ];
     for (path, key) in PLAN {
         l.push(Limit {
@@ -232,10 +269,10 @@ proptest! {
     /// One key beyond its limit, up to three others at theirs: refused, naming that key.
     #[test]
     fn a_value_beyond_its_limit_is_refused_naming_its_key(
-        which in 0usize..17,
+        which in 0usize..23,
         exponent in -9.0f64..200.0,
         k in 0usize..6,
-        others in proptest::collection::vec((0usize..17, 0usize..3), 0..3),
+        others in proptest::collection::vec((0usize..23, 0usize..3), 0..3),
     ) {
         let all = limits();
         let l = &all[which % all.len()];

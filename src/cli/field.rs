@@ -108,7 +108,9 @@ pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
     options.geometry.normals = args.normals;
     options.critical_threshold = args.critical_threshold;
     stages.stage("geometry, initial field and highlights");
-    let result = compute_field(&mesh, &options)?;
+    // A failure on the part names its file.
+    let result =
+        compute_field(&mesh, &options).with_context(|| args.mesh.mesh.display().to_string())?;
     let file = FieldFile::new(&mesh, &args.mesh.mesh.display().to_string(), &options, &result)?;
     stages.stage("writing");
     grainline::output::write_json_compact_atomic(&args.out, &file)

@@ -65,7 +65,7 @@ pub fn report_tail(report: &grainline::pipeline::run::RunReport, strokes: bool, 
     }
     if !quiet {
         for o in &report.outputs {
-            eprintln!("wrote {o}");
+            eprintln!("wrote {}", grainline::error::escape_control(o));
         }
     }
 }

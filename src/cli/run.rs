@@ -2,7 +2,6 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use clap::Args;
 use grainline::pipeline::run::{run as run_scene, RunOptions};
 use grainline::scene::LoadedScene;
@@ -28,7 +27,13 @@ pub struct RunArgs {
 pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
     let scene = LoadedScene::read(&args.scene)?;
     if let Some(d) = &args.out_dir {
-        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+        // Created with the outputs, once the run has succeeded (a failed run writes nothing).
+        if d.as_os_str().is_empty() {
+            anyhow::bail!("--out-dir is empty: give a directory (`.` for this one)");
+        }
+        if std::fs::metadata(d).is_ok_and(|m| !m.is_dir()) {
+            anyhow::bail!("--out-dir {}: is a file, not a directory", d.display());
+        }
     }
     let report_path = args.report.clone().unwrap_or_else(|| {
         args.out_dir.clone().unwrap_or_else(|| scene.base.clone()).join("run-report.json")
@@ -57,7 +62,7 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
             report.stages.iter().map(|s| format!("{} {:.2}s", s.stage, s.seconds)).collect();
         eprintln!(
             "wrote {} ({:.2} s: {})",
-            report_path.display(),
+            grainline::error::escape_control(&report_path.display().to_string()),
             report.wall_seconds,
             stages.join(", ")
         );

@@ -133,8 +133,7 @@ fn check_point_count(key: &str, n: usize) -> Result<()> {
 
 /// Reads the paths of an SVG file as UV polylines (module documentation).
 pub fn read_svg_polylines(path: &Path, tolerance: f64) -> Result<Vec<Vec<Vector2<f64>>>> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::output::read_bounded_text(path, crate::limits::MAX_SVG_BYTES, "an SVG file")?;
     svg_polylines(&text, path, tolerance)
 }
 
@@ -558,6 +557,17 @@ fn space_targets(ctx: &Context, lines: &[Vec<Vector3<f64>>], radius: f64) -> Vec
         hi = hi.sup(p);
     }
     let (lo, hi) = (lo.add_scalar(-radius), hi.add_scalar(radius));
+    // The segments in order (line by line), and a grid of them: each vertex meets the
+    // segments near it in that order (the same closest segment on ties).
+    let segments: Vec<(usize, [Vector3<f64>; 2])> = lines
+        .iter()
+        .enumerate()
+        .flat_map(|(line, l)| l.windows(2).map(move |s| (line, [s[0], s[1]])))
+        .collect();
+    let ends: Vec<([f64; 3], [f64; 3])> =
+        segments.iter().map(|(_, s)| (s[0].into(), s[1].into())).collect();
+    let grid = super::segment_grid::SegmentGrid::new(&ends, 2.0 * radius);
+    let mut near = Vec::new();
     ctx.mesh
         .positions
         .iter()
@@ -566,8 +576,10 @@ fn space_targets(ctx: &Context, lines: &[Vec<Vector3<f64>>], radius: f64) -> Vec
                 return None;
             }
             let mut best: Option<Hit> = None;
-            for (line, l) in lines.iter().enumerate() {
-                for s in l.windows(2) {
+            grid.near(&(*p).into(), radius, &mut near);
+            for &k in &near {
+                let (line, s) = segments[k as usize];
+                {
                     let e = s[1] - s[0];
                     let ee = e.norm_squared();
                     if !(ee > 0.0) {
@@ -613,6 +625,23 @@ fn uv_targets(ctx: &Context, lines: &[Vec<Vector2<f64>>], radius: f64) -> Option
         hi = hi.sup(p);
     }
     let r2 = radius * radius;
+    // The segments in order (line by line), and a grid of them in UV, its cell twice the
+    // radius at the mesh's mean UV scale (the cell only sets the speed, not the result).
+    let segments: Vec<(usize, [Vector2<f64>; 2])> = lines
+        .iter()
+        .enumerate()
+        .flat_map(|(line, l)| l.windows(2).map(move |s| (line, [s[0], s[1]])))
+        .collect();
+    let ends: Vec<([f64; 2], [f64; 2])> =
+        segments.iter().map(|(_, s)| (s[0].into(), s[1].into())).collect();
+    let area_uv = (0..mesh.num_faces()).fold(0.0, |u, f| {
+        let [t0, t1, t2] = uv.face(f);
+        let d = 0.5 * (t1 - t0).perp(&(t2 - t0)).abs();
+        u + if d.is_finite() { d } else { 0.0 }
+    });
+    let scale = (area_uv / mesh.area()).sqrt();
+    let grid = super::segment_grid::SegmentGrid::new(&ends, 2.0 * radius * scale);
+    let mut near = Vec::new();
     Some(
         (0..mesh.num_vertices())
             .map(|v| {
@@ -661,8 +690,10 @@ fn uv_targets(ctx: &Context, lines: &[Vec<Vector2<f64>>], radius: f64) -> Option
                     {
                         continue;
                     }
-                    for (line, l) in lines.iter().enumerate() {
-                        for s in l.windows(2) {
+                    grid.near(&p.into(), r_uv, &mut near);
+                    for &k in &near {
+                        let (line, s) = segments[k as usize];
+                        {
                             let (t, d2) = closest_on_segment(&p, &s[0], &s[1], &g);
                             if d2 < r2 && best.is_none_or(|b| d2 < b.distance * b.distance) {
                                 let e = s[1] - s[0];

@@ -26,6 +26,7 @@ pub mod chart;
 pub mod curve;
 pub mod light;
 pub mod resolution;
+mod segment_grid;
 pub mod shape;
 pub mod stencil;
 pub mod support;
@@ -138,6 +139,13 @@ impl Edit {
 
 /// Validates a list of edits; error keys are `[k].key` (the scene loader adds `edits`).
 pub fn validate_edits(edits: &[Edit]) -> Result<()> {
+    let max = crate::limits::MAX_EDITS;
+    if edits.len() > max {
+        return Err(Error::setting(
+            "",
+            format!("lists {} edits, more than the {max} a scene may have", edits.len()),
+        ));
+    }
     for (k, e) in edits.iter().enumerate() {
         e.validate().map_err(|err| at_edit(k, e.tool(), err))?;
     }
@@ -686,12 +694,17 @@ fn at_edit(k: usize, tool: &str, err: Error) -> Error {
     }
 }
 
-/// A weight must be finite and ≥ 0.
+/// A weight must be finite, ≥ 0 and at most [`crate::limits::MAX_EDIT_WEIGHT`].
 pub(crate) fn check_weight(key: &str, w: f64) -> Result<()> {
-    if !(w.is_finite() && w >= 0.0) {
+    use crate::limits::MAX_EDIT_WEIGHT;
+    if !(w.is_finite() && (0.0..=MAX_EDIT_WEIGHT).contains(&w)) {
         return Err(Error::setting(
             key,
-            format!("must be a finite number ≥ 0, got {}", crate::error::fmt_num(w)),
+            format!(
+                "must be a finite number ≥ 0 and at most {} (limits::MAX_EDIT_WEIGHT), got {}",
+                crate::error::fmt_num(MAX_EDIT_WEIGHT),
+                crate::error::fmt_num(w)
+            ),
         ));
     }
     Ok(())

@@ -236,7 +236,11 @@ fn get(ctx: &Context, path: &str, query: &str) -> Reply {
         }
         // No icon: an empty answer instead of a 404 in the page's console.
         "/favicon.ico" => Reply { status: 204, content_type: "image/x-icon", body: Vec::new() },
-        "/files/scene.json" => match std::fs::read(s.path()) {
+        "/files/scene.json" => match crate::output::read_bounded(
+            s.path(),
+            crate::limits::MAX_SCENE_BYTES,
+            "a scene file",
+        ) {
             Ok(b) => Reply::ok("application/json", b),
             Err(e) => Reply::error(404, format!("the scene file: {e}")),
         },

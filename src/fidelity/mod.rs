@@ -529,7 +529,15 @@ fn curve_distances(
     options: &FidelityOptions,
 ) -> Target {
     let Fields { mesh, h, symmetry, u_after, .. } = *fields;
-    let samples = curve_samples(polylines, options.sample_spacing * radius, radius);
+    // At most MAX_FIDELITY_SAMPLES samples: a longer curve is sampled more sparsely (each
+    // sample's search costs up to the cells within the cap, so a zigzag of 2,000 points took
+    // most of its run here).
+    let total: f64 =
+        polylines.iter().flat_map(|l| l.windows(2)).map(|s| (s[1] - s[0]).norm()).sum();
+    let sparsest = total / crate::limits::MAX_FIDELITY_SAMPLES as f64;
+    let spacing =
+        (options.sample_spacing * radius).max(if sparsest.is_finite() { sparsest } else { 0.0 });
+    let samples = curve_samples(polylines, spacing, radius);
     // Distances along the surface: in the plane of the face C1 crosses, leaving out
     // an offset along its normal (the drawn curve lies on the part as it was drawn on,
     // a refined mesh's new vertices a little off its facets; the tool itself measures

@@ -315,6 +315,23 @@ fn check_loops(loops: &[Loop], name: &Path, opts: &PanelOptions) -> Result<()> {
             message: "no closed outline".into(),
         });
     }
+    let max = crate::limits::MAX_PANEL_COORDINATE_MM;
+    for l in loops {
+        if let Some(p) = l.points.iter().find(|p| !(p[0].abs() <= max && p[1].abs() <= max)) {
+            return Err(Error::Parse {
+                path: name.to_path_buf(),
+                line: l.line,
+                message: format!(
+                    "{}: the point ({}, {}) mm is beyond ±{} mm (limits::MAX_PANEL_COORDINATE_MM, \
+                     1 km): check the drawing's units and viewBox",
+                    l.element,
+                    crate::error::fmt_num(p[0]),
+                    crate::error::fmt_num(p[1]),
+                    crate::error::fmt_num(max)
+                ),
+            });
+        }
+    }
     check_budget(loops, opts)?;
     check_simple(loops, name)?;
     if let Some(l) = loops.iter().find(|l| signed_area(&l.points).abs() <= 1e-12) {
@@ -553,8 +570,7 @@ fn round_up_2(x: f64) -> String {
 /// Reads an outline SVG and meshes it (see the module documentation).
 pub fn panel_from_svg(path: &Path, opts: &PanelOptions) -> Result<PanelResult> {
     opts.validate()?;
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = crate::output::read_bounded_text(path, crate::limits::MAX_SVG_BYTES, "an SVG file")?;
     let loops = read_svg_loops(&text, path, opts.tolerance)?;
     mesh_loops(&loops, path, opts)
 }

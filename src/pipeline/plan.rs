@@ -125,7 +125,7 @@ pub fn output_plan(s: &LoadedScene, needs: &StagePlan, options: &RunOptions) -> 
         plan.output("export.glb", out("export.glb", p)?);
     }
     if let Some(d) = scene.export.as_ref().and_then(|e| e.maps.as_ref()) {
-        let dir = out("export.maps", d)?;
+        let dir = output_dir_path(s, options.out_dir.as_deref(), "export.maps", d)?;
         for f in super::export::MAP_FILES {
             plan.output("export.maps", dir.join(f));
         }
@@ -197,7 +197,49 @@ pub fn check_scene_work(
 /// a `..` that climbs out of it (`../x.svg`, `a/../../x.svg`) is refused, naming `key` (the
 /// scene key, e.g. `render.output`), and so is a path longer than
 /// [`crate::limits::MAX_OUTPUT_PATH_BYTES`] (echoed shortened).
+///
+/// An output names a file: an empty path, `.`, a path ending in `/` or in `.` or `..` names
+/// a directory and is refused, naming `key` (an empty one would otherwise have been the
+/// directory itself, and `export.maps: ""` put its maps in the file system's root).
 pub fn output_path(s: &LoadedScene, out_dir: Option<&Path>, key: &str, p: &str) -> Result<PathBuf> {
+    if let Some(why) = not_a_file_name(p) {
+        return Err(crate::Error::setting(
+            key,
+            format!("{:?} {why}; an output is a file: give its name", crate::error::shorten(p)),
+        ));
+    }
+    output_dir_path(s, out_dir, key, p)
+}
+
+/// Why the output path `p` does not name a file, if it does not.
+fn not_a_file_name(p: &str) -> Option<&'static str> {
+    if p.is_empty() {
+        return Some("is empty");
+    }
+    if p.ends_with('/') || p.ends_with(std::path::MAIN_SEPARATOR) {
+        return Some("ends in a separator (a directory)");
+    }
+    match Path::new(p).components().next_back() {
+        Some(Component::Normal(_)) if !p.ends_with("/.") && p != "." => None,
+        _ => Some("names a directory"),
+    }
+}
+
+/// Where an output directory of the scene (`export.maps`) goes, as [`output_path`] but a
+/// directory: `.` (the output directory itself) and a trailing `/` are accepted; an empty
+/// path is refused naming `key`.
+pub fn output_dir_path(
+    s: &LoadedScene,
+    out_dir: Option<&Path>,
+    key: &str,
+    p: &str,
+) -> Result<PathBuf> {
+    if p.is_empty() {
+        return Err(crate::Error::setting(
+            key,
+            "is empty; give a directory (`.` for the output directory itself)",
+        ));
+    }
     if p.len() > crate::limits::MAX_OUTPUT_PATH_BYTES {
         return Err(crate::Error::setting(
             key,

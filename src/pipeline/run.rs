@@ -94,8 +94,8 @@ pub struct RunReport {
 /// Runs the scene: the stages its outputs need, each timed. Before any work the output paths
 /// are checked ([`output_plan`]); every output is written into a temporary beside its target
 /// as it is computed, and all of them are renamed into place only once the last one is ready,
-/// the report (when [`RunOptions::report`] is set) last of all. A run that fails part-way
-/// leaves every earlier output as it was.
+/// the report (when [`RunOptions::report`] is set) last of all ([`Staged::commit`]). A run
+/// that fails part-way leaves every earlier output as it was and writes none.
 ///
 /// ```
 /// use grainline::pipeline::{run::{run, RunOptions}, Silent};
@@ -173,8 +173,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         max_deg: b.max_deg,
     });
     let critical_points = shown.critical(&prepared).iter().filter(|&&c| c).count();
-    // Every output is computed and staged: put them in place, then the report.
-    let outputs: Vec<String> = staged.commit()?.iter().map(|p| p.display().to_string()).collect();
+    // Every output is computed and staged: the report is staged last and all of them are
+    // put in place together (a failed run replaces none of them).
+    let outputs: Vec<String> = staged.targets().map(|p| p.display().to_string()).collect();
     let report = RunReport {
         format: "grainline-run-report",
         version: 1,
@@ -198,8 +199,9 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         outputs,
     };
     if let Some(p) = &options.report {
-        crate::output::write_atomic(p, &json_pretty(&report)?)?;
+        staged.add(p, &json_pretty(&report)?)?;
     }
+    staged.commit()?;
     Ok(report)
 }
 
@@ -458,9 +460,14 @@ fn export_stage(
     if let Some(dir) = &e.maps {
         let maps = super::export::maps(&x)?;
         let files = super::export::MAP_FILES;
-        let sep = if dir.ends_with('/') { "" } else { "/" };
-        out.write("export.maps", &format!("{dir}{sep}{}", files[0]), &maps.direction)?;
-        out.write("export.maps", &format!("{dir}{sep}{}", files[1]), &maps.angle)?;
+        let dir = super::plan::output_dir_path(
+            out.s,
+            out.options.out_dir.as_deref(),
+            "export.maps",
+            dir,
+        )?;
+        out.staged.add(&dir.join(files[0]), &maps.direction)?;
+        out.staged.add(&dir.join(files[1]), &maps.angle)?;
     }
     let Some(path) = &e.glb else { return Ok(None) };
     let glb = super::export::export(&x)?;

@@ -249,9 +249,11 @@ impl Effects {
         }
         if let Some(h) = &self.highlight_curves {
             check_open("effects.highlight_curves.width_px", h.width_px, 0.0, 50.0)?;
+            check_light_list("effects.highlight_curves.lights", &h.lights)?;
         }
         if let Some(c) = &self.critical_points {
             check_range("effects.critical_points.threshold", c.threshold, -1.0, 1.0)?;
+            check_light_list("effects.critical_points.lights", &c.lights)?;
         }
         if let Some(e) = &self.edits {
             check_open("effects.edits.arrow_px", e.arrow_px, 0.0, 1000.0)?;
@@ -267,6 +269,20 @@ impl Effects {
         }
         Ok(())
     }
+}
+
+/// Refuses an effect's list of light indices longer than [`crate::limits::MAX_LIGHTS`] (the
+/// most lights a scene may have): each entry is a pass over every sample, so 10⁴ entries
+/// kept a render busy for seconds.
+fn check_light_list(key: &str, lights: &[usize]) -> Result<()> {
+    let max = crate::limits::MAX_LIGHTS;
+    if lights.len() > max {
+        return Err(Error::setting(
+            key,
+            format!("lists {} lights, more than the {max} a scene may have", lights.len()),
+        ));
+    }
+    Ok(())
 }
 
 /// LIC settings (Cabral & Leedom 1993).

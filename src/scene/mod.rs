@@ -99,7 +99,7 @@ impl Scene {
             let key = e.path().to_string();
             let inner = e.into_inner();
             let line = (inner.line() > 0).then_some(inner.line());
-            let message = strip_position(&inner.to_string());
+            let message = in_scene_terms(text, &key, &strip_position(&inner.to_string()));
             let message =
                 if key.is_empty() || key == "." { message } else { format!("{key}: {message}") };
             Error::Scene { path: path.to_path_buf(), line, message }
@@ -217,6 +217,86 @@ pub fn prefix(section: &str, e: Error) -> Error {
     }
 }
 
+/// serde's wording of a type error said in the scene's terms: the Rust types it names
+/// (`u32`, `f64`, `struct Scene`) as the JSON a scene writes, an enum given the wrong type with
+/// the names it takes, an array with too many elements, and a scene that is not an object.
+fn in_scene_terms(text: &str, key: &str, message: &str) -> String {
+    let top = key.is_empty() || key == ".";
+    if top && (message.starts_with("invalid type") || message.starts_with("invalid length")) {
+        return "the scene must be a JSON object (`{\"mesh\": …, \"view\": …}`)".into();
+    }
+    if message == "trailing characters" && !top {
+        return "holds more elements than it takes (an [x, y, z] takes three)".into();
+    }
+    if message == "expected value" && !top {
+        return match enum_names(text, key) {
+            Some(names) => format!("has the wrong type: expected {names}"),
+            None => "has the wrong type (see docs/scene.md)".into(),
+        };
+    }
+    if let Some(rest) = message.strip_prefix("invalid length ") {
+        if rest.contains("expected struct") {
+            return "must be a JSON object (`{…}`), not an array".into();
+        }
+        // "invalid length 4, expected an array of length 3" / "… expected 3 elements in
+        // sequence": a vector with the wrong number of elements.
+        if let Some((n, wanted)) = rest.split_once(", expected ") {
+            let m: String = wanted.chars().filter(char::is_ascii_digit).collect();
+            if !m.is_empty() {
+                return format!("holds {n} elements; it takes {m}");
+            }
+        }
+    }
+    let mut out = message.to_string();
+    for (rust, json) in [
+        ("expected u8", "expected a whole number ≥ 0"),
+        ("expected u16", "expected a whole number ≥ 0"),
+        ("expected u32", "expected a whole number ≥ 0"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected i32", "expected a whole number"),
+        ("expected i64", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected a boolean", "expected true or false"),
+    ] {
+        if let Some(head) = out.strip_suffix(rust) {
+            out = format!("{head}{json}");
+        }
+    }
+    if let Some(i) = out.find("expected struct ") {
+        out = format!("{}expected a JSON object (`{{…}}`)", &out[..i]);
+    }
+    out
+}
+
+/// The names the enum at `key` takes, from serde's own message for an unknown name there
+/// (the scene parsed again with a string at `key`).
+fn enum_names(text: &str, key: &str) -> Option<String> {
+    let mut value: serde_json::Value = serde_json::from_str(text).ok()?;
+    let mut pointer = String::new();
+    for part in key.split('.') {
+        let (name, index) = match part.find('[') {
+            Some(i) => (&part[..i], Some(&part[i..])),
+            None => (part, None),
+        };
+        if !name.is_empty() {
+            pointer.push('/');
+            pointer.push_str(name);
+        }
+        for k in index.into_iter().flat_map(|s| s.split(['[', ']'])).filter(|s| !s.is_empty()) {
+            pointer.push('/');
+            pointer.push_str(k);
+        }
+    }
+    *value.pointer_mut(&pointer)? = serde_json::Value::String("\u{1}".into());
+    let err = serde_path_to_error::deserialize::<_, Scene>(value).err()?;
+    let m = err.into_inner().to_string();
+    let i = m.find("expected ")?;
+    let names = &m[i + "expected ".len()..];
+    (m.contains("unknown variant")).then(|| strip_position(names))
+}
+
 /// serde_json appends " at line L column C"; the scene error carries the line itself.
 fn strip_position(s: &str) -> String {
     match s.rfind(" at line ") {
@@ -239,8 +319,9 @@ pub struct LoadedScene {
 impl LoadedScene {
     /// Reads and checks a scene file.
     pub fn read(path: &Path) -> Result<LoadedScene> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+        // Refused unread when it is a FIFO, a device or a directory, or too big.
+        let text =
+            crate::output::read_bounded_text(path, crate::limits::MAX_SCENE_BYTES, "a scene file")?;
         let scene = Scene::from_str(&text, path)?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(LoadedScene { path: path.to_path_buf(), scene, base })

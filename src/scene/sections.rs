@@ -399,6 +399,19 @@ impl ViewSection {
         let eye = finite3("eye", &self.eye)?;
         let target = finite3("target", &self.target)?;
         let up = finite3("up", &self.up)?;
+        for (key, v) in [("eye", &self.eye), ("target", &self.target), ("up", &self.up)] {
+            if let Some(c) = v.iter().find(|c| c.abs() > crate::limits::MAX_COORDINATE) {
+                return Err(Error::setting(
+                    key,
+                    format!(
+                        "{} is beyond ±{:e} (limits::MAX_COORDINATE, the largest coordinate a \
+                         part may have)",
+                        crate::error::fmt_num(*c),
+                        crate::limits::MAX_COORDINATE
+                    ),
+                ));
+            }
+        }
         // The preview camera's own check, so what the scene accepts the renderer accepts
         // (e.g. its field of view is at most 179°, the limit of its projection).
         let camera = crate::render::Camera { eye, target, up, fov_deg: self.fov_deg };

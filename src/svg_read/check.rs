@@ -7,7 +7,7 @@ use std::path::Path;
 use std::str::FromStr;
 
 use super::{describe_element, parse_error};
-use crate::limits::MAX_SVG_NUMBER;
+use crate::limits::{MAX_SVG_DEPTH, MAX_SVG_ELEMENTS, MAX_SVG_NUMBER, MAX_SVG_SELECTOR_WORK};
 use crate::Result;
 
 /// The number attributes of the shape elements.
@@ -15,13 +15,15 @@ const NUMBER_ATTRIBUTES: [&str; 13] =
     ["x", "y", "width", "height", "rx", "ry", "cx", "cy", "r", "x1", "y1", "x2", "y2"];
 
 /// Checks every element's `transform` and every shape's coordinates (`d`, `points`, the number
-/// attributes).
+/// attributes), after the document's size ([`check_budgets`]).
 pub(super) fn check_elements(doc: &usvg::roxmltree::Document, name: &Path) -> Result<()> {
+    check_budgets(doc, name)?;
     let root = doc.root_element();
     for node in doc.descendants().filter(|n| n.is_element() && *n != root) {
         let tag = node.tag_name().name();
-        let line = doc.text_pos_at(node.range().start).row as usize;
+        // The line only for a message: `text_pos_at` scans the text from its start.
         let at = |message: String| {
+            let line = doc.text_pos_at(node.range().start).row as usize;
             parse_error(name, line, format!("{}: {message}", describe_element(&node, tag, line)))
         };
         if let Some(v) = node.attribute("transform") {
@@ -119,4 +121,120 @@ fn syntax_error(d: &str, e: &svgtypes::Error) -> String {
     format!(
         "syntax error in its path data (d): {e}{context}; SVG would draw the path only up to it"
     )
+}
+
+/// Refuses, before usvg reads it, a document of more than [`MAX_SVG_ELEMENTS`] elements,
+/// nested deeper than [`MAX_SVG_DEPTH`], or whose `<style>` sheets would take more than
+/// [`MAX_SVG_SELECTOR_WORK`] steps to match: a selector of k descendant (or `~` sibling)
+/// combinators is matched by trying the ancestors (or earlier siblings) of each element in
+/// every combination, up to Σ_{j ≤ k} C(D + 1, j) for a depth D, so a 395-byte selector took
+/// seconds.
+/// Each error names the file and the line of the element at fault.
+fn check_budgets(doc: &usvg::roxmltree::Document, name: &Path) -> Result<()> {
+    let line_of = |n: &usvg::roxmltree::Node| doc.text_pos_at(n.range().start).row as usize;
+    let mut elements = 0usize;
+    let mut deepest = 0usize;
+    let mut widest = 0usize;
+    for node in doc.descendants().filter(|n| n.is_element()) {
+        elements += 1;
+        if elements > MAX_SVG_ELEMENTS {
+            return Err(parse_error(
+                name,
+                line_of(&node),
+                format!(
+                    "more than {MAX_SVG_ELEMENTS} elements (limits::MAX_SVG_ELEMENTS); simplify \
+                     the drawing"
+                ),
+            ));
+        }
+        let depth = node.ancestors().skip(1).filter(|a| a.is_element()).count();
+        if depth > MAX_SVG_DEPTH {
+            return Err(parse_error(
+                name,
+                line_of(&node),
+                format!(
+                    "elements nested {depth} deep, deeper than {MAX_SVG_DEPTH} \
+                     (limits::MAX_SVG_DEPTH)"
+                ),
+            ));
+        }
+        deepest = deepest.max(depth);
+        widest = widest.max(node.children().filter(|c| c.is_element()).count());
+    }
+    let (deepest, widest) = (deepest as f64, widest as f64);
+    for style in doc.descendants().filter(|n| n.is_element() && n.tag_name().name() == "style") {
+        let css: String = style.children().filter_map(|c| c.text()).collect();
+        let work: f64 = selectors(&css)
+            .map(|(d, w)| {
+                let n = elements as f64;
+                n * chains(deepest + 1.0, d as f64) * chains(widest + 1.0, w as f64)
+            })
+            .sum();
+        if work > MAX_SVG_SELECTOR_WORK {
+            return Err(parse_error(
+                name,
+                line_of(&style),
+                format!(
+                    "its style sheet's selectors would take about {work:.1e} steps to match on \
+                     {elements} elements, beyond {MAX_SVG_SELECTOR_WORK:.0e} \
+                     (limits::MAX_SVG_SELECTOR_WORK); use fewer combinators per selector"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Per selector of a style sheet, its backtracking combinators: (descendant, general sibling
+/// `~`). The child `>` and adjacent `+` combinators try one element each.
+fn selectors(css: &str) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let mut rest = css;
+    std::iter::from_fn(move || {
+        // The text before each `{` (after the last `}`) is a selector list; comments and
+        // at-rules' blocks are counted as selectors too (an over-estimate, never an under-).
+        let open = rest.find('{')?;
+        let head = &rest[..open];
+        let head = head.rfind('}').map_or(head, |i| &head[i + 1..]);
+        rest = rest[open + 1..].find('}').map_or("", |i| &rest[open + 1 + i + 1..]);
+        Some(head.split(',').map(combinators).collect::<Vec<_>>())
+    })
+    .flatten()
+}
+
+/// The backtracking combinators of one selector: (descendant, general sibling).
+fn combinators(selector: &str) -> (usize, usize) {
+    let spaced = selector.replace('>', " > ").replace('+', " + ").replace('~', " ~ ");
+    let (mut descendant, mut sibling) = (0, 0);
+    let mut previous_compound = false;
+    for token in spaced.split_whitespace() {
+        match token {
+            "~" => {
+                sibling += 1;
+                previous_compound = false;
+            }
+            ">" | "+" => previous_compound = false,
+            _ => {
+                if previous_compound {
+                    descendant += 1;
+                }
+                previous_compound = true;
+            }
+        }
+    }
+    (descendant, sibling)
+}
+
+/// The partial matches a backtracking matcher may try for k combinators over n candidates:
+/// Σ_{j ≤ k} C(n, j) (all 2ⁿ when k ≥ n: a selector longer than the nesting still tries
+/// every prefix before it fails), in floating point.
+fn chains(n: f64, k: f64) -> f64 {
+    let mut c = 1.0;
+    let mut sum = 1.0;
+    let mut i = 0.0;
+    while i < k.min(n) {
+        c = c * (n - i) / (i + 1.0);
+        sum += c;
+        i += 1.0;
+    }
+    sum
 }

@@ -164,6 +164,16 @@ impl GcodeOptions {
         let (k, u) = (self.units.in_mm(), self.units.as_str());
         for (key, v) in [("gcode.feed", self.feed), ("gcode.plunge_feed", self.plunge_feed)] {
             positive(key, v)?;
+            if v * k > MAX_FEED_MM_MIN {
+                return Err(ToolpathError::Gcode {
+                    key,
+                    message: format!(
+                        "{} {u}/min is over {} mm/min, faster than any machine moves",
+                        short(v),
+                        short(MAX_FEED_MM_MIN)
+                    ),
+                });
+            }
             if rounded(v * k, FEED_DECIMALS) <= 0.0 {
                 return Err(ToolpathError::Gcode {
                     key,
@@ -179,19 +189,24 @@ impl GcodeOptions {
         }
         if let Some(r) = self.rapid_rate_mm_min {
             positive("gcode.rapid_rate_mm_min", r)?;
-            if rounded(r, FEED_DECIMALS) <= 0.0 {
+            // Below 0.1 the rate used to be rounded up to 0.1 in silence.
+            if !(MIN_RAPID_MM_MIN..=MAX_FEED_MM_MIN).contains(&r) {
                 return Err(ToolpathError::Gcode {
                     key: "gcode.rapid_rate_mm_min",
                     message: format!(
-                        "{} mm/min rounds to 0 (the rate is taken in mm/min with \
-                         {FEED_DECIMALS} decimal); use at least 0.1",
-                        short(r)
+                        "{} mm/min is outside [{MIN_RAPID_MM_MIN}, {}] mm/min (the rate is \
+                         taken in mm/min with {FEED_DECIMALS} decimal)",
+                        short(r),
+                        short(MAX_FEED_MM_MIN)
                     ),
                 });
             }
         }
         finite("gcode.safe_z", self.safe_z)?;
+        crate::budget::lead_length("gcode.safe_z", self.safe_z.abs())
+            .map_err(|_| out_of_reach("gcode.safe_z", self.safe_z))?;
         positive("gcode.clearance", self.clearance)?;
+        crate::budget::lead_length("gcode.clearance", self.clearance)?;
         match &self.spindle {
             Spindle::None => {}
             Spindle::Speed(s) => {
@@ -222,6 +237,10 @@ impl GcodeOptions {
             for k in 0..3 {
                 finite("gcode.envelope.min", e.min[k])?;
                 finite("gcode.envelope.max", e.max[k])?;
+                for (key, v) in [("gcode.envelope.min", e.min[k]), ("gcode.envelope.max", e.max[k])]
+                {
+                    crate::budget::lead_length(key, v.abs()).map_err(|_| out_of_reach(key, v))?;
+                }
                 if e.min[k] > e.max[k] {
                     return Err(ToolpathError::InvalidOption {
                         name: "gcode.envelope",
@@ -233,6 +252,8 @@ impl GcodeOptions {
         }
         if let Some(z) = self.z_floor {
             finite("gcode.z_floor", z)?;
+            crate::budget::lead_length("gcode.z_floor", z.abs())
+                .map_err(|_| out_of_reach("gcode.z_floor", z))?;
         }
         Ok(())
     }
@@ -456,6 +477,25 @@ fn build_rotary(plan: &Plan, o: &GcodeOptions, f: &Fixture) -> Result<Program> {
         passes.push((pass.stroke, moves));
     }
     Ok(Program { blend, safe_z, passes, rotary: true })
+}
+
+/// Smallest `gcode.rapid_rate_mm_min`: 0.1 mm/min, the smallest rate printed with one
+/// decimal (a smaller one is refused, not rounded up).
+pub const MIN_RAPID_MM_MIN: f64 = 0.1;
+
+/// Largest feed, plunge feed and rapid rate: 10⁶ mm/min (1 km/min), beyond any machine.
+pub const MAX_FEED_MM_MIN: f64 = 1e6;
+
+/// The error of a coordinate option (`gcode.safe_z`, …) beyond ±[`crate::budget::MAX_LEAD_LENGTH`].
+fn out_of_reach(key: &'static str, v: f64) -> ToolpathError {
+    ToolpathError::Gcode {
+        key,
+        message: format!(
+            "{} is beyond ±{} scene units (budget::MAX_LEAD_LENGTH), outside any machine's travel",
+            short(v),
+            short(crate::budget::MAX_LEAD_LENGTH)
+        ),
+    }
 }
 
 /// Rapid rate (mm/min) when [`GcodeOptions::rapid_rate_mm_min`] is not set: a modest hobby or

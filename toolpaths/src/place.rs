@@ -144,6 +144,14 @@ impl PlacementOptions {
     /// Reject NaN and out-of-range values with a clear error.
     pub fn validate(&self) -> Result<()> {
         positive("placement.width", self.width)?;
+        // At most budget::MAX_LEAD_LENGTH (written out: budget uses this file).
+        if self.width > 1e6 {
+            return Err(ToolpathError::InvalidOption {
+                name: "placement.width",
+                value: self.width,
+                reason: "must be in (0, 1e6] scene units (budget::MAX_LEAD_LENGTH)",
+            });
+        }
         in_range("placement.overlap", self.overlap, 0.0, 1.0, "must be in [0, 1)")?;
         positive("placement.test_ratio", self.test_ratio)?;
         if self.test_ratio > 1.0 {

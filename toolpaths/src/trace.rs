@@ -72,6 +72,13 @@ impl TraceOptions {
         positive("placement.trace.min_step", self.min_step)?;
         positive("placement.trace.max_length", self.max_length)?;
         non_negative("placement.trace.exclusion_radius", self.exclusion_radius)?;
+        if self.max_steps == 0 {
+            return Err(ToolpathError::InvalidOption {
+                name: "placement.trace.max_steps",
+                value: 0.0,
+                reason: "must be at least 1 (0 traces no stroke)",
+            });
+        }
         if self.min_step > self.max_step {
             // Blame the one that was moved: min_step when it is not its default.
             return Err(if self.min_step != Self::default().min_step {

@@ -427,6 +427,13 @@ impl Session {
             }
             Change::Commit(e) => {
                 self.check_edit(&e)?;
+                let max = crate::limits::MAX_EDITS;
+                if st.edits.len() >= max {
+                    return Err(Error::setting(
+                        "edits",
+                        format!("the scene already has {max} edits, the most it may have"),
+                    ));
+                }
                 let before = (st.edits.clone(), st.light);
                 st.undo.push(before);
                 if st.undo.len() > UNDO_DEPTH {
