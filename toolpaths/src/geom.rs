@@ -175,6 +175,17 @@ impl Metric {
     }
 }
 
+/// Euclidean distance in the plane from `p` to the segment `[a, b]` (a point when `a == b`).
+///
+/// The plane distance (no metric) of both crates: the toolpaths' part-edge test and grainline's
+/// strokes read back in UV (`uvfield`) measure with it.
+pub fn segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f64 {
+    let (ab, ap) = (sub(b, a), sub(p, a));
+    let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if l2 > 0.0 { ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
+}
+
 /// Distance from `p` to the segment `[a, b]` measured with metric `m`.
 pub(crate) fn point_segment_distance(m: &Metric, p: Vec2, a: Vec2, b: Vec2) -> f64 {
     let ab = sub(b, a);
