@@ -71,6 +71,14 @@ pub(crate) fn dot3(a: Vec3, b: Vec3) -> f64 {
 pub(crate) fn norm3(a: Vec3) -> f64 {
     dot3(a, a).sqrt()
 }
+/// The closest point to `p` on the segment `[a, b]` in space, with its parameter in `[0, 1]`
+/// along the segment (0 when `a == b`).
+pub(crate) fn segment_foot3(p: Vec3, a: Vec3, b: Vec3) -> (f64, Vec3) {
+    let ab = sub3(b, a);
+    let l2 = dot3(ab, ab);
+    let t = if l2 > 0.0 { (dot3(sub3(p, a), ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (t, [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]])
+}
 pub(crate) fn cross3(a: Vec3, b: Vec3) -> Vec3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
