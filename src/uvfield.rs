@@ -32,7 +32,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use grainline_toolpaths::{Directions, FieldMesh, Metric, Placement, SeamPair};
+use grainline_toolpaths::{segment_distance, Directions, FieldMesh, Metric, Placement, SeamPair};
 use nalgebra::{Matrix2, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -565,7 +565,7 @@ impl SegmentGrid {
                     }
                     for &s in &self.cells[j as usize * self.nx + i as usize] {
                         let (a, b) = self.segs[s as usize];
-                        let d = point_segment(p, a, b);
+                        let d = segment_distance(p, a, b);
                         // Ties go to the lower index, so the result is deterministic.
                         if best.is_none_or(|(bs, bd)| d < bd || (d == bd && (s as usize) < bs)) {
                             best = Some((s as usize, d));
@@ -582,14 +582,6 @@ impl SegmentGrid {
         }
         best
     }
-}
-
-fn point_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let ab = [b[0] - a[0], b[1] - a[1]];
-    let ap = [p[0] - a[0], p[1] - a[1]];
-    let l2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if l2 > 0.0 { ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
 }
 
 /// Rebuilds the grain from placed strokes and compares it with the designed field.

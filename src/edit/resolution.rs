@@ -40,6 +40,7 @@ use super::curve::read_svg_polylines;
 use super::support::Centre;
 use super::warp::{finest_scale, WarpKind};
 use super::{at_edit, Edit};
+use crate::geometry::cells::SegmentCells;
 use crate::highlight::lighting::half_vector;
 use crate::highlight::Lighting;
 use crate::mesh::Mesh;
@@ -263,9 +264,8 @@ pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Resolut
 #[derive(Clone, Debug)]
 struct SegmentGrid {
     segments: Vec<[Vector3<f64>; 2]>,
-    origin: Vector3<f64>,
-    cell: f64,
-    cells: std::collections::HashMap<[i64; 3], Vec<u32>>,
+    /// None below [`SegmentGrid::SCAN`] segments or when no cell size fits.
+    cells: Option<SegmentCells>,
 }
 
 impl SegmentGrid {
@@ -286,42 +286,28 @@ impl SegmentGrid {
             }
         }
         let (lo, hi) = bounds(segments.iter().flatten());
-        let mut grid =
-            SegmentGrid { segments, origin: lo, cell: f64::INFINITY, cells: Default::default() };
-        if grid.segments.len() <= Self::SCAN || !(lo.x <= hi.x) {
-            return grid;
+        if segments.len() <= Self::SCAN || !(lo.x <= hi.x) {
+            return SegmentGrid { segments, cells: None };
         }
         let cell = reach.max((hi - lo).max() / Self::MAX_CELLS);
         if !(cell.is_finite() && cell > 0.0) {
-            return grid;
+            return SegmentGrid { segments, cells: None };
         }
-        grid.cell = cell;
-        for (k, [a, b]) in grid.segments.iter().enumerate() {
-            let n = ((b - a).norm() / (0.5 * cell)).ceil().max(1.0) as usize;
-            for j in 0..=n {
-                let key = grid.key(&(a + (b - a) * (j as f64 / n as f64)));
-                let bucket = grid.cells.entry(key).or_default();
-                if bucket.last() != Some(&(k as u32)) {
-                    bucket.push(k as u32);
-                }
-            }
+        let mut cells = SegmentCells::new(lo, cell);
+        for (k, [a, b]) in segments.iter().enumerate() {
+            cells.insert_along(k as u32, a, b);
         }
-        grid
-    }
-
-    fn key(&self, p: &Vector3<f64>) -> [i64; 3] {
-        let q = (p - self.origin) / self.cell;
-        [q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64]
+        SegmentGrid { segments, cells: Some(cells) }
     }
 
     /// Whether `p` is within `d` of a segment.
     fn within(&self, p: &Vector3<f64>, d: f64) -> bool {
         let near = |k: usize| segment_distance(p, &self.segments[k]) <= d;
-        if !self.cell.is_finite() {
+        let Some(cells) = &self.cells else {
             return (0..self.segments.len()).any(near);
-        }
-        let slack = Vector3::repeat(d + 0.25 * self.cell);
-        let (lo, hi) = (self.key(&(p - slack)), self.key(&(p + slack)));
+        };
+        let slack = Vector3::repeat(d + 0.25 * cells.cell());
+        let (lo, hi) = (cells.key(&(p - slack)), cells.key(&(p + slack)));
         let span: f64 = (0..3).map(|i| (hi[i] - lo[i] + 1) as f64).product();
         if !(span <= self.segments.len() as f64) {
             return (0..self.segments.len()).any(near);
@@ -329,10 +315,8 @@ impl SegmentGrid {
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    if let Some(b) = self.cells.get(&[x, y, z]) {
-                        if b.iter().any(|&k| near(k as usize)) {
-                            return true;
-                        }
+                    if cells.get(&[x, y, z]).iter().any(|&k| near(k as usize)) {
+                        return true;
                     }
                 }
             }

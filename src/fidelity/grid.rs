@@ -1,11 +1,10 @@
 //! Spatial queries for the fidelity measure: nearest segments (a sparse grid of 3D cells) and
 //! point-in-triangle tests for planar triangles (a dense grid of 2D cells).
 
-use std::collections::HashMap;
-
 use nalgebra::{Vector2, Vector3};
 
 use crate::edit::support::barycentric;
+use crate::geometry::cells::SegmentCells;
 
 /// Nearest-segment queries: segments bucketed in a sparse uniform grid.
 pub(super) struct SegmentGrid {
@@ -13,8 +12,8 @@ pub(super) struct SegmentGrid {
     /// Per segment, the unit normal of the face it lies on (distances are then measured in
     /// that face's plane, leaving out the offset along the normal), or zero (in space).
     normals: Vec<Vector3<f64>>,
-    cell: f64,
-    cells: HashMap<[i64; 3], Vec<u32>>,
+    /// Each segment under every cell its box meets, counted from the origin.
+    cells: SegmentCells,
     /// Rings of cells [`SegmentGrid::nearest`] visits past the one that settles the distance:
     /// one when distances are measured in the faces' planes (they can be a little shorter).
     slack: f64,
@@ -35,26 +34,13 @@ impl SegmentGrid {
             segs.iter().map(|s| (s[1] - s[0]).norm()).sum::<f64>() / segs.len() as f64
         };
         let cell = (2.0 * mean).max(reach / 32.0).max(1e-12);
-        let mut cells: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        let mut cells = SegmentCells::new(Vector3::zeros(), cell);
         for (k, s) in segs.iter().enumerate() {
-            let (lo, hi) = (key(&s[0].inf(&s[1]), cell), key(&s[0].sup(&s[1]), cell));
-            for i in lo[0]..=hi[0] {
-                for j in lo[1]..=hi[1] {
-                    for l in lo[2]..=hi[2] {
-                        cells.entry([i, j, l]).or_default().push(k as u32);
-                    }
-                }
-            }
+            cells.insert_box(k as u32, &s[0], &s[1]);
         }
         let normals = vec![Vector3::zeros(); segs.len()];
-        let mut bounds = [[i64::MAX; 3], [i64::MIN; 3]];
-        for k in cells.keys() {
-            for i in 0..3 {
-                bounds[0][i] = bounds[0][i].min(k[i]);
-                bounds[1][i] = bounds[1][i].max(k[i]);
-            }
-        }
-        SegmentGrid { segs, normals, cell, cells, slack: 0.0, bounds }
+        let bounds = cells.occupied();
+        SegmentGrid { segs, normals, cells, slack: 0.0, bounds }
     }
 
     /// A grid whose distances are measured in the plane of each segment's face (`normals`, one
@@ -77,9 +63,9 @@ impl SegmentGrid {
         if self.segs.is_empty() {
             return cap;
         }
-        let c = key(p, self.cell);
+        let (c, cell) = (self.cells.key(p), self.cells.cell());
         let mut best = cap;
-        let rings = (cap / self.cell).ceil().max(1.0) as i64 + 1;
+        let rings = (cap / cell).ceil().max(1.0) as i64 + 1;
         // The offsets from c along axis `a` that reach an occupied cell, within `ring`.
         let [lo, hi] = self.bounds;
         let range = |a: usize, ring: i64| {
@@ -93,10 +79,7 @@ impl SegmentGrid {
                         if i.abs().max(j.abs()).max(l.abs()) != ring {
                             continue;
                         }
-                        let Some(list) = self.cells.get(&[c[0] + i, c[1] + j, c[2] + l]) else {
-                            continue;
-                        };
-                        for &k in list {
+                        for &k in self.cells.get(&[c[0] + i, c[1] + j, c[2] + l]) {
                             let s = &self.segs[k as usize];
                             let n = &self.normals[k as usize];
                             let q = p - n * (p - s[0]).dot(n);
@@ -107,24 +90,12 @@ impl SegmentGrid {
             }
             // Every cell of a later ring is at least ring·cell away from p (one ring more when
             // distances are measured in the faces' planes, which can be a little shorter).
-            if best <= (ring as f64 - self.slack) * self.cell {
+            if best <= (ring as f64 - self.slack) * cell {
                 break;
             }
         }
         best
     }
-}
-
-fn key(p: &Vector3<f64>, cell: f64) -> [i64; 3] {
-    p.map(|x| {
-        let c = (x / cell).floor();
-        if c.is_finite() {
-            c.clamp(-1e15, 1e15) as i64
-        } else {
-            0
-        }
-    })
-    .into()
 }
 
 pub(super) fn point_segment_distance(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {

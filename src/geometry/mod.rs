@@ -6,6 +6,7 @@
 //! eigenvalues of −W (positive on a sphere with outward normals).
 
 pub mod areas;
+pub(crate) mod cells;
 pub mod connection;
 pub mod curvature;
 pub mod frames;

@@ -71,6 +71,14 @@ pub(crate) fn dot3(a: Vec3, b: Vec3) -> f64 {
 pub(crate) fn norm3(a: Vec3) -> f64 {
     dot3(a, a).sqrt()
 }
+/// The closest point to `p` on the segment `[a, b]` in space, with its parameter in `[0, 1]`
+/// along the segment (0 when `a == b`).
+pub(crate) fn segment_foot3(p: Vec3, a: Vec3, b: Vec3) -> (f64, Vec3) {
+    let ab = sub3(b, a);
+    let l2 = dot3(ab, ab);
+    let t = if l2 > 0.0 { (dot3(sub3(p, a), ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (t, [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]])
+}
 pub(crate) fn cross3(a: Vec3, b: Vec3) -> Vec3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
@@ -173,6 +181,17 @@ impl Metric {
             && self.g > 0.0
             && self.e * self.g - self.f * self.f > 0.0
     }
+}
+
+/// Euclidean distance in the plane from `p` to the segment `[a, b]` (a point when `a == b`).
+///
+/// The plane distance (no metric) of both crates: the toolpaths' part-edge test and grainline's
+/// strokes read back in UV (`uvfield`) measure with it.
+pub fn segment_distance(p: Vec2, a: Vec2, b: Vec2) -> f64 {
+    let (ab, ap) = (sub(b, a), sub(p, a));
+    let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if l2 > 0.0 { ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
+    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
 }
 
 /// Distance from `p` to the segment `[a, b]` measured with metric `m`.

@@ -91,7 +91,7 @@ pub use gcode::{
     check_safety, cycle_time, write_gcode, CycleTime, Dialect, Envelope, GcodeOptions, LengthUnit,
     Spindle, DEFAULT_RAPID_MM_MIN,
 };
-pub use geom::{Metric, Vec2, Vec3};
+pub use geom::{segment_distance, Metric, Vec2, Vec3};
 pub use job::{generate, JobOptions, JobOutput, LENGTH_DEFAULTS_MM};
 pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};
 pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};

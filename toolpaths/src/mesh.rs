@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, ToolpathError};
-use crate::geom::{barycentric, cross, sub, Metric, Vec2, Vec3};
+use crate::geom::{barycentric, cross, segment_distance, sub, Metric, Vec2, Vec3};
 use crate::grid::FaceGrid;
 pub use crate::input::{Directions, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
 use crate::topology::{build_adjacency, build_metric, build_seams};
@@ -301,14 +301,7 @@ impl Domain {
     pub(crate) fn on_part_edge(&self, f: u32, p: Vec2) -> bool {
         let c = self.corners(f);
         let nb = self.neighbors[f as usize];
-        let dist = |i: usize| {
-            let (a, b) = (c[(i + 1) % 3], c[(i + 2) % 3]);
-            let (ab, ap) = (sub(b, a), sub(p, a));
-            let l2 = ab[0] * ab[0] + ab[1] * ab[1];
-            let t =
-                if l2 > 0.0 { ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0) } else { 0.0 };
-            (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
-        };
+        let dist = |i: usize| segment_distance(p, c[(i + 1) % 3], c[(i + 2) % 3]);
         let edge = (0..3).filter(|&i| nb[i] == NONE).min_by(|&i, &j| dist(i).total_cmp(&dist(j)));
         edge.is_some_and(|i| !self.seams.contains_key(&(f, i as u8)))
     }

@@ -22,7 +22,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::geom::{dot3, norm3, point_segment_distance, sub3, Metric, Vec2, Vec3};
+use crate::geom::{dot3, norm3, point_segment_distance, segment_foot3, sub3, Metric, Vec2, Vec3};
 use crate::grid::Grid3;
 use crate::locate::barycentric;
 use crate::mesh::Domain;
@@ -126,14 +126,6 @@ pub(crate) fn probe(dom: &Domain, spacing: Spacing, p: Vec2, f: u32) -> Probe {
     } else {
         Probe { uv: p, chart, m, x: [p[0], p[1], 0.0], n: [0.0; 3] }
     }
-}
-
-/// Closest point to `p` on the segment `[a, b]` (3D).
-fn foot3(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
-    let ab = sub3(b, a);
-    let l2 = dot3(ab, ab);
-    let t = if l2 > 0.0 { (dot3(sub3(p, a), ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
-    [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]]
 }
 
 /// Eq. S1: surface distance from the chord `x → y` and the normals at both ends.
@@ -262,7 +254,7 @@ impl StrokeIndex {
             let mut bc = c;
             for (flag, j) in [(LINK_NEXT, i + 1), (LINK_PREV, i.wrapping_sub(1))] {
                 if self.link[i] & flag != 0 {
-                    let f = foot3(q.x, y, self.pos[j]);
+                    let (_, f) = segment_foot3(q.x, y, self.pos[j]);
                     let d = norm3(sub3(f, q.x));
                     if d < bc {
                         (bc, best) = (d, f);

@@ -50,7 +50,7 @@ use std::collections::HashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{positive, Result, ToolpathError};
-use crate::geom::{cross3, dot3, norm3, sub3, Vec2, Vec3};
+use crate::geom::{cross3, dot3, norm3, segment_foot3, sub3, Vec2, Vec3};
 use crate::locate::barycentric;
 use crate::mesh::Domain;
 use crate::place::Placement;
@@ -521,11 +521,7 @@ fn neighbours(
                     }
                     let l = &strokes[si as usize];
                     let (a, b) = (l.x[i as usize], l.x[i as usize + 1]);
-                    let ab = sub3(b, a);
-                    let l2 = dot3(ab, ab);
-                    let tt =
-                        if l2 > 0.0 { (dot3(sub3(p, a), ab) / l2).clamp(0.0, 1.0) } else { 0.0 };
-                    let foot = [0, 1, 2].map(|j| a[j] + tt * ab[j]);
+                    let (tt, foot) = segment_foot3(p, a, b);
                     let off = sub3(foot, p);
                     let d = norm3(off);
                     if !(d > 0.0 && d <= radius) {
@@ -542,7 +538,7 @@ fn neighbours(
                     }
                     // A foot within `trim` of the neighbour's open ends does not count (the
                     // ends are left out of the neighbour's own figures too).
-                    let s_foot = l.s[i as usize] + tt * l2.sqrt();
+                    let s_foot = l.s[i as usize] + tt * norm3(sub3(b, a));
                     let at_end = !l.closed && (s_foot <= trim || s_foot >= l.len() - trim);
                     let side = usize::from(side_dot < 0.0);
                     let cand = (d, si, i, at_end);
