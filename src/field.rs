@@ -201,6 +201,10 @@ pub struct FieldFile {
     /// split; vertices after these are the refinement's (`mesh.refine`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub patch_copies: Option<Vec<u32>>,
+    /// The surfaces a CAD part was read as (`mesh.surfaces`; docs/formats.md, "Recognized
+    /// surfaces"). Absent when none was recognized.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surfaces: Option<crate::geometry::surfaces::SurfaceReport>,
 }
 
 /// A short name for an initial field.
@@ -284,6 +288,7 @@ impl FieldFile {
             phi: None,
             target_ell: None,
             patch_copies: None,
+            surfaces: None,
         };
         file.check_finite()?;
         Ok(file)

@@ -221,6 +221,7 @@ pub fn optimized_field_file(p: &Prepared, o: &Optimized) -> Result<FieldFile> {
     file.phi = Some(o.phi.clone());
     file.target_ell = Some(o.target_ell.iter().map(|t| t.as_ref().map(arr)).collect());
     file.patch_copies = p.patches.as_ref().map(|r| r.copies_of.clone());
+    file.surfaces = p.surfaces.as_ref().map(|r| r.report.clone());
     file.check_finite()?;
     Ok(file)
 }

@@ -442,6 +442,7 @@ fn recognize_surfaces(s: &LoadedScene, mesh: &Mesh) -> Option<crate::geometry::s
 pub fn initial_field_file(p: &Prepared) -> Result<crate::field::FieldFile> {
     let mut file = crate::field::FieldFile::new(&p.mesh, &p.mesh_name, &p.field_options, &p.field)?;
     file.patch_copies = p.patches.as_ref().map(|r| r.copies_of.clone());
+    file.surfaces = p.surfaces.as_ref().map(|r| r.report.clone());
     Ok(file)
 }
 

@@ -77,7 +77,7 @@ pub const SEED_TRIES: usize = 4;
 pub const NO_SURFACE: u32 = u32::MAX;
 
 /// One recognized surface.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Surface {
     /// The primitive and its parameters.
     pub primitive: Primitive,
@@ -541,7 +541,7 @@ fn face_normals_at(mesh: &Mesh) -> Vec<V3> {
 }
 
 /// The surfaces of a part as `grainline inspect`, FIELD.json and the run report give them.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SurfaceReport {
     /// The distance within which a vertex counted as on a surface (scene units).
     pub tolerance: f64,
@@ -556,7 +556,7 @@ pub struct SurfaceReport {
 }
 
 /// Where two recognized surfaces meet at a crease.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CreaseReport {
     /// The two surfaces.
     pub surfaces: [u32; 2],

@@ -43,7 +43,7 @@ impl SurfaceKind {
 }
 
 /// An analytic surface with its parameters (directions are unit vectors).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Primitive {
     /// The plane `n · p = offset`.
