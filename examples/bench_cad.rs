@@ -8,6 +8,7 @@
 //!
 //! ```text
 //! cargo run --release --example bench_cad [-- --stl FILE UNITS]...
+//! BENCH_SURFACES=off cargo run --release --example bench_cad   # the facets as they are
 //! ```
 //!
 //! Parts: ../shared/meshes/cad (`GRAINLINE_SHARED` overrides ../shared), the parts of
@@ -120,8 +121,10 @@ fn stage(report: &serde_json::Value, name: &str) -> f64 {
 }
 
 fn base_scene(part: &Part, d: f64, eye: P, target: P, light: P) -> serde_json::Value {
+    // `BENCH_SURFACES=off` reads the facets as they are (`mesh.surfaces: "off"`), to compare.
+    let surfaces = std::env::var("BENCH_SURFACES").unwrap_or_else(|_| "recognize".into());
     serde_json::json!({
-        "mesh": {"path": part.stl, "allow_nonmanifold": true},
+        "mesh": {"path": part.stl, "allow_nonmanifold": true, "surfaces": surfaces},
         "units": part.units,
         "lights": [{"type": "directional", "direction": light}],
         "view": {"eye": eye, "target": target},
