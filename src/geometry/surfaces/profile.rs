@@ -127,17 +127,30 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
         let mut i = 0;
         while i < chain.len() {
             let mut best: Option<(usize, Primitive)> = None;
+            let link_regions = |l: &Link, merged: &[Option<Grown>]| -> Vec<u32> {
+                match l {
+                    Link::Band(k) => merged[*k].as_ref().map_or(vec![], |m| m.1.clone()),
+                    Link::Fan(f) => f.clone(),
+                }
+            };
+            // The run's regions, grown one link at a time; a link that lies on the surface
+            // the run already fits is taken without fitting again (the run stays linear in its
+            // regions), any other makes the run fitted afresh.
+            let mut regions: Vec<u32> = link_regions(&chain[i], &merged);
             for j in i + 1..chain.len() {
                 let run = &chain[i..=j];
                 let bands = run.iter().filter(|l| matches!(l, Link::Band(_))).count();
                 let rings = bands + 1 + (run.len() - bands);
-                let regions: Vec<u32> = run
-                    .iter()
-                    .flat_map(|l| match l {
-                        Link::Band(k) => merged[*k].as_ref().map_or(vec![], |m| m.1.clone()),
-                        Link::Fan(f) => f.clone(),
-                    })
-                    .collect();
+                let next = link_regions(&chain[j], &merged);
+                let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
+                let on = best.as_ref().is_some_and(|(_, p)| {
+                    next.iter().all(|&r| region_on(g, mesh, r, p, tol, spread))
+                });
+                regions.extend(next);
+                if on {
+                    best = best.map(|(_, p)| (j, p));
+                    continue;
+                }
                 match profile_fit(g, mesh, &regions, tol, rings) {
                     Some(p) => best = Some((j, p)),
                     None if rings >= 4 => break,
