@@ -10,33 +10,38 @@
 //! within the file's rounding ([`Surfaces::tolerance`]):
 //!
 //! 1. **Seeds** are regions of at least two faces (a quad, not a scan's lone triangle), the
-//!    regular ones first: a strip whose two neighbours turn by the same angle (an inner strip
-//!    of a fillet, a band's trapezoid) before one at a surface's end.
-//! 2. **Growth** adds neighbouring regions across edges of at most [`MAX_STEP_DEG`], the
-//!    smoothest first. Until the set holds three regions any primitive through its vertices
-//!    is accepted (two strips of a cylinder fix it exactly); from then on a region joins only
-//!    if its vertices lie on the surface the set fixes and its chord faces it within
-//!    [`MAX_STEP_DEG`]; the surface is fitted again whenever the set has doubled.
-//! 3. **Kinds** are tried simplest first — cylinder, cone, sphere, torus — and a grown set is
-//!    kept when one passes through all its vertices and it holds at least three regions (so
-//!    that the fit is over-determined: three strips are four rulings, one more than a
-//!    cylinder needs).
-//! 4. **Bodies of revolution with a free profile** (a kettle, a vase) are meshed as bands that
-//!    are each exactly a cone: coaxial single-band cones and cylinders in a chain of three or
-//!    more whose profile turns by no more than the export's angular step (360° over the
-//!    trapezoids around) between bands are a free-form surface, not primitives, and are left
-//!    to the jet fit.
-//! 5. **Planes** are the remaining planar regions of at least two faces that are
+//!    regular ones first: a strip whose two neighbours, as wide as it, turn by the same angle
+//!    (an inner strip of a fillet, a band's trapezoid) before one at a surface's end; a seed
+//!    whose growth fails is tried again without the partner it took first ([`SEED_TRIES`]).
+//! 2. **Growth** (`grow.rs`) adds neighbouring quads across edges of at most [`MAX_STEP_DEG`],
+//!    those as wide as the seed and the smoothest first. Until three regions fix a cylinder or
+//!    a cone, any primitive through the set is accepted; then a region joins only if its
+//!    vertices lie on that surface and the surface's normal at each of them is within
+//!    [`MAX_CHORD_DEVIATION_DEG`] of the chord's. A growth is kept as a cylinder (three strips
+//!    or more) or a cone band that stands off its own plane by ten tolerances at least.
+//! 3. **Profiles** (`profile.rs`): coaxial bands in a chain, with a pole's fan as one more
+//!    profile point, become the sphere (three profile points or more) or the torus (four or
+//!    more) that passes through all their rings.
+//! 4. **Free forms**: a band's cone is exact on any turned surface, so coaxial surfaces that
+//!    meet at a turn neither tangent nor beyond the export's step are a free profile (a
+//!    kettle, a vase: all of a chain of three or more, each single band of a chain of two);
+//!    adjacent tangent surfaces of one kind and nearly one size are a free form (a dome's rows
+//!    of quads, each a cylinder within the rounding).
+//! 5. **Absorption**: regions on no surface (a pole's fan) join a neighbouring surface they
+//!    lie on.
+//! 6. **Planes** are the remaining planar regions of at least two faces that are
 //!    [`crate::mesh::planar::WIDER`] times wider than every unrecognized region they meet
 //!    smoothly (a face of the part, not a strip of a curved face the growth could not fix).
+//! 7. **Closure**: a small curved surface that unrecognized regions continue smoothly on more
+//!    than [`MAX_OPEN_SHARE`] of its rim is a coincidence of a free-form face, and is dropped.
 //!
 //! Two surfaces meet at a **crease** when their normals differ along the edge they share by
 //! more than [`G1_TOLERANCE_DEG`] ([`Surfaces::crease_between`]): a chamfer's 26.6° edge is a
 //! crease, a fillet meeting a plate tangentially is not, whatever the strips' angles.
 //!
-//! Limits: a surface meshed with fewer than three strips (a fillet exported at 45° chords) is
-//! not recognized; a crease between two bands of a turned part that turns by less than the
-//! export's angular step, inside a chain of three or more bands, is read as a free profile.
+//! Limits: a surface meshed with too few strips to over-determine it (a fillet exported at 45°
+//! chords, a torus of two strips) is not recognized; a crease between two bands of a turned
+//! part that turns by less than the export's angular step is read as a strip edge.
 
 mod fit;
 mod grow;
@@ -265,7 +270,7 @@ fn close_off(g: &grow::RegionGraph, grown: &[profile::Grown], region_surface: &m
     }
 }
 
-/// Module docs, step 5: the remaining planar regions that are faces of the part.
+/// Module docs, step 6: the remaining planar regions that are faces of the part.
 fn add_planes(
     g: &grow::RegionGraph,
     mesh: &Mesh,
