@@ -91,6 +91,7 @@ fn main() -> grainline::Result<()> {
         symmetry: options.symmetry,
         keep_map: false,
         keep_field_mesh: false,
+        surfaces: None,
     })?;
     let (job, uv) = (&traced.job, &traced.uv);
     println!(

@@ -3,6 +3,12 @@
 //! 0.1 % and its axis within 0.1°, at 10°, 15° and 30° chords, from float32 STL coordinates;
 //! every edge between two faces called a crease exactly when the faces' normals jump there.
 
+#[path = "support/cad_truth.rs"]
+mod cad_truth;
+#[path = "support/curved_truth.rs"]
+mod curved_truth;
+
+use curved_truth::may_be_unread;
 use grainline::generate::cad::{self, AnalyticFace, CadPart};
 use grainline::geometry::surfaces::{recognize, Primitive, Surfaces, NO_SURFACE};
 use grainline::mesh::Mesh;
@@ -36,29 +42,6 @@ fn axis_of(f: &AnalyticFace) -> Option<V3> {
         AnalyticFace::Cylinder { axis_dir, .. }
         | AnalyticFace::Cone { axis_dir, .. }
         | AnalyticFace::Torus { axis_dir, .. } => Some(axis_dir),
-    }
-}
-
-/// Whether face `k` of `part` exported at `step` degrees may be left unrecognized by the
-/// documented rule (docs/math.md §3, "Recognized surfaces", limits): a torus needs three
-/// strips along its profile and a sphere one band besides its pole's fan (fewer rings are
-/// fitted exactly by other surfaces too), and a single band (a cylinder or a cone between two
-/// rings) next to a face of revolution it meets at less than the export's step, or next to
-/// an unrecognized curve tangentially, is read as a strip of a free profile. On the knob:
-/// the round (60°) and the crown (30°) at 30° and the crown at 15°; the boss beside an
-/// unrecognized round; the skirt and the chamfer, 26.6° apart, at 30°.
-fn may_be_unread(part: &CadPart, step: f64, k: usize) -> bool {
-    if part.name != "knob" {
-        return false;
-    }
-    let strips = |deg: f64| (deg / step - 1e-9).ceil() as usize;
-    let round = strips(60.0) < 3;
-    match k {
-        1 | 2 => step >= 26.57,
-        4 => round,
-        5 => round,
-        6 => strips(30.0) < 2,
-        _ => false,
     }
 }
 

@@ -281,6 +281,7 @@ fn trace_with(mesh: &Mesh, g: &Geometry, phi: &[f64], section: &ToolpathSection)
         symmetry: Symmetry::Line,
         keep_map: false,
         keep_field_mesh: false,
+        surfaces: None,
     })
     .unwrap();
     (t.job, t.uv)

@@ -94,6 +94,11 @@ pub struct ExportInput<'a> {
     /// The part's UV layout (its own, or one made by `layout::flatten`): TEXCOORD_0, the
     /// tangent frames and the texture's domain.
     pub uv: &'a CornerAttribute<Vector2<f64>>,
+    /// Per face, whether it lies on a recognized curved surface (`mesh.surfaces`): its
+    /// corners' grain is extended off the surface before baking
+    /// ([`crate::geometry::surfaces::ambient`]), so each texel carries the surface's grain
+    /// between the chords, not the chords' blend. `None`: no face is.
+    pub curved_faces: Option<&'a [bool]>,
 }
 
 /// Options of [`export_glb`].
@@ -288,8 +293,16 @@ pub fn grain_texture(input: &ExportInput, size: u32) -> Result<GrainTexture> {
     let grain: Vec<[Vector3<f64>; 3]> = oriented
         .faces
         .iter()
-        .map(|f| {
-            f.map(|k| tangents[oriented.vertex[k as usize] as usize] * oriented.sign[k as usize])
+        .enumerate()
+        .map(|(face, f)| {
+            let g = f.map(|k| {
+                tangents[oriented.vertex[k as usize] as usize] * oriented.sign[k as usize]
+            });
+            if input.curved_faces.is_none_or(|c| c.get(face) != Some(&true)) {
+                return g;
+            }
+            let n = input.faces[face].map(|v| normals[v as usize]);
+            crate::geometry::surfaces::ambient::extend(g, n).unwrap_or(g)
         })
         .collect();
     let baked = crate::texmap::bake(&BakeInput {
@@ -503,6 +516,7 @@ mod tests {
             singular_faces: &[],
             strokes: None,
             uv: &uv,
+            curved_faces: None,
         };
         let options = ExportOptions {
             material: Material::default(),

@@ -48,7 +48,8 @@ pub struct Maps {
 /// The grain's maps: the glb's grain baked ([`grain_texture`]) and encoded as 16-bit PNGs.
 pub fn maps(x: &ExportStageInput) -> Result<Maps> {
     let (normals, u, singular) = grain(x);
-    let input = export_input(x, &normals, &u, &singular)?;
+    let curved = x.prepared.surfaces.as_ref().map(|r| r.curved_faces(&x.prepared.mesh));
+    let input = export_input(x, &normals, &u, &singular, &curved)?;
     let t = grain_texture(&input, texture_size(x.section, input.uv))?;
     Ok(Maps { direction: t.baked.image.direction_png16()?, angle: t.baked.image.angle_png16()? })
 }
@@ -87,6 +88,7 @@ fn export_input<'a>(
     normals: &'a [Vector3<f64>],
     u: &'a [Vector3<f64>],
     singular: &'a [u32],
+    curved: &'a Option<Vec<bool>>,
 ) -> Result<ExportInput<'a>> {
     let prepared = x.prepared;
     let uv = prepared.mesh.uv.as_ref().ok_or_else(|| {
@@ -104,6 +106,7 @@ fn export_input<'a>(
         singular_faces: singular,
         strokes: x.section.strokes.then_some(x.strokes_3d),
         uv,
+        curved_faces: curved.as_deref(),
     })
 }
 
@@ -120,7 +123,8 @@ fn texture_size(
 pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
     let (scene, prepared) = (x.scene, x.prepared);
     let (normals, u, singular) = grain(x);
-    let input = export_input(x, &normals, &u, &singular)?;
+    let curved = x.prepared.surfaces.as_ref().map(|r| r.curved_faces(&x.prepared.mesh));
+    let input = export_input(x, &normals, &u, &singular, &curved)?;
     let name = Path::new(&prepared.mesh_name)
         .file_stem()
         .map_or_else(|| "part".to_string(), |s| s.to_string_lossy().into_owned());

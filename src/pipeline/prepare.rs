@@ -48,6 +48,27 @@ pub struct RecognizedPart {
     pub report: crate::geometry::surfaces::SurfaceReport,
 }
 
+impl RecognizedPart {
+    /// The surface each face of `mesh` (the part as prepared) lies on
+    /// ([`crate::geometry::surfaces::VertexSurfaces::face_surfaces`]).
+    pub fn face_surfaces(&self, mesh: &Mesh) -> Vec<u32> {
+        self.vertices.face_surfaces(mesh, &self.surfaces)
+    }
+
+    /// Whether surface `s` is curved: a cylinder, cone, sphere or torus (not a plane, not
+    /// [`crate::geometry::surfaces::NO_SURFACE`]).
+    pub fn is_curved(&self, s: u32) -> bool {
+        self.surfaces.surfaces.get(s as usize).is_some_and(|x| {
+            !matches!(x.primitive, crate::geometry::surfaces::Primitive::Plane { .. })
+        })
+    }
+
+    /// Per face of `mesh`, whether it lies on a curved surface.
+    pub fn curved_faces(&self, mesh: &Mesh) -> Vec<bool> {
+        self.face_surfaces(mesh).into_iter().map(|s| self.is_curved(s)).collect()
+    }
+}
+
 /// The highlight model's key light as the scene gives it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum KeyLight {

@@ -354,6 +354,7 @@ fn trace_stage(
         symmetry: prepared.field_options.symmetry,
         keep_map: plan.gap,
         keep_field_mesh: plan.keeps_field_mesh(),
+        surfaces: prepared.surfaces.as_ref(),
     };
     let t = trace(&input)?;
     stages.start("write toolpaths");

@@ -7,9 +7,11 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use crate::geometry::surfaces::Primitive;
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
+use crate::pipeline::prepare::RecognizedPart;
 use crate::scene::toolpaths::{toolpath_error, ToolpathSection};
 use crate::solve::settings::Constraints;
 use crate::uvfield::{as_brushed, field_mesh, AsBrushed, UvFieldReport};
@@ -83,6 +85,90 @@ pub struct TraceInput<'a> {
     pub keep_map: bool,
     /// Keep the field mesh, for [`TracedStrokes::gap`] and [`TracedStrokes::as_brushed`].
     pub keep_field_mesh: bool,
+    /// The surfaces recognized on the part (`mesh.surfaces`): the strokes' 3D points are put
+    /// on them rather than on the chords, and the field inside a curved chord is
+    /// the surface's (docs/math.md §3, "Recognized surfaces").
+    pub surfaces: Option<&'a RecognizedPart>,
+}
+
+/// The recognized surface of each triangle handed to the toolpaths crate, which lifts the
+/// strokes onto it (`grainline_toolpaths::SurfaceLift`): a chord point goes to the nearest
+/// point of its cylinder, cone, sphere or torus (`p − n · d(p)`, the primitive's normal `n`
+/// and signed distance `d`; docs/math.md §3, "Recognized surfaces"). Planes and unrecognized
+/// faces keep their chords.
+struct OnSurfaces {
+    primitives: Vec<Primitive>,
+    /// Per triangle of the field mesh, its surface ([`crate::geometry::surfaces::NO_SURFACE`] for none).
+    of: Vec<u32>,
+}
+
+impl grainline_toolpaths::SurfaceLift for OnSurfaces {
+    fn project(&self, face: u32, p: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
+        let s = *self.of.get(face as usize)?;
+        let prim = self.primitives.get(s as usize)?;
+        if matches!(prim, Primitive::Plane { .. }) {
+            return None;
+        }
+        let p = Vector3::from(p);
+        let n = prim.normal_at(&p);
+        Some((prim.nearest(&p, &n).into(), n.into()))
+    }
+}
+
+impl OnSurfaces {
+    /// The surfaces of the field mesh's triangles: the mesh's faces in order, less the ones
+    /// the UV field left out (`degenerate`, ascending).
+    /// The hook, and per triangle its surface; `None` when no triangle is on a curved one.
+    fn hook(
+        rec: &RecognizedPart,
+        mesh: &Mesh,
+        degenerate: &[u32],
+    ) -> Option<(grainline_toolpaths::SurfaceHook, Vec<u32>)> {
+        let faces = rec.face_surfaces(mesh);
+        let mut skip = degenerate.iter().peekable();
+        let of: Vec<u32> = (0..faces.len() as u32)
+            .filter(|f| skip.next_if_eq(&f).is_none())
+            .map(|f| faces[f as usize])
+            .collect();
+        of.iter().any(|&s| rec.is_curved(s)).then(|| {
+            let primitives = rec.surfaces.surfaces.iter().map(|s| s.primitive).collect();
+            let on = OnSurfaces { primitives, of: of.clone() };
+            (grainline_toolpaths::SurfaceHook(std::sync::Arc::new(on)), of)
+        })
+    }
+}
+
+/// Per triangle of the field mesh on a curved surface, its corners' grain extended off the
+/// surface ([`crate::geometry::surfaces::ambient`]); the toolpaths crate blends it and
+/// projects it onto the surface inside the triangle. A line field's corners are aligned to
+/// the first's.
+fn ambient_corners(
+    input: &TraceInput,
+    tris: &[[u32; 3]],
+    uv_to_vertex: &[u32],
+    of: &[u32],
+    rec: &RecognizedPart,
+) -> Vec<Option<[[f64; 3]; 3]>> {
+    let u3 = input.geometry.directions_of(input.phi);
+    tris.iter()
+        .zip(of)
+        .map(|(t, &s)| {
+            if !rec.is_curved(s) {
+                return None;
+            }
+            let v = t.map(|c| uv_to_vertex[c as usize] as usize);
+            let mut u = v.map(|v| u3[v]);
+            if input.symmetry == Symmetry::Line {
+                for i in 1..3 {
+                    if u[i].dot(&u[0]) < 0.0 {
+                        u[i] = -u[i];
+                    }
+                }
+            }
+            let n = v.map(|v| input.geometry.normal(v));
+            crate::geometry::surfaces::ambient::extend(u, n).map(|a| a.map(Into::into))
+        })
+        .collect()
 }
 
 /// The traced strokes and what the later steps of the stage read.
@@ -105,8 +191,14 @@ pub struct TracedStrokes {
 pub fn trace(input: &TraceInput) -> Result<TracedStrokes> {
     let units = input.mesh.units;
     let section = toolpath_section(input.toolpaths, input.constraints, units, input.keep_map)?;
-    let (fm, uv) =
+    let (mut fm, uv) =
         field_mesh(input.mesh, input.geometry, input.phi, input.symmetry, &section.uv_field)?;
+    if let Some(rec) = input.surfaces {
+        if let Some((hook, of)) = OnSurfaces::hook(rec, input.mesh, &uv.degenerate_faces) {
+            let ambient = ambient_corners(input, &fm.triangles, &uv.uv_to_vertex, &of, rec);
+            fm = fm.with_surface(hook, ambient);
+        }
+    }
     let field_mesh = if input.keep_field_mesh { Some(fm.clone()) } else { None };
     let mut job = grainline_toolpaths::generate(fm, &section.job_options(units))
         .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;

@@ -233,34 +233,80 @@ pub struct GlbGrain {
 }
 
 pub fn glb_grain(glb: &Path) -> GlbGrain {
-    let bytes = std::fs::read(glb).unwrap();
-    let g = gltf::Gltf::from_slice(&bytes).unwrap();
-    let blob = g.blob.as_deref().unwrap();
-    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-    let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
-    let ext = &doc["materials"][0]["extensions"]["KHR_materials_anisotropy"];
-    let rot = ext["anisotropyRotation"].as_f64().unwrap_or(0.0);
-    let tex = ext["anisotropyTexture"]["index"].as_u64().unwrap() as usize;
-    let image = &doc["images"][doc["textures"][tex]["source"].as_u64().unwrap() as usize];
-    let view = &doc["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
-    let off = view["byteOffset"].as_u64().unwrap_or(0) as usize;
-    let len = view["byteLength"].as_u64().unwrap() as usize;
-    let mut r = png::Decoder::new(std::io::Cursor::new(&blob[off..off + len])).read_info().unwrap();
-    let mut buf = vec![0; r.output_buffer_size().unwrap()];
-    let info = r.next_frame(&mut buf).unwrap();
-    assert_eq!((info.color_type, info.bit_depth), (png::ColorType::Rgb, png::BitDepth::Sixteen));
-    let size = info.width as usize;
-    let texel = |i: usize, j: usize| {
-        let k = 6 * (j * size + i);
-        let c = |o: usize| f64::from(u16::from_be_bytes([buf[k + o], buf[k + o + 1]])) / 65535.0;
-        [2.0 * c(0) - 1.0, 2.0 * c(2) - 1.0]
-    };
-    let sample = |st: [f32; 2]| {
-        let m = size as f64;
-        let x = (f64::from(st[0]) * m - 0.5).clamp(0.0, m - 1.0);
-        let y = (f64::from(st[1]) * m - 0.5).clamp(0.0, m - 1.0);
+    let v = GlbView::read(glb);
+    let u = (0..v.p.len()).map(|k| v.grain_at_vertex(k)).collect();
+    GlbGrain { p: v.p.clone(), n: v.n.clone(), u, idx: v.idx.clone() }
+}
+
+/// The part's primitive of a grainline glb and its `anisotropyTexture`, read as a viewer
+/// reads them: per fragment the interpolated NORMAL, TANGENT and TEXCOORD_0, the texture
+/// sampled bilinearly there (clamped), its RG (× 2 − 1) turned by `anisotropyRotation` in the
+/// frame (T, w·(N × T)) the anisotropy direction d, and the grain u = d × n.
+pub struct GlbView {
+    pub p: Vec<[f32; 3]>,
+    pub n: Vec<[f32; 3]>,
+    pub t: Vec<[f32; 4]>,
+    pub uv: Vec<[f32; 2]>,
+    pub idx: Vec<u32>,
+    /// Texels, row 0 at the top, RG mapped to [−1, 1].
+    tex: Vec<[f64; 2]>,
+    size: usize,
+    rot: f64,
+}
+
+impl GlbView {
+    pub fn read(glb: &Path) -> Self {
+        let bytes = std::fs::read(glb).unwrap();
+        let g = gltf::Gltf::from_slice(&bytes).unwrap();
+        let blob = g.blob.as_deref().unwrap();
+        let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+        let ext = &doc["materials"][0]["extensions"]["KHR_materials_anisotropy"];
+        let rot = ext["anisotropyRotation"].as_f64().unwrap_or(0.0);
+        let tex = ext["anisotropyTexture"]["index"].as_u64().unwrap() as usize;
+        let image = &doc["images"][doc["textures"][tex]["source"].as_u64().unwrap() as usize];
+        let view = &doc["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
+        let off = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let len = view["byteLength"].as_u64().unwrap() as usize;
+        let mut r =
+            png::Decoder::new(std::io::Cursor::new(&blob[off..off + len])).read_info().unwrap();
+        let mut buf = vec![0; r.output_buffer_size().unwrap()];
+        let info = r.next_frame(&mut buf).unwrap();
+        assert_eq!(
+            (info.color_type, info.bit_depth),
+            (png::ColorType::Rgb, png::BitDepth::Sixteen)
+        );
+        let size = info.width as usize;
+        let tex = (0..size * size)
+            .map(|i| {
+                let k = 6 * i;
+                let c = |o: usize| {
+                    f64::from(u16::from_be_bytes([buf[k + o], buf[k + o + 1]])) / 65535.0
+                };
+                [2.0 * c(0) - 1.0, 2.0 * c(2) - 1.0]
+            })
+            .collect();
+        let prim = g.meshes().next().unwrap().primitives().next().unwrap();
+        let reader = prim.reader(|_| Some(blob));
+        GlbView {
+            p: reader.read_positions().unwrap().collect(),
+            n: reader.read_normals().unwrap().collect(),
+            t: reader.read_tangents().unwrap().collect(),
+            uv: reader.read_tex_coords(0).unwrap().into_f32().collect(),
+            idx: reader.read_indices().unwrap().into_u32().collect(),
+            tex,
+            size,
+            rot,
+        }
+    }
+
+    /// The texture's RG at TEXCOORD_0 `st`, bilinear between the four nearest texel centres.
+    fn sample(&self, st: [f64; 2]) -> [f64; 2] {
+        let m = self.size as f64;
+        let x = (st[0] * m - 0.5).clamp(0.0, m - 1.0);
+        let y = (st[1] * m - 0.5).clamp(0.0, m - 1.0);
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-        let (x1, y1) = ((x0 + 1).min(size - 1), (y0 + 1).min(size - 1));
+        let (x1, y1) = ((x0 + 1).min(self.size - 1), (y0 + 1).min(self.size - 1));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
         let mut out = [0.0; 2];
         for (i, j, w) in [
@@ -269,30 +315,49 @@ pub fn glb_grain(glb: &Path) -> GlbGrain {
             (x0, y1, (1.0 - fx) * fy),
             (x1, y1, fx * fy),
         ] {
-            out[0] += w * texel(i, j)[0];
-            out[1] += w * texel(i, j)[1];
+            let t = self.tex[j * self.size + i];
+            out[0] += w * t[0];
+            out[1] += w * t[1];
         }
         out
-    };
-    let prim = g.meshes().next().unwrap().primitives().next().unwrap();
-    let reader = prim.reader(|_| Some(blob));
-    let p: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
-    let n: Vec<[f32; 3]> = reader.read_normals().unwrap().collect();
-    let t: Vec<[f32; 4]> = reader.read_tangents().unwrap().collect();
-    let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
-    let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
-    let u = (0..p.len())
-        .map(|k| {
-            let nn = n[k].map(f64::from);
-            let tt = [t[k][0], t[k][1], t[k][2]].map(f64::from);
-            let b = cross(nn, tt).map(|c| c * f64::from(t[k][3]));
-            let [dx, dy] = sample(uv[k]);
-            let a = dy.atan2(dx) + rot;
-            let d = [0, 1, 2].map(|c| a.cos() * tt[c] + a.sin() * b[c]);
-            cross(d, nn)
-        })
-        .collect();
-    GlbGrain { p, n, u, idx }
+    }
+
+    /// Position, unit normal and grain at barycentric `b` of the triangle `tri` (vertex
+    /// indices), as a fragment shader interpolates them.
+    pub fn fragment(&self, tri: [u32; 3], b: [f64; 3]) -> (P, P, P) {
+        let lerp3 = |f: &dyn Fn(usize) -> P| {
+            let mut o = [0.0; 3];
+            for (c, &v) in tri.iter().enumerate() {
+                let x = f(v as usize);
+                for k in 0..3 {
+                    o[k] += b[c] * x[k];
+                }
+            }
+            o
+        };
+        let p = lerp3(&|v| self.p[v].map(f64::from));
+        let n = unit(lerp3(&|v| self.n[v].map(f64::from)));
+        let t = lerp3(&|v| [0, 1, 2].map(|k| f64::from(self.t[v][k])));
+        let w: f64 = tri.iter().zip(b).map(|(&v, bc)| bc * f64::from(self.t[v as usize][3])).sum();
+        let st = lerp3(&|v| [f64::from(self.uv[v][0]), f64::from(self.uv[v][1]), 0.0]);
+        let tt = unit(sub(t, n.map(|c| c * dot(n, t))));
+        let bt = cross(n, tt).map(|c| c * w.signum());
+        let [dx, dy] = self.sample([st[0], st[1]]);
+        let a = dy.atan2(dx) + self.rot;
+        let d = [0, 1, 2].map(|c| a.cos() * tt[c] + a.sin() * bt[c]);
+        (p, n, cross(d, n))
+    }
+
+    /// The grain at vertex `k` (the texture sampled at its TEXCOORD_0 in its own frame).
+    pub fn grain_at_vertex(&self, k: usize) -> P {
+        let nn = self.n[k].map(f64::from);
+        let tt = [self.t[k][0], self.t[k][1], self.t[k][2]].map(f64::from);
+        let b = cross(nn, tt).map(|c| c * f64::from(self.t[k][3]));
+        let [dx, dy] = self.sample([f64::from(self.uv[k][0]), f64::from(self.uv[k][1])]);
+        let a = dy.atan2(dx) + self.rot;
+        let d = [0, 1, 2].map(|c| a.cos() * tt[c] + a.sin() * b[c]);
+        cross(d, nn)
+    }
 }
 
 /// The bound on the glb's grain at a corner ([`glb_flatness`]): 1°. It was 0.5° while TANGENT

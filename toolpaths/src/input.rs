@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, ToolpathError};
 use crate::geom::{Metric, Vec2, Vec3};
+use std::sync::Arc;
 
 /// Index of a UV vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -84,6 +85,16 @@ pub struct FieldMesh {
     pub metric: Option<Vec<Metric>>,
     /// UV seams across which strokes may continue (see [`crate::TraceOptions::cross_seams`]).
     pub seams: Vec<SeamPair>,
+    /// Optional per triangle, the grain at its three corners as ambient 3D vectors: with a
+    /// [`FieldMesh::surface`], the field inside a triangle on a known surface is their blend
+    /// projected onto the surface's tangent plane (`surface.rs`) rather than the UV
+    /// directions' blend; `None` for a triangle that keeps the UV blend.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ambient: Option<Vec<Option<[Vec3; 3]>>>,
+    /// The surface each triangle approximates, when the caller knows it: strokes' 3D points
+    /// are put on it rather than on the chords (`surface.rs`). Not serialized.
+    #[serde(skip)]
+    pub surface: Option<SurfaceHook>,
 }
 
 impl FieldMesh {
@@ -103,6 +114,8 @@ impl FieldMesh {
             normals: None,
             metric: None,
             seams: Vec::new(),
+            ambient: None,
+            surface: None,
         }
     }
 
@@ -119,9 +132,54 @@ impl FieldMesh {
         self
     }
 
+    /// Attach the surfaces the triangles approximate and their corners' ambient grain (with
+    /// a lift: [`FieldMesh::with_lift`]).
+    pub fn with_surface(
+        mut self,
+        surface: SurfaceHook,
+        ambient: Vec<Option<[Vec3; 3]>>,
+    ) -> FieldMesh {
+        self.surface = Some(surface);
+        self.ambient = Some(ambient);
+        self
+    }
+
     /// Attach UV seam pairs.
     pub fn with_seams(mut self, seams: Vec<SeamPair>) -> FieldMesh {
         self.seams = seams;
         self
+    }
+}
+
+/// The surface each triangle of a [`crate::FieldMesh`] approximates.
+pub trait SurfaceLift: Send + Sync {
+    /// The point of the surface triangle `face` approximates nearest to `p` (a point of the
+    /// triangle's chord plane) and the surface's unit normal there (either sign); `None`
+    /// where the triangle is the surface (a plane, an unrecognized face).
+    fn project(&self, face: u32, p: Vec3) -> Option<(Vec3, Vec3)>;
+}
+
+/// A shared [`SurfaceLift`] carried by a [`crate::FieldMesh`] (not serialized: a field mesh
+/// read from JSON lifts onto its chords; `surface.rs`).
+#[derive(Clone)]
+pub struct SurfaceHook(pub Arc<dyn SurfaceLift>);
+
+impl std::fmt::Debug for SurfaceHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("SurfaceHook")
+    }
+}
+
+impl PartialEq for SurfaceHook {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::addr_eq(Arc::as_ptr(&self.0), Arc::as_ptr(&other.0))
+    }
+}
+
+impl SurfaceHook {
+    /// `p` on face `f`'s surface, with its normal, when both are finite.
+    pub(crate) fn project(&self, f: u32, p: Vec3) -> Option<(Vec3, Vec3)> {
+        let (q, n) = self.0.project(f, p)?;
+        (q.iter().chain(&n).all(|x| x.is_finite())).then_some((q, n))
     }
 }

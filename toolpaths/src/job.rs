@@ -152,6 +152,7 @@ pub fn generate(mesh: FieldMesh, o: &JobOptions) -> Result<JobOutput> {
         .min_turning_radius
         .map(|r| crate::stroke_checks::cut_tight_ends(&dom, &mut placement, r))
         .unwrap_or_default();
+    crate::surface::densify(&dom, &mut placement, o.plan.tolerance);
     let cov = match &o.coverage {
         Some(c) => Some(timed(&mut t, "coverage", || coverage(&dom, &placement, c))?),
         None => None,

@@ -12,7 +12,8 @@
 //! Layers of the source files, bottom to top (a file uses only files of lower layers):
 //!
 //! 1. `error`, `geom`: errors; vectors, metrics, barycentric coordinates.
-//! 2. `input`, `grid`, `buckets`, `simplify`, `snippet`, `stroke`, `tour`: the input mesh;
+//! 2. `input`, `grid`, `buckets`, `simplify`, `snippet`, `stroke`, `tour`: the input mesh
+//!    (and the surface its triangles approximate, [`SurfaceLift`]);
 //!    uniform grids; point buckets; polyline simplification; spindle snippets; strokes; the
 //!    stroke tour model.
 //! 3. `topology`, `improve`, `bound`: adjacency, metrics and seams; tour local search;
@@ -23,7 +24,8 @@
 //! 6. `trace`: streamline tracing.
 //! 7. `spacing`: stroke-to-stroke distances.
 //! 8. `place`: stroke placement.
-//! 9. `budget`, `coverage`, `stroke_checks`: work budgets; coverage; stroke checks.
+//! 9. `budget`, `coverage`, `stroke_checks`, `surface`: work budgets; coverage; stroke
+//!    checks; strokes sampled on the surface the triangles approximate.
 //! 10. `plan_options`: planner options.
 //! 11. `passes`: one pass from one stroke.
 //! 12. `plan`: the ordered passes.
@@ -77,6 +79,7 @@ mod snippet;
 mod spacing;
 mod stroke;
 mod stroke_checks;
+mod surface;
 mod svg_out;
 mod topology;
 mod tour;
@@ -92,6 +95,7 @@ pub use gcode::{
     Spindle, DEFAULT_RAPID_MM_MIN,
 };
 pub use geom::{segment_distance, Metric, Vec2, Vec3};
+pub use input::{SurfaceHook, SurfaceLift};
 pub use job::{generate, JobOptions, JobOutput, LENGTH_DEFAULTS_MM};
 pub use json::{strokes_file, strokes_json, StrokeRecord, StrokesFile};
 pub use mesh::{Directions, Domain, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};

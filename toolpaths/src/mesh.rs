@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Result, ToolpathError};
 use crate::geom::{barycentric, cross, segment_distance, sub, Metric, Vec2, Vec3};
 use crate::grid::FaceGrid;
+use crate::input::SurfaceHook;
 pub use crate::input::{Directions, FaceId, FieldMesh, SeamPair, Symmetry, VertexId};
 use crate::topology::{build_adjacency, build_metric, build_seams};
 pub(crate) use crate::topology::{SeamLink, NONE};
@@ -111,6 +112,11 @@ pub struct Domain {
     pub(crate) spacing_normals: Option<Vec<Vec3>>,
     /// Singularities, found on first use (`field.rs`).
     pub(crate) sing: OnceLock<Vec<Singularity>>,
+    /// The surface each triangle approximates, when known (`surface.rs`).
+    pub(crate) surface: Option<SurfaceHook>,
+    /// Per face on a known surface, its corners' grain extended off it (`surface.rs`); empty
+    /// without a surface.
+    pub(crate) ambient: Vec<Option<[Vec3; 3]>>,
 }
 
 fn check_finite2(what: &'static str, v: &[Vec2]) -> Result<()> {
@@ -124,6 +130,21 @@ fn check_finite3(what: &'static str, v: &[Vec3]) -> Result<()> {
     match v.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
         Some(index) => Err(ToolpathError::NonFinite { what, index }),
         None => Ok(()),
+    }
+}
+
+/// The corners' ambient grain ([`FieldMesh::ambient`]): one entry per triangle, finite.
+fn check_ambient(a: Option<Vec<Option<[Vec3; 3]>>>, nf: usize) -> Result<Vec<Option<[Vec3; 3]>>> {
+    let Some(a) = a else { return Ok(Vec::new()) };
+    if a.len() != nf {
+        return Err(ToolpathError::InvalidMesh(format!(
+            "{} ambient triangles for {nf} triangles",
+            a.len()
+        )));
+    }
+    match a.iter().position(|c| c.is_some_and(|c| !c.iter().flatten().all(|x| x.is_finite()))) {
+        Some(index) => Err(ToolpathError::NonFinite { what: "ambient", index }),
+        None => Ok(a),
     }
 }
 
@@ -178,6 +199,7 @@ impl Domain {
                 check_finite3(what, a)?;
             }
         }
+        let mesh_has_lift = mesh.positions.is_some();
         let uv = mesh.uv;
         let tris = mesh.triangles;
         let mut bbox = [[f64::INFINITY; 2], [f64::NEG_INFINITY; 2]];
@@ -203,7 +225,8 @@ impl Domain {
         let (chart, chart_bbox) = build_charts(&uv, &tris, &neighbors);
         let spacing_normals =
             mesh.positions.as_ref().map(|p| vertex_normals(p, &tris, mesh.normals.as_deref()));
-        Ok(Domain {
+        let ambient = check_ambient(mesh.ambient, nf)?;
+        let dom = Domain {
             uv,
             tris,
             dirs,
@@ -220,7 +243,10 @@ impl Domain {
             chart_bbox,
             spacing_normals,
             sing: OnceLock::new(),
-        })
+            surface: mesh.surface.filter(|_| mesh_has_lift),
+            ambient,
+        };
+        Ok(dom)
     }
 
     /// Number of charts (connected pieces of the UV layout; seams do not join them).
@@ -306,15 +332,31 @@ impl Domain {
         edge.is_some_and(|i| !self.seams.contains_key(&(f, i as u8)))
     }
 
-    /// 3D position of a UV point given its face and barycentric coordinates.
+    /// 3D position of a UV point given its face and barycentric coordinates: on the face's
+    /// chord, or on the surface it approximates when known (`surface.rs`).
     pub(crate) fn lift(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
+        let x = self.chord_lift(f, bary)?;
+        Some(self.surface.as_ref().and_then(|s| s.project(f, x)).map_or(x, |(q, _)| q))
+    }
+
+    pub(crate) fn chord_lift(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
         let p = self.positions.as_ref()?;
         let t = self.tris[f as usize];
         Some([0, 1, 2].map(|k| (0..3).map(|i| bary[i] * p[t[i] as usize][k]).sum()))
     }
 
-    /// Unit normal at a UV point (interpolated vertex normals, else the face normal).
+    /// Unit normal at a UV point: the surface's when known (`surface.rs`), oriented as the
+    /// interpolated vertex normals (else the face normal), which it is otherwise.
     pub(crate) fn normal(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
+        let n = self.chord_normal(f, bary)?;
+        let on = self.surface.as_ref().and_then(|s| s.project(f, self.chord_lift(f, bary)?));
+        let Some((_, m)) = on else { return Some(n) };
+        let l = crate::geom::norm3(m);
+        let s = if crate::geom::dot3(m, n) < 0.0 { -1.0 } else { 1.0 };
+        Some(if l > 0.0 { m.map(|x| s * x / l) } else { n })
+    }
+
+    fn chord_normal(&self, f: u32, bary: [f64; 3]) -> Option<Vec3> {
         let t = self.tris[f as usize];
         let n = if let Some(ns) = &self.normals {
             [0, 1, 2].map(|k| (0..3).map(|i| bary[i] * ns[t[i] as usize][k]).sum::<f64>())

@@ -272,6 +272,7 @@ impl Session {
             symmetry,
             keep_map: false,
             keep_field_mesh: true,
+            surfaces: p.surfaces.as_ref(),
         };
         let t = crate::pipeline::trace::trace(&input)?;
         let ab =

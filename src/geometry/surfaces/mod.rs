@@ -43,6 +43,7 @@
 //! chords, a torus of two strips) is not recognized; a crease between two bands of a turned
 //! part that turns by less than the export's angular step is read as a strip edge.
 
+pub mod ambient;
 mod fit;
 mod grow;
 pub mod primitive;
@@ -511,6 +512,30 @@ impl VertexSurfaces {
                 // Tangent part only (the mean of tangent surfaces' operators, projected).
                 let proj = Matrix3::identity() - n * n.transpose();
                 Some(SurfacePoint { normal: n, shape: proj * shape * proj })
+            })
+            .collect()
+    }
+
+    /// The surface each face of `mesh` lies on: the one its corners' surfaces share (corners
+    /// on none ignored), the one whose normal at the face's centroid is nearest the face's
+    /// when they share several, [`NO_SURFACE`] when they share none or no corner is on any.
+    pub fn face_surfaces(&self, mesh: &Mesh, surfaces: &Surfaces) -> Vec<u32> {
+        (0..mesh.num_faces())
+            .map(|f| {
+                let lists: Vec<&[u32; MAX_VERTEX_SURFACES]> = mesh.faces[f]
+                    .iter()
+                    .filter_map(|&v| self.of.get(v as usize))
+                    .filter(|l| l[0] != NO_SURFACE)
+                    .collect();
+                let Some(first) = lists.first() else { return NO_SURFACE };
+                let shared = first
+                    .iter()
+                    .copied()
+                    .filter(|&s| s != NO_SURFACE && lists.iter().all(|l| l.contains(&s)));
+                let [a, b, c] = mesh.face_positions(f);
+                let (centroid, n) = ((a + b + c) / 3.0, face_normal(mesh, f));
+                let fit = |s: u32| surfaces.point(s, &centroid, &n).normal.dot(&n);
+                shared.max_by(|&s, &t| fit(s).total_cmp(&fit(t))).unwrap_or(NO_SURFACE)
             })
             .collect()
     }

