@@ -80,6 +80,9 @@ fn curved_faces_are_brushed_and_exported_as_the_surfaces_they_approximate() {
     let mut failures = Vec::new();
     for step in steps() {
         for part in parts(step) {
+            if std::env::var("CURVED_PARTS").is_ok_and(|p| !p.split(',').any(|n| n == part.name)) {
+                continue;
+            }
             let figures = measure(&part, step, &root);
             for (k, f) in figures.iter().enumerate() {
                 if part.faces[k].is_planar() {
@@ -132,7 +135,8 @@ fn kind(f: &cad::AnalyticFace) -> &'static str {
     }
 }
 
-/// The chordal steps measured (`CURVED_STEPS=30,15` for a part of the run).
+/// The chordal steps measured (`CURVED_STEPS=30,15` for a part of the run; `CURVED_PARTS=knob`
+/// for some parts, `CURVED_DEBUG=K` prints what fails on face K).
 fn steps() -> Vec<f64> {
     std::env::var("CURVED_STEPS")
         .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
@@ -142,13 +146,11 @@ fn steps() -> Vec<f64> {
 /// The shortfalls measured and not yet explained, each with the floor it must keep (a
 /// regression below it fails): the knob's 10° torus round (98.7 % of its stroke length), two
 /// small hole walls of the bracket at 30° (12 strips round a 3 mm hole; 98.6 and 97.0 % of
-/// their area: interior fragments a few degrees off), and the turned part's shank at 30° (88.9 %
-/// of its glb corner normals: corners at its ends off by 12–59°).
-const SHORTFALLS: [(&str, f64, usize, &str, f64); 4] = [
+/// their area: interior fragments a few degrees off).
+const SHORTFALLS: [(&str, f64, usize, &str, f64); 3] = [
     ("knob", 10.0, 5, "strokes", 0.985),
     ("bracket", 30.0, 13, "grain", 0.98),
     ("bracket", 30.0, 14, "grain", 0.965),
-    ("turned", 30.0, 4, "normals", 0.88),
 ];
 
 /// Whether figure `what` of face `k` is a listed shortfall and keeps its floor.
@@ -156,4 +158,89 @@ fn known(part: &str, step: f64, k: usize, what: &str, value: f64) -> bool {
     SHORTFALLS
         .iter()
         .any(|&(p, s, f, w, floor)| p == part && s == step && f == k && w == what && value >= floor)
+}
+
+/// The preview of a part exported at 15° chords against the preview of the same part at 1°
+/// (same scene: an anisotropic metal, a key light, a world grain): the share of the part's
+/// pixels (part in either image) whose luminance (after a 1/2.2 gamma) is within 0.04. The
+/// curved faces shade with their surface's normal and grain per sample, not the chords'.
+/// Measured: bracket 99.98 %, knob 97.7 % (the rest on the crown's highlight near the world
+/// grain's pole and along the chamfer's rims; 96.4 % with the corners' normals and grain
+/// blended); the floors below keep that.
+#[test]
+fn the_preview_of_a_coarse_export_matches_the_fine_export() {
+    let root = std::env::temp_dir().join(format!("grainline-curved-px-{}", std::process::id()));
+    let cases = [
+        (
+            cad::bracket(&cad::BracketOptions { step_deg: 15.0, ..Default::default() }).unwrap(),
+            cad::bracket(&cad::BracketOptions { step_deg: 1.0, ..Default::default() }).unwrap(),
+            [90.0, -60.0, 70.0],
+            [20.0, 30.0, 10.0],
+            0.999,
+        ),
+        (
+            cad::knob(&cad::KnobOptions { step_deg: 15.0, ..Default::default() }).unwrap(),
+            cad::knob(&cad::KnobOptions { step_deg: 1.0, ..Default::default() }).unwrap(),
+            [60.0, -90.0, 70.0],
+            [0.0, 0.0, 12.0],
+            0.975,
+        ),
+    ];
+    for (coarse, fine, eye, target, floor) in cases {
+        let [a, b] = [&coarse, &fine].map(|p| {
+            let dir = root.join(format!("{}-{}", p.name, p.triangles.len()));
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(dir.join("part.stl"), p.stl_binary()).unwrap();
+            let scene = serde_json::json!({
+                "mesh": "part.stl", "units": p.units.as_str(),
+                "material": {"brdf": {"kind": "ashikhmin_shirley", "nu": 400, "nv": 10,
+                                      "rs": [0.9, 0.9, 0.92]}},
+                "lights": [{"type": "directional", "key": true, "direction": [0.3, -0.5, 1],
+                            "irradiance": 2.5}],
+                "view": {"eye": eye, "target": target, "up": [0, 0, 1], "fov_deg": 40},
+                "field": {"init": "world", "world": [0.6, 0.3, 0.74]},
+                "render": {"width": PX, "height": PX, "output": "p.png", "linear": "p.pfm"}
+            });
+            std::fs::write(dir.join("scene.json"), scene.to_string()).unwrap();
+            let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
+                .args(["--quiet", "render"])
+                .arg(dir.join("scene.json"))
+                .output()
+                .unwrap();
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            read_pfm(&dir.join("p.pfm"))
+        });
+        let bg = |x: &[f32; 3], y: &[f32; 3]| x == y;
+        let (mut part, mut ok) = (0usize, 0usize);
+        for (x, y) in a.iter().zip(&b) {
+            if bg(x, &a[0]) && bg(y, &b[0]) {
+                continue;
+            }
+            part += 1;
+            ok += usize::from((lum(x) - lum(y)).abs() <= 0.04);
+        }
+        let share = ok as f64 / part as f64;
+        eprintln!("{}: {:.2} % of {part} part pixels within 0.04", coarse.name, 100.0 * share);
+        assert!(share >= floor, "{}: {share}", coarse.name);
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// Preview size of [`the_preview_of_a_coarse_export_matches_the_fine_export`].
+const PX: usize = 384;
+
+/// Luminance after a 1/2.2 gamma.
+fn lum(c: &[f32; 3]) -> f64 {
+    let v = 0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2]);
+    v.clamp(0.0, 1.0).powf(1.0 / 2.2)
+}
+
+/// grainline's PFM ("PF\nW H\n-1.0\n", f32 LE RGB): the pixels.
+fn read_pfm(path: &Path) -> Vec<[f32; 3]> {
+    let b = std::fs::read(path).unwrap();
+    let start = b.iter().enumerate().filter(|(_, &c)| c == b'\n').nth(2).unwrap().0 + 1;
+    b[start..]
+        .chunks_exact(12)
+        .map(|c| [0, 1, 2].map(|k| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())))
+        .collect()
 }

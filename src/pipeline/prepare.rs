@@ -67,6 +67,14 @@ impl RecognizedPart {
     pub fn curved_faces(&self, mesh: &Mesh) -> Vec<bool> {
         self.face_surfaces(mesh).into_iter().map(|s| self.is_curved(s)).collect()
     }
+
+    /// The surface of each face of `mesh` with the primitives.
+    pub fn on_faces(&self, mesh: &Mesh) -> crate::geometry::surfaces::FaceSurfaces {
+        crate::geometry::surfaces::FaceSurfaces {
+            primitives: self.surfaces.surfaces.iter().map(|s| s.primitive).collect(),
+            of: self.face_surfaces(mesh),
+        }
+    }
 }
 
 /// The highlight model's key light as the scene gives it.

@@ -69,6 +69,8 @@ pub fn preview(p: &PreviewInput) -> Result<RenderOutput> {
     let mut input =
         RenderInput::new(&prepared.mesh.positions, &prepared.mesh.faces, &normals, &u, symmetry);
     input.corner_normals = Some(&corner.corners);
+    let on_faces = prepared.surfaces.as_ref().map(|r| r.on_faces(&prepared.mesh));
+    input.surfaces = on_faces.as_ref();
     input.ell = Some(p.ell);
     input.critical = Some(p.critical);
     if settings.effects.strokes.is_some() {

@@ -7,7 +7,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use crate::geometry::surfaces::Primitive;
+use crate::geometry::surfaces::FaceSurfaces;
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
@@ -95,45 +95,36 @@ pub struct TraceInput<'a> {
 /// strokes onto it (`grainline_toolpaths::SurfaceLift`): a chord point goes to the nearest
 /// point of its cylinder, cone, sphere or torus (`p − n · d(p)`, the primitive's normal `n`
 /// and signed distance `d`; docs/math.md §3, "Recognized surfaces"). Planes and unrecognized
-/// faces keep their chords.
-struct OnSurfaces {
-    primitives: Vec<Primitive>,
-    /// Per triangle of the field mesh, its surface ([`crate::geometry::surfaces::NO_SURFACE`] for none).
-    of: Vec<u32>,
-}
+/// faces keep their chords. Its faces are the field mesh's triangles.
+struct OnSurfaces(FaceSurfaces);
 
 impl grainline_toolpaths::SurfaceLift for OnSurfaces {
     fn project(&self, face: u32, p: [f64; 3]) -> Option<([f64; 3], [f64; 3])> {
-        let s = *self.of.get(face as usize)?;
-        let prim = self.primitives.get(s as usize)?;
-        if matches!(prim, Primitive::Plane { .. }) {
-            return None;
-        }
-        let p = Vector3::from(p);
-        let n = prim.normal_at(&p);
-        Some((prim.nearest(&p, &n).into(), n.into()))
+        let (q, n) = self.0.project(face as usize, &Vector3::from(p))?;
+        Some((q.into(), n.into()))
     }
 }
 
 impl OnSurfaces {
-    /// The surfaces of the field mesh's triangles: the mesh's faces in order, less the ones
-    /// the UV field left out (`degenerate`, ascending).
-    /// The hook, and per triangle its surface; `None` when no triangle is on a curved one.
+    /// The hook on the field mesh's triangles (the mesh's faces in order, less the ones the UV
+    /// field left out: `degenerate`, ascending) and their surfaces; `None` when no triangle is
+    /// on a curved one.
     fn hook(
         rec: &RecognizedPart,
         mesh: &Mesh,
         degenerate: &[u32],
-    ) -> Option<(grainline_toolpaths::SurfaceHook, Vec<u32>)> {
-        let faces = rec.face_surfaces(mesh);
+    ) -> Option<(grainline_toolpaths::SurfaceHook, FaceSurfaces)> {
+        let faces = rec.on_faces(mesh);
         let mut skip = degenerate.iter().peekable();
-        let of: Vec<u32> = (0..faces.len() as u32)
+        let of: Vec<u32> = (0..faces.of.len() as u32)
             .filter(|f| skip.next_if_eq(&f).is_none())
-            .map(|f| faces[f as usize])
+            .map(|f| faces.of[f as usize])
             .collect();
-        of.iter().any(|&s| rec.is_curved(s)).then(|| {
-            let primitives = rec.surfaces.surfaces.iter().map(|s| s.primitive).collect();
-            let on = OnSurfaces { primitives, of: of.clone() };
-            (grainline_toolpaths::SurfaceHook(std::sync::Arc::new(on)), of)
+        let on = FaceSurfaces { primitives: faces.primitives, of };
+        (0..on.of.len()).any(|f| on.curved(f).is_some()).then(|| {
+            let hook =
+                grainline_toolpaths::SurfaceHook(std::sync::Arc::new(OnSurfaces(on.clone())));
+            (hook, on)
         })
     }
 }
@@ -146,16 +137,13 @@ fn ambient_corners(
     input: &TraceInput,
     tris: &[[u32; 3]],
     uv_to_vertex: &[u32],
-    of: &[u32],
-    rec: &RecognizedPart,
+    on: &FaceSurfaces,
 ) -> Vec<Option<[[f64; 3]; 3]>> {
     let u3 = input.geometry.directions_of(input.phi);
     tris.iter()
-        .zip(of)
-        .map(|(t, &s)| {
-            if !rec.is_curved(s) {
-                return None;
-            }
+        .enumerate()
+        .map(|(f, t)| {
+            on.curved(f)?;
             let v = t.map(|c| uv_to_vertex[c as usize] as usize);
             let mut u = v.map(|v| u3[v]);
             if input.symmetry == Symmetry::Line {
@@ -194,8 +182,8 @@ pub fn trace(input: &TraceInput) -> Result<TracedStrokes> {
     let (mut fm, uv) =
         field_mesh(input.mesh, input.geometry, input.phi, input.symmetry, &section.uv_field)?;
     if let Some(rec) = input.surfaces {
-        if let Some((hook, of)) = OnSurfaces::hook(rec, input.mesh, &uv.degenerate_faces) {
-            let ambient = ambient_corners(input, &fm.triangles, &uv.uv_to_vertex, &of, rec);
+        if let Some((hook, on)) = OnSurfaces::hook(rec, input.mesh, &uv.degenerate_faces) {
+            let ambient = ambient_corners(input, &fm.triangles, &uv.uv_to_vertex, &on);
             fm = fm.with_surface(hook, ambient);
         }
     }

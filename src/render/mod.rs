@@ -64,6 +64,9 @@ pub struct RenderInput<'a> {
     /// order), e.g. the crease-aware [`corner_normals`](crate::geometry::normals::corner_normals);
     /// when given they replace `normals` for shading.
     pub corner_normals: Option<&'a [[Vector3<f64>; 3]]>,
+    /// The recognized surface of each face (`mesh.surfaces`): on a curved face the shading
+    /// normal is the surface's per sample (docs/math.md §3, "Recognized surfaces").
+    pub surfaces: Option<&'a crate::geometry::surfaces::FaceSurfaces>,
     /// The designed grain u per vertex (3D; projected to the tangent plane per sample).
     pub u: &'a [Vector3<f64>],
     /// k = 1 or k = 2 (the grain is then interpolated as a line, paper §4.4).
@@ -98,6 +101,7 @@ impl<'a> RenderInput<'a> {
             faces,
             normals,
             corner_normals: None,
+            surfaces: None,
             u,
             symmetry,
             ell: None,
@@ -263,6 +267,7 @@ pub(crate) fn render_with(
             faces: input.faces,
             normals: input.normals,
             corner_normals: input.corner_normals,
+            surfaces: input.surfaces,
         },
         vis: &vis,
         eye: camera.eye,

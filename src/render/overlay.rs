@@ -26,10 +26,36 @@ impl Ctx<'_> {
         self.mesh.surf(&self.vis.samples[k], &self.eye)
     }
 
-    /// The grain at a surface sample.
+    /// The grain at a surface sample: the corners' blend, or on a recognized curved face the
+    /// corners' grain extended off the surface first ([`crate::geometry::surfaces::ambient`]),
+    /// so that the blend projected onto the sample's normal is the surface's grain.
     pub fn grain(&self, s: &Surf, grain: &[Vector3<f64>]) -> Vector3<f64> {
         let c = self.mesh.corners(s);
-        s.grain(c.map(|i| grain[i]), self.symmetry)
+        let mut u = c.map(|i| grain[i]);
+        if self.mesh.surfaces.is_some_and(|f| f.curved(s.face).is_some()) {
+            if self.symmetry == Symmetry::Line {
+                for k in 1..3 {
+                    if u[k].dot(&u[0]) < 0.0 {
+                        u[k] = -u[k];
+                    }
+                }
+            }
+            let n = match self.mesh.corner_normals {
+                Some(cn) => cn[s.face],
+                None => c.map(|i| self.mesh.normals[i]),
+            };
+            let unit = |v: Vector3<f64>| v.try_normalize(1e-300).unwrap_or(v);
+            let n = n.map(unit);
+            let uu = [0, 1, 2].map(|k| unit(u[k] - n[k] * n[k].dot(&u[k])));
+            if let Some(a) = crate::geometry::surfaces::ambient::extend(uu, n) {
+                let b = a[0] * s.w[0] + a[1] * s.w[1] + a[2] * s.w[2];
+                let t = b - s.n * s.n.dot(&b);
+                if t.norm() > 1e-9 * b.norm() {
+                    return t.normalize();
+                }
+            }
+        }
+        s.grain(u, self.symmetry)
     }
 
     /// Runs `f` on every covered sample, row-parallel; returns the sum of `f`'s counts.

@@ -4,6 +4,7 @@
 use nalgebra::Vector3;
 
 use super::raster::{Sample, EMPTY};
+use crate::geometry::surfaces::FaceSurfaces;
 use crate::highlight::Symmetry;
 
 /// The mesh data the passes read.
@@ -13,6 +14,9 @@ pub(crate) struct MeshData<'a> {
     pub normals: &'a [Vector3<f64>],
     /// Per-corner shading normals, replacing `normals` when present.
     pub corner_normals: Option<&'a [[Vector3<f64>; 3]]>,
+    /// The recognized surface of each face: on a curved one the shading normal is the
+    /// surface's at the sample's nearest point, not the corners' blend.
+    pub surfaces: Option<&'a FaceSurfaces>,
 }
 
 /// The surface seen at one sample.
@@ -66,6 +70,10 @@ impl MeshData<'_> {
         } else {
             unit_geo()
         };
+        // On a recognized curved surface, its own normal, oriented as the corners'.
+        if let Some((_, m)) = self.surfaces.and_then(|s| s.project(face, &p)) {
+            n = if m.dot(&n) < 0.0 { -m } else { m };
+        }
         // Two-sided: a face seen from behind shades with its flipped normal.
         if geo.dot(&wo) < 0.0 {
             n = -n;

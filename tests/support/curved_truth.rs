@@ -35,6 +35,16 @@ pub struct CurvedTruth {
     boxes: Vec<[P; 2]>,
     /// Per face, how far a point of its triangles may stand off it (sagitta and float32).
     slack: Vec<f64>,
+    /// The face of each triangle, keyed by its corners as float32 (sorted): a glb triangle
+    /// is one of the part's.
+    by_corners: std::collections::HashMap<[[u32; 3]; 3], usize>,
+}
+
+/// A triangle's corners as float32 bits, sorted.
+fn corner_key(t: [[f32; 3]; 3]) -> [[u32; 3]; 3] {
+    let mut k = t.map(|p| p.map(f32::to_bits));
+    k.sort();
+    k
 }
 
 /// Per curved face: what was measured.
@@ -80,7 +90,15 @@ impl CurvedTruth {
         }
         let size = boxes.iter().fold(0.0f64, |m, b| m.max(norm(sub(b[1], b[0]))));
         let slack = part.tolerances.iter().map(|t| t.sagitta + 1e-5 * size).collect();
-        CurvedTruth { faces: part.faces.clone(), boxes, slack }
+        let by_corners = part
+            .triangles
+            .iter()
+            .zip(&part.face_of)
+            .map(|(t, &f)| {
+                (corner_key(t.map(|p| [p.x as f32, p.y as f32, p.z as f32])), f as usize)
+            })
+            .collect();
+        CurvedTruth { faces: part.faces.clone(), boxes, slack, by_corners }
     }
 
     /// The face `p` lies on (within its slack and its triangles' box), nearest first.
@@ -183,7 +201,9 @@ impl CurvedTruth {
             let tri = [tri[0], tri[1], tri[2]];
             let q: Vec<P> = tri.iter().map(|&i| d(g.p[i as usize])).collect();
             let c = [0, 1, 2].map(|k| (q[0][k] + q[1][k] + q[2][k]) / 3.0);
-            let Some(k) = self.face_at(c) else { continue };
+            // The part's own triangle when the glb kept it; else the face nearest its centroid.
+            let own = self.by_corners.get(&corner_key(tri.map(|i| g.p[i as usize]))).copied();
+            let Some(k) = own.or_else(|| self.face_at(c)) else { continue };
             if self.faces[k].is_planar() {
                 continue;
             }

@@ -558,6 +558,34 @@ impl VertexSurfaces {
     }
 }
 
+/// The recognized surface of each face of a part as prepared: what the strokes are lifted onto
+/// and the preview shades with per sample.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FaceSurfaces {
+    /// The surfaces' primitives.
+    pub primitives: Vec<Primitive>,
+    /// Per face, its surface ([`NO_SURFACE`] for none).
+    pub of: Vec<u32>,
+}
+
+impl FaceSurfaces {
+    /// The curved primitive (not a plane) face `f` lies on, if any.
+    pub fn curved(&self, f: usize) -> Option<&Primitive> {
+        let s = *self.of.get(f)?;
+        let prim = self.primitives.get(s as usize)?;
+        (!matches!(prim, Primitive::Plane { .. })).then_some(prim)
+    }
+
+    /// The point of face `f`'s curved surface nearest `p` and the unit normal there (either
+    /// sign), when `f` lies on one and both are finite.
+    pub fn project(&self, f: usize, p: &V3) -> Option<(V3, V3)> {
+        let prim = self.curved(f)?;
+        let n = prim.normal_at(p);
+        let q = prim.nearest(p, &n);
+        (q.iter().chain(n.iter()).all(|x| x.is_finite())).then_some((q, n))
+    }
+}
+
 /// Per vertex, the sum of its faces' unit normals (an orientation, not a normal).
 fn face_normals_at(mesh: &Mesh) -> Vec<V3> {
     let mut out = vec![V3::zeros(); mesh.num_vertices()];
