@@ -129,6 +129,34 @@ impl OnSurfaces {
     }
 }
 
+/// A rotary fixture's `axis: "auto"` on a part read as a body of revolution: the axis of its
+/// largest one ([`crate::geometry::surfaces::revolution`]), exact, rather than the axis
+/// fitted to the normals (`grainline_toolpaths::fit_axis`), which other parts keep.
+fn recognized_rotary_axis(
+    options: &mut grainline_toolpaths::JobOptions,
+    rec: &RecognizedPart,
+    mesh: &Mesh,
+) {
+    use grainline_toolpaths::{rotary::Auto, AxisSpec, RotaryAxis, ZMode};
+    let ZMode::Rotary { axis, .. } = &mut options.plan.z_mode else { return };
+    if *axis != AxisSpec::Auto(Auto::Auto) {
+        return;
+    }
+    let Some((lo, hi)) = mesh.bounding_box() else { return };
+    let found = crate::geometry::surfaces::revolution::largest_body_of_revolution(
+        &rec.surfaces,
+        (hi - lo).norm(),
+        mesh.area(),
+    );
+    if let Some(b) = found {
+        *axis = AxisSpec::Given(RotaryAxis {
+            point: b.point.into(),
+            direction: b.direction.into(),
+            zero: None,
+        });
+    }
+}
+
 /// Per triangle of the field mesh on a curved surface, its corners' grain extended off the
 /// surface ([`crate::geometry::surfaces::ambient`]); the toolpaths crate blends it and
 /// projects it onto the surface inside the triangle. A line field's corners are aligned to
@@ -188,7 +216,11 @@ pub fn trace(input: &TraceInput) -> Result<TracedStrokes> {
         }
     }
     let field_mesh = if input.keep_field_mesh { Some(fm.clone()) } else { None };
-    let mut job = grainline_toolpaths::generate(fm, &section.job_options(units))
+    let mut options = section.job_options(units);
+    if let Some(rec) = input.surfaces {
+        recognized_rotary_axis(&mut options, rec, input.mesh);
+    }
+    let mut job = grainline_toolpaths::generate(fm, &options)
         .map_err(|e| crate::scene::prefix("toolpaths", toolpath_error(e)))?;
     section.time_job(&mut job, units);
     let strokes_3d =

@@ -48,6 +48,7 @@ mod fit;
 mod grow;
 pub mod primitive;
 mod profile;
+pub mod revolution;
 
 use nalgebra::{Matrix3, Vector3};
 
