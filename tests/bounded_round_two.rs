@@ -384,3 +384,37 @@ fn control_characters_in_printed_paths_are_escaped() {
     assert!(e.contains("a\\u{1b}[31mred.json"), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// A curve zigzagging over the whole vase with a small radius asks for its whole trace at
+/// r/8: about 10⁷ new vertices. It is refused from the estimate before any split, naming the
+/// edit, the estimate and `mesh.refine.max_vertices` (it used to be refined until the budget
+/// stopped it, seconds later, naming the budget only), and nothing is written.
+#[test]
+fn a_zigzag_curve_refused_from_its_refinement_estimate_naming_the_edit() {
+    let d = dir("zigzag");
+    // 10⁴ points around the vase (R = 30 + 8 sin(πz/60)), z alternating 5 and 55 mm.
+    let points: Vec<String> = (0..10_000)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 10_000.0;
+            let z: f64 = if k % 2 == 0 { 5.0 } else { 55.0 };
+            let r = 30.0 + 8.0 * (std::f64::consts::PI * z / 60.0).sin();
+            format!("[{:.4}, {:.4}, {z}]", r * a.cos(), r * a.sin())
+        })
+        .collect();
+    let edit = format!(r#"{{"tool": "curve", "points": [[{}]], "radius": 0.5}}"#, points.join(","));
+    let sc = scene(&d, &format!(r#", "edits": [{edit}]"#));
+    let o = grainline(&["--quiet", "run", sc.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    for w in
+        ["edits[0]: refining the part for this curve would add about", "mesh.refine.max_vertices"]
+    {
+        assert!(e.contains(w), "wanted {w:?} in: {e}");
+    }
+    // The estimate, a·10ᵇ with b ≥ 6, is past the budget of 2 × 10⁶.
+    let about = e.split("about ").nth(1).and_then(|s| s.split(' ').next()).unwrap();
+    let estimate: f64 = about.parse().unwrap();
+    assert!(estimate > 2e6, "{about}: {e}");
+    assert_eq!(tree(&d), ["scene.json", "vase.obj"]);
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -138,6 +138,44 @@ fn truncated_lines_name_their_line() {
     one_line(&e, "bad_number.obj");
 }
 
+/// Issue 46: `v x y z r g b [a]` (scan exports) and `v x y z w` load with the right
+/// positions whichever reader reads the numbers; other counts, a `w` of zero or not finite and
+/// a colour that is not a number are refused naming the file, the line and what was found.
+#[test]
+fn vertex_colours_and_weights_load_and_bad_counts_name_their_line() {
+    use grainline::mesh::load::{load_obj_with, ObjParser};
+    use nalgebra::Vector3;
+    for parser in [ObjParser::Auto, ObjParser::Tobj, ObjParser::Parallel] {
+        let m = load_obj_with(&data("vertex_colours.obj"), &LoadOptions::default(), parser)
+            .unwrap_or_else(|e| panic!("{parser:?}: {e}"));
+        let want = [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0]];
+        let want: Vec<Vector3<f64>> = want.iter().map(|&p| Vector3::from(p)).collect();
+        assert_eq!(m.mesh.positions, want, "{parser:?}");
+        assert_eq!(m.mesh.faces.len(), 4);
+    }
+    let dir = std::env::temp_dir().join(format!("grainline-colours-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (line, wanted) in [
+        ("v 0 1 0 1 0", "vertex with 5 numbers; a vertex takes 3 (x y z), 4 (x y z w)"),
+        ("v 0 1 0 1 0 0 1 1", "vertex with 8 numbers"),
+        ("v 0 1", "vertex with 2 numbers; a vertex takes 3 (x y z), 4 (x y z w) or 6 to 7"),
+        ("v 0 1 0 0.5 red 0", "bad number \"red\""),
+        ("v 0 1 0 0", "vertex weight w is zero"),
+        ("v 0 1 0 inf", "vertex weight w is inf"),
+        ("v 0 1 0 NaN", "vertex weight w is NaN"),
+    ] {
+        let p = dir.join("bad.obj");
+        std::fs::write(&p, format!("v 0 0 0\nv 1 0 0\n{line}\nf 1 2 3\n")).unwrap();
+        for parser in [ObjParser::Tobj, ObjParser::Parallel] {
+            let e = load_obj_with(&p, &LoadOptions::default(), parser).unwrap_err();
+            assert!(matches!(e, Error::Parse { line: 3, .. }), "{line}: {e}");
+            let s = one_line(&e, "bad.obj");
+            assert!(s.contains("bad.obj:3:") && s.contains(wanted), "{line}: {s}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn binary_garbage_missing_file_directory_and_empty_file() {
     let e = err("garbage.obj");

@@ -94,7 +94,8 @@ struct Spec {
     /// Split the faces into two objects, and name forms.
     objects: u8,
     /// A defect to insert: 0 none, 1 bad number, 2 w = 0, 3 index out of range, 4 nan,
-    /// 5 forward reference, 6 `l` statement, 7 vertex colours, 8 `w` on every vertex,
+    /// 5 forward reference, 6 `l` statement, 7 vertex colours (`r g b` on the first vertex,
+    /// `r g b a` on the seed's), 8 `w` on every vertex,
     /// 9 vt after the first object, 10 a zero-area face, 11 a non-manifold fin.
     defect: u8,
 }
@@ -129,6 +130,8 @@ fn generate(s: &Spec) -> String {
             }
             if s.defect == 7 && k == 0 {
                 vertices.push_str(" 0.1 0.2 0.3");
+            } else if s.defect == 7 && seed(k) % 3 == 0 {
+                vertices.push_str(" 0 1 0.5 1");
             }
             if s.defect == 1 && k == n + 1 {
                 vertices.push('x');
@@ -289,6 +292,10 @@ fn edge_forms_agree_and_load() {
     // An `o` line with leading whitespace names the object "o x" (tobj's rule), empty "o".
     let out = ok(" o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\no\nf 1 3 4\n");
     assert!(out.contains("\"o x\"") && out.contains("unnamed_object"), "{out}");
+    // Vertex colours (issue 46): r g b and r g b a on some vertices, beside a `w`; never a
+    // weight.
+    let out = ok("v 0 0 0 0 0 0\nv 2 0 0 0.1 0.2 0.3 1\nv 0 4 0 2\nv 0 0 1\nf 1 2 3\nf 2 1 4\n");
+    assert!(out.contains("[2.0, 0.0, 0.0]") && out.contains("[0.0, 2.0, 0.0]"), "{out}");
     // The objects' names are the scanner's, as tobj forms them: `g` before any face renames.
     let out = ok("g a\ng b\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     assert!(out.contains("[\"b\"]"), "{out}");
@@ -304,6 +311,9 @@ fn errors_agree() {
     err("v 0 0 0\nv 1 0 0 0\nv 0 1 0\nf 1 2 3\n", "err.obj:2: vertex weight");
     err("v 0 0 0\nv 1 0 inf\nv 0 1 0\nf 1 2 3\n", "err.obj:2: vertex 2");
     err("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 x\nf 1/1 2/1 3/1\n", "err.obj:4: bad number");
+    err("v 0 0 0\nv 1 0 0 1 1\nv 0 1 0\nf 1 2 3\n", "err.obj:2: vertex with 5 numbers");
+    err("v 0 0 0\nv 1 0 0 inf\nv 0 1 0\nf 1 2 3\n", "err.obj:2: vertex weight w is inf");
+    err("v 0 0 0 1 1 1\nv 1 0 x 1 1 1\nv 0 1 0\nf 1 2 3\n", "err.obj:2: bad number");
     err("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "err.obj:4:");
     // An object with faces before any `vt`, then one with UVs: tobj gives the first object no
     // texture indices, which the loader refuses; the parallel reader must refuse it too.

@@ -198,3 +198,43 @@ fn malformed_path_data_is_an_error_not_a_panic() {
     assert_eq!(l.len(), 1);
     assert_eq!(l[0].points.len(), 3);
 }
+
+/// Issue 46: the even-odd area of 2 × 10⁴ separate rects, a hole in every other one and an
+/// island in every fourth hole, inside one long outline: exact (every coordinate dyadic), in
+/// time about linear in the loops (each loop is tested against the boxes that hold it).
+#[test]
+fn the_even_odd_area_of_many_nested_loops_is_exact() {
+    use grainline::panel::{even_odd_area, Loop};
+    let square = |c: [f64; 2], r: f64, per_side: usize| {
+        let corners = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        let mut points = Vec::new();
+        for k in 0..4 {
+            let (a, b) = (corners[k], corners[(k + 1) % 4]);
+            for s in 0..per_side {
+                let t = s as f64 / per_side as f64;
+                points.push([0, 1].map(|i| c[i] + r * (a[i] + t * (b[i] - a[i]))));
+            }
+        }
+        Loop { points, element: format!("square at {c:?}"), line: 0 }
+    };
+    let (side, n) = (142usize, 142 * 142);
+    let mut loops = vec![square([71.0, 71.0], 72.0, 64)];
+    let (mut holes, mut islands) = (0, 0);
+    for k in 0..n {
+        let c = [(k % side) as f64 + 0.5, (k / side) as f64 + 0.5];
+        loops.push(square(c, 0.25, 1));
+        if k % 2 == 0 {
+            loops.push(square(c, 0.125, 1));
+            holes += 1;
+            if k % 4 == 0 {
+                loops.push(square(c, 0.0625, 1));
+                islands += 1;
+            }
+        }
+    }
+    assert!(loops.len() > 30_000, "{}", loops.len());
+    // The outline 144², minus the rects (¼ each), plus their holes (¹⁄₁₆), minus the islands
+    // (¹⁄₆₄): every partial sum a multiple of ¹⁄₆₄, exact.
+    let want = 144.0 * 144.0 - 0.25 * n as f64 + holes as f64 / 16.0 - islands as f64 / 64.0;
+    assert_eq!(even_odd_area(&loops), want);
+}

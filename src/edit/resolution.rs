@@ -82,12 +82,34 @@ struct Region {
     edge: f64,
 }
 
+impl Region {
+    /// The area of the region's trace on a surface, at most: 2 × reach × its polylines'
+    /// length + π reach² for each (a ball's πr² for a lone point).
+    fn area(&self) -> f64 {
+        let r = self.reach;
+        let finite = |w: &[Vector3<f64>]| w.iter().all(|p| p.iter().all(|c| c.is_finite()));
+        self.lines
+            .iter()
+            .map(|l| {
+                let length: f64 =
+                    l.windows(2).filter(|w| finite(w)).map(|w| (w[1] - w[0]).norm()).sum();
+                2.0 * r * length + std::f64::consts::PI * r * r
+            })
+            .sum()
+    }
+}
+
 /// A region with the edge it asks for, and its segments bucketed for distance queries.
 #[derive(Clone, Debug)]
 struct Marked {
     region: Region,
     want: f64,
     grid: SegmentGrid,
+    /// The edit that asked (its index in the scene's `edits`).
+    edit: usize,
+    /// The area to be refined: the faces it reaches that are coarser than `want`, at most the
+    /// region's own area ([`Region::area`]).
+    area: f64,
 }
 
 /// What the edits ask of the refinement: the edge each face of the part needs, and the
@@ -166,6 +188,26 @@ fn transport(w: &Vector3<f64>, from: &Vector3<f64>, to: &Vector3<f64>) -> Vector
     w + a.cross(w) + a.cross(&a.cross(w)) / (1.0 + c)
 }
 
+/// About how many vertices refining for one edit adds ([`Resolution::estimates`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefineEstimate {
+    /// The edit's index in the scene's `edits`.
+    pub edit: usize,
+    /// The area to be refined (scene units²).
+    pub area: f64,
+    /// The edge asked there (scene units).
+    pub edge: f64,
+    /// [`VERTICES_PER_EDGE_SQUARE`] × area / edge².
+    pub vertices: f64,
+}
+
+/// Vertices that longest-edge bisection adds per edge² of area refined to an edge `e`: it
+/// stops when the longest edge is at most `e` and its children's is then at least `e/√2`, so
+/// the triangles it leaves have areas between about e²/8 and e²/4 (right isosceles ones,
+/// e²/6 on average), and a surface has about half as many vertices as triangles: 3/e².
+/// On the kettle, a curve whose tube covers 1.4 × 10⁴ mm² at e = 0.25 mm added 6.4 × 10⁵.
+pub const VERTICES_PER_EDGE_SQUARE: f64 = 3.0;
+
 impl PartialEq for Resolution {
     fn eq(&self, other: &Self) -> bool {
         self.faces == other.faces
@@ -180,6 +222,26 @@ impl PartialEq for Resolution {
 }
 
 impl Resolution {
+    /// About how many vertices the refinement adds for each edit that asks for any, before
+    /// any is added: [`VERTICES_PER_EDGE_SQUARE`] × A / e², A the area of the part's faces
+    /// within the edit's reach and coarser than its edge e, at most the area of its region
+    /// (a ball's πr², a tube's 2r × its length + πr²: the faces a split makes are asked again,
+    /// so a long face touched by a brush is refined near it only). Linear in a curve's length
+    /// whatever its points; the half vector's turn (at most [`MIN_TURN_SCALE`] of the edge,
+    /// near critical points and folds) is not counted.
+    pub fn estimates(&self) -> Vec<RefineEstimate> {
+        self.marked
+            .iter()
+            .filter(|m| m.area > 0.0)
+            .map(|m| RefineEstimate {
+                edit: m.edit,
+                area: m.area,
+                edge: m.want,
+                vertices: VERTICES_PER_EDGE_SQUARE * m.area / (m.want * m.want),
+            })
+            .collect()
+    }
+
     /// The finest edge asked anywhere (`f64::INFINITY` when no face asks).
     pub fn finest(&self) -> f64 {
         self.faces.iter().copied().fold(f64::INFINITY, f64::min)
@@ -249,9 +311,10 @@ pub fn edit_resolution(mesh: &Mesh, edits: &[Edit], edge: f64) -> Result<Resolut
         if !(want.is_finite() && want > 0.0) {
             continue;
         }
-        if mark(mesh, &region, want, &mut target) {
-            let grid = SegmentGrid::new(&region.lines, region.reach);
-            marked.push(Marked { region, want, grid });
+        let grid = SegmentGrid::new(&region.lines, region.reach);
+        if let Some(area) = mark(mesh, &region, &grid, want, &mut target) {
+            let area = area.min(region.area());
+            marked.push(Marked { region, want, grid, edit: k, area });
         }
     }
     Ok(Resolution { faces: target, marked, turn: None })
@@ -273,6 +336,8 @@ impl SegmentGrid {
     const SCAN: usize = 16;
     /// Most cells per axis across the segments' box.
     const MAX_CELLS: f64 = 256.0;
+    /// Most listings of segments in cells, besides two per segment.
+    const MAX_SAMPLES: f64 = 4e6;
 
     fn new(lines: &[Vec<Vector3<f64>>], reach: f64) -> SegmentGrid {
         let finite = |p: &Vector3<f64>| p.iter().all(|c| c.is_finite());
@@ -289,7 +354,10 @@ impl SegmentGrid {
         if segments.len() <= Self::SCAN || !(lo.x <= hi.x) {
             return SegmentGrid { segments, cells: None };
         }
-        let cell = reach.max((hi - lo).max() / Self::MAX_CELLS);
+        // Each segment is listed every half cell: at most MAX_SAMPLES + 2 per segment in all.
+        let length: f64 = segments.iter().map(|[a, b]| (b - a).norm()).sum();
+        let cell =
+            reach.max((hi - lo).max() / Self::MAX_CELLS).max(2.0 * length / Self::MAX_SAMPLES);
         if !(cell.is_finite() && cell > 0.0) {
             return SegmentGrid { segments, cells: None };
         }
@@ -370,23 +438,33 @@ fn region_of(mesh: &Mesh, e: &Edit) -> Result<Option<Region>> {
     })
 }
 
-/// Lowers `target` to `want` on every face that reaches within `region.reach` of its lines;
-/// whether the region asks for anything (it may not: see [`mark_between_vertices`]).
-fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) -> bool {
+/// Lowers `target` to `want` on every face that reaches within `region.reach` of its lines
+/// (`grid`, the lines' segments: each vertex and face is compared with the segments near it, so
+/// the work is linear in the curve's points); the area of the faces it reaches that are coarser
+/// than `want`, `None` when the region asks for nothing (it may not: see
+/// [`mark_between_vertices`]).
+fn mark(
+    mesh: &Mesh,
+    region: &Region,
+    grid: &SegmentGrid,
+    want: f64,
+    target: &mut [f64],
+) -> Option<f64> {
     let (lo, hi) = bounds(region.lines.iter().flatten());
     if !(lo.x <= hi.x) {
-        return false;
+        return None;
     }
     let n = mesh.num_vertices();
     // A brush or tube that holds none of the part's vertices lies on triangles larger than
     // itself, or its radius is a slip of units (module docs): `mark_between_vertices` decides.
     let holds_a_vertex = mesh.positions.iter().any(|p| {
         let near = (0..3).all(|i| p[i] >= lo[i] - region.reach && p[i] <= hi[i] + region.reach);
-        near && region.lines.iter().any(|l| polyline_distance(p, l) <= region.reach)
+        near && grid.within(p, region.reach)
     });
     if !holds_a_vertex {
         return mark_between_vertices(mesh, region, want, target);
     }
+    let mut area = 0.0;
     for (f, face) in mesh.faces.iter().enumerate() {
         if face.iter().any(|&v| v as usize >= n) {
             continue;
@@ -399,22 +477,38 @@ fn mark(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) -> bool {
         if outside || !(reach.is_finite()) {
             continue;
         }
-        let d = region.lines.iter().map(|l| polyline_distance(&c, l)).fold(f64::INFINITY, f64::min);
-        if d <= reach {
+        if grid.within(&c, reach) {
             target[f] = target[f].min(want);
+            area += coarse_area(&p, want);
         }
     }
-    true
+    Some(area)
+}
+
+/// The area of the triangle `p` when its longest edge is longer than `want` (it is split), else 0.
+fn coarse_area(p: &[Vector3<f64>; 3], want: f64) -> f64 {
+    let longest = (0..3).map(|k| (p[(k + 1) % 3] - p[k]).norm()).fold(0.0, f64::max);
+    if longest > want {
+        0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm()
+    } else {
+        0.0
+    }
 }
 
 /// [`mark`] for a region that holds no vertex: nothing when the region is small against the
 /// part (a slip of units, refused by its tool), else `want` on the faces within the reach.
-fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [f64]) -> bool {
+fn mark_between_vertices(
+    mesh: &Mesh,
+    region: &Region,
+    want: f64,
+    target: &mut [f64],
+) -> Option<f64> {
     let (lo, hi) = bounds(mesh.positions.iter());
     let diagonal = (hi - lo).norm();
     if !(diagonal.is_finite() && region.reach >= MIN_REACH_SHARE * diagonal) {
-        return false;
+        return None;
     }
+    let mut area = 0.0;
     // The region's points, its polylines sampled every half reach (coarser, at most
     // MAX_SAMPLES in all, for a polyline longer than MAX_SAMPLES half reaches): the distance
     // of a face to the samples exceeds its distance to the polyline by at most half a step.
@@ -456,9 +550,10 @@ fn mark_between_vertices(mesh: &Mesh, region: &Region, want: f64, target: &mut [
         });
         if near {
             target[f] = target[f].min(want);
+            area += coarse_area(&[a, b, c], want);
         }
     }
-    true
+    Some(area)
 }
 
 /// The box of the finite points (lo > hi when there is none).
@@ -469,17 +564,6 @@ fn bounds<'a>(points: impl Iterator<Item = &'a Vector3<f64>>) -> (Vector3<f64>, 
         hi = hi.sup(p);
     }
     (lo, hi)
-}
-
-fn polyline_distance(p: &Vector3<f64>, line: &[Vector3<f64>]) -> f64 {
-    match line {
-        [] => f64::INFINITY,
-        [a] => (p - a).norm(),
-        _ => line
-            .windows(2)
-            .map(|w| segment_distance(p, &[w[0], w[1]]))
-            .fold(f64::INFINITY, f64::min),
-    }
 }
 
 #[cfg(test)]
@@ -664,6 +748,55 @@ mod tests {
         let t = edit_resolution(&m, &[curve], 0.5).unwrap().faces;
         assert!((t[0] - 0.05625).abs() < 1e-12, "{}", t[0]);
         assert!(t[19].is_infinite());
+    }
+
+    /// Issue 46: a curve's request and its estimate follow its length, not its points. The
+    /// same line in 2 or 2,001 points marks the same faces with the same estimate, a zigzag of
+    /// tiny steps inside its own tube asks no more than the strip holds, and each estimate is
+    /// 3 × the coarse faces' area within the tube's area / e².
+    #[test]
+    fn a_curve_s_estimate_follows_its_length_not_its_points() {
+        let m = strip();
+        let curve = |points: Vec<[f64; 3]>| {
+            Edit::Curve(CurveEdit {
+                svg: None,
+                uv: None,
+                points: Some(vec![points]),
+                radius: 0.6,
+                weight: 1.0,
+                tolerance: 1e-3,
+                width: None,
+            })
+        };
+        let fine: Vec<[f64; 3]> = (0..=2000).map(|k| [k as f64 * 0.002, 0.5, 0.0]).collect();
+        let a = edit_resolution(&m, &[curve(vec![[0.0, 0.5, 0.0], [4.0, 0.5, 0.0]])], 0.5).unwrap();
+        let b = edit_resolution(&m, &[curve(fine)], 0.5).unwrap();
+        assert_eq!(a.faces, b.faces);
+        let (ea, eb) = (a.estimates(), b.estimates());
+        assert_eq!(ea.len(), 1);
+        // Every face the tube reaches (area ½, edges ≥ 1) is coarser than its edge 0.1125.
+        let reached = |t: &[f64]| 0.5 * t.iter().filter(|x| x.is_finite()).count() as f64;
+        let e = ea[0];
+        assert_eq!((e.edit, e.edge, e.area), (0, 0.6 * 0.5 * CURVE_EDGE, reached(&a.faces)));
+        assert!((5.0..=6.0).contains(&e.area), "{e:?}");
+        assert!((e.vertices - 3.0 * e.area / (e.edge * e.edge)).abs() < 1e-9 * e.vertices);
+        assert!((eb[0].vertices - e.vertices).abs() < 1e-9 * e.vertices, "{eb:?}");
+        // 10⁴ steps of ±0.05 across y = 0.5 over 4 units: 1000 units long, a tube of 1200
+        // units², yet it asks for the faces it reaches (those of the line, ± the last square).
+        let zigzag: Vec<[f64; 3]> = (0..=10_000)
+            .map(|k| [k as f64 * 4e-4, if k % 2 == 0 { 0.45 } else { 0.55 }, 0.0])
+            .collect();
+        let z = edit_resolution(&m, &[curve(zigzag)], 0.5).unwrap();
+        let ez = z.estimates()[0];
+        assert_eq!(ez.area, reached(&z.faces));
+        assert!((ez.area - e.area).abs() <= 1.0, "{ez:?} {e:?}");
+        // A short curve's estimate is bounded by its tube, not by the faces it touches:
+        // 2 × 0.6 × 0.01 + π 0.6².
+        let dot = edit_resolution(&m, &[curve(vec![[2.5, 0.5, 0.0], [2.51, 0.5, 0.0]])], 0.5)
+            .unwrap()
+            .estimates();
+        let tube = 2.0 * 0.6 * 0.01 + std::f64::consts::PI * 0.36;
+        assert!((dot[0].area - tube).abs() < 1e-12, "{dot:?}");
     }
 
     /// A light and a view both along +z: h = z, and h̄ on the unit sphere points to the pole.

@@ -33,13 +33,19 @@
 //! corners of the two agree one to one, which is checked.
 //!
 //! Files of [`PARALLEL_MIN_BYTES`] or more that stay within what it reproduces exactly (ASCII,
-//! no forward face indices, no `l` statements, no vertex colours) have their numbers read by a
+//! no forward face indices, no `l` statements) have their numbers read by a
 //! parallel parser (`parse.rs`) instead of tobj, and their objects formed by the scanner the way
 //! tobj forms them ([`ObjParser`]); the mesh, the report and every error are the same
 //! (tests/mesh_parser_equivalence.rs). When the parallel parser meets a number it cannot read,
 //! tobj reads the file and reports it. Most such files need only one pass: a parallel scan that
 //! parses the numbers as it goes (`scan_parallel.rs`); it gives the two passes' result or gives
 //! way to them.
+//!
+//! A `v` statement holds 3 numbers (x y z), 4 (x y z w: the position is (x, y, z)/w, w finite
+//! and non-zero) or 6 to 7 (`x y z r g b [a]`: a vertex colour, as scan exports write it, read
+//! and not used); any other count is refused naming the line. tobj cannot read colours (it
+//! refuses `r g b a`, and a file where only some vertices have one), so a file with colours
+//! has its numbers read by the parallel parser whichever [`ObjParser`] is chosen.
 
 use std::path::Path;
 
@@ -210,6 +216,12 @@ pub fn load_obj_with(path: &Path, options: &LoadOptions, parser: ObjParser) -> R
     let scanned = scanned?;
     let parsed = match numbers {
         Numbers::Parallel(Some(v)) if parallel_fits(&scanned, &v) => Ok(v),
+        // tobj cannot read vertex colours: the number parser reads them whatever the choice
+        // (tobj reports a number it cannot read).
+        _ if scanned.colours => match parse::values(&bytes) {
+            Some(v) if same_counts(&scanned, &v) => Ok(v),
+            _ => Err(run_tobj(&bytes)),
+        },
         Numbers::Parallel(_) => Err(run_tobj(&bytes)),
         Numbers::Tobj(t) => Err(t),
     };
@@ -241,15 +253,18 @@ enum Numbers {
 /// the file stays within what they reproduce, and every object with faces that uses `vt`
 /// (`vn`) comes after at least one `vt` (`vn`) statement, as tobj requires.
 fn parallel_fits(scan: &Scan, values: &Values) -> bool {
-    let counts = values.v.len() == scan.num_v
-        && values.vt.len() == scan.num_vt
-        && values.vn.len() == scan.num_vn;
+    let counts = same_counts(scan, values);
     let attrs = scan.models.iter().all(|m| {
         m.len == 0
             || ((scan.corner_vt.is_empty() || m.vt_at_end > 0)
                 && (scan.corner_vn.is_empty() || m.vn_at_end > 0))
     });
     scan.parallel_ok && counts && attrs
+}
+
+/// Whether the number parser read as many `v`, `vt` and `vn` as the scanner counted.
+fn same_counts(scan: &Scan, values: &Values) -> bool {
+    values.v.len() == scan.num_v && values.vt.len() == scan.num_vt && values.vn.len() == scan.num_vn
 }
 
 fn scanned_models(scan: &Scan) -> Vec<Model> {
@@ -720,11 +735,13 @@ mod tests {
         let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
         assert!(fits(&format!("{tri}o a\nf 1 2 3\ng b\nf -3 -2 -1\n")));
         assert!(fits(&format!("{tri}vt 0 0\nf 1/1 2/1 3/1\r\n")));
-        // A forward index, a polyline, vertex colours, non-ASCII text, and an object with faces
+        // Vertex colours are the parallel parser's only.
+        assert!(fits("v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 1 1 1 0.5\nf 1 2 3\n"));
+        // A forward index, a polyline, non-ASCII text, and an object with faces
         // before the first `vt` of a file whose faces use `vt`: tobj reads these.
         assert!(!fits(&format!("f 1 2 3\n{tri}")));
         assert!(!fits(&format!("{tri}l 1 2\nf 1 2 3\n")));
-        assert!(!fits("v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+
         assert!(!fits(&format!("# \u{e9}\n{tri}f 1 2 3\n")));
         assert!(!fits(&format!("{tri}f 1 2 3\no b\nvt 0 0\nf 1/1 2/1 3/1\n")));
     }

@@ -5,7 +5,9 @@
 //! Numbers are parsed exactly as tobj parses them (`f64::from_str` on the whitespace-separated
 //! tokens, `v x y z w` divided by `w`, only the first two numbers of a `vt`), so on the files it
 //! accepts it gives tobj's values bit for bit. It gives up (returns `None`) on anything tobj
-//! would refuse (a bad number, `w = 0`); the loader then runs tobj, whose error it reports.
+//! would refuse (a bad number, `w = 0`) and on a `w` that is not finite, which the scanner
+//! refuses; the loader then runs tobj, whose error it reports.
+//! It also reads what tobj cannot, vertex colours (`v x y z r g b [a]`, the colour not used).
 //! Statement syntax, indices and line numbers are the scanner's job (`scan.rs`).
 
 use rayon::prelude::*;
@@ -74,6 +76,31 @@ fn numbers<'a, const N: usize>(toks: &mut impl Iterator<Item = &'a [u8]>) -> Opt
     Some(out)
 }
 
+/// The position of a `v` statement from the numbers after `v`: `x y z`; `x y z w`, the
+/// position (x, y, z)/w (tobj's division), `None` unless `w` is finite and non-zero; or
+/// `x y z r g b [a]`, a vertex colour, `None` unless its values are numbers (they are not used).
+/// Any other count is `None` (the scanner refuses it, naming the line).
+pub(crate) fn position<'a>(toks: &mut impl Iterator<Item = &'a [u8]>) -> Option<[f64; 3]> {
+    let mut p = numbers::<3>(toks)?;
+    let Some(first) = toks.next() else { return Some(p) };
+    let first = number(first)?;
+    let mut colour = 1;
+    for t in toks {
+        number(t)?;
+        colour += 1;
+    }
+    match colour {
+        1 if first != 0.0 && first.is_finite() => {
+            for c in &mut p {
+                *c /= first;
+            }
+            Some(p)
+        }
+        3 | 4 => Some(p),
+        _ => None,
+    }
+}
+
 fn chunk_values(chunk: &[u8]) -> Option<Values> {
     let mut out = Values::default();
     for line in chunk.split(|&b| b == b'\n') {
@@ -84,20 +111,7 @@ fn chunk_values(chunk: &[u8]) -> Option<Values> {
         }
         let mut toks = line.split(|&b| is_space(b)).filter(|t| !t.is_empty());
         match toks.next() {
-            Some(b"v") => {
-                let mut p = numbers::<3>(&mut toks)?;
-                // `v x y z w` (the scanner allows 3, 4 or 6 numbers; 6 never reaches here).
-                if let Some(w) = toks.next() {
-                    let w = number(w)?;
-                    if w == 0.0 {
-                        return None;
-                    }
-                    for c in &mut p {
-                        *c /= w;
-                    }
-                }
-                out.v.push(p);
-            }
+            Some(b"v") => out.v.push(position(&mut toks)?),
             Some(b"vt") => out.vt.push(numbers::<2>(&mut toks)?),
             Some(b"vn") => out.vn.push(numbers::<3>(&mut toks)?),
             _ => {}
@@ -119,5 +133,12 @@ mod tests {
         assert_eq!(v.vn, vec![[0.0, 0.0, 1.0]]);
         assert!(values(b"v 1 2 x\n").is_none());
         assert!(values(b"v 1 2 3 0\n").is_none());
+        assert!(values(b"v 1 2 3 inf\n").is_none());
+        // Colours are read past, never as a weight; 5 or 8 numbers, or a bad colour, fail.
+        let v = values(b"v 1 2 3 0 0.5 1\nv 4 5 6 0 0 0 1\nv 2 4 6 2\n").unwrap();
+        assert_eq!(v.v, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [1.0, 2.0, 3.0]]);
+        for bad in ["v 1 2 3 1 1\n", "v 1 2 3 1 1 1 1 1\n", "v 1 2 3 1 x 1\n"] {
+            assert!(values(bad.as_bytes()).is_none(), "{bad}");
+        }
     }
 }

@@ -37,8 +37,12 @@ pub(crate) struct Scan {
     /// The objects as tobj forms them, in file order (always at least one).
     pub models: Vec<ScanModel>,
     /// False when the file has something only tobj handles exactly: non-ASCII bytes, face
-    /// indices that refer forward, `l` statements, or vertex colours.
+    /// indices that refer forward, or `l` statements.
     pub parallel_ok: bool,
+    /// Whether some `v` statement has a vertex colour (`x y z r g b [a]`). tobj cannot read
+    /// such a file (it refuses `r g b a`, and fails when only some vertices have a colour), so
+    /// its numbers are the parallel parser's whatever the reader chosen.
+    pub colours: bool,
 }
 
 /// An object as tobj forms it: the faces from one `o`/`g` statement that follows a face (or
@@ -220,12 +224,7 @@ impl Scanner<'_> {
         let Some(kw) = toks.next() else { return Ok(()) };
         match kw {
             b"v" => {
-                let n = toks.count();
-                if !matches!(n, 3 | 4 | 6) {
-                    return Err(self.truncated(line_no, "vertex", "3 coordinates", n));
-                }
-                // Vertex colours: tobj's handling of partial colours is not reproduced.
-                self.out.parallel_ok &= n != 6;
+                self.vertex(line_no, toks)?;
                 self.out.num_v += 1;
             }
             b"vt" => {
@@ -274,6 +273,60 @@ impl Scanner<'_> {
                     line_no,
                     format!("unexpected text {}; not an OBJ statement", show(kw)),
                 ))
+            }
+        }
+        Ok(())
+    }
+
+    /// A `v` statement: `x y z`; `x y z w`, homogeneous, the position (x, y, z)/w, so `w` must
+    /// be a finite non-zero number; or `x y z r g b [a]`, a vertex colour (scan exports write
+    /// it), whose values must be numbers and are not used. The coordinates themselves are the
+    /// number reader's (tobj or [`super::parse`]).
+    fn vertex<'t>(&mut self, line_no: usize, toks: impl Iterator<Item = &'t [u8]>) -> Result<()> {
+        let mut rest: [&[u8]; 4] = [&[]; 4];
+        let mut n = 0;
+        for t in toks {
+            if (3..7).contains(&n) {
+                rest[n - 3] = t;
+            }
+            n += 1;
+        }
+        let number = |t: &[u8]| match super::parse::number(t) {
+            Some(x) => Ok(x),
+            None => Err(parse_err(self.path, line_no, format!("bad number {}", show(t)))),
+        };
+        match n {
+            3 => {}
+            4 => {
+                let w = number(rest[0])?;
+                if w == 0.0 || !w.is_finite() {
+                    let w = if w == 0.0 { "zero".to_string() } else { format!("{w}") };
+                    return Err(parse_err(
+                        self.path,
+                        line_no,
+                        format!(
+                            "vertex weight w is {w}; the position is (x, y, z)/w, so w must be \
+                             finite and non-zero"
+                        ),
+                    ));
+                }
+            }
+            6 | 7 => {
+                for &t in &rest[..n - 3] {
+                    number(t)?;
+                }
+                self.out.colours = true;
+            }
+            _ => {
+                let hint = if n < 3 { " (truncated line?)" } else { "" };
+                return Err(parse_err(
+                    self.path,
+                    line_no,
+                    format!(
+                        "vertex with {n} numbers; a vertex takes 3 (x y z), 4 (x y z w) \
+                         or 6 to 7 (x y z r g b [a], the colour not used){hint}"
+                    ),
+                ));
             }
         }
         Ok(())
@@ -427,12 +480,13 @@ pub(crate) fn line_of(bytes: &[u8], kind: Kind, index: usize) -> usize {
 }
 
 /// Finds the line behind an error tobj reported without one: the first number tobj cannot
-/// parse (as `f32`), or a `w` of zero.
+/// parse (as `f32`), or a `w` of zero (the scanner has checked `w` and colours already).
 pub(crate) fn locate_tobj_error(path: &Path, bytes: &[u8], err: tobj::LoadError) -> Error {
     for (line_no, line) in lines(bytes) {
         let mut toks = tokens(line);
         let need = match toks.next() {
-            Some(b"v") => 4,
+            // x y z, and w when it is the fourth and last number (not a colour's red).
+            Some(b"v") => 3 + usize::from(tokens(line).count() == 5),
             Some(b"vt") => 2,
             Some(b"vn") => 3,
             _ => continue,
@@ -477,6 +531,25 @@ mod tests {
         assert!(matches!(e, Error::IndexOutOfRange { line: 2, .. }), "{e}");
         let e = run("v 0 0 0\n\u{1}\u{2}\n").unwrap_err();
         assert!(matches!(e, Error::Parse { line: 2, .. }), "{e}");
+    }
+
+    #[test]
+    fn vertex_forms() {
+        let s = run("v 0 0 0\nv 1 0 0 2\nv 0 1 0 1 1 1\nv 0 0 1 1 1 1 1\n").unwrap();
+        assert_eq!((s.num_v, s.colours, s.parallel_ok), (4, true, true));
+        assert!(!run("v 0 0 0 2\n").unwrap().colours);
+        for (text, want) in [
+            ("v 0 0 0\nv 1 0 0 1 1\n", "vertex with 5 numbers"),
+            ("v 0 0 0\nv 1 0 0 1 1 1 1 1\n", "vertex with 8 numbers"),
+            ("v 0 0 0\nv 1 0 0 -0\n", "vertex weight w is zero"),
+            ("v 0 0 0\nv 1 0 0 -inf\n", "vertex weight w is -inf"),
+            ("v 0 0 0\nv 1 0 0 w\n", "bad number \"w\""),
+            ("v 0 0 0\nv 1 0 0 1 x 1\n", "bad number \"x\""),
+        ] {
+            let e = run(text).unwrap_err();
+            assert!(matches!(e, Error::Parse { line: 2, .. }), "{e}");
+            assert!(e.to_string().contains(want), "{e}");
+        }
     }
 }
 

@@ -6,8 +6,9 @@
 //! before them added, so the result does not depend on the thread count or the chunk size. A
 //! chunk cannot know how many `v` came before it, so the pass takes only what it can join
 //! exactly and gives up (`None`) on anything else: any error, non-ASCII text, negative
-//! (relative) or forward face indices, `l` statements, vertex colours, a number
-//! `f64::from_str` refuses, `w = 0`. The loader then runs the two sequential passes, which
+//! (relative) or forward face indices, `l` statements, a number `f64::from_str` refuses, a `w`
+//! of zero or not finite. Vertex colours (`v x y z r g b [a]`) are read past, as the scanner
+//! and the number parser read them. The loader then runs the two sequential passes, which
 //! handle every file and report every error with its line. When it succeeds, the result is
 //! exactly theirs ([`Scan`] field by field, [`Values`] bit for bit; unit tests below and
 //! tests/mesh_parser_equivalence.rs).
@@ -19,7 +20,7 @@
 
 use rayon::prelude::*;
 
-use super::parse::{line_chunks, number, Values};
+use super::parse::{line_chunks, number, position, Values};
 use super::scan::{is_ignored_keyword, parse_int, Scan, ScanModel, NONE, UNNAMED};
 
 /// Bytes per chunk for a file of `len` bytes: about 64 chunks, between 64 bytes and 1 MiB. Small
@@ -66,6 +67,8 @@ struct Part {
     /// 0-based line of every triangle's `f`, within the chunk.
     face_line: Vec<u32>,
     ignored_statements: usize,
+    /// Whether a `v` statement has a vertex colour.
+    colours: bool,
     objects: Vec<ObjectEvent>,
     /// Whether a face follows the chunk's last `o`/`g` (or its start, if none).
     faces_after: bool,
@@ -157,26 +160,15 @@ impl Part {
         toks: &[(usize, usize)],
         corners: &mut Vec<[u32; 3]>,
     ) -> Option<()> {
+        let count = toks.len();
         let mut toks = toks.iter().map(|&(a, b)| &line[a..b]);
         let Some(kw) = toks.next() else { return Some(()) };
         match kw {
+            // `x y z`, `x y z w` or `x y z r g b [a]`, read as the number parser reads them.
             b"v" => {
-                let (a, b, c) = (toks.next()?, toks.next()?, toks.next()?);
-                let mut p = [number(a)?, number(b)?, number(c)?];
-                if let Some(w) = toks.next() {
-                    // Exactly 4 numbers: 6 are vertex colours (sequential passes), 5 an error.
-                    if toks.next().is_some() {
-                        return None;
-                    }
-                    let w = number(w)?;
-                    if w == 0.0 {
-                        return None;
-                    }
-                    for c in &mut p {
-                        *c /= w;
-                    }
-                }
-                self.values.v.push(p);
+                self.values.v.push(position(&mut toks)?);
+                // The keyword and more than x y z w: a colour.
+                self.colours |= count > 5;
             }
             b"vt" => {
                 let (a, b) = (toks.next()?, toks.next()?);
@@ -307,6 +299,7 @@ fn join(parts: &[Part]) -> Option<(Scan, Values)> {
         scan.num_vt += p.values.vt.len();
         scan.num_vn += p.values.vn.len();
         scan.ignored_statements += p.ignored_statements;
+        scan.colours |= p.colours;
         scan.face_line.extend(p.face_line.iter().map(|&l| l + line));
         line += p.lines as u32;
         corners += p.corner_v.len();
@@ -398,6 +391,9 @@ mod tests {
         check("", true);
         check("v 0 0 0\n   \n\t\n\nv 1 1 1\r\nv 2 2 2", true);
         check("v 0 0 0\n", true);
+        // Vertex colours (`r g b`, `r g b a`), on some vertices only, beside a `w`.
+        let colours = "v 0 0 0 1 0 0\nv 1 0 0 2\nv 1 1 0 0.5 0.5 0.5 1\nv 0 1 0\nf 1 2 3 4\n";
+        check(colours, true);
     }
 
     #[test]
@@ -407,8 +403,11 @@ mod tests {
             "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 1 1 0\n",    // a forward index
             "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 4\n",    // out of range
             "v 0 0 0\nv 1 0 0\nv 1 1 0\nl 1 2\n",      // a polyline
-            "v 0 0 0 1 0 0\n",                         // a vertex colour
+            "v 0 0 0 1 0\n",                           // 5 numbers
+            "v 0 0 0 1 0 0 1 1\n",                     // 8 numbers
+            "v 0 0 0 1 red 0\n",                       // a colour that is not a number
             "v 0 0 0 0\n",                             // w = 0
+            "v 0 0 0 inf\n",                           // w not finite
             "v 0 0 x\n",                               // a bad number
             "v 0 0\n",                                 // a truncated line
             "vt 0 0 0 0\n",                            // too many values

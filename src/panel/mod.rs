@@ -42,8 +42,10 @@ use spade::{
 use crate::mesh::{CornerAttribute, Mesh, Units};
 use crate::{Error, Result};
 
+mod nesting;
 mod svg;
 
+pub use nesting::even_odd_area;
 pub use svg::read_svg_loops;
 
 /// Options of the panel mesher (a scene section when a scene names an outline).
@@ -234,41 +236,6 @@ fn check_simple(loops: &[Loop], name: &Path) -> Result<()> {
         active.push(k);
     }
     Ok(())
-}
-
-/// Area enclosed by the loops under the even-odd rule (holes subtract, islands add): each
-/// loop's |area| with the sign of its nesting depth.
-fn even_odd_area(loops: &[Loop]) -> f64 {
-    let inside = |p: [f64; 2], poly: &[[f64; 2]]| {
-        let mut c = false;
-        let n = poly.len();
-        for i in 0..n {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            if (a[1] > p[1]) != (b[1] > p[1])
-                && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
-            {
-                c = !c;
-            }
-        }
-        c
-    };
-    loops
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let depth = loops
-                .iter()
-                .enumerate()
-                .filter(|&(j, o)| j != i && inside(l.points[0], &o.points))
-                .count();
-            let a = signed_area(&l.points).abs();
-            if depth % 2 == 0 {
-                a
-            } else {
-                -a
-            }
-        })
-        .sum()
 }
 
 /// Meshes closed loops (in mm; even-odd inside) into a flat panel.

@@ -521,12 +521,45 @@ pub fn refine_request(
     if !target.finest().is_finite() {
         return Ok(None);
     }
+    check_refine_estimate(&target, &edits, settings.max_vertices)?;
     if settings.turn < 180.0 {
         let lighting = key_light(&s.scene)?.lighting(s.scene.view.view(), mesh)?;
         let max_turn = settings.turn.to_radians();
         target.turn = Some(crate::edit::resolution::HalfVectorTurn { lighting, max_turn });
     }
     Ok(Some(target))
+}
+
+/// Refuses, before any split, a refinement estimated to add more than `budget` vertices
+/// (`mesh.refine.max_vertices`; [`crate::edit::resolution::Resolution::estimates`]), naming the
+/// edit that asks for the most: a curve zigzagging over the part with a small radius asks for
+/// its whole trace at r/8, and used to be refined for seconds before the budget stopped it.
+fn check_refine_estimate(
+    target: &crate::edit::resolution::Resolution,
+    edits: &[crate::edit::Edit],
+    budget: usize,
+) -> Result<()> {
+    let estimates = target.estimates();
+    let total: f64 = estimates.iter().map(|e| e.vertices).sum();
+    let worst = estimates.iter().max_by(|a, b| a.vertices.total_cmp(&b.vertices));
+    let Some(w) = worst.filter(|_| total > budget as f64) else { return Ok(()) };
+    let tool = edits.get(w.edit).map_or("edit", |e| e.tool());
+    let change = if tool == "curve" { "radius or `width`" } else { "radius" };
+    Err(Error::setting(
+        format!("edits[{}]", w.edit),
+        format!(
+            "refining the part for this {tool} would add about {:.2e} vertices ({:.2e} in all \
+             for the edits), more than `mesh.refine.max_vertices` ({budget}): {} × the {:.3e} \
+             units² it reaches / its edge {}². Give it a larger {change}, raise \
+             `mesh.refine.edge` or `mesh.refine.max_vertices`, or set `mesh.refine.mode: \
+             \"none\"`",
+            w.vertices,
+            total,
+            crate::edit::resolution::VERTICES_PER_EDGE_SQUARE,
+            w.area,
+            crate::error::fmt_num(w.edge),
+        ),
+    ))
 }
 
 /// Refines the part inside the edits' brushes where its triangles are coarser than
