@@ -9,13 +9,14 @@
 
 #[path = "support/cad_truth.rs"]
 mod cad_truth;
+mod common;
 #[path = "support/curved_truth.rs"]
 mod curved_truth;
 
 use std::path::Path;
 use std::process::Command;
 
-use curved_truth::{CurvedTruth, FaceFigures};
+use curved_truth::{share, FaceFigures};
 use grainline::generate::cad::{self, CadPart};
 
 /// A world direction along no axis of the parts.
@@ -30,48 +31,12 @@ fn parts(step_deg: f64) -> Vec<CadPart> {
     ]
 }
 
-/// Runs `stl` with the world grain, strokes (brush `width`) and a glb into `dir`.
-fn run(stl: &Path, units: &str, width: f64, dir: &Path) {
-    let scene = serde_json::json!({
-        "mesh": {"path": stl},
-        "units": units,
-        "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-        "view": {"eye": [1, -2, 1.5], "target": [0, 0, 0]},
-        "field": {"init": "world", "world": WORLD},
-        "toolpaths": {"strokes_json": "strokes.json", "placement": {"width": width}},
-        "export": {"glb": "part.glb"}
-    });
-    std::fs::write(dir.join("scene.json"), serde_json::to_string(&scene).unwrap()).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(dir.join("scene.json"))
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}: {}", stl.display(), String::from_utf8_lossy(&out.stderr));
-}
-
 fn measure(part: &CadPart, step: f64, root: &Path) -> Vec<FaceFigures> {
     let dir = root.join(format!("{}-{step}", part.name));
     std::fs::create_dir_all(&dir).unwrap();
     let stl = dir.join("part.stl");
     std::fs::write(&stl, part.stl_binary()).unwrap();
-    let tris: Vec<[cad_truth::P; 3]> =
-        part.triangles.iter().map(|t| t.map(|p| [p.x, p.y, p.z])).collect();
-    let width = cad_truth::diagonal(&tris) / 50.0;
-    run(&stl, part.units.as_str(), width, &dir);
-    let truth = CurvedTruth::new(part);
-    let mut figures = vec![FaceFigures::default(); part.faces.len()];
-    truth.strokes(&dir.join("strokes.json"), WORLD, &mut figures);
-    truth.glb(&dir.join("part.glb"), WORLD, &mut figures);
-    figures
-}
-
-fn share(ok: f64, all: f64) -> f64 {
-    if all > 0.0 {
-        ok / all
-    } else {
-        1.0
-    }
+    curved_truth::run_and_measure(part, &stl, &dir, WORLD)
 }
 
 #[test]
@@ -247,7 +212,8 @@ fn read_pfm(path: &Path) -> Vec<[f32; 3]> {
 
 /// A rotary program of the turned shaft at 15° chords with `axis: "auto"`: the fixture is the
 /// shaft's recognized axis, z through the origin, exactly as the program prints it (the axis
-/// fitted to the chords' normals, with `mesh.surfaces: "off"`, is 0.01° and 0.007 mm off).
+/// fitted to the chords' normals, with `mesh.surfaces: "off"`, is 0.01° and 0.007 mm off), and
+/// LinuxCNC's rs274 reads the program.
 #[test]
 fn a_rotary_program_holds_a_turned_part_on_its_recognized_axis() {
     let dir = std::env::temp_dir().join(format!("grainline-curved-rot-{}", std::process::id()));
@@ -278,5 +244,18 @@ fn a_rotary_program_holds_a_turned_part_on_its_recognized_axis() {
     let (point, direction) = (nums(words[2]), nums(words[4]));
     assert!(point[0].abs() < 1e-3 && point[1].abs() < 1e-3, "{header}");
     assert!(direction[0].abs() < 1e-6 && direction[1].abs() < 1e-6, "{header}");
+    // The program, its points on the surfaces, read by LinuxCNC's rs274.
+    let shared = std::env::var_os("GRAINLINE_SHARED")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared"));
+    let tool = shared.join("tools/check-gcode");
+    if tool.exists() {
+        common::ensure_rs274(&tool);
+        let ngc = dir.join("p.ngc");
+        let (ok, text) = common::run_checker(&tool, &[ngc.as_os_str()]);
+        assert!(ok, "check-gcode rejected the rotary program:\n{text}");
+    } else {
+        eprintln!("skipping the rs274 check: {} not found", tool.display());
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use cad_truth::{read_stl, P};
-use curved_truth::{CurvedTruth, FaceFigures};
+use curved_truth::share;
 use grainline::generate::cad::{AnalyticFace, CadPart, FaceTolerance};
 use grainline::geometry::surfaces::{recognize, Primitive};
 use grainline::mesh::Units;
@@ -179,14 +179,6 @@ fn matches(p: &Primitive, f: &AnalyticFace) -> bool {
     }
 }
 
-fn share(ok: f64, all: f64) -> f64 {
-    if all > 0.0 {
-        ok / all
-    } else {
-        1.0
-    }
-}
-
 #[test]
 fn openscad_exports_are_read_as_their_surfaces_and_brushed_on_them() {
     let scad = openscad();
@@ -217,7 +209,7 @@ fn openscad_exports_are_read_as_their_surfaces_and_brushed_on_them() {
                 }
             }
             let cad = as_cad_part(&part, &stl);
-            let figures = run_and_measure(&cad, &stl, &dir);
+            let figures = curved_truth::run_and_measure(&cad, &stl, &dir, WORLD);
             for (k, f) in figures.iter().enumerate() {
                 if part.faces[k].is_planar() {
                     continue;
@@ -245,31 +237,4 @@ fn openscad_exports_are_read_as_their_surfaces_and_brushed_on_them() {
     }
     std::fs::remove_dir_all(&root).ok();
     assert!(failures.is_empty(), "{failures:#?}");
-}
-
-/// Runs the part with the world grain, strokes and a glb; the figures per face.
-fn run_and_measure(part: &CadPart, stl: &Path, dir: &Path) -> Vec<FaceFigures> {
-    let tris: Vec<[P; 3]> = part.triangles.iter().map(|t| t.map(|p| [p.x, p.y, p.z])).collect();
-    let scene = serde_json::json!({
-        "mesh": {"path": stl},
-        "units": "mm",
-        "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-        "view": {"eye": [1, -2, 1.5], "target": [0, 0, 0]},
-        "field": {"init": "world", "world": WORLD},
-        "toolpaths": {"strokes_json": "strokes.json",
-                      "placement": {"width": cad_truth::diagonal(&tris) / 50.0}},
-        "export": {"glb": "part.glb"}
-    });
-    std::fs::write(dir.join("scene.json"), scene.to_string()).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
-        .args(["--quiet", "run"])
-        .arg(dir.join("scene.json"))
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let truth = CurvedTruth::new(part);
-    let mut figures = vec![FaceFigures::default(); part.faces.len()];
-    truth.strokes(&dir.join("strokes.json"), WORLD, &mut figures);
-    truth.glb(&dir.join("part.glb"), WORLD, &mut figures);
-    figures
 }

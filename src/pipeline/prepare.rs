@@ -49,31 +49,19 @@ pub struct RecognizedPart {
 }
 
 impl RecognizedPart {
-    /// The surface each face of `mesh` (the part as prepared) lies on
+    /// The surface of each face of `mesh` (the part as prepared) with the primitives
     /// ([`crate::geometry::surfaces::VertexSurfaces::face_surfaces`]).
-    pub fn face_surfaces(&self, mesh: &Mesh) -> Vec<u32> {
-        self.vertices.face_surfaces(mesh, &self.surfaces)
-    }
-
-    /// Whether surface `s` is curved: a cylinder, cone, sphere or torus (not a plane, not
-    /// [`crate::geometry::surfaces::NO_SURFACE`]).
-    pub fn is_curved(&self, s: u32) -> bool {
-        self.surfaces.surfaces.get(s as usize).is_some_and(|x| {
-            !matches!(x.primitive, crate::geometry::surfaces::Primitive::Plane { .. })
-        })
+    pub fn on_faces(&self, mesh: &Mesh) -> crate::geometry::surfaces::FaceSurfaces {
+        crate::geometry::surfaces::FaceSurfaces {
+            primitives: self.surfaces.surfaces.iter().map(|s| s.primitive).collect(),
+            of: self.vertices.face_surfaces(mesh, &self.surfaces),
+        }
     }
 
     /// Per face of `mesh`, whether it lies on a curved surface.
     pub fn curved_faces(&self, mesh: &Mesh) -> Vec<bool> {
-        self.face_surfaces(mesh).into_iter().map(|s| self.is_curved(s)).collect()
-    }
-
-    /// The surface of each face of `mesh` with the primitives.
-    pub fn on_faces(&self, mesh: &Mesh) -> crate::geometry::surfaces::FaceSurfaces {
-        crate::geometry::surfaces::FaceSurfaces {
-            primitives: self.surfaces.surfaces.iter().map(|s| s.primitive).collect(),
-            of: self.face_surfaces(mesh),
-        }
+        let on = self.on_faces(mesh);
+        (0..on.of.len()).map(|f| on.curved(f).is_some()).collect()
     }
 }
 

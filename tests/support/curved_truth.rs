@@ -265,3 +265,45 @@ pub fn may_be_unread(part: &CadPart, step: f64, k: usize) -> bool {
         _ => false,
     }
 }
+
+/// Runs `part` (written to `stl` already) with a world grain `w`, no edit, strokes of a brush of
+/// a fiftieth of its diagonal and a glb into `dir`, and measures them on its curved faces.
+pub fn run_and_measure(
+    part: &CadPart,
+    stl: &std::path::Path,
+    dir: &std::path::Path,
+    w: P,
+) -> Vec<FaceFigures> {
+    let tris: Vec<[P; 3]> = part.triangles.iter().map(|t| t.map(|p| [p.x, p.y, p.z])).collect();
+    let scene = serde_json::json!({
+        "mesh": {"path": stl},
+        "units": part.units.as_str(),
+        "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+        "view": {"eye": [1, -2, 1.5], "target": [0, 0, 0]},
+        "field": {"init": "world", "world": w},
+        "toolpaths": {"strokes_json": "strokes.json",
+                      "placement": {"width": super::cad_truth::diagonal(&tris) / 50.0}},
+        "export": {"glb": "part.glb"}
+    });
+    std::fs::write(dir.join("scene.json"), scene.to_string()).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "run"])
+        .arg(dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}: {}", stl.display(), String::from_utf8_lossy(&out.stderr));
+    let truth = CurvedTruth::new(part);
+    let mut figures = vec![FaceFigures::default(); part.faces.len()];
+    truth.strokes(&dir.join("strokes.json"), w, &mut figures);
+    truth.glb(&dir.join("part.glb"), w, &mut figures);
+    figures
+}
+
+/// `ok / all`, 1 when there is nothing.
+pub fn share(ok: f64, all: f64) -> f64 {
+    if all > 0.0 {
+        ok / all
+    } else {
+        1.0
+    }
+}

@@ -27,49 +27,52 @@ use crate::place::Placement;
 /// Most halvings of one stroke segment ([`densify`]): 2¹⁰ pieces.
 const MAX_DEPTH: u32 = 10;
 
+/// Most points [`densify`] adds, as a multiple of the strokes' own: a tolerance far below the
+/// surface's curvature cannot grow the strokes without bound (past it the remaining segments
+/// keep their samples, which lie on the surface all the same).
+const MAX_ADDED_PER_POINT: usize = 8;
+
 /// Inserts UV points into the strokes of `placement` until every lifted segment stands off the
-/// surface by at most `tol / 4` (module docs); a no-op without a [`crate::SurfaceLift`]. Seam jumps
-/// are kept as they are. Returns the number of points inserted.
+/// surface by at most `tol / 4` (module docs), adding at most [`MAX_ADDED_PER_POINT`] times the
+/// strokes' points; a no-op without a [`crate::SurfaceLift`]. Seam jumps are kept as they are.
+/// Returns the number of points inserted.
 pub(crate) fn densify(dom: &Domain, placement: &mut Placement, tol: f64) -> usize {
     if dom.surface.is_none() || tol.is_nan() || tol <= 0.0 {
         return 0;
     }
-    let mut added = 0;
+    let total: usize = placement.strokes.iter().map(|s| s.uv.len()).sum();
+    let mut budget = MAX_ADDED_PER_POINT * total;
     for s in &mut placement.strokes {
         let n = s.uv.len();
         let mut uv = Vec::with_capacity(n);
         let mut faces = Vec::with_capacity(n);
         let mut breaks = Vec::with_capacity(s.breaks.len());
+        let mut next_break = s.breaks.iter().copied().peekable();
         for i in 0..n {
-            if i > 0 && !s.breaks.contains(&i) {
-                let (a, b) = ((s.uv[i - 1], s.faces[i - 1]), (s.uv[i], s.faces[i]));
-                split(dom, a, b, 0.25 * tol, MAX_DEPTH, &mut uv, &mut faces);
-            } else if i > 0 {
+            if next_break.next_if_eq(&i).is_some() {
                 breaks.push(uv.len());
+            } else if i > 0 {
+                let (a, b) = ((s.uv[i - 1], s.faces[i - 1]), (s.uv[i], s.faces[i]));
+                let mut out = (&mut uv, &mut faces, &mut budget);
+                split(dom, a, b, 0.25 * tol, MAX_DEPTH, &mut out);
             }
             uv.push(s.uv[i]);
             faces.push(s.faces[i]);
         }
-        added += uv.len() - n;
         s.uv = uv;
         s.faces = faces;
         s.breaks = breaks;
     }
-    added
+    MAX_ADDED_PER_POINT * total - budget
 }
+
+/// Where [`split`] puts its points: UV, faces, and the points it may still add.
+type Out<'a> = (&'a mut Vec<Vec2>, &'a mut Vec<u32>, &'a mut usize);
 
 /// The points strictly between `a` and `b` (pushed in order) that bring the lifted segment
 /// within `tol` of the surface.
-fn split(
-    dom: &Domain,
-    a: (Vec2, u32),
-    b: (Vec2, u32),
-    tol: f64,
-    depth: u32,
-    uv: &mut Vec<Vec2>,
-    faces: &mut Vec<u32>,
-) {
-    if depth == 0 {
+fn split(dom: &Domain, a: (Vec2, u32), b: (Vec2, u32), tol: f64, depth: u32, out: &mut Out) {
+    if depth == 0 || *out.2 == 0 {
         return;
     }
     let m = [0.5 * (a.0[0] + b.0[0]), 0.5 * (a.0[1] + b.0[1])];
@@ -87,8 +90,12 @@ fn split(
     if off.is_nan() || off <= tol {
         return;
     }
-    split(dom, a, (m, face), tol, depth - 1, uv, faces);
-    uv.push(m);
-    faces.push(face);
-    split(dom, (m, face), b, tol, depth - 1, uv, faces);
+    split(dom, a, (m, face), tol, depth - 1, out);
+    if *out.2 == 0 {
+        return;
+    }
+    *out.2 -= 1;
+    out.0.push(m);
+    out.1.push(face);
+    split(dom, (m, face), b, tol, depth - 1, out);
 }
