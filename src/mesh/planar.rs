@@ -84,6 +84,14 @@ fn face_neighbours(mesh: &Mesh) -> Vec<[u32; 3]> {
 /// Groups `mesh`'s faces into planar regions (module docs). O(F log F); the same result at
 /// any thread count.
 pub fn planar_regions(mesh: &Mesh) -> PlanarRegions {
+    planar_regions_within(mesh, 0.0)
+}
+
+/// [`planar_regions`], where a face also joins a region when its corners lie within `eps` of
+/// the plane of the region's first face (and it faces the same way): the file's rounding
+/// tilts a narrow chord's normal by more than [`FLAT_COS`] (a six-digit quad 0.3 mm wide, by
+/// 2·10⁻⁴ rad), not its corners off the plane. `eps` = 0 is [`planar_regions`].
+pub fn planar_regions_within(mesh: &Mesh, eps: f64) -> PlanarRegions {
     let nf = mesh.num_faces();
     let normals: Vec<Option<Vector3<f64>>> =
         (0..nf).into_par_iter().map(|f| face_normal(mesh, f)).collect();
@@ -97,6 +105,13 @@ pub fn planar_regions(mesh: &Mesh) -> PlanarRegions {
             continue;
         }
         let r = normal.len() as u32;
+        let offset = n.dot(&mesh.positions[mesh.faces[seed][0] as usize]);
+        let on_plane = |g: usize| {
+            eps > 0.0
+                && mesh.faces[g]
+                    .iter()
+                    .all(|&v| (n.dot(&mesh.positions[v as usize]) - offset).abs() <= eps)
+        };
         face_region[seed] = r;
         let mut count = 1u32;
         stack.push(seed as u32);
@@ -105,7 +120,10 @@ pub fn planar_regions(mesh: &Mesh) -> PlanarRegions {
                 if g == NO_REGION || face_region[g as usize] != NO_REGION {
                     continue;
                 }
-                if normals[g as usize].is_some_and(|m| m.dot(&n) >= FLAT_COS) {
+                let joins = normals[g as usize].is_some_and(|m| {
+                    m.dot(&n) >= FLAT_COS || (m.dot(&n) > 0.0 && on_plane(g as usize))
+                });
+                if joins {
                     face_region[g as usize] = r;
                     count += 1;
                     stack.push(g);

@@ -118,6 +118,14 @@ impl CurvedTruth {
         best.map(|(k, _)| k)
     }
 
+    /// The face whose surface passes nearest `p` (a point near the part).
+    pub fn nearest_face(&self, p: P) -> Option<usize> {
+        (0..self.faces.len())
+            .map(|k| (k, self.faces[k].distance(&v(p))))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k)
+    }
+
     /// The true normal of face `k` at (or nearest) `p`.
     pub fn normal(&self, k: usize, p: P) -> P {
         a(self.faces[k].normal_at(&v(p)))
@@ -152,15 +160,18 @@ impl CurvedTruth {
     fn stroke_segment(&self, p: P, q: P, w: P, out: &mut [FaceFigures]) {
         let d = sub(q, p);
         let len = norm(d);
+        let m = [0, 1, 2].map(|c| 0.5 * (p[c] + q[c]));
+        // A segment belongs to a face when its ends lie on it and its middle lies nearer to it
+        // than to any other face: a straight stroke across a plate may end on the rim of the
+        // fillet beyond it (its middle within the fillet's sagitta, but on the plate).
         let (Some(k), Some(l)) = (self.face_at(p), self.face_at(q)) else { return };
-        if k != l || self.faces[k].is_planar() || len == 0.0 {
+        if k != l || self.nearest_face(m) != Some(k) || self.faces[k].is_planar() || len == 0.0 {
             return;
         }
         let f = &mut out[k];
         for x in [p, q] {
             f.stroke_off = f.stroke_off.max(self.faces[k].distance(&v(x)));
         }
-        let m = [0, 1, 2].map(|c| 0.5 * (p[c] + q[c]));
         match self.grain(k, m, w) {
             None => f.stroke_skipped += len,
             Some(g) => {

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use super::fit;
 use super::primitive::{Primitive, SurfaceKind};
 use super::{MAX_CHORD_DEVIATION_DEG, MAX_STEP_DEG};
-use crate::mesh::planar::{planar_regions, PlanarRegions, NO_REGION};
+use crate::mesh::planar::{planar_regions_within, PlanarRegions, NO_REGION};
 use crate::mesh::Mesh;
 
 type V3 = Vector3<f64>;
@@ -27,8 +27,10 @@ pub(super) struct RegionGraph {
 }
 
 impl RegionGraph {
-    pub(super) fn new(mesh: &Mesh) -> Self {
-        let regions = planar_regions(mesh);
+    /// The graph of `mesh`'s planar regions, flat within `eps`
+    /// ([`crate::mesh::planar::planar_regions_within`]).
+    pub(super) fn new(mesh: &Mesh, eps: f64) -> Self {
+        let regions = planar_regions_within(mesh, eps);
         let nr = regions.normal.len();
         let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(3 * mesh.num_faces());
         for (f, t) in mesh.faces.iter().enumerate() {
@@ -248,7 +250,26 @@ pub(super) fn grow(
     enqueue(&mut heap, seen, seed);
     let mut model: Option<Primitive> = None;
     let mut refit_at = 6usize;
-    while let Some(Reverse((_, _, r))) = heap.pop() {
+    // Regions the model refused: tried again against a model refitted to the whole set once
+    // the queue runs dry (a cone fitted to three trapezoids of a band written with six digits
+    // strays by more than the rounding a quarter turn on; the band's whole ring does not).
+    let mut deferred: Vec<u32> = Vec::new();
+    let mut retried_at = 0usize;
+    loop {
+        let Some(Reverse((_, _, r))) = heap.pop() else {
+            if deferred.is_empty() || set.regions.len() == retried_at || model.is_none() {
+                break;
+            }
+            retried_at = set.regions.len();
+            model = best_fit(&set.points, &set.normals, &set.lines, tol, Kinds::Ruled);
+            if model.is_none() {
+                return Err(set.regions.get(1).copied());
+            }
+            for r in deferred.drain(..) {
+                heap.push(Reverse((unlike(r), 0, r)));
+            }
+            continue;
+        };
         // A strip or a band is a quad at least (two triangles); lone triangles (a pole's fan,
         // a scan's) join a surface afterwards, if they lie on it.
         if g.regions.faces[r as usize] < 2 || (set.regions.len() == 1 && banned.contains(&r)) {
@@ -269,7 +290,10 @@ pub(super) fn grow(
                 let fit = best_fit(&trial, &normals, &lines, tol, Kinds::All).filter(|f| {
                     set.regions.iter().chain([&r]).all(|&q| region_on(g, mesh, q, f, tol, spread))
                 });
-                if set.regions.len() + 1 >= 3 {
+                // The set fixes its surface once it is three regions and bulges off its plane
+                // by more than the rounding can fake ([`MIN_BULGE`] tolerances): three strips of
+                // a 2° export written with six digits fit cylinders of many radii.
+                if set.regions.len() + 1 >= 3 && fit::flatness(&trial) > MIN_BULGE * tol {
                     model = fit
                         .filter(|f| matches!(f.kind(), SurfaceKind::Cylinder | SurfaceKind::Cone));
                 }
@@ -277,6 +301,9 @@ pub(super) fn grow(
             }
         };
         if !accept {
+            if model.is_some() {
+                deferred.push(r);
+            }
             continue;
         }
         set.push(g, mesh, stamp, id, r);

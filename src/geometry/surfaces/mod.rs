@@ -19,9 +19,13 @@
 //!    vertices lie on that surface and the surface's normal at each of them is within
 //!    [`MAX_CHORD_DEVIATION_DEG`] of the chord's. A growth is kept as a cylinder (three strips
 //!    or more) or a cone band that stands off its own plane by ten tolerances at least.
-//! 3. **Profiles** (`profile.rs`): coaxial bands in a chain, with a pole's fan as one more
-//!    profile point, become the sphere (three profile points or more) or the torus (four or
-//!    more) that passes through all their rings.
+//!    Regions the model refused are tried again against a fit to the whole set when the queue
+//!    runs dry, and neighbouring cylinders or cones that one surface passes through are
+//!    joined (`profile::merge_pieces`).
+//! 3. **Profiles** (`profile.rs`): coaxial bands in a chain (open, or a closed loop: a full
+//!    torus), with a pole's fan as one more profile point, become the sphere (three profile
+//!    points or more) or the torus (four or more) that passes through all their rings; a
+//!    surface whose regions all lie on a larger neighbour joins it (`profile::subsume`).
 //! 4. **Free forms**: a band's cone is exact on any turned surface, so coaxial surfaces that
 //!    meet at a turn neither tangent nor beyond the export's step are a free profile (a
 //!    kettle, a vase: all of a chain of three or more, each single band of a chain of two);
@@ -117,8 +121,8 @@ pub fn recognize(mesh: &Mesh) -> Surfaces {
     if nf == 0 || tol.is_nan() || tol <= 0.0 {
         return Surfaces { face_surface: vec![NO_SURFACE; nf], surfaces: vec![], tolerance: tol };
     }
-    let g = grow::RegionGraph::new(mesh);
-    let tol = rounding_tolerance(mesh, tol);
+    let (tol, eps) = rounding_tolerance(mesh, tol);
+    let g = grow::RegionGraph::new(mesh, eps);
     let nr = g.regions.normal.len();
     let mut seeds: Vec<(bool, u32)> = (0..nr as u32)
         .filter(|&r| g.regions.faces[r as usize] >= 2)
@@ -155,9 +159,12 @@ pub fn recognize(mesh: &Mesh) -> Surfaces {
             }
         }
     }
+    let grown = profile::merge_pieces(&g, mesh, grown, tol);
     let grown = profile::join_bands(&g, mesh, grown, tol);
+    let grown = profile::subsume(&g, mesh, grown, tol);
     let grown = profile::free_profiles(&g, mesh, grown, tol);
-    let mut grown = profile::twins(&g, mesh, grown);
+    let grown = profile::twins(&g, mesh, grown, tol);
+    let mut grown = profile::subsume(&g, mesh, grown, tol);
     let mut region_surface = vec![NO_SURFACE; nr];
     for (k, (_, regions)) in grown.iter().enumerate() {
         for &r in regions {
@@ -211,16 +218,53 @@ pub fn relative_rounding(mesh: &Mesh) -> Option<f64> {
     (d <= 15).then(|| 0.5 * 10f64.powi(1 - d as i32))
 }
 
-/// The distance within which a vertex counts as on a surface: [`ROUNDING_MARGIN`] times the
-/// file's rounding ([`relative_rounding`]) of the largest coordinate, at most `ceiling`
-/// ([`tolerance`]; `ceiling` when the rounding is not known).
-fn rounding_tolerance(mesh: &Mesh, ceiling: f64) -> f64 {
+/// The distance within which a vertex counts as on a surface, and the distance from a plane
+/// within which a face lies on it when grouping planar regions.
+///
+/// In a float32 file (a binary STL) the first is [`ROUNDING_MARGIN`] times its rounding
+/// ([`relative_rounding`]) of the largest coordinate, at most `ceiling` ([`tolerance`]); the
+/// second is 0 (the rounding tilts no chord's normal by [`crate::mesh::planar::FLAT_COS`]).
+/// In a file of decimal digits (an ASCII STL, an OBJ, a PLY) the vertices stand off their
+/// surface by up to √3 half units of the last digit written: both are [`DIGIT_MARGIN`] half
+/// units of the typical coordinate's last digit (the 95th percentile of their magnitudes:
+/// an exact 1 in a file of six digits says nothing), or the float32 rule's if larger. When
+/// the rounding is not known, `ceiling` and 0.
+fn rounding_tolerance(mesh: &Mesh, ceiling: f64) -> (f64, f64) {
     let m = mesh.positions.iter().map(|p| p.amax()).fold(0.0, f64::max);
     match relative_rounding(mesh) {
-        Some(rel) => (ROUNDING_MARGIN * rel * m).clamp(1e-3 * ceiling, ceiling),
-        None => ceiling,
+        Some(rel) if rel > 2f64.powi(-24) => {
+            let unit = rel * 10f64.powf(typical_magnitude(mesh).log10().floor());
+            let t = (ROUNDING_MARGIN * rel * m).clamp(1e-3 * ceiling, ceiling);
+            let digits = DIGIT_MARGIN * unit;
+            (t.max(digits), digits)
+        }
+        Some(rel) => ((ROUNDING_MARGIN * rel * m).clamp(1e-3 * ceiling, ceiling), 0.0),
+        None => (ceiling, 0.0),
     }
 }
+
+/// The 95th percentile of the magnitudes of `mesh`'s non-zero coordinates (a sample of
+/// them), or 1 when there are none.
+fn typical_magnitude(mesh: &Mesh) -> f64 {
+    let step = (mesh.positions.len() / 4096).max(1);
+    let mut mags: Vec<f64> = mesh
+        .positions
+        .iter()
+        .step_by(step)
+        .flat_map(|p| [p.x.abs(), p.y.abs(), p.z.abs()])
+        .filter(|c| *c > 0.0 && c.is_finite())
+        .collect();
+    if mags.is_empty() {
+        return 1.0;
+    }
+    mags.sort_by(f64::total_cmp);
+    mags[(mags.len() - 1) * 95 / 100]
+}
+
+/// How many times the half unit of the largest coordinate's last written digit a vertex may
+/// stand off its surface: rounding each of three coordinates moves a point by up to √3 of it,
+/// and a fit through rounded points takes some more.
+pub const DIGIT_MARGIN: f64 = 4.0;
 
 /// The share of a small curved surface's neighbouring regions that may continue it
 /// smoothly without being recognized.

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 
 use super::grow::{best_fit, region_on, Kinds, RegionGraph};
 use super::primitive::{Primitive, SurfaceKind};
-use super::{G1_TOLERANCE_DEG, MAX_CHORD_DEVIATION_DEG};
+use super::MAX_CHORD_DEVIATION_DEG;
 use crate::mesh::Mesh;
 
 type V3 = Vector3<f64>;
@@ -60,6 +60,102 @@ fn neighbours(g: &RegionGraph, grown: &[Grown]) -> Vec<Vec<usize>> {
         .collect()
 }
 
+/// Step 2's end: neighbouring cylinders or cones that one primitive of their kind passes
+/// through — pieces of one face that a growth from a few strips of a six-digit file split
+/// (its first fit strays by more than the rounding a quarter turn on) — become one surface.
+pub(super) fn merge_pieces(
+    g: &RegionGraph,
+    mesh: &Mesh,
+    mut grown: Vec<Grown>,
+    tol: f64,
+) -> Vec<Grown> {
+    let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
+    let ruled = |p: &Primitive| matches!(p.kind(), SurfaceKind::Cylinder | SurfaceKind::Cone);
+    let parallel = |p: &Primitive, q: &Primitive| match (p.axis(), q.axis()) {
+        (Some((_, a)), Some((_, b))) => a.cross(&b).norm() <= 5f64.to_radians().sin(),
+        _ => false,
+    };
+    loop {
+        let nb = neighbours(g, &grown);
+        let mut merged = None;
+        'pairs: for (k, js) in nb.iter().enumerate() {
+            for &j in js.iter().filter(|&&j| j > k) {
+                let (p, q) = (&grown[k].0, &grown[j].0);
+                if !(ruled(p) && ruled(q) && p.kind() == q.kind() && parallel(p, q)) {
+                    continue;
+                }
+                let regions: Vec<u32> = grown[k].1.iter().chain(&grown[j].1).copied().collect();
+                let pts = points(g, mesh, &regions);
+                let normals: Vec<V3> =
+                    regions.iter().map(|&r| g.regions.normal[r as usize]).collect();
+                let lines: Vec<(V3, V3)> = regions
+                    .iter()
+                    .map(|&r| (g.centroid[r as usize], g.regions.normal[r as usize]))
+                    .collect();
+                let fit = best_fit(&pts, &normals, &lines, tol, Kinds::Ruled).filter(|f| {
+                    f.kind() == p.kind()
+                        && regions.iter().all(|&r| region_on(g, mesh, r, f, tol, spread))
+                });
+                if let Some(f) = fit {
+                    merged = Some((k, j, f, regions));
+                    break 'pairs;
+                }
+            }
+        }
+        let Some((k, j, prim, regions)) = merged else { return grown };
+        grown[k] = (prim, regions);
+        grown.remove(j);
+    }
+}
+
+/// A surface whose every region lies on a neighbouring surface as large or larger is a piece of it that
+/// a growth read as its own primitive (a column of a torus's trapezoids, each between two
+/// parallels, fits a cylinder along the parallels within a six-digit rounding): it joins the
+/// larger one, the smallest pieces first.
+pub(super) fn subsume(g: &RegionGraph, mesh: &Mesh, mut grown: Vec<Grown>, tol: f64) -> Vec<Grown> {
+    let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
+    // Rounds: in each, every piece not itself taking others in joins a neighbour that does
+    // not join another (so a round's moves are independent), the smallest pieces first.
+    loop {
+        let n = grown.len();
+        let nb = neighbours(g, &grown);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by_key(|&k| (grown[k].1.len(), k));
+        let mut into: Vec<Option<usize>> = vec![None; n];
+        let mut takes = vec![false; n];
+        for &k in &order {
+            if takes[k] {
+                continue;
+            }
+            let rs = &grown[k].1;
+            let host = nb[k].iter().copied().find(|&j| {
+                into[j].is_none()
+                    && grown[j].1.len() >= rs.len()
+                    && rs.iter().all(|&r| region_on(g, mesh, r, &grown[j].0, tol, spread))
+            });
+            if let Some(j) = host {
+                into[k] = Some(j);
+                takes[j] = true;
+            }
+        }
+        if into.iter().all(Option::is_none) {
+            return grown;
+        }
+        for k in 0..n {
+            if let Some(j) = into[k] {
+                let piece = std::mem::take(&mut grown[k].1);
+                grown[j].1.extend(piece);
+            }
+        }
+        grown = grown
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| into[*k].is_none())
+            .map(|(_, p)| p)
+            .collect();
+    }
+}
+
 /// Step 3: runs of coaxial bands (cones and cylinders between two rings) whose rings lie on
 /// one sphere (three rings or more) or one torus (four or more: a circle through three
 /// profile points always exists) become that surface.
@@ -77,11 +173,14 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
     let band_nb = |k: usize| -> Vec<usize> {
         nb[k].iter().copied().filter(|&j| band[j] && coaxial(&grown[k].0, &grown[j].0)).collect()
     };
-    // Chains: walk from each band with at most one band neighbour (or any, for a closed loop).
+    // Chains: walk from each band with at most one band neighbour, then from any band left
+    // (a closed loop: a full torus's profile, a ring).
     let mut chained = vec![false; n];
     let mut chains: Vec<Vec<usize>> = Vec::new();
-    for start in (0..n).filter(|&k| band[k]) {
-        if chained[start] || band_nb(start).len() > 1 {
+    let ends = (0..n).filter(|&k| band[k] && band_nb(k).len() <= 1);
+    let loops = (0..n).filter(|&k| band[k]);
+    for start in ends.chain(loops) {
+        if chained[start] {
             continue;
         }
         let mut chain = vec![start];
@@ -232,6 +331,12 @@ fn profile_fit(
     (enough && regions.iter().all(|&r| region_on(g, mesh, r, &prim, tol, spread))).then_some(prim)
 }
 
+/// The least turn between two coaxial surfaces that is a free profile's chord edge, not a
+/// tangent junction (degrees): fitted bands agree at a tangent junction to a few hundredths of
+/// a degree, and the bands of a gently curved profile exported at ten rows (a vase) turn by
+/// 2° or less, below the crease test's [`super::G1_TOLERANCE_DEG`].
+const MIN_PROFILE_TURN_DEG: f64 = 0.5;
+
 /// How far a turn between two surfaces may exceed the export's step and still read as a strip
 /// edge: the step is measured on fits whose normals the file's rounding tilts.
 const STEP_SLACK: f64 = 1.25;
@@ -279,7 +384,7 @@ fn azimuth_step(prim: &Primitive, points: &[V3]) -> Option<f64> {
 /// axes within 5° (or centres within 5 % of the radius): no CAD part is built so, but a
 /// free-form face whose strips each fit a circle is (a dome's rows of quads, each a
 /// cylinder within the file's rounding). Both are a free form.
-pub(super) fn twins(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>) -> Vec<Grown> {
+pub(super) fn twins(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f64) -> Vec<Grown> {
     let n = grown.len();
     let nb = neighbours(g, &grown);
     let alike = |p: &Primitive, q: &Primitive| {
@@ -306,17 +411,56 @@ pub(super) fn twins(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>) -> Vec<Grow
             _ => axes && close(p.radius(), q.radius()),
         }
     };
+    let mut parent: Vec<usize> = (0..n).collect();
     let mut twin = vec![false; n];
     for k in 0..n {
         for &j in &nb[k] {
             if alike(&grown[k].0, &grown[j].0) {
                 twin[k] = true;
                 twin[j] = true;
+                let (a, b) = (root(&mut parent, k), root(&mut parent, j));
+                parent[a.max(b)] = a.min(b);
             }
         }
     }
-    let _ = mesh;
-    grown.into_iter().enumerate().filter(|(k, _)| !twin[*k]).map(|(_, p)| p).collect()
+    // A cluster of twins that one torus or sphere passes through is that surface: the
+    // columns of a torus's trapezoids at 2° chords, each a prism that fits a cylinder within
+    // six digits. (A cluster of cylinders that one cone fits is no CAD face's.)
+    let mut clusters: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for k in (0..n).filter(|&k| twin[k]) {
+        clusters[root(&mut parent, k)].push(k);
+    }
+    let mut out: Vec<Grown> = Vec::new();
+    for members in clusters.iter().filter(|c| c.len() >= 2) {
+        let regions: Vec<u32> = members.iter().flat_map(|&k| grown[k].1.iter().copied()).collect();
+        let fit = whole_fit(g, mesh, &regions, tol)
+            .filter(|p| matches!(p.kind(), SurfaceKind::Torus | SurfaceKind::Sphere));
+        if let Some(prim) = fit {
+            out.push((prim, regions));
+        }
+    }
+    out.extend(grown.into_iter().enumerate().filter(|(k, _)| !twin[*k]).map(|(_, p)| p));
+    out
+}
+
+/// Union-find's root of `x`, halving the path.
+fn root(p: &mut [usize], mut x: usize) -> usize {
+    while p[x] != x {
+        p[x] = p[p[x]];
+        x = p[x];
+    }
+    x
+}
+
+/// The one primitive of any kind through all of `regions`, each a chord of it.
+fn whole_fit(g: &RegionGraph, mesh: &Mesh, regions: &[u32], tol: f64) -> Option<Primitive> {
+    let pts = points(g, mesh, regions);
+    let normals: Vec<V3> = regions.iter().map(|&r| g.regions.normal[r as usize]).collect();
+    let lines: Vec<(V3, V3)> =
+        regions.iter().map(|&r| (g.centroid[r as usize], g.regions.normal[r as usize])).collect();
+    let prim = best_fit(&pts, &normals, &lines, tol, Kinds::All)?;
+    let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
+    regions.iter().all(|&r| region_on(g, mesh, r, &prim, tol, spread)).then_some(prim)
 }
 
 /// Step 4: coaxial surfaces of revolution that meet at an angle neither tangent nor beyond
@@ -338,14 +482,7 @@ pub(super) fn free_profiles(
     let step: Vec<Option<f64>> =
         (0..n).map(|k| internal_step(g, mesh, &grown[k], &owner, k as u32)).collect();
     let mut parent: Vec<usize> = (0..n).collect();
-    fn root(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
-    let g1 = G1_TOLERANCE_DEG.to_radians();
+    let g1 = MIN_PROFILE_TURN_DEG.to_radians();
     for (k, (pk, rs)) in grown.iter().enumerate() {
         let Some(step_k) = step[k] else { continue };
         for &r in rs {
