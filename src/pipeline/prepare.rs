@@ -273,6 +273,7 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
         });
     }
     stages.start("field");
+    crate::cancel::checkpoint("field")?;
     let mut field_options = FieldOptions::new(lighting);
     field_options.init = scene.field.initial_field(directions, map);
     field_options.symmetry = scene.field.symmetry.symmetry();
