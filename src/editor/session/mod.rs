@@ -423,7 +423,7 @@ impl Session {
 
     /// Refuses an edit whose refinement, after the committed ones, would be past
     /// `mesh.refine.max_vertices`: the estimate `grainline run` makes before any split
-    /// ([`refine_request`]), made here at once so that the request is refused naming the edit
+    /// ([`crate::pipeline::prepare::check_refine_budget`]), made here at once so that the request is refused naming the edit
     /// (`edits[N]`) and the budget, instead of the solver thread refining for minutes. A
     /// dragged edit is checked too: it would be refused when committed.
     pub fn check_refinement(&self, e: &Edit) -> Result<()> {
@@ -432,7 +432,7 @@ impl Session {
         // The part and the brushes do not depend on the key light: the original base serves.
         let b = &self.original;
         let s = self.with_edits(b, &edits)?;
-        refine_request(&s, &b.part.mesh).map(|_| ())
+        crate::pipeline::prepare::check_refine_budget(&s, &b.part.mesh)
     }
 
     /// Applies a change; returns the new version. The solver thread picks it up, and the solve
