@@ -446,7 +446,7 @@ fn issue46_a_signal_during_the_renames_leaves_the_whole_new_set() {
             .stderr(std::process::Stdio::piped())
             .spawn()
             .unwrap();
-        let renamed = |t: &str| std::fs::read(d.join(t)).map_or(false, |b| b != b"old");
+        let renamed = |t: &str| std::fs::read(d.join(t)).is_ok_and(|b| b != b"old");
         // Wait (bounded) for the first rename; the report, renamed last, is still the old one.
         let t0 = std::time::Instant::now();
         while !targets.iter().any(|t| renamed(t)) {
