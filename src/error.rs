@@ -145,6 +145,13 @@ pub enum Error {
         /// What happened.
         message: String,
     },
+    /// The work was cancelled from outside ([`crate::cancel`]) at a check point in `stage`:
+    /// not a failure of the input; the caller keeps nothing of it.
+    #[error("cancelled during {stage}")]
+    Cancelled {
+        /// The check point that saw the flag.
+        stage: &'static str,
+    },
 }
 
 /// Shorthand for results of this crate.

@@ -90,6 +90,7 @@ pub fn compute_field(mesh: &Mesh, options: &FieldOptions) -> Result<FieldResult>
         &options.surface_points,
     )
     .0;
+    crate::cancel::checkpoint("field")?;
     let init = initial_field(mesh, &geometry, &options.init, options.symmetry)?;
     let normals: Vec<Vector3<f64>> = geometry.frames.par_iter().map(|f| f.n).collect();
     let h = half_vectors(&options.lighting, &mesh.positions, &normals);

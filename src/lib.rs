@@ -16,7 +16,8 @@
 //!
 //! 1. `error`, `limits`, `output`, `allocator` — the error type, the budgets, the outputs
 //!    written atomically, the allocator.
-//! 2. `factor` — the bounded sparse Cholesky factor.
+//! 2. `factor`, `cancel` — the bounded sparse Cholesky factor; long work cancelled from
+//!    outside at its check points.
 //! 3. `mesh` — loading (OBJ, STL, PLY), validation, topology, UV charts, refinement.
 //! 4. `svg_read`, `generate` — SVG drawings read as polylines; analytic test parts.
 //! 5. `geometry`, `texmap` — normals, frames, areas, connection, curvature, ∇φ, face angles;
@@ -59,6 +60,7 @@
 
 pub mod allocator;
 pub mod appearance;
+pub mod cancel;
 pub mod edit;
 pub mod editor;
 pub mod error;

@@ -31,7 +31,15 @@ fn main() -> ExitCode {
         }
         let _ = rayon::ThreadPoolBuilder::new().num_threads(n).build_global();
     }
-    match cli::run(args) {
+    let result = cli::run(args);
+    if grainline::output::interrupted() {
+        // A signal came (also during the last renames): its handler ends the process with
+        // 128 + its number once the renames are done; this thread must not exit first.
+        loop {
+            std::thread::park();
+        }
+    }
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("grainline: error: {}", grainline::error::escape_control(&message(&e)));
@@ -56,9 +64,15 @@ fn remove_temporaries_on_signal() {
                 SIGTERM => "SIGTERM",
                 _ => "SIGHUP",
             };
+            let renamed = match grainline::output::renamed() {
+                0 => String::new(),
+                n => {
+                    format!("{n} output(s) renamed into place (a set being renamed is finished); ")
+                }
+            };
             eprintln!(
-                "grainline: interrupted by {name}: {removed} temporary file(s) removed; outputs \
-                 not yet written were left as they were"
+                "grainline: interrupted by {name}: {removed} temporary file(s) removed; \
+                 {renamed}outputs not yet written were left as they were"
             );
             std::process::exit(128 + sig);
         }

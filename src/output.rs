@@ -13,21 +13,44 @@
 //!   leaves its old outputs untouched and no temporary behind.
 //! - **Interrupted runs leave nothing behind.** Every live temporary is registered here;
 //!   [`remove_temporaries`] deletes them (the binary calls it from its SIGINT / SIGTERM / SIGHUP
-//!   handler, since destructors do not run when a signal ends the process).
+//!   handler, since destructors do not run when a signal ends the process). A signal during a
+//!   commit's renames waits for them: the whole new set is in place, then the process ends.
+//! - **A testing aid.** [`RENAME_PAUSE_ENV`] makes a commit pause between its renames, so the
+//!   tests can send a signal during them.
 
 use std::io::Write;
 use std::path::{Component, Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
+use std::time::Duration;
 
 use crate::{Error, Result};
 
-/// The temporaries alive in this process, and whether new ones are still allowed.
+/// The temporaries alive in this process, whether new ones are still allowed, and how many
+/// outputs were renamed into place.
 struct Registry {
     paths: Vec<PathBuf>,
     closed: bool,
+    renamed: usize,
 }
 
-static REGISTRY: Mutex<Registry> = Mutex::new(Registry { paths: Vec::new(), closed: false });
+static REGISTRY: Mutex<Registry> =
+    Mutex::new(Registry { paths: Vec::new(), closed: false, renamed: 0 });
+
+/// Set by [`remove_temporaries`] before it waits for a commit's renames.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// The environment variable that makes [`Staged::commit`] pause this many milliseconds (at
+/// most 10 000) between two renames: a testing aid (docs/formats.md, "How files are
+/// written"), so a test can send a signal while a set of outputs is half renamed. Read by the
+/// commit alone; unset, or not a whole number, no pause.
+pub const RENAME_PAUSE_ENV: &str = "GRAINLINE_TEST_RENAME_PAUSE_MS";
+
+/// The pause [`RENAME_PAUSE_ENV`] asks for.
+fn rename_pause() -> Option<Duration> {
+    let ms: u64 = std::env::var(RENAME_PAUSE_ENV).ok()?.trim().parse().ok()?;
+    Some(Duration::from_millis(ms.min(10_000)))
+}
 
 fn registry() -> std::sync::MutexGuard<'static, Registry> {
     REGISTRY.lock().unwrap_or_else(|e| e.into_inner())
@@ -37,7 +60,11 @@ fn registry() -> std::sync::MutexGuard<'static, Registry> {
 /// refuses new ones from then on (a later [`Staged::add`] fails). Returns how many were deleted.
 /// Meant for a signal handler running on its own thread (it takes a lock, so not for a
 /// handler in signal context); the caller then exits.
+///
+/// It first marks the process interrupted ([`interrupted`]), then takes the lock a commit holds
+/// during its renames: a signal during them waits until the whole new set is in place.
 pub fn remove_temporaries() -> usize {
+    INTERRUPTED.store(true, Ordering::SeqCst);
     let mut r = registry();
     r.closed = true;
     let mut n = 0;
@@ -47,6 +74,18 @@ pub fn remove_temporaries() -> usize {
         }
     }
     n
+}
+
+/// Whether [`remove_temporaries`] was called: the process is being ended by a signal. The
+/// binary does not exit on its own once this is set, so that the signal's exit status is the
+/// one the process ends with, also when the signal came during the last renames.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// How many outputs this process has renamed into place.
+pub fn renamed() -> usize {
+    registry().renamed
 }
 
 /// The temporaries currently alive (for tests and diagnostics).
@@ -432,11 +471,16 @@ impl Staged {
         if r.closed && !self.pending.is_empty() {
             return Err(refuse(&self.pending[0].target, "interrupted: no output was replaced"));
         }
-        for mut p in std::mem::take(&mut self.pending) {
+        let pause = rename_pause();
+        for (i, mut p) in std::mem::take(&mut self.pending).into_iter().enumerate() {
+            if let (true, Some(d)) = (i > 0, pause) {
+                std::thread::sleep(d);
+            }
             let temp = p.temp.take().expect("a pending output holds its temporary");
             let tp: PathBuf = temp.to_path_buf();
             let result = temp.persist(&p.target);
             r.paths.retain(|q| q != &tp);
+            r.renamed += usize::from(result.is_ok());
             if let Err(e) = result {
                 drop(r);
                 drop(e.path); // deletes the temporary

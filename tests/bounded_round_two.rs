@@ -241,6 +241,47 @@ fn a_huge_scene_or_svg_file_is_refused_from_its_size_unread() {
         &["big.svg", "bytes"],
         2.0,
     );
+    // A gigabyte of zeros named like a mesh: refused at its first line from its first bytes
+    // (it was read whole, twice: 7 s and 1 GB of memory).
+    let obj = d.join("big.obj");
+    std::fs::File::create(&obj).unwrap().set_len(1 << 30).unwrap();
+    let out = d.join("f.json");
+    let field = ["--quiet", "field", obj.to_str().unwrap(), "--light", "0,0,1", "--view", "0,0,1"];
+    let args = [&field[..], &["--out", out.to_str().unwrap()]].concat();
+    refused(&args, &["big.obj:1:", "binary data"], 2.0);
+    refused(&["--quiet", "inspect", obj.to_str().unwrap()], &["big.obj:1:", "binary data"], 2.0);
+    // A control character in a trailing comment is not binary data: the file is read on.
+    let text = format!("v 0 0 0 # \u{1}\n{}", "v 1 0 0\nv 0 1 0\nf 1 2 3\n".repeat(10));
+    std::fs::write(&obj, text).unwrap();
+    let o = grainline(&["--quiet", "inspect", obj.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+// A triangle 10⁷⁴ units across (within the coordinate limit) whose field is not finite: the
+// message names the mesh file.
+#[test]
+fn a_field_that_fails_on_a_vast_triangle_names_the_mesh() {
+    let d = dir("vast");
+    let obj = d.join("vast.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1e74 0 0\nv 0 1e74 0\nf 1 2 3\n").unwrap();
+    let out = d.join("f.json");
+    let o = grainline(&[
+        "--quiet",
+        "field",
+        obj.to_str().unwrap(),
+        "--light",
+        "0,0,1",
+        "--view",
+        "0,0,1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    if !o.status.success() {
+        assert!(e.contains("vast.obj"), "{e}");
+    }
+    assert!(!out.exists() || o.status.success(), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -382,6 +423,8 @@ fn control_characters_in_printed_paths_are_escaped() {
     assert!(!o.status.success());
     assert!(!e.contains('\x1b'), "{e:?}");
     assert!(e.contains("a\\u{1b}[31mred.json"), "{e}");
+    // A truncated scene names no `?` key.
+    assert!(e.contains("red.json:1: EOF while parsing"), "{e}");
     std::fs::remove_dir_all(&d).unwrap();
 }
 

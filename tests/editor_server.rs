@@ -643,3 +643,142 @@ fn issue30_item5_api_refuses_what_the_scene_file_refuses() {
     assert_eq!(std::fs::read(&scene).unwrap(), before, "nothing was saved");
     assert_eq!(state(p)["edits"].as_array().unwrap().len(), 0);
 }
+
+// Issue 46, item 3: a curve preview of 60k points used to run for over a minute and reach
+// 5.3 GB. The refinement a curve would ask for is estimated when the request arrives, with
+// the estimate `grainline run` makes before any split: past `mesh.refine.max_vertices` the
+// preview (and the commit) is a 400 at once naming the edit and the budget, and nothing
+// changes.
+#[test]
+fn issue46_an_over_budget_curve_preview_is_refused_at_once() {
+    let text = SCENE.replace(
+        r#""mesh": "part.obj""#,
+        r#""mesh": {"path": "part.obj", "refine": {"max_vertices": 5000}}"#,
+    );
+    let srv = start_with("overbudget", &text);
+    let p = srv.port;
+    solved(p);
+    let before = state(p);
+    // A zigzag over the cylinder's side (r = 30, z in [-40, 40]), 20k points, r = 0.5 mm.
+    let points: Vec<String> = (0..20_000)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / 20_000.0;
+            let z = if i % 2 == 0 { -30 } else { 30 };
+            format!("[{:.2},{:.2},{z}]", 30.0 * a.cos(), 30.0 * a.sin())
+        })
+        .collect();
+    let edit = format!(r#"{{"tool": "curve", "points": [[{}]], "radius": 0.5}}"#, points.join(","));
+    for action in ["preview", "commit"] {
+        let body = format!(r#"{{"action": "{action}", "edit": {edit}}}"#);
+        let t = Instant::now();
+        let (s, r) = post(p, "/api/edit", &own(p), &body);
+        let took = t.elapsed();
+        assert_eq!(s, Some(400), "{action}: {r}");
+        assert!(
+            r.contains("edits[0]") && r.contains("mesh.refine.max_vertices") && r.contains("5000"),
+            "{action}: {r}"
+        );
+        // Refused from an estimate (the refinement would take minutes); 2 s of slack for a
+        // loaded machine.
+        assert!(took < Duration::from_secs(3), "{action} took {took:?}");
+    }
+    let after = state(p);
+    for key in ["version", "edits", "previewing", "undo"] {
+        assert_eq!(after[key], before[key], "{key}");
+    }
+}
+
+// Issue 46, item 3: the handler kept computing after its client left, holding its connection
+// slot. An export (a whole run of the committed edits) whose client closes the connection is
+// cancelled: its work stops at the next check point, its threads end (the slot is free), no
+// file and no temporary is written, the session is as it was, and the next request is
+// answered at once. Each check point inside the request pauses 1 s (a testing aid,
+// `GRAINLINE_TEST_CHECKPOINT_PAUSE_MS`), so the export takes at least 2 s unless cancelled,
+// and one that went on to its end would leave its file.
+#[test]
+fn issue46_work_for_a_client_that_left_is_cancelled() {
+    use std::io::Write;
+    let env = [(grainline::cancel::CHECKPOINT_PAUSE_ENV, "1000")];
+    let srv = start_in_env(scene_dir_with("cancel", SCENE), &env);
+    let p = srv.port;
+    let pid = srv.child.id();
+    let v = solved(p);
+    let before = state(p);
+    let (threads0, _) = threads_and_rss(pid);
+    let body = r#"{"what": "glb"}"#;
+    let mut s = TcpStream::connect(("127.0.0.1", p)).unwrap();
+    let rq = format!(
+        "POST /api/export HTTP/1.1\r\nHost: 127.0.0.1:{p}\r\nOrigin: http://127.0.0.1:{p}\r\n\
+         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+        body.len()
+    );
+    s.write_all(rq.as_bytes()).unwrap();
+    // The export is under way (its connection's thread and its work's)...
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(threads_and_rss(pid).0 > threads0, "the export is not running");
+    // ... when its client leaves.
+    drop(s);
+    let t = Instant::now();
+    while threads_and_rss(pid).0 > threads0 {
+        assert!(t.elapsed() < Duration::from_secs(30), "the export's threads still run");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let t = Instant::now();
+    assert_eq!(get(p, "/api/info").0, Some(200));
+    assert!(t.elapsed() < Duration::from_secs(5), "answered after {:?}", t.elapsed());
+    // The export wrote nothing: it was cancelled, not finished unseen.
+    std::thread::sleep(Duration::from_millis(2500));
+    let files: Vec<String> = std::fs::read_dir(&srv.dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!files.iter().any(|f| f.ends_with(".glb") || f.ends_with(".tmp")), "{files:?}");
+    let after = state(p);
+    for key in ["version", "solved_version", "edits", "error"] {
+        assert_eq!(after[key], before[key], "{key}");
+    }
+    assert_eq!(after["version"].as_u64(), Some(v));
+    // The same export, waited for, is written: the session was left as it was.
+    let (status, r) = post(p, "/api/export", &own(p), body);
+    assert_eq!(status, Some(200), "{r}");
+    assert!(srv.dir.join("scene.glb").exists(), "{r}");
+}
+
+// Issue 46, item 3: a solve made stale by a change ran to its end before the newer version
+// was solved. A bend committed and undone at once is dropped at the solver's next check point:
+// the state is solved again long before that bend's solve could have ended. Check points
+// pause 300 ms (`GRAINLINE_TEST_CHECKPOINT_PAUSE_MS`): a commit's solve (refinement levels,
+// stages, edits, iterations, fidelity) takes seconds, its cancellation one pause.
+#[test]
+fn issue46_a_stale_solve_is_cancelled() {
+    let env = [(grainline::cancel::CHECKPOINT_PAUSE_ENV, "300")];
+    let srv = start_in_env(scene_dir_with("stale", SCENE), &env);
+    let p = srv.port;
+    solved(p);
+    let bend = |x: i32| {
+        format!(
+            r#"{{"action": "commit", "edit": {{"tool": "bend", "centre": {{"point": [{x}, 0, 0]}},
+                "radius": 20, "strength": 0.6}}}}"#
+        )
+    };
+    // A commit solved to its end: how long a solve takes.
+    let t = Instant::now();
+    assert_eq!(post(p, "/api/edit", &own(p), &bend(30)).0, Some(200));
+    solved(p);
+    let full = t.elapsed().as_secs_f64();
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    solved(p);
+    let before = state(p);
+    // Another bend (another refinement), undone at once.
+    assert_eq!(post(p, "/api/edit", &own(p), &bend(-30)).0, Some(200));
+    let t = Instant::now();
+    assert_eq!(post(p, "/api/undo", &own(p), "{}").0, Some(200));
+    let v = solved(p);
+    let took = t.elapsed().as_secs_f64();
+    let after = state(p);
+    assert_eq!(after["solved_version"].as_u64(), Some(v));
+    assert_eq!(after["edits"], before["edits"]);
+    assert!(after["error"].is_null(), "{}", after["error"]);
+    assert!(after["dropped"].as_u64() > before["dropped"].as_u64(), "{after}");
+    assert!(took < 0.5 * full, "solved again after {took:.1} s; a solve takes {full:.1} s");
+}

@@ -417,6 +417,65 @@ fn item10_sigterm_during_a_run_removes_temporaries_and_keeps_old_outputs() {
     std::fs::remove_dir_all(&d).unwrap();
 }
 
+// Issue 46, item 2: a signal that comes while a run renames its outputs into place waits for
+// the renames and leaves the whole new set with its report. The commit is made to pause between
+// renames (GRAINLINE_TEST_RENAME_PAUSE_MS, a testing aid read only there); the signal is sent
+// once the first output is seen renamed while the report is still the old one — a set half
+// renamed, so the test cannot pass by a signal that came before or after the renames.
+#[cfg(unix)]
+#[test]
+fn issue46_a_signal_during_the_renames_leaves_the_whole_new_set() {
+    let d = dir("renames");
+    let sc = scene(
+        &d,
+        r#", "toolpaths": {"svg": "o/v.svg", "gcode": "o/v.ngc", "placement": {"width": 3}}"#,
+    );
+    let text = std::fs::read_to_string(&sc).unwrap();
+    let text = text
+        .replace(r#""field": {"init": "uv"}"#, r#""field": {"init": "uv", "output": "o/f.json"}"#);
+    std::fs::write(&sc, text).unwrap();
+    let targets = ["o/f.json", "o/v.svg", "o/v.ngc", "run-report.json"];
+    for (signal, code) in [("TERM", 143), ("INT", 130), ("HUP", 129)] {
+        std::fs::create_dir_all(d.join("o")).unwrap();
+        for t in targets {
+            std::fs::write(d.join(t), b"old").unwrap();
+        }
+        let child = Command::new(env!("CARGO_BIN_EXE_grainline"))
+            .args(["--quiet", "run", sc.to_str().unwrap()])
+            .env(grainline::output::RENAME_PAUSE_ENV, "1500")
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let renamed = |t: &str| std::fs::read(d.join(t)).is_ok_and(|b| b != b"old");
+        // Wait (bounded) for the first rename; the report, renamed last, is still the old one.
+        let t0 = std::time::Instant::now();
+        while !targets.iter().any(|t| renamed(t)) {
+            assert!(t0.elapsed().as_secs() < 120, "no output was renamed: {:?}", tree(&d));
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let half: Vec<&str> = targets.iter().copied().filter(|t| renamed(t)).collect();
+        assert!(!renamed("run-report.json"), "the set was not half renamed: {half:?}");
+        let ok = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+        let out = child.wait_with_output().unwrap();
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(code), "SIG{signal} after {half:?}: {e}");
+        assert!(e.contains("interrupted") && e.contains("renamed into place"), "{e}");
+        for t in targets {
+            assert!(renamed(t), "SIG{signal}: {t} is the old one: {:?}", tree(&d));
+        }
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join("run-report.json")).unwrap()).unwrap();
+        assert_eq!(report["format"], "grainline-run-report");
+        assert_eq!(report["outputs"].as_array().map(Vec::len), Some(3), "{}", report["outputs"]);
+        assert!(temporaries(&d).is_empty(), "left behind: {:?}", tree(&d));
+    }
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
 #[test]
 fn item10_a_run_failing_late_writes_no_output_and_keeps_the_old_ones() {
     let d = dir("late");

@@ -111,7 +111,8 @@ pub fn run(args: FieldArgs, quiet: bool) -> anyhow::Result<()> {
     // A failure on the part names its file.
     let result =
         compute_field(&mesh, &options).with_context(|| args.mesh.mesh.display().to_string())?;
-    let file = FieldFile::new(&mesh, &args.mesh.mesh.display().to_string(), &options, &result)?;
+    let file = FieldFile::new(&mesh, &args.mesh.mesh.display().to_string(), &options, &result)
+        .with_context(|| args.mesh.mesh.display().to_string())?;
     stages.stage("writing");
     grainline::output::write_json_compact_atomic(&args.out, &file)
         .with_context(|| format!("writing {}", args.out.display()))?;

@@ -354,6 +354,7 @@ fn apply_in_order(
 ) -> Result<Vec<EditReport>> {
     let mut reports = Vec::with_capacity(edits.len());
     for (j, e) in edits.iter().enumerate() {
+        crate::cancel::checkpoint("edits")?;
         let k = first + j;
         let mut report = EditReport::new(k, e.tool());
         let r = match e {

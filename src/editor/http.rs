@@ -11,13 +11,23 @@
 //! - a body announced by `Content-Length` (no chunked uploads: `411`), at most
 //!   [`MAX_BODY`] (`413`, decided before reading), read within
 //!   [`BODY_TIMEOUT`];
-//! - writes that give up after [`WRITE_TIMEOUT`] on a client that does not read.
+//! - writes that give up after [`WRITE_TIMEOUT`] on a client that does not read;
+//! - work cancelled when the client goes: the handler runs on a thread of its own inside a
+//!   [`Cancel`] scope while the connection's thread looks at the socket every
+//!   [`WATCH_INTERVAL`]; when the client has closed the connection (end of stream, or a reset)
+//!   the flag is set, the handler's work stops at its next check point ([`crate::cancel`]),
+//!   nothing is answered, and the slot is given back as soon as the handler has returned. A
+//!   client that half-closes its side after the request is taken as gone too (as Go's
+//!   `net/http` does); bytes sent after the request are read and dropped (one request per
+//!   connection).
 
 use std::io::{Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
+
+use crate::cancel::Cancel;
 
 /// The largest request body read (bytes).
 pub const MAX_BODY: usize = 1 << 20;
@@ -31,6 +41,8 @@ pub const BODY_TIMEOUT: Duration = Duration::from_secs(30);
 pub const WRITE_TIMEOUT: Duration = Duration::from_secs(30);
 /// Most bytes of the request line and headers.
 pub const MAX_HEAD: usize = 16 << 10;
+/// How often the socket of a request being answered is looked at for a client that left.
+pub const WATCH_INTERVAL: Duration = Duration::from_millis(100);
 
 /// A request as read: method, target, headers in order, body.
 #[derive(Clone, Debug, Default)]
@@ -126,20 +138,77 @@ fn refuse(mut stream: TcpStream) {
     let _ = stream.shutdown(Shutdown::Write);
 }
 
-/// Reads one request, answers it, closes.
-fn connection<F: Fn(&Request) -> Response>(stream: TcpStream, handler: &F, _slot: Slot) {
+/// Reads one request, answers it (unless the client left meanwhile), closes.
+fn connection<F: Fn(&Request) -> Response + Sync>(stream: TcpStream, handler: &F, _slot: Slot) {
     let _ = stream.set_write_timeout(Some(WRITE_TIMEOUT));
     let response = match read_request(&stream) {
         Ok(rq) => {
             let head = rq.method == "HEAD";
-            let r = handler(&rq);
-            respond(&stream, &r, head);
+            if let Some(r) = answer_watching(&stream, handler, &rq) {
+                respond(&stream, &r, head);
+            }
             return;
         }
         Err(Some(r)) => r,
         Err(None) => return,
     };
     respond(&stream, &response, false);
+}
+
+/// Runs `handler` on a thread of its own inside a [`Cancel`] scope and watches `stream`
+/// meanwhile; `None` when the client left (the work was cancelled and has returned).
+fn answer_watching<F: Fn(&Request) -> Response + Sync>(
+    stream: &TcpStream,
+    handler: &F,
+    rq: &Request,
+) -> Option<Response> {
+    let cancel = Cancel::new();
+    let cancel = &cancel;
+    std::thread::scope(|scope| {
+        let (tx, rx) = mpsc::channel();
+        let work =
+            std::thread::Builder::new().name("editor-work".into()).spawn_scoped(scope, move || {
+                let r = cancel.scope(|| handler(rq));
+                let _ = tx.send(r);
+            });
+        if work.is_err() {
+            return Some(Response::error(503, "busy: cannot start a thread for the request"));
+        }
+        let _ = stream.set_nonblocking(true);
+        let answer = loop {
+            match rx.recv_timeout(WATCH_INTERVAL) {
+                Ok(r) => break Some(r),
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    break Some(Response::error(500, "internal error"))
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+            }
+            if client_gone(stream) {
+                cancel.cancel();
+                // The scope joins the handler: it returns at its next check point.
+                break None;
+            }
+        };
+        let _ = stream.set_nonblocking(false);
+        answer
+    })
+}
+
+/// Whether the client of a non-blocking `stream` has closed it (end of stream or an error);
+/// bytes it still sends are read and dropped.
+fn client_gone(mut stream: &TcpStream) -> bool {
+    let mut sink = [0u8; 4096];
+    // A bounded number of reads: a client that keeps sending is looked at again next time.
+    for _ in 0..16 {
+        match stream.read(&mut sink) {
+            Ok(0) => return true,
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => return false,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(_) => return true,
+        }
+    }
+    false
 }
 
 /// Writes `r` (without its body for a HEAD) and closes the connection.

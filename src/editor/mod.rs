@@ -13,8 +13,9 @@
 //! `Origin` is not its own page; serves only its embedded assets and the scene's own files
 //! under fixed names (no path from the URL ever reaches the file system); answers a malformed
 //! request with a 4xx and keeps running; bounds every connection's time, headers and body,
-//! and the number of connections handled at once ([`http`]); checks every edit and light
-//! from the page with the scene file's own checks.
+//! and the number of connections handled at once ([`http`]), and cancels a request's work
+//! when its client goes; checks every edit and light from the page with the scene file's own
+//! checks, and an edit's refinement against its budget when it arrives.
 
 pub mod assets;
 pub mod drag;

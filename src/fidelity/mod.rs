@@ -677,6 +677,7 @@ pub fn fidelity_of_edits(
         .iter()
         .filter_map(|r| r.shape.as_ref().map(|s| (r, s)))
         .map(|(r, s)| {
+            crate::cancel::checkpoint("fidelity")?;
             edit_fidelity(
                 mesh, geometry, h, symmetry, &u_before, &u_after, r.index, &r.tool, s, options,
             )

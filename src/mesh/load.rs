@@ -101,6 +101,12 @@ pub fn load_mesh(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
     check_options(options)?;
     // A FIFO or a device is refused before it is opened (opening a FIFO would block).
     crate::output::check_input_file(path)?;
+    // A file named `.obj` is an OBJ unless it starts as a PLY: its first bytes decide, and the
+    // OBJ reader reads it once (a 1 GB file of zeros was read whole twice to be refused).
+    let obj_name = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if obj_name && MeshFormat::detect(path, &read_head(path, 16)?)? == MeshFormat::Obj {
+        return load_obj(path, options);
+    }
     let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
     let format = MeshFormat::detect(path, &bytes)?;
     if format == MeshFormat::Obj {
@@ -175,13 +181,44 @@ pub fn load_obj(path: &Path, options: &LoadOptions) -> Result<LoadedMesh> {
     load_obj_with(path, options, ObjParser::Auto)
 }
 
+/// The first `n` bytes of a file (fewer when it is shorter).
+fn read_head(path: &Path, n: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let io = |e| Error::Io { path: path.to_owned(), source: e };
+    let mut head = Vec::new();
+    std::fs::File::open(path).map_err(io)?.take(n).read_to_end(&mut head).map_err(io)?;
+    Ok(head)
+}
+
+/// How much of an OBJ file is looked at for binary data before the rest is read.
+const OBJ_HEAD_BYTES: u64 = 64 << 10;
+
+/// The bytes of an OBJ file, or only its first [`OBJ_HEAD_BYTES`] when they already hold
+/// binary data outside comments: normalizing is line by line and the scanner checks each
+/// line's text before anything else, so it refuses the head at the line (and with the error)
+/// it would refuse the whole file at, without reading a large binary file (1 GB took 7 s and
+/// 1 GB of memory to be refused).
+fn read_obj_bytes(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let io = |e| Error::Io { path: path.to_owned(), source: e };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    (&mut file).take(OBJ_HEAD_BYTES).read_to_end(&mut bytes).map_err(io)?;
+    let control = |b: &u8| *b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0b | 0x0c);
+    let binary = bytes.iter().any(control) && scan::normalize(bytes.clone()).iter().any(control);
+    if !binary {
+        file.read_to_end(&mut bytes).map_err(io)?;
+    }
+    Ok(bytes)
+}
+
 /// [`load_obj`] with a choice of number reader; every choice gives the same mesh, report and
 /// errors (the parallel parser is only faster).
 pub fn load_obj_with(path: &Path, options: &LoadOptions, parser: ObjParser) -> Result<LoadedMesh> {
     check_options(options)?;
     // A FIFO or a device is refused before it is opened (opening a FIFO would block).
     crate::output::check_input_file(path)?;
-    let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_owned(), source: e })?;
+    let bytes = read_obj_bytes(path)?;
     // BOM, CR-only line ends, `\` continuations and trailing comments, for both readers.
     let bytes = scan::normalize(bytes);
     let parallel = match parser {

@@ -155,6 +155,7 @@ pub fn refine_with(
     state.rim = rim_planes(mesh, &state.plane);
     let mut levels = 0;
     for _ in 0..options.max_levels {
+        crate::cancel::checkpoint("refinement")?;
         let Some(plan) = state.plan() else { break };
         let added = plan.marked.iter().filter(|m| **m).count();
         if state.parents.len() + added > options.max_new_vertices {

@@ -139,8 +139,10 @@ pub fn optimize_stage(s: &LoadedScene, p: &Prepared, stages: &mut Stages) -> Res
     let er = apply_edits(&edit_input(p), &edits, &options)
         .map_err(|e| crate::scene::prefix("edits", e))?;
     stages.start("solve");
+    crate::cancel::checkpoint("solve")?;
     let epsilon = epsilon_before(p, &er);
     let solved = solve_targets(s, p, &er, epsilon, &OptimizeReuse::default())?;
+    crate::cancel::checkpoint("solve")?;
     finish_optimized(p, er, solved)
 }
 

@@ -273,6 +273,7 @@ pub fn prepare_part(s: &LoadedScene, part: LoadedPart, stages: &mut Stages) -> R
         });
     }
     stages.start("field");
+    crate::cancel::checkpoint("field")?;
     let mut field_options = FieldOptions::new(lighting);
     field_options.init = scene.field.initial_field(directions, map);
     field_options.symmetry = scene.field.symmetry.symmetry();
@@ -502,19 +503,41 @@ pub fn refine_request(
     if settings.mode == crate::scene::RefineMode::None || s.scene.edits.is_empty() {
         return Ok(None);
     }
-    let edits = super::optimize::resolved_edits(s);
-    let key = |e: Error| crate::scene::prefix("edits", e);
-    let mut target =
-        crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
-    if !target.finest().is_finite() {
-        return Ok(None);
-    }
-    check_refine_estimate(&target, &edits, settings.max_vertices)?;
+    let Some(mut target) = checked_resolution(s, mesh, &settings)? else { return Ok(None) };
     if settings.turn < 180.0 {
         let lighting = key_light(&s.scene)?.lighting(s.scene.view.view(), mesh)?;
         let max_turn = settings.turn.to_radians();
         target.turn = Some(crate::edit::resolution::HalfVectorTurn { lighting, max_turn });
     }
+    Ok(Some(target))
+}
+
+/// Refuses the scene's edits when refining the part for them is estimated past
+/// `mesh.refine.max_vertices` (the check [`refine_request`] makes before any split, without
+/// the rest of the request): the editor asks it of each edit from the page when it arrives.
+pub fn check_refine_budget(s: &LoadedScene, mesh: &Mesh) -> Result<()> {
+    let settings = s.scene.mesh.as_ref().map(|m| m.0.refine.clone()).unwrap_or_default();
+    if settings.mode == crate::scene::RefineMode::None || s.scene.edits.is_empty() {
+        return Ok(());
+    }
+    checked_resolution(s, mesh, &settings).map(|_| ())
+}
+
+/// The edits' resolution on `mesh` with its estimate checked against the budget (`None`
+/// when nothing is finer than the part).
+fn checked_resolution(
+    s: &LoadedScene,
+    mesh: &Mesh,
+    settings: &crate::scene::RefineSettings,
+) -> Result<Option<crate::edit::resolution::Resolution>> {
+    let edits = super::optimize::resolved_edits(s);
+    let key = |e: Error| crate::scene::prefix("edits", e);
+    let target =
+        crate::edit::resolution::edit_resolution(mesh, &edits, settings.edge).map_err(key)?;
+    if !target.finest().is_finite() {
+        return Ok(None);
+    }
+    check_refine_estimate(&target, &edits, settings.max_vertices)?;
     Ok(Some(target))
 }
 

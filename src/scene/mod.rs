@@ -96,7 +96,8 @@ impl Scene {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut de = serde_json::Deserializer::from_str(text);
         let scene: Scene = serde_path_to_error::deserialize(&mut de).map_err(|e| {
-            let key = e.path().to_string();
+            // `?`: serde_path_to_error's name for a key not read yet (a truncated file).
+            let key = Some(e.path().to_string()).filter(|k| k != "?").unwrap_or_default();
             let inner = e.into_inner();
             let line = (inner.line() > 0).then_some(inner.line());
             let message = in_scene_terms(text, &key, &strip_position(&inner.to_string()));

@@ -413,6 +413,7 @@ impl Lm<'_, '_> {
     fn run(&mut self) -> Result<StopReason> {
         let mut stop = StopReason::IterationCap;
         'outer: for _ in 0..self.options.max_iterations {
+            crate::cancel::checkpoint("solve")?;
             let t0 = Instant::now();
             if !self.assembled {
                 self.sys.assemble(&self.phi, &mut self.acc);

@@ -55,9 +55,15 @@ pub fn start_with(name: &str, text: &str) -> Server {
 
 /// The editor on `dir/scene.json`.
 pub fn start_in(dir: PathBuf) -> Server {
+    start_in_env(dir, &[])
+}
+
+/// The editor on `dir/scene.json` with these environment variables.
+pub fn start_in_env(dir: PathBuf, env: &[(&str, &str)]) -> Server {
     let mut child = Command::new(env!("CARGO_BIN_EXE_grainline"))
         .args(["--quiet", "edit", "--port", "0"])
         .arg(dir.join("scene.json"))
+        .envs(env.iter().copied())
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()

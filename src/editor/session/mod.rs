@@ -1,6 +1,7 @@
 //! The editor's state: the scene as read, the part as loaded and its preparations, the list of
 //! edits with its undo and redo stacks, the edit being dragged, and the solver thread that
-//! turns the latest list into a field (latest request wins; a result that is stale when it is
+//! turns the latest list into a field (latest request wins: a solve made stale by a change is
+//! cancelled at its next check point, [`crate::cancel`], and a result that is stale when it is
 //! ready is dropped).
 //!
 //! Every field the page is shown is computed from the scene **text** that saving would write
@@ -30,6 +31,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
+use crate::cancel::Cancel;
 use crate::edit::{Edit, WarpKind};
 use crate::editor::drag::DragBase;
 use crate::fidelity::EditFidelity;
@@ -160,6 +162,8 @@ struct State {
     dropped: u64,
     /// The solver thread is computing this version.
     solving: Option<u64>,
+    /// The flag of the solve in progress: set by a change, which makes that solve stale.
+    inflight: Option<Cancel>,
 }
 
 /// A summary of the state for the page (`GET /api/state`).
@@ -417,16 +421,35 @@ impl Session {
         Ok(())
     }
 
-    /// Applies a change; returns the new version. The solver thread picks it up.
+    /// Refuses an edit whose refinement, after the committed ones, would be past
+    /// `mesh.refine.max_vertices`: the estimate `grainline run` makes before any split
+    /// ([`crate::pipeline::prepare::check_refine_budget`]), made here at once so that the request is refused naming the edit
+    /// (`edits[N]`) and the budget, instead of the solver thread refining for minutes. A
+    /// dragged edit is checked too: it would be refused when committed.
+    pub fn check_refinement(&self, e: &Edit) -> Result<()> {
+        let mut edits = self.lock().edits.clone();
+        edits.push(e.clone());
+        // The part and the brushes do not depend on the key light: the original base serves.
+        let b = &self.original;
+        let s = self.with_edits(b, &edits)?;
+        crate::pipeline::prepare::check_refine_budget(&s, &b.part.mesh)
+    }
+
+    /// Applies a change; returns the new version. The solver thread picks it up, and the solve
+    /// in progress, now stale, is cancelled ([`Session::solver_loop`]). Nothing is applied
+    /// when the request's work was cancelled meanwhile (its client left: [`super::http`]).
     pub fn change(&self, c: Change) -> Result<u64> {
+        if let Change::Preview(e) | Change::Commit(e) = &c {
+            self.check_edit(e)?;
+            self.check_refinement(e)?;
+        }
+        crate::cancel::checkpoint("edit")?;
         let mut st = self.lock();
         match c {
             Change::Preview(e) => {
-                self.check_edit(&e)?;
                 st.preview = Some(e);
             }
             Change::Commit(e) => {
-                self.check_edit(&e)?;
                 let max = crate::limits::MAX_EDITS;
                 if st.edits.len() >= max {
                     return Err(Error::setting(
@@ -483,6 +506,9 @@ impl Session {
             }
         }
         st.version += 1;
+        if let Some(stale) = st.inflight.take() {
+            stale.cancel();
+        }
         let v = st.version;
         drop(st);
         self.changed.notify_all();
@@ -503,10 +529,13 @@ impl Session {
                     .max(st.error.as_ref().map(|e| e.0))
                     .unwrap_or(0);
                 let now = Instant::now();
-                if newest > after || now >= deadline {
+                // A page that left (its request cancelled, [`super::http`]) waits no longer.
+                let gone = crate::cancel::checkpoint("state").is_err();
+                if newest > after || now >= deadline || gone {
                     break;
                 }
-                st = match self.changed.wait_timeout(st, deadline - now) {
+                let slice = (deadline - now).min(super::http::WATCH_INTERVAL);
+                st = match self.changed.wait_timeout(st, slice) {
                     Ok((g, _)) => g,
                     Err(e) => e.into_inner().0,
                 };
@@ -623,11 +652,14 @@ impl Session {
         }
     }
 
-    /// The solver thread's loop: solves the latest version, drops a result that is stale when
-    /// it is ready, never returns.
+    /// The solver thread's loop: solves the latest version, never returns. A change makes the
+    /// solve in progress stale: it is cancelled ([`Cancel`]) and stops at its next check point
+    /// (the refinement's levels, the stages, the solver's iterations), keeping nothing it made
+    /// (a part, a drag's base); a result that is stale when it is ready is dropped.
     pub fn solver_loop(self: Arc<Self>) {
         let mut done = 0u64;
         loop {
+            let cancel = Cancel::new();
             let (version, committed, dragged, light) = {
                 let mut st = self.lock();
                 while st.version <= done {
@@ -637,19 +669,23 @@ impl Session {
                     };
                 }
                 st.solving = Some(st.version);
+                st.inflight = Some(cancel.clone());
                 (st.version, st.edits.clone(), st.preview.clone(), st.light)
             };
             // A panic in the solve must not end the editor: it is reported like an error.
             let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                let b = self.base_for(light)?;
-                match &dragged {
-                    Some(d) => self.solve_drag(&b, &committed, d, version),
-                    None => self.solve(&b, &committed, version),
-                }
+                cancel.scope(|| {
+                    let b = self.base_for(light)?;
+                    match &dragged {
+                        Some(d) => self.solve_drag(&b, &committed, d, version),
+                        None => self.solve(&b, &committed, version),
+                    }
+                })
             }))
             .unwrap_or_else(|_| Err(Error::invalid_arg("solve", "the solver failed (panic)")));
             let mut st = self.lock();
             st.solving = None;
+            st.inflight = None;
             done = version;
             if st.version == version {
                 match result {

@@ -210,25 +210,39 @@ impl Session {
 
     /// FIELD.json of a solved field, exactly as `grainline run` writes it (`field.output`) for
     /// a scene file holding the same edits: [`optimized_field_file`] (or the initial field's
-    /// file without edits) through [`crate::output::json_compact`]. Made once per result.
+    /// file without edits) through [`crate::output::json_compact`]. Made once per result; work
+    /// cancelled ([`crate::cancel`]: the page left) is not kept, and is made again when asked.
     pub fn field_json<'a>(&self, solved: &'a Solved) -> Result<&'a [u8]> {
-        let p = &solved.part.prepared;
-        let made = solved.field_json.get_or_init(|| {
-            let file = match (&solved.optimized, solved.edits.is_empty()) {
-                (Some(o), _) => optimized_field_file(p, o),
-                (None, true) => crate::pipeline::prepare::initial_field_file(p),
-                // A drag step: the whole stage, as `grainline run` makes it, when asked for.
-                (None, false) => self.with_edits(&solved.base, &solved.edits).and_then(|s| {
-                    let o = optimize_stage(&s, p, &mut Stages::new(&Silent))?;
-                    optimized_field_file(p, &o)
-                }),
-            };
-            file.and_then(|f| crate::output::json_compact(&f)).map_err(|e| e.to_string())
-        });
+        let made = match solved.field_json.get() {
+            Some(m) => m,
+            None => {
+                let m = match self.make_field_json(solved) {
+                    Err(e @ Error::Cancelled { .. }) => return Err(e),
+                    m => m.map_err(|e| e.to_string()),
+                };
+                // Another request may have made it meanwhile: the same bytes.
+                let _ = solved.field_json.set(m);
+                solved.field_json.get().expect("set above")
+            }
+        };
         match made {
             Ok(b) => Ok(b.as_slice()),
             Err(e) => Err(Error::invalid_arg("field.json", e.clone())),
         }
+    }
+
+    fn make_field_json(&self, solved: &Solved) -> Result<Vec<u8>> {
+        let p = &solved.part.prepared;
+        let file = match (&solved.optimized, solved.edits.is_empty()) {
+            (Some(o), _) => optimized_field_file(p, o),
+            (None, true) => crate::pipeline::prepare::initial_field_file(p),
+            // A drag step: the whole stage, as `grainline run` makes it, when asked for.
+            (None, false) => self.with_edits(&solved.base, &solved.edits).and_then(|s| {
+                let o = optimize_stage(&s, p, &mut Stages::new(&Silent))?;
+                optimized_field_file(p, &o)
+            }),
+        };
+        file.and_then(|f| crate::output::json_compact(&f))
     }
 
     /// The strokes `grainline run` traces for a solved field and the as-brushed grain rebuilt
@@ -236,7 +250,17 @@ impl Session {
     /// traces (FIELD.json's, after a solve). Made once per result; a part without a UV layout
     /// is told the key to add.
     pub fn traced<'a>(&self, solved: &'a Solved) -> Result<&'a PageStrokes> {
-        let made = solved.traced.get_or_init(|| self.trace(solved).map_err(|e| e.to_string()));
+        let made = match solved.traced.get() {
+            Some(m) => m,
+            None => {
+                let m = match self.trace(solved) {
+                    Err(e @ Error::Cancelled { .. }) => return Err(e),
+                    m => m.map_err(|e| e.to_string()),
+                };
+                let _ = solved.traced.set(m);
+                solved.traced.get().expect("set above")
+            }
+        };
         match made {
             Ok(t) => Ok(t),
             Err(e) => Err(Error::setting("toolpaths", e.clone())),
