@@ -173,18 +173,9 @@ fn the_preview_of_a_coarse_export_matches_the_fine_export() {
                 .output()
                 .unwrap();
             assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-            read_pfm(&dir.join("p.pfm"))
+            curved_truth::read_pfm(&dir.join("p.pfm"))
         });
-        let bg = |x: &[f32; 3], y: &[f32; 3]| x == y;
-        let (mut part, mut ok) = (0usize, 0usize);
-        for (x, y) in a.iter().zip(&b) {
-            if bg(x, &a[0]) && bg(y, &b[0]) {
-                continue;
-            }
-            part += 1;
-            ok += usize::from((lum(x) - lum(y)).abs() <= 0.04);
-        }
-        let share = ok as f64 / part as f64;
+        let (share, part) = curved_truth::preview_agreement(&a, &b);
         eprintln!("{}: {:.2} % of {part} part pixels within 0.04", coarse.name, 100.0 * share);
         assert!(share >= floor, "{}: {share}", coarse.name);
     }
@@ -193,22 +184,6 @@ fn the_preview_of_a_coarse_export_matches_the_fine_export() {
 
 /// Preview size of [`the_preview_of_a_coarse_export_matches_the_fine_export`].
 const PX: usize = 384;
-
-/// Luminance after a 1/2.2 gamma.
-fn lum(c: &[f32; 3]) -> f64 {
-    let v = 0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2]);
-    v.clamp(0.0, 1.0).powf(1.0 / 2.2)
-}
-
-/// grainline's PFM ("PF\nW H\n-1.0\n", f32 LE RGB): the pixels.
-fn read_pfm(path: &Path) -> Vec<[f32; 3]> {
-    let b = std::fs::read(path).unwrap();
-    let start = b.iter().enumerate().filter(|(_, &c)| c == b'\n').nth(2).unwrap().0 + 1;
-    b[start..]
-        .chunks_exact(12)
-        .map(|c| [0, 1, 2].map(|k| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())))
-        .collect()
-}
 
 /// A rotary program of the turned shaft at 15° chords with `axis: "auto"`: the fixture is the
 /// shaft's recognized axis, z through the origin, exactly as the program prints it (the axis

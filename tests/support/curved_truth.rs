@@ -318,3 +318,33 @@ pub fn share(ok: f64, all: f64) -> f64 {
         1.0
     }
 }
+
+/// Luminance after a 1/2.2 gamma.
+pub fn lum(c: &[f32; 3]) -> f64 {
+    let v = 0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2]);
+    v.clamp(0.0, 1.0).powf(1.0 / 2.2)
+}
+
+/// grainline's PFM ("PF\nW H\n-1.0\n", f32 LE RGB): the pixels.
+pub fn read_pfm(path: &std::path::Path) -> Vec<[f32; 3]> {
+    let b = std::fs::read(path).unwrap();
+    let start = b.iter().enumerate().filter(|(_, &c)| c == b'\n').nth(2).unwrap().0 + 1;
+    b[start..]
+        .chunks_exact(12)
+        .map(|c| [0, 1, 2].map(|k| f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())))
+        .collect()
+}
+
+/// The share of the part's pixels (not the background, the first pixel's colour, in both
+/// images) whose luminances ([`lum`]) are within 0.04, and how many pixels the part covers.
+pub fn preview_agreement(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, usize) {
+    let (mut part, mut ok) = (0usize, 0usize);
+    for (x, y) in a.iter().zip(b) {
+        if x == &a[0] && y == &b[0] {
+            continue;
+        }
+        part += 1;
+        ok += usize::from((lum(x) - lum(y)).abs() <= 0.04);
+    }
+    (ok as f64 / part.max(1) as f64, part)
+}

@@ -165,16 +165,26 @@ pub fn recognize(mesh: &Mesh) -> Surfaces {
     let grown = profile::free_profiles(&g, mesh, grown, tol);
     let grown = profile::twins(&g, mesh, grown, tol);
     let mut grown = profile::subsume(&g, mesh, grown, tol);
-    let mut region_surface = vec![NO_SURFACE; nr];
-    for (k, (_, regions)) in grown.iter().enumerate() {
-        for &r in regions {
-            region_surface[r as usize] = k as u32;
-        }
-    }
+    let mut region_surface = owners(&grown, nr);
     grow::absorb(&g, mesh, &mut grown, &mut region_surface, tol);
+    // Absorbed regions join surfaces they lie on both: a torus's flat top ring (a planar
+    // annulus between the outer and the inner half) makes the halves neighbours.
+    let mut grown = profile::subsume(&g, mesh, grown, tol);
+    let mut region_surface = owners(&grown, nr);
     add_planes(&g, mesh, &mut grown, &mut region_surface);
     close_off(&g, &grown, &mut region_surface);
     finish(mesh, &g, grown, &region_surface, tol)
+}
+
+/// Per region, the index of the surface that holds it, or [`NO_SURFACE`].
+fn owners(grown: &[profile::Grown], regions: usize) -> Vec<u32> {
+    let mut region_surface = vec![NO_SURFACE; regions];
+    for (k, (_, rs)) in grown.iter().enumerate() {
+        for &r in rs {
+            region_surface[r as usize] = k as u32;
+        }
+    }
+    region_surface
 }
 
 /// The most the tolerance may be, [`RELATIVE_TOLERANCE`] of `mesh`'s largest coordinate.

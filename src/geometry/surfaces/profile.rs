@@ -483,6 +483,7 @@ pub(super) fn free_profiles(
         (0..n).map(|k| internal_step(g, mesh, &grown[k], &owner, k as u32)).collect();
     let mut parent: Vec<usize> = (0..n).collect();
     let g1 = MIN_PROFILE_TURN_DEG.to_radians();
+    let mut tangent: Vec<(usize, usize)> = Vec::new();
     for (k, (pk, rs)) in grown.iter().enumerate() {
         let Some(step_k) = step[k] else { continue };
         for &r in rs {
@@ -504,7 +505,9 @@ pub(super) fn free_profiles(
                 };
                 let at = mesh.positions[v as usize];
                 let turn = pk.normal_at(&at).dot(&pj.normal_at(&at)).clamp(-1.0, 1.0).acos();
-                if turn > g1 && turn <= STEP_SLACK * step_k.max(step_j) {
+                if turn <= g1 {
+                    tangent.push((k, j));
+                } else if turn <= STEP_SLACK * step_k.max(step_j) {
                     let (a, b) = (root(&mut parent, k), root(&mut parent, j));
                     parent[a.max(b)] = a.min(b);
                 }
@@ -519,13 +522,23 @@ pub(super) fn free_profiles(
     // than a step, it is a chord of that face's continuation, not a cone.
     let single: Vec<bool> =
         grown.iter().map(|(p, rs)| rings(p, &points(g, mesh, rs), tol).len() == 2).collect();
-    grown
-        .into_iter()
-        .enumerate()
-        .filter(|(k, _)| {
-            let s = size[root(&mut parent, *k)];
-            s == 1 || (s == 2 && !single[*k])
+    let mut dropped: Vec<bool> = (0..n)
+        .map(|k| {
+            let s = size[root(&mut parent, k)];
+            !(s == 1 || (s == 2 && !single[k]))
         })
-        .map(|(_, p)| p)
-        .collect()
+        .collect();
+    // A single band that continues a free profile tangentially is its end (a vase's first
+    // row, whose turn to the next is below a profile's least).
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for &(k, j) in &tangent {
+            if single[k] && !dropped[k] && dropped[j] {
+                dropped[k] = true;
+                changed = true;
+            }
+        }
+    }
+    grown.into_iter().enumerate().filter(|(k, _)| !dropped[*k]).map(|(_, p)| p).collect()
 }
