@@ -110,6 +110,11 @@ pub use grainline_toolpaths::budget::MAX_NEIGHBOURS;
 /// have long stopped mattering, and at 10³⁰⁰ the energy overflows to infinity mid-solve.
 pub const MAX_SMOOTHNESS: f64 = 1e6;
 
+/// Most iterations the solve may be given (`solver.max_iterations`): twenty times the default
+/// 50, which the solve rarely uses up; each iteration costs a factorization of the part's
+/// normal equations, so the cap bounds a run's solve at 1,000 of them.
+pub const MAX_SOLVER_ITERATIONS: usize = 1_000;
+
 /// Largest `solver.constraints.turning_radius.radius`: 10⁹ scene units (1000 km in mm). The
 /// hinge divides the streamlines' curvature by the bound 1/R, so a radius far beyond any part
 /// only turns the hinge's residuals into infinity.

@@ -202,6 +202,13 @@ fn item_8_bounded_solver_numbers_and_short_messages() {
         "{e}"
     );
     assert!(e.contains("1e300") && e.len() < 200, "{e}");
+    // The solve's iteration cap is bounded too (each iteration is a factorization).
+    let e =
+        scene_error(&format!(r#"{{{BASE}, {lights}, "solver": {{"max_iterations": 1000001}}}}"#));
+    assert!(
+        e.contains("solver.max_iterations") && e.contains("[1, 1000]") && e.contains("1000001"),
+        "{e}"
+    );
     // At the documented limits: accepted.
     let ok = format!(
         r#"{{{BASE}, {lights}, "solver": {{"smoothness": 1e6,

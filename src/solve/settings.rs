@@ -118,7 +118,7 @@ pub struct SolverSettings {
     /// Σ wᵢⱼ|…|² (scale-free) is multiplied by λ_s × the surface area, so that it scales like
     /// the highlight energy Σ Aᵢ‖Lᵢ − Lᵢ*‖² and λ_s means the same on a part in mm or in m.
     pub smoothness: f64,
-    /// Iteration cap (≥ 1; default 50).
+    /// Iteration cap (1 to 1,000, `limits::MAX_SOLVER_ITERATIONS`; default 50).
     pub max_iterations: usize,
     /// Stop when an accepted step lowers the total energy by less than this fraction (≥ 0;
     /// default 1e-10).
@@ -209,8 +209,12 @@ impl SolverSettings {
         let max_s = crate::limits::MAX_SMOOTHNESS;
         let in_range = (0.0..=max_s).contains(&self.smoothness);
         check("smoothness", self.smoothness, in_range, &format!("in [0, {}]", fmt_num(max_s)))?;
-        if self.max_iterations == 0 {
-            return Err(Error::setting("max_iterations", "must be ≥ 1, got 0"));
+        let max_it = crate::limits::MAX_SOLVER_ITERATIONS;
+        if self.max_iterations == 0 || self.max_iterations > max_it {
+            return Err(Error::setting(
+                "max_iterations",
+                format!("must be in [1, {max_it}], got {}", self.max_iterations),
+            ));
         }
         check("relative_decrease", self.relative_decrease, self.relative_decrease >= 0.0, "≥ 0")?;
         check(
