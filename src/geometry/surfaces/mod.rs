@@ -37,7 +37,9 @@
 //!    [`crate::mesh::planar::WIDER`] times wider than every unrecognized region they meet
 //!    smoothly (a face of the part, not a strip of a curved face the growth could not fix).
 //! 7. **Closure**: a small curved surface that unrecognized regions continue smoothly on more
-//!    than [`MAX_OPEN_SHARE`] of its rim is a coincidence of a free-form face, and is dropped.
+//!    than [`MAX_OPEN_SHARE`] of its rim is a coincidence of a free-form face, and is dropped;
+//!    so is any curved surface whose rim runs for more than [`MAX_OPEN_LENGTH_SHARE`] of its
+//!    length along unrecognized faces met smoothly.
 //!
 //! Two surfaces meet at a **crease** when their normals differ along the edge they share by
 //! more than [`G1_TOLERANCE_DEG`] ([`Surfaces::crease_between`]): a chamfer's 26.6° edge is a
@@ -173,6 +175,7 @@ pub fn recognize(mesh: &Mesh) -> Surfaces {
     let mut region_surface = owners(&grown, nr);
     add_planes(&g, mesh, &mut grown, &mut region_surface);
     close_off(&g, &grown, &mut region_surface);
+    close_off_by_length(mesh, &g, &grown, &mut region_surface);
     finish(mesh, &g, grown, &region_surface, tol)
 }
 
@@ -314,6 +317,86 @@ fn close_off(g: &grow::RegionGraph, grown: &[profile::Grown], region_surface: &m
                 }
             }
             if open as f64 > MAX_OPEN_SHARE * rim as f64 {
+                for &r in regions {
+                    region_surface[r as usize] = NO_SURFACE;
+                }
+                changed = true;
+            }
+        }
+        if !changed {
+            return;
+        }
+    }
+}
+
+/// The share of a curved surface's rim, by length, that unrecognized faces may continue
+/// smoothly: a face of a CAD part ends at creases or at the faces it blends into, which are
+/// recognized; a patch of a free-form face that a primitive passes through within the
+/// rounding (ruling strips of a developable written with six digits) is bounded mostly by
+/// more of that face.
+pub const MAX_OPEN_LENGTH_SHARE: f64 = 0.5;
+
+/// Module docs, step 7, by length: a curved surface whose rim runs for more than
+/// [`MAX_OPEN_LENGTH_SHARE`] of its length along unrecognized faces met smoothly (across less
+/// than [`MAX_STEP_DEG`]) is left to the jet fit, repeatedly. O(F log F).
+fn close_off_by_length(
+    mesh: &Mesh,
+    g: &grow::RegionGraph,
+    grown: &[profile::Grown],
+    region_surface: &mut [u32],
+) {
+    let cos_step = MAX_STEP_DEG.to_radians().cos();
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * mesh.num_faces());
+    for (f, t) in mesh.faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.push((a.min(b), a.max(b), f as u32));
+        }
+    }
+    edges.sort_unstable();
+    let pairs: Vec<(u32, u32, f64)> = edges
+        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .filter_map(|run| match run {
+            [x, y] => {
+                let len = (mesh.positions[x.1 as usize] - mesh.positions[x.0 as usize]).norm();
+                Some((x.2, y.2, len))
+            }
+            _ => None,
+        })
+        .collect();
+    let surface_of = |f: u32, rs: &[u32]| {
+        let r = g.regions.face_region[f as usize];
+        if r == NO_REGION {
+            NO_SURFACE
+        } else {
+            rs[r as usize]
+        }
+    };
+    loop {
+        let (mut open, mut rim) = (vec![0.0; grown.len()], vec![0.0; grown.len()]);
+        for &(f, h, len) in &pairs {
+            let (a, b) = (surface_of(f, region_surface), surface_of(h, region_surface));
+            if a == b {
+                continue;
+            }
+            let smooth =
+                face_normal(mesh, f as usize).dot(&face_normal(mesh, h as usize)) >= cos_step;
+            for (s, other) in [(a, b), (b, a)] {
+                if s != NO_SURFACE {
+                    rim[s as usize] += len;
+                    if other == NO_SURFACE && smooth {
+                        open[s as usize] += len;
+                    }
+                }
+            }
+        }
+        let mut changed = false;
+        for (k, (prim, regions)) in grown.iter().enumerate() {
+            let held = regions.first().is_some_and(|&r| region_surface[r as usize] == k as u32);
+            if prim.kind() == SurfaceKind::Plane || !held {
+                continue;
+            }
+            if open[k] > MAX_OPEN_LENGTH_SHARE * rim[k] {
                 for &r in regions {
                     region_surface[r as usize] = NO_SURFACE;
                 }
