@@ -290,9 +290,10 @@ pub const SMALL_SURFACE_REGIONS: usize = 12;
 
 /// Module docs, step 7: a small curved surface (fewer than [`SMALL_SURFACE_REGIONS`]
 /// chords) whose neighbours continue it smoothly (across less than [`MAX_STEP_DEG`]) without
-/// being recognized, on more than [`MAX_OPEN_SHARE`] of its rim, is a piece of a free-form face that happens to fit a circle within the file's
-/// rounding (a few quads of a scan or of a spline surface), not a face of the part: it is
-/// left to the jet fit, and so, in turn, are the surfaces that then lie open.
+/// being recognized, on more than [`MAX_OPEN_SHARE`] of its rim, is a piece of a free-form
+/// face that happens to fit a circle within the file's rounding (a few quads of a scan or of
+/// a spline surface), not a face of the part: it is left to the jet fit, and so, in turn, are
+/// the surfaces that then lie open.
 fn close_off(g: &grow::RegionGraph, grown: &[profile::Grown], region_surface: &mut [u32]) {
     let max_step = MAX_STEP_DEG.to_radians();
     loop {

@@ -75,13 +75,20 @@ pub(super) fn merge_pieces(
         (Some((_, a)), Some((_, b))) => a.cross(&b).norm() <= 5f64.to_radians().sin(),
         _ => false,
     };
+    // Rounds: each surface joins at most one neighbour per round (the pairs a round merges
+    // are disjoint), so a band split into n pieces takes about log₂ n rounds, not n restarts.
     loop {
+        let n = grown.len();
         let nb = neighbours(g, &grown);
-        let mut merged = None;
-        'pairs: for (k, js) in nb.iter().enumerate() {
-            for &j in js.iter().filter(|&&j| j > k) {
+        let mut partner: Vec<Option<(usize, Primitive, Vec<u32>)>> = vec![None; n];
+        let mut used = vec![false; n];
+        for k in 0..n {
+            for &j in nb[k].iter().filter(|&&j| j > k) {
+                if used[k] {
+                    break;
+                }
                 let (p, q) = (&grown[k].0, &grown[j].0);
-                if !(ruled(p) && ruled(q) && p.kind() == q.kind() && parallel(p, q)) {
+                if used[j] || !(ruled(p) && ruled(q) && p.kind() == q.kind() && parallel(p, q)) {
                     continue;
                 }
                 let regions: Vec<u32> = grown[k].1.iter().chain(&grown[j].1).copied().collect();
@@ -97,21 +104,30 @@ pub(super) fn merge_pieces(
                         && regions.iter().all(|&r| region_on(g, mesh, r, f, tol, spread))
                 });
                 if let Some(f) = fit {
-                    merged = Some((k, j, f, regions));
-                    break 'pairs;
+                    partner[k] = Some((j, f, regions));
+                    used[k] = true;
+                    used[j] = true;
                 }
             }
         }
-        let Some((k, j, prim, regions)) = merged else { return grown };
-        grown[k] = (prim, regions);
-        grown.remove(j);
+        if partner.iter().all(Option::is_none) {
+            return grown;
+        }
+        let mut gone = vec![false; n];
+        for (k, m) in partner.into_iter().enumerate() {
+            if let Some((j, prim, regions)) = m {
+                grown[k] = (prim, regions);
+                gone[j] = true;
+            }
+        }
+        grown = grown.into_iter().enumerate().filter(|(k, _)| !gone[*k]).map(|(_, p)| p).collect();
     }
 }
 
-/// A surface whose every region lies on a neighbouring surface as large or larger is a piece of it that
-/// a growth read as its own primitive (a column of a torus's trapezoids, each between two
-/// parallels, fits a cylinder along the parallels within a six-digit rounding): it joins the
-/// larger one, the smallest pieces first.
+/// A surface whose every region lies on a neighbouring surface as large or larger is a piece
+/// of it that a growth read as its own primitive (a column of a torus's trapezoids, each
+/// between two parallels, fits a cylinder along the parallels within a six-digit rounding):
+/// it joins the larger one, the smallest pieces first.
 pub(super) fn subsume(g: &RegionGraph, mesh: &Mesh, mut grown: Vec<Grown>, tol: f64) -> Vec<Grown> {
     let spread = MAX_CHORD_DEVIATION_DEG.to_radians();
     // Rounds: in each, every piece not itself taking others in joins a neighbour that does
