@@ -156,24 +156,7 @@ fn the_preview_of_a_coarse_export_matches_the_fine_export() {
             let dir = root.join(format!("{}-{}", p.name, p.triangles.len()));
             std::fs::create_dir_all(&dir).unwrap();
             std::fs::write(dir.join("part.stl"), p.stl_binary()).unwrap();
-            let scene = serde_json::json!({
-                "mesh": "part.stl", "units": p.units.as_str(),
-                "material": {"brdf": {"kind": "ashikhmin_shirley", "nu": 400, "nv": 10,
-                                      "rs": [0.9, 0.9, 0.92]}},
-                "lights": [{"type": "directional", "key": true, "direction": [0.3, -0.5, 1],
-                            "irradiance": 2.5}],
-                "view": {"eye": eye, "target": target, "up": [0, 0, 1], "fov_deg": 40},
-                "field": {"init": "world", "world": [0.6, 0.3, 0.74]},
-                "render": {"width": PX, "height": PX, "output": "p.png", "linear": "p.pfm"}
-            });
-            std::fs::write(dir.join("scene.json"), scene.to_string()).unwrap();
-            let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
-                .args(["--quiet", "render"])
-                .arg(dir.join("scene.json"))
-                .output()
-                .unwrap();
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-            curved_truth::read_pfm(&dir.join("p.pfm"))
+            curved_truth::render_preview(&dir, ("part.stl", p.units.as_str()), (eye, target), PX)
         });
         let (share, part) = curved_truth::preview_agreement(&a, &b);
         eprintln!("{}: {:.2} % of {part} part pixels within 0.04", coarse.name, 100.0 * share);

@@ -319,25 +319,13 @@ fn the_preview_of_a_coarse_openscad_export_matches_the_fine_export() {
         let [a, b] = [24, 180].map(|fn_| {
             let dir = root.join(format!("{name}-{fn_}"));
             let stl = export(&scad, &part, fn_, &dir);
-            let scene = serde_json::json!({
-                "mesh": stl.file_name().unwrap().to_str().unwrap(), "units": "mm",
-                "material": {"brdf": {"kind": "ashikhmin_shirley", "nu": 400, "nv": 10,
-                                      "rs": [0.9, 0.9, 0.92]}},
-                "lights": [{"type": "directional", "key": true, "direction": [0.3, -0.5, 1],
-                            "irradiance": 2.5}],
-                "view": {"eye": [45, -70, 55], "target": [0, 0, 4], "up": [0, 0, 1],
-                         "fov_deg": 40},
-                "field": {"init": "world", "world": [0.6, 0.3, 0.74]},
-                "render": {"width": 384, "height": 384, "output": "p.png", "linear": "p.pfm"}
-            });
-            std::fs::write(dir.join("scene.json"), scene.to_string()).unwrap();
-            let out = Command::new(env!("CARGO_BIN_EXE_grainline"))
-                .args(["--quiet", "render"])
-                .arg(dir.join("scene.json"))
-                .output()
-                .unwrap();
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-            curved_truth::read_pfm(&dir.join("p.pfm"))
+            let mesh = stl.file_name().unwrap().to_str().unwrap();
+            curved_truth::render_preview(
+                &dir,
+                (mesh, "mm"),
+                ([45.0, -70.0, 55.0], [0.0, 0.0, 4.0]),
+                384,
+            )
         });
         let (share, part) = curved_truth::preview_agreement(&a, &b);
         eprintln!("{name}: {:.2} % of {part} part pixels within 0.04", 100.0 * share);

@@ -348,3 +348,32 @@ pub fn preview_agreement(a: &[[f32; 3]], b: &[[f32; 3]]) -> (f64, usize) {
     }
     (ok as f64 / part.max(1) as f64, part)
 }
+
+/// The linear preview (`render.linear`) of `mesh` (a file in `dir`) in the scene the
+/// coarse-against-fine tests share: an anisotropic metal, a key light, a world grain, seen
+/// from `eye` towards `target` at `px` × `px`.
+pub fn render_preview(
+    dir: &std::path::Path,
+    (mesh, units): (&str, &str),
+    (eye, target): ([f64; 3], [f64; 3]),
+    px: usize,
+) -> Vec<[f32; 3]> {
+    let scene = serde_json::json!({
+        "mesh": mesh, "units": units,
+        "material": {"brdf": {"kind": "ashikhmin_shirley", "nu": 400, "nv": 10,
+                              "rs": [0.9, 0.9, 0.92]}},
+        "lights": [{"type": "directional", "key": true, "direction": [0.3, -0.5, 1],
+                    "irradiance": 2.5}],
+        "view": {"eye": eye, "target": target, "up": [0, 0, 1], "fov_deg": 40},
+        "field": {"init": "world", "world": [0.6, 0.3, 0.74]},
+        "render": {"width": px, "height": px, "output": "p.png", "linear": "p.pfm"}
+    });
+    std::fs::write(dir.join("scene.json"), scene.to_string()).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_grainline"))
+        .args(["--quiet", "render"])
+        .arg(dir.join("scene.json"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    read_pfm(&dir.join("p.pfm"))
+}

@@ -24,6 +24,8 @@ pub(super) struct RegionGraph {
     nbs: Vec<(u32, f64)>,
     /// Per region: the mean of its vertices.
     pub(super) centroid: Vec<V3>,
+    /// The two faces across each manifold edge, and the edge's length.
+    pub(super) face_pairs: Vec<(u32, u32, f64)>,
 }
 
 impl RegionGraph {
@@ -51,8 +53,11 @@ impl RegionGraph {
         }
         edges.sort_unstable();
         let mut links: Vec<(u32, u32)> = Vec::new();
+        let mut face_pairs: Vec<(u32, u32, f64)> = Vec::new();
         for run in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
             if let [x, y] = run {
+                let len = (mesh.positions[x.1 as usize] - mesh.positions[x.0 as usize]).norm();
+                face_pairs.push((x.2, y.2, len));
                 let (r, s) = (regions.face_region[x.2 as usize], regions.face_region[y.2 as usize]);
                 if r != s && r != NO_REGION && s != NO_REGION {
                     links.push((r, s));
@@ -81,7 +86,7 @@ impl RegionGraph {
                 vs.iter().map(|&v| mesh.positions[v as usize]).sum::<V3>() / vs.len().max(1) as f64
             })
             .collect();
-        RegionGraph { regions, vert_start, verts, nb_start, nbs, centroid }
+        RegionGraph { regions, vert_start, verts, nb_start, nbs, centroid, face_pairs }
     }
 
     pub(super) fn verts(&self, r: u32) -> &[u32] {

@@ -339,7 +339,7 @@ pub const MAX_OPEN_LENGTH_SHARE: f64 = 0.5;
 
 /// Module docs, step 7, by length: a curved surface whose rim runs for more than
 /// [`MAX_OPEN_LENGTH_SHARE`] of its length along unrecognized faces met smoothly (across less
-/// than [`MAX_STEP_DEG`]) is left to the jet fit, repeatedly. O(F log F).
+/// than [`MAX_STEP_DEG`]) is left to the jet fit, repeatedly. Linear in the edges per round.
 fn close_off_by_length(
     mesh: &Mesh,
     g: &grow::RegionGraph,
@@ -347,24 +347,6 @@ fn close_off_by_length(
     region_surface: &mut [u32],
 ) {
     let cos_step = MAX_STEP_DEG.to_radians().cos();
-    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * mesh.num_faces());
-    for (f, t) in mesh.faces.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.push((a.min(b), a.max(b), f as u32));
-        }
-    }
-    edges.sort_unstable();
-    let pairs: Vec<(u32, u32, f64)> = edges
-        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
-        .filter_map(|run| match run {
-            [x, y] => {
-                let len = (mesh.positions[x.1 as usize] - mesh.positions[x.0 as usize]).norm();
-                Some((x.2, y.2, len))
-            }
-            _ => None,
-        })
-        .collect();
     let surface_of = |f: u32, rs: &[u32]| {
         let r = g.regions.face_region[f as usize];
         if r == NO_REGION {
@@ -375,7 +357,7 @@ fn close_off_by_length(
     };
     loop {
         let (mut open, mut rim) = (vec![0.0; grown.len()], vec![0.0; grown.len()]);
-        for &(f, h, len) in &pairs {
+        for &(f, h, len) in &g.face_pairs {
             let (a, b) = (surface_of(f, region_surface), surface_of(h, region_surface));
             if a == b {
                 continue;
