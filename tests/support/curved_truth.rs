@@ -254,27 +254,10 @@ impl CurvedTruth {
     }
 }
 
-/// Whether face `k` of `part` exported at `step` degrees may be left unrecognized by the
-/// documented rule (docs/math.md §3, "Recognized surfaces", limits): a torus needs three
-/// strips along its profile and a sphere one band besides its pole's fan (fewer rings are
-/// fitted exactly by other surfaces too), and a single band (a cylinder or a cone between two
-/// rings) next to a face of revolution it meets at less than the export's step, or next to
-/// an unrecognized curve tangentially, is read as a strip of a free profile. On the knob:
-/// the round (60°) and the crown (30°) at 30° and the crown at 15°; the boss beside an
-/// unrecognized round; the skirt and the chamfer, 26.6° apart, at 30°.
-pub fn may_be_unread(part: &CadPart, step: f64, k: usize) -> bool {
-    if part.name != "knob" {
-        return false;
-    }
-    let strips = |deg: f64| (deg / step - 1e-9).ceil() as usize;
-    let round = strips(60.0) < 3;
-    match k {
-        1 | 2 => step >= 26.57,
-        4 => round,
-        5 => round,
-        6 => strips(30.0) < 2,
-        _ => false,
-    }
+/// Whether face `k` of `part` exported at `step` degrees may be left unrecognized: no face
+/// of the generated corpus may, at any step measured.
+pub fn may_be_unread(_part: &CadPart, _step: f64, _k: usize) -> bool {
+    false
 }
 
 /// Runs `part` (written to `stl` already) with a world grain `w`, no edit, strokes of a brush of

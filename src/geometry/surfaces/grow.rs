@@ -97,6 +97,16 @@ impl RegionGraph {
         &self.nbs[self.nb_start[r as usize] as usize..self.nb_start[r as usize + 1] as usize]
     }
 
+    /// Whether another neighbour of `r`, as wide as `s` (within a factor of two), meets `r` at
+    /// `angle` (within 1 %): `s` continues a run of strips through `r`.
+    pub(super) fn is_paired(&self, r: u32, s: u32, angle: f64) -> bool {
+        let x = self.regions.width[s as usize];
+        self.neighbours(r).iter().any(|&(q, b)| {
+            let y = self.regions.width[q as usize];
+            q != s && x <= 2.0 * y && y <= 2.0 * x && (angle - b).abs() <= 0.01 * angle.max(b)
+        })
+    }
+
     /// Whether two of the region's neighbours meet it at the same angle (within 1 %): an inner
     /// strip of a fillet, a trapezoid inside a band.
     pub(super) fn is_regular(&self, r: u32) -> bool {
@@ -242,15 +252,21 @@ pub(super) fn grow(
         let x = g.regions.width[s as usize];
         !(x <= 2.0 * w && w <= 2.0 * x)
     };
-    let mut heap: BinaryHeap<Reverse<(bool, u64, u32)>> = BinaryHeap::new();
-    let enqueue = |heap: &mut BinaryHeap<Reverse<(bool, u64, u32)>>, seen: &mut [u32], r: u32| {
-        for &(s, angle) in g.neighbours(r) {
-            if !taken[s as usize] && angle <= max_step && seen[s as usize] != id {
-                seen[s as usize] = id;
-                heap.push(Reverse((unlike(s), angle.to_bits(), s)));
+    // Then the strips that continue a run: a neighbour met at the angle another neighbour of
+    // the same width meets the region at (the next strip of a fillet, the next trapezoid of a
+    // band) before a lone crossing — at 30° chords a 26.6° chamfer edge is smoother than the
+    // skirt's own strip edges, and only their pairing tells them apart.
+    let mut heap: BinaryHeap<Reverse<(bool, bool, u64, u32)>> = BinaryHeap::new();
+    let enqueue =
+        |heap: &mut BinaryHeap<Reverse<(bool, bool, u64, u32)>>, seen: &mut [u32], r: u32| {
+            for &(s, angle) in g.neighbours(r) {
+                if !taken[s as usize] && angle <= max_step && seen[s as usize] != id {
+                    seen[s as usize] = id;
+                    let lone = !g.is_paired(r, s, angle);
+                    heap.push(Reverse((unlike(s), lone, angle.to_bits(), s)));
+                }
             }
-        }
-    };
+        };
     seen[seed as usize] = id;
     enqueue(&mut heap, seen, seed);
     let mut model: Option<Primitive> = None;
@@ -261,7 +277,7 @@ pub(super) fn grow(
     let mut deferred: Vec<u32> = Vec::new();
     let mut retried_at = 0usize;
     loop {
-        let Some(Reverse((_, _, r))) = heap.pop() else {
+        let Some(Reverse((_, _, _, r))) = heap.pop() else {
             if deferred.is_empty() || set.regions.len() == retried_at || model.is_none() {
                 break;
             }
@@ -271,7 +287,7 @@ pub(super) fn grow(
                 return Err(set.regions.get(1).copied());
             }
             for r in deferred.drain(..) {
-                heap.push(Reverse((unlike(r), 0, r)));
+                heap.push(Reverse((unlike(r), false, 0, r)));
             }
             continue;
         };

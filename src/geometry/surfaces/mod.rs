@@ -14,7 +14,9 @@
 //!    (an inner strip of a fillet, a band's trapezoid) before one at a surface's end; a seed
 //!    whose growth fails is tried again without the partner it took first ([`SEED_TRIES`]).
 //! 2. **Growth** (`grow.rs`) adds neighbouring quads across edges of at most [`MAX_STEP_DEG`],
-//!    those as wide as the seed and the smoothest first. Until three regions fix a cylinder or
+//!    those as wide as the seed first, then those that continue a run of strips (met at the
+//!    angle another neighbour as wide meets the same region) before a lone crossing, the
+//!    smoothest first. Until three regions fix a cylinder or
 //!    a cone, any primitive through the set is accepted; then a region joins only if its
 //!    vertices lie on that surface and the surface's normal at each of them is within
 //!    [`MAX_CHORD_DEVIATION_DEG`] of the chord's. A growth is kept as a cylinder (three strips
@@ -24,8 +26,10 @@
 //!    joined (`profile::merge_pieces`).
 //! 3. **Profiles** (`profile.rs`): coaxial bands in a chain (open, or a closed loop: a full
 //!    torus), with a pole's fan as one more profile point, become the sphere (three profile
-//!    points or more) or the torus (four or more) that passes through all their rings; a
-//!    surface whose regions all lie on a larger neighbour joins it (`profile::subsume`).
+//!    points or more) or the torus (four or more) that passes through all their rings, or, with
+//!    fewer, the one a tangent neighbour fixes (`tangent.rs`: a round of two strips, a crown of
+//!    one fan); a surface whose regions all lie on a larger neighbour joins it
+//!    (`profile::subsume`).
 //! 4. **Free forms**: a band's cone is exact on any turned surface, so coaxial surfaces that
 //!    meet at a turn neither tangent nor beyond the export's step are a free profile (a
 //!    kettle, a vase: all of a chain of three or more, each single band of a chain of two);
@@ -45,9 +49,10 @@
 //! more than [`G1_TOLERANCE_DEG`] ([`Surfaces::crease_between`]): a chamfer's 26.6° edge is a
 //! crease, a fillet meeting a plate tangentially is not, whatever the strips' angles.
 //!
-//! Limits: a surface meshed with too few strips to over-determine it (a fillet exported at 45°
-//! chords, a torus of two strips) is not recognized; a crease between two bands of a turned
-//! part that turns by less than the export's angular step is read as a strip edge.
+//! Limits: a surface meshed with too few strips to over-determine it and no tangent neighbour
+//! (a fillet exported at 45° chords, a torus of two strips between creases) is not recognized;
+//! a crease inside a chain of three or more single bands of a turned part that turns by less
+//! than the export's angular step is read as a free profile's strip edge.
 
 pub mod ambient;
 mod fit;
@@ -55,6 +60,7 @@ mod grow;
 pub mod primitive;
 mod profile;
 pub mod revolution;
+mod tangent;
 
 use nalgebra::{Matrix3, Vector3};
 

@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 
 use super::grow::{best_fit, region_on, Kinds, RegionGraph};
 use super::primitive::{Primitive, SurfaceKind};
+use super::tangent;
 use super::MAX_CHORD_DEVIATION_DEG;
 use crate::mesh::Mesh;
 
@@ -236,9 +237,14 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
             links
         })
         .collect();
+    let mut owners = tangent::Owners::new(&grown, g.regions.normal.len());
     let mut merged: Vec<Option<Grown>> = grown.into_iter().map(Some).collect();
     let mut out: Vec<Grown> = Vec::new();
     for chain in chains {
+        let axis = chain.iter().find_map(|l| match l {
+            Link::Band(k) => merged[*k].as_ref().and_then(|m| m.0.axis()),
+            Link::Fan(_) => None,
+        });
         let mut i = 0;
         while i < chain.len() {
             let mut best: Option<(usize, Primitive)> = None;
@@ -269,18 +275,35 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
                 match profile_fit(g, mesh, &regions, tol, rings) {
                     Some(p) => best = Some((j, p)),
                     None if rings >= 4 => break,
-                    None => {}
+                    None => {
+                        // Three rings fix no circle; a tangent neighbour does (`tangent`).
+                        let fit = whole_fit(g, mesh, &regions, tol).filter(|p| {
+                            p.kind() == SurfaceKind::Torus
+                                && tangent::tangent_to_a_neighbour(g, mesh, &owners, &regions, p)
+                        });
+                        if let Some(p) = fit {
+                            best = Some((j, p));
+                        }
+                    }
                 }
+            }
+            // A fan alone at the chain's end (a crown of one row): the sphere through its rim
+            // and pole, when tangent to its neighbour.
+            if let (None, Link::Fan(f), Some(axis)) = (&best, &chain[i], axis) {
+                let prim = tangent::fan_sphere(&points(g, mesh, f), axis, tol)
+                    .filter(|p| tangent::tangent_to_a_neighbour(g, mesh, &owners, f, p));
+                best = prim.map(|p| (i, p));
             }
             match best {
                 Some((j, prim)) => {
-                    let regions = chain[i..=j]
+                    let regions: Vec<u32> = chain[i..=j]
                         .iter()
                         .flat_map(|l| match l {
                             Link::Band(k) => merged[*k].take().map_or(vec![], |m| m.1),
                             Link::Fan(f) => f.clone(),
                         })
                         .collect();
+                    owners.assign(&regions, &prim);
                     out.push((prim, regions));
                     i = j + 1;
                 }
@@ -538,10 +561,17 @@ pub(super) fn free_profiles(
     // than a step, it is a chord of that face's continuation, not a cone.
     let single: Vec<bool> =
         grown.iter().map(|(p, rs)| rings(p, &points(g, mesh, rs), tol).len() == 2).collect();
+    // Two single bands alone, though, are two ruled faces meeting at a crease (a skirt and its
+    // chamfer exported at 30°): no turn of a profile repeats to call them a free one.
+    let mut singles = vec![0usize; n];
+    for k in 0..n {
+        singles[root(&mut parent, k)] += single[k] as usize;
+    }
+    let pair_of_singles: Vec<bool> = (0..n).map(|k| size[k] == 2 && singles[k] == 2).collect();
     let mut dropped: Vec<bool> = (0..n)
         .map(|k| {
             let s = size[root(&mut parent, k)];
-            !(s == 1 || (s == 2 && !single[k]))
+            !(s == 1 || (s == 2 && (!single[k] || pair_of_singles[root(&mut parent, k)])))
         })
         .collect();
     // A single band that continues a free profile tangentially is its end (a vase's first
