@@ -13,6 +13,7 @@ use super::{
     RenderSettings, Timer,
 };
 use crate::render::camera::Projector;
+use crate::render::displace::Displacement;
 use crate::{Error, Result};
 
 /// Rasterizes the mesh at `sw` × `sh` samples and counts what it did; warns when the mesh
@@ -25,8 +26,12 @@ pub(super) fn rasterize(
     warnings: &mut Vec<String>,
     timer: &mut Timer,
 ) -> raster::VisBuffer {
-    let (vis, rstats) =
-        timer.run("raster", || raster::rasterize(proj, input.positions, input.faces, sw, sh));
+    let (vis, rstats) = timer.run("raster", || {
+        let mesh = (input.positions, input.faces);
+        let displace =
+            input.surfaces.and_then(|s| Displacement::new(input.positions, input.faces, s));
+        raster::rasterize(proj, mesh, displace.as_ref(), sw, sh)
+    });
     counters.triangles_in = rstats.triangles_in as u64;
     counters.triangles_culled = rstats.triangles_culled as u64;
     counters.triangles_clipped = rstats.triangles_clipped as u64;

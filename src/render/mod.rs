@@ -11,6 +11,7 @@
 pub use crate::appearance::brdf;
 mod bvh;
 pub mod camera;
+mod displace;
 pub mod env;
 mod frame;
 pub mod image;

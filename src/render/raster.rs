@@ -9,6 +9,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use super::camera::Projector;
+use super::displace::Displacement;
 
 /// Rows of samples per band.
 const BAND: usize = 16;
@@ -60,10 +61,13 @@ struct ScreenTri {
 }
 
 /// Rasterizes all faces into a `width × height` buffer.
+///
+/// With `displace`, the chords of curved recognized surfaces are drawn as sub-triangles on
+/// their surfaces ([`Displacement`]); each keeps its face's id and barycentrics.
 pub(crate) fn rasterize(
     cam: &Projector,
-    positions: &[Vector3<f64>],
-    faces: &[[u32; 3]],
+    (positions, faces): (&[Vector3<f64>], &[[u32; 3]]),
+    displace: Option<&Displacement>,
     width: usize,
     height: usize,
 ) -> (VisBuffer, RasterStats) {
@@ -79,9 +83,22 @@ pub(crate) fn rasterize(
     let tris: Vec<ScreenTri> = faces
         .par_iter()
         .enumerate()
-        .filter(|(_, tri)| !(cull && faces_away(positions, tri, &cam.eye)))
         .flat_map_iter(|(f, tri)| {
-            setup(cam, &cam_pos, f as u32, tri, width, height).0.into_iter().flatten()
+            let subs = displace.and_then(|d| d.sub_triangles(positions, f, tri));
+            let corner_bary = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+            let whole = [0, 1, 2].map(|k| (cam_pos[tri[k] as usize], corner_bary[k]));
+            let drawn: Vec<[(Vector3<f64>, [f64; 2]); 3]> = match subs {
+                None if cull && faces_away(positions, tri, &cam.eye) => vec![],
+                None => vec![whole],
+                Some(subs) => subs
+                    .into_iter()
+                    .filter(|s| !(cull && corners_away(&s.map(|c| c.0), &cam.eye)))
+                    .map(|s| s.map(|(p, b)| (cam.camera_coords(&p), b)))
+                    .collect(),
+            };
+            drawn.into_iter().flat_map(move |verts| {
+                setup(cam, f as u32, verts, width, height).0.into_iter().flatten()
+            })
         })
         .collect();
     let mut stats =
@@ -116,7 +133,12 @@ pub(crate) fn rasterize(
 /// Whether the face's outward side (counter-clockwise corners) faces away from the eye.
 #[inline]
 fn faces_away(positions: &[Vector3<f64>], tri: &[u32; 3], eye: &Vector3<f64>) -> bool {
-    let [a, b, c] = tri.map(|i| positions[i as usize]);
+    corners_away(&tri.map(|i| positions[i as usize]), eye)
+}
+
+/// Whether the triangle `[a, b, c]` (counter-clockwise outside) faces away from the eye.
+#[inline]
+fn corners_away([a, b, c]: &[Vector3<f64>; 3], eye: &Vector3<f64>) -> bool {
     (b - a).cross(&(c - a)).dot(&(a - eye)) > 0.0
 }
 
@@ -264,19 +286,17 @@ pub(crate) fn closed_outside(
     })
 }
 
-/// Clips a face against the near plane and projects it; returns the (at most two) screen
+/// Clips a triangle of `face` (camera coordinates and the face's barycentrics at its corners)
+/// against the near plane and projects it; returns the (at most two) screen
 /// triangles and whether clipping happened.
 fn setup(
     cam: &Projector,
-    cam_pos: &[Vector3<f64>],
     face: u32,
-    tri: &[u32; 3],
+    verts: [(Vector3<f64>, [f64; 2]); 3],
     width: usize,
     height: usize,
 ) -> ([Option<ScreenTri>; 2], bool) {
     type V = (Vector3<f64>, [f64; 2]);
-    let corner_bary = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-    let verts: [V; 3] = [0, 1, 2].map(|k| (cam_pos[tri[k] as usize], corner_bary[k]));
     let inside = |v: &V| v.0.z > cam.near;
     let n_in = verts.iter().filter(|v| inside(v)).count();
     if n_in == 0 {

@@ -42,13 +42,13 @@ impl Owners {
                 region[r as usize] = k as u32;
             }
         }
-        Owners { region, prims: grown.iter().map(|(p, _)| p.clone()).collect() }
+        Owners { region, prims: grown.iter().map(|(p, _)| *p).collect() }
     }
 
     /// `regions` now lie on `prim`.
     pub(super) fn assign(&mut self, regions: &[u32], prim: &Primitive) {
         let k = self.prims.len() as u32;
-        self.prims.push(prim.clone());
+        self.prims.push(*prim);
         for &r in regions {
             self.region[r as usize] = k;
         }
