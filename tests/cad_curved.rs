@@ -125,44 +125,49 @@ fn known(part: &str, step: f64, k: usize, what: &str, value: f64) -> bool {
         .any(|&(p, s, f, w, floor)| p == part && s == step && f == k && w == what && value >= floor)
 }
 
-/// The preview of a part exported at 15° chords against the preview of the same part at 1°
-/// (same scene: an anisotropic metal, a key light, a world grain): the share of the part's
-/// pixels (part in either image) whose luminance (after a 1/2.2 gamma) is within 0.04. The
-/// curved faces shade with their surface's normal and grain per sample, not the chords'.
-/// Measured: bracket 99.98 %, knob 97.7 % (the rest on the crown's highlight near the world
-/// grain's pole and along the chamfer's rims; 96.4 % with the corners' normals and grain
-/// blended); the floors below keep that.
+/// The preview of a part exported at 10°, 15° and 30° chords against the preview of the same
+/// part at 1° (same scene: an anisotropic metal, a key light, a world grain): the share of the
+/// part's pixels (part in either image) whose luminance (after a 1/2.2 gamma) is within 0.04
+/// must be 99 % at least (the goal). The curved chords are drawn on their surfaces
+/// and shade with their normal and grain per sample. Measured: bracket 100 % at every step,
+/// knob 100 % at 10° and 15°, 99.5 % at 30°; drawing the chords flat the knob at 15° kept
+/// 97.7 % (one-pixel lines along its rims), blending the chords' normals and grain 96.4 %.
 #[test]
 fn the_preview_of_a_coarse_export_matches_the_fine_export() {
     let root = std::env::temp_dir().join(format!("grainline-curved-px-{}", std::process::id()));
-    let cases = [
-        (
-            cad::bracket(&cad::BracketOptions { step_deg: 15.0, ..Default::default() }).unwrap(),
-            cad::bracket(&cad::BracketOptions { step_deg: 1.0, ..Default::default() }).unwrap(),
-            [90.0, -60.0, 70.0],
-            [20.0, 30.0, 10.0],
-            0.999,
-        ),
-        (
-            cad::knob(&cad::KnobOptions { step_deg: 15.0, ..Default::default() }).unwrap(),
-            cad::knob(&cad::KnobOptions { step_deg: 1.0, ..Default::default() }).unwrap(),
-            [60.0, -90.0, 70.0],
-            [0.0, 0.0, 12.0],
-            0.975,
-        ),
-    ];
-    for (coarse, fine, eye, target, floor) in cases {
-        let [a, b] = [&coarse, &fine].map(|p| {
-            let dir = root.join(format!("{}-{}", p.name, p.triangles.len()));
-            std::fs::create_dir_all(&dir).unwrap();
-            std::fs::write(dir.join("part.stl"), p.stl_binary()).unwrap();
-            curved_truth::render_preview(&dir, ("part.stl", p.units.as_str()), (eye, target), PX)
-        });
-        let (share, part) = curved_truth::preview_agreement(&a, &b);
-        eprintln!("{}: {:.2} % of {part} part pixels within 0.04", coarse.name, 100.0 * share);
-        assert!(share >= floor, "{}: {share}", coarse.name);
+    let bracket = |step_deg| cad::bracket(&cad::BracketOptions { step_deg, ..Default::default() });
+    let knob = |step_deg| cad::knob(&cad::KnobOptions { step_deg, ..Default::default() });
+    let views =
+        [([90.0, -60.0, 70.0], [20.0, 30.0, 10.0]), ([60.0, -90.0, 70.0], [0.0, 0.0, 12.0])];
+    let mut failures = Vec::new();
+    for (make, (eye, target)) in [(&bracket as &dyn Fn(f64) -> _, views[0]), (&knob, views[1])] {
+        let fine: cad::CadPart = make(1.0).unwrap();
+        let b = preview(&root, &fine, (eye, target));
+        for step in [10.0, 15.0, 30.0] {
+            let coarse: cad::CadPart = make(step).unwrap();
+            let a = preview(&root, &coarse, (eye, target));
+            let (share, part) = curved_truth::preview_agreement(&a, &b);
+            let line = format!(
+                "{} at {step}°: {:.2} % of {part} part pixels within 0.04",
+                coarse.name,
+                100.0 * share
+            );
+            eprintln!("{line}");
+            if share < 0.99 {
+                failures.push(line);
+            }
+        }
     }
     std::fs::remove_dir_all(&root).ok();
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The linear preview of `part` (written as STL under `root`) from `eye` towards `target`.
+fn preview(root: &Path, part: &cad::CadPart, view: ([f64; 3], [f64; 3])) -> Vec<[f32; 3]> {
+    let dir = root.join(format!("{}-{}", part.name, part.triangles.len()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("part.stl"), part.stl_binary()).unwrap();
+    curved_truth::render_preview(&dir, ("part.stl", part.units.as_str()), view, PX)
 }
 
 /// Preview size of [`the_preview_of_a_coarse_export_matches_the_fine_export`].

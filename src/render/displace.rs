@@ -258,3 +258,80 @@ fn canonical_vertices(positions: &[V3]) -> Vec<u32> {
     }
     canon
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::surfaces::Primitive;
+
+    /// A prism of `k` strips between z = 0 and z = 1 whose corners lie on the unit cylinder
+    /// about z: positions, faces (counter-clockwise outside).
+    fn prism(k: usize) -> (Vec<V3>, Vec<[u32; 3]>) {
+        let mut pos = Vec::new();
+        for i in 0..k {
+            let t = std::f64::consts::TAU * i as f64 / k as f64;
+            pos.push(V3::new(t.cos(), t.sin(), 0.0));
+            pos.push(V3::new(t.cos(), t.sin(), 1.0));
+        }
+        let mut faces = Vec::new();
+        for i in 0..k as u32 {
+            let j = (i + 1) % k as u32;
+            faces.push([2 * i, 2 * j, 2 * j + 1]);
+            faces.push([2 * i, 2 * j + 1, 2 * i + 1]);
+        }
+        (pos, faces)
+    }
+
+    fn cylinder(radius: f64) -> Primitive {
+        Primitive::Cylinder { point: [0.0; 3], axis: [0.0, 0.0, 1.0], radius }
+    }
+
+    #[test]
+    fn sub_triangles_lie_on_the_surface_and_agree_along_shared_edges() {
+        let (pos, faces) = prism(12);
+        let on = FaceSurfaces { primitives: vec![cylinder(1.0)], of: vec![0; faces.len()] };
+        let d = Displacement::new(&pos, &faces, &on).expect("30° chords are cut");
+        // ⌈30° / 1.5°⌉, up to the rounding of the corners' normals.
+        assert!(d.n == 20 || d.n == 21, "{}", d.n);
+        let mut corners: Vec<V3> = Vec::new();
+        for (f, t) in faces.iter().enumerate() {
+            for sub in d.sub_triangles(&pos, f, t).unwrap() {
+                for (p, bary) in sub {
+                    // Off the rims (open edges, drawn straight), every point is on the cylinder.
+                    if p.z > 1e-12 && p.z < 1.0 - 1e-12 {
+                        assert!((p.xy().norm() - 1.0).abs() < 1e-12, "{p:?}");
+                    }
+                    assert!(bary.iter().all(|b| (-1e-12..=1.0 + 1e-12).contains(b)));
+                    corners.push(p);
+                }
+            }
+        }
+        // Points on a ruling shared by two faces come out bit for bit the same from both: every
+        // distinct point on the ruling through vertex 0 is met by both its faces.
+        let on_ruling: Vec<[u64; 3]> = corners
+            .iter()
+            .filter(|p| p.y == 0.0 && p.x > 0.0)
+            .map(|p| p.map(f64::to_bits).into())
+            .collect();
+        let mut distinct = on_ruling.clone();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), d.n + 1, "one point per step along the ruling, shared");
+        assert_eq!(on_ruling.len(), 2 * 3 * d.n, "each met by both faces' sub-triangles");
+    }
+
+    #[test]
+    fn a_degenerate_surface_leaves_the_chords_as_they_are() {
+        let (pos, faces) = prism(12);
+        for bad in [f64::NAN, 0.0, f64::INFINITY] {
+            let on = FaceSurfaces { primitives: vec![cylinder(bad)], of: vec![0; faces.len()] };
+            if let Some(d) = Displacement::new(&pos, &faces, &on) {
+                for (f, t) in faces.iter().enumerate() {
+                    for sub in d.sub_triangles(&pos, f, t).into_iter().flatten() {
+                        assert!(sub.iter().all(|(p, _)| p.iter().all(|x| x.is_finite())));
+                    }
+                }
+            }
+        }
+    }
+}

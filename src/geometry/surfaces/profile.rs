@@ -177,66 +177,7 @@ pub(super) fn subsume(g: &RegionGraph, mesh: &Mesh, mut grown: Vec<Grown>, tol: 
 /// one sphere (three rings or more) or one torus (four or more: a circle through three
 /// profile points always exists) become that surface.
 pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f64) -> Vec<Grown> {
-    let n = grown.len();
-    let band: Vec<bool> = grown
-        .iter()
-        .map(|(p, rs)| {
-            let pts = points(g, mesh, rs);
-            matches!(p.kind(), SurfaceKind::Cylinder | SurfaceKind::Cone)
-                && rings(p, &pts, tol).len() == 2
-        })
-        .collect();
-    let nb = neighbours(g, &grown);
-    let band_nb = |k: usize| -> Vec<usize> {
-        nb[k].iter().copied().filter(|&j| band[j] && coaxial(&grown[k].0, &grown[j].0)).collect()
-    };
-    // Chains: walk from each band with at most one band neighbour, then from any band left
-    // (a closed loop: a full torus's profile, a ring).
-    let mut chained = vec![false; n];
-    let mut chains: Vec<Vec<usize>> = Vec::new();
-    let ends = (0..n).filter(|&k| band[k] && band_nb(k).len() <= 1);
-    let loops = (0..n).filter(|&k| band[k]);
-    for start in ends.chain(loops) {
-        if chained[start] {
-            continue;
-        }
-        let mut chain = vec![start];
-        chained[start] = true;
-        let mut at = start;
-        while let Some(next) = band_nb(at).into_iter().find(|&j| !chained[j]) {
-            chained[next] = true;
-            chain.push(next);
-            at = next;
-        }
-        chains.push(chain);
-    }
-    let owned = {
-        let mut o = vec![false; g.regions.normal.len()];
-        for (_, rs) in &grown {
-            for &r in rs {
-                o[r as usize] = true;
-            }
-        }
-        o
-    };
-    // A chain that ends at a pole continues into the fan of triangles around it: one more
-    // profile point for a sphere (a crown's last band and its fan).
-    let chains: Vec<Vec<Link>> = chains
-        .into_iter()
-        .map(|chain| {
-            let mut links: Vec<Link> = chain.iter().map(|&k| Link::Band(k)).collect();
-            if let Some(fan) = pole_fan(g, mesh, &grown[chain[0]], &owned, tol) {
-                links.insert(0, Link::Fan(fan));
-            }
-            let last = chain[chain.len() - 1];
-            if chain.len() > 1 || matches!(links[0], Link::Band(_)) {
-                if let Some(fan) = pole_fan(g, mesh, &grown[last], &owned, tol) {
-                    links.push(Link::Fan(fan));
-                }
-            }
-            links
-        })
-        .collect();
+    let chains = chains(g, mesh, &grown, tol);
     let mut owners = tangent::Owners::new(&grown, g.regions.normal.len());
     let mut merged: Vec<Option<Grown>> = grown.into_iter().map(Some).collect();
     let mut out: Vec<Grown> = Vec::new();
@@ -313,6 +254,71 @@ pub(super) fn join_bands(g: &RegionGraph, mesh: &Mesh, grown: Vec<Grown>, tol: f
     }
     out.extend(merged.into_iter().flatten());
     out
+}
+
+/// Step 3's chains: coaxial bands in a row along the profile (open, or a closed loop), with the
+/// pole's fan at either end as one more link.
+fn chains(g: &RegionGraph, mesh: &Mesh, grown: &[Grown], tol: f64) -> Vec<Vec<Link>> {
+    let n = grown.len();
+    let band: Vec<bool> = grown
+        .iter()
+        .map(|(p, rs)| {
+            let pts = points(g, mesh, rs);
+            matches!(p.kind(), SurfaceKind::Cylinder | SurfaceKind::Cone)
+                && rings(p, &pts, tol).len() == 2
+        })
+        .collect();
+    let nb = neighbours(g, grown);
+    let band_nb = |k: usize| -> Vec<usize> {
+        nb[k].iter().copied().filter(|&j| band[j] && coaxial(&grown[k].0, &grown[j].0)).collect()
+    };
+    // Chains: walk from each band with at most one band neighbour, then from any band left
+    // (a closed loop: a full torus's profile, a ring).
+    let mut chained = vec![false; n];
+    let mut chains: Vec<Vec<usize>> = Vec::new();
+    let ends = (0..n).filter(|&k| band[k] && band_nb(k).len() <= 1);
+    let loops = (0..n).filter(|&k| band[k]);
+    for start in ends.chain(loops) {
+        if chained[start] {
+            continue;
+        }
+        let mut chain = vec![start];
+        chained[start] = true;
+        let mut at = start;
+        while let Some(next) = band_nb(at).into_iter().find(|&j| !chained[j]) {
+            chained[next] = true;
+            chain.push(next);
+            at = next;
+        }
+        chains.push(chain);
+    }
+    let owned = {
+        let mut o = vec![false; g.regions.normal.len()];
+        for (_, rs) in grown {
+            for &r in rs {
+                o[r as usize] = true;
+            }
+        }
+        o
+    };
+    // A chain that ends at a pole continues into the fan of triangles around it: one more
+    // profile point for a sphere (a crown's last band and its fan).
+    chains
+        .into_iter()
+        .map(|chain| {
+            let mut links: Vec<Link> = chain.iter().map(|&k| Link::Band(k)).collect();
+            if let Some(fan) = pole_fan(g, mesh, &grown[chain[0]], &owned, tol) {
+                links.insert(0, Link::Fan(fan));
+            }
+            let last = chain[chain.len() - 1];
+            if chain.len() > 1 || matches!(links[0], Link::Band(_)) {
+                if let Some(fan) = pole_fan(g, mesh, &grown[last], &owned, tol) {
+                    links.push(Link::Fan(fan));
+                }
+            }
+            links
+        })
+        .collect()
 }
 
 /// An element of a chain of bands: a band (a grown surface) or a pole's fan of triangles.
