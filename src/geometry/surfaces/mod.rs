@@ -42,8 +42,9 @@
 //!    smoothly (a face of the part, not a strip of a curved face the growth could not fix).
 //! 7. **Closure**: a small curved surface that unrecognized regions continue smoothly on more
 //!    than [`MAX_OPEN_SHARE`] of its rim is a coincidence of a free-form face, and is dropped;
-//!    so is any curved surface whose rim runs for more than [`MAX_OPEN_LENGTH_SHARE`] of its
-//!    length along unrecognized faces met smoothly.
+//!    so is any curved surface, or plane of fewer than [`SMALL_SURFACE_REGIONS`] triangles,
+//!    whose rim runs for more than [`MAX_OPEN_LENGTH_SHARE`] of its length along unrecognized
+//!    faces met smoothly.
 //!
 //! Two surfaces meet at a **crease** when their normals differ along the edge they share by
 //! more than [`G1_TOLERANCE_DEG`] ([`Surfaces::crease_between`]): a chamfer's 26.6° edge is a
@@ -343,9 +344,10 @@ fn close_off(g: &grow::RegionGraph, grown: &[profile::Grown], region_surface: &m
 /// more of that face.
 pub const MAX_OPEN_LENGTH_SHARE: f64 = 0.5;
 
-/// Module docs, step 7, by length: a curved surface whose rim runs for more than
-/// [`MAX_OPEN_LENGTH_SHARE`] of its length along unrecognized faces met smoothly (across less
-/// than [`MAX_STEP_DEG`]) is left to the jet fit, repeatedly. Linear in the edges per round.
+/// Module docs, step 7, by length: a curved surface, or a plane of a few triangles, whose rim
+/// runs for more than [`MAX_OPEN_LENGTH_SHARE`] of its length along unrecognized faces met
+/// smoothly (across less than [`MAX_STEP_DEG`]) is left to the jet fit, repeatedly. Linear in
+/// the edges per round.
 fn close_off_by_length(
     mesh: &Mesh,
     g: &grow::RegionGraph,
@@ -382,7 +384,12 @@ fn close_off_by_length(
         let mut changed = false;
         for (k, (prim, regions)) in grown.iter().enumerate() {
             let held = regions.first().is_some_and(|&r| region_surface[r as usize] == k as u32);
-            if prim.kind() == SurfaceKind::Plane || !held {
+            // A plane is a face of the part however it is bounded, unless it is a speck (fewer
+            // than [`SMALL_SURFACE_REGIONS`] triangles: two chords of a finely exported torus
+            // that happen to be coplanar).
+            let faces: usize = regions.iter().map(|&r| g.regions.faces[r as usize] as usize).sum();
+            let plane = prim.kind() == SurfaceKind::Plane;
+            if (plane && faces >= SMALL_SURFACE_REGIONS) || !held {
                 continue;
             }
             if open[k] > MAX_OPEN_LENGTH_SHARE * rim[k] {
