@@ -514,9 +514,11 @@ impl SegmentGrid {
             };
         }
         let (w, h) = ((hi[0] - lo[0]).max(1e-12), (hi[1] - lo[1]).max(1e-12));
-        // About four segments per cell, at most 1M cells.
+        // Cells of the mean segment's length (at most 1M cells): on the corpus a query then
+        // reads about half the segments it read with cells twice as long, in half the time. The
+        // search is exact whatever the cell (see `nearest`).
         let mean = total / segs.len() as f64;
-        let cell = (2.0 * mean).max((w * h / 1.0e6).sqrt()).max(1e-12);
+        let cell = mean.max((w * h / 1.0e6).sqrt()).max(1e-12);
         let nx = (w / cell).ceil() as usize + 1;
         let ny = (h / cell).ceil() as usize + 1;
         let mut g =

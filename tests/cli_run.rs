@@ -88,6 +88,8 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
                 "solve",
                 "toolpaths",
                 "write toolpaths",
+                "as-brushed",
+                "as-brushed fidelity",
                 "render",
                 "write render"
             ]
