@@ -34,7 +34,6 @@
 use std::path::Path;
 
 mod common;
-#[allow(dead_code)]
 mod corpus;
 
 use common::{grainline, ok, read_json, scratch_dir};

@@ -445,13 +445,16 @@ impl Fields<'_> {
     }
 }
 
+/// A target sample on the part (scene units) and its face, when known.
+type Located = (Vector3<f64>, Option<usize>);
+
 /// The distances of an edit's target samples to C1, in units of r.
 struct Target {
     distances: Vec<f64>,
     /// Where each sample lies: on the part (scene units), with its face when known (warps:
     /// the support face the sample lies on in the brush chart; curves: none, the drawn curve
     /// is given in space).
-    points: Vec<(Vector3<f64>, Option<usize>)>,
+    points: Vec<Located>,
     /// No target sample to compare.
     empty: bool,
     /// No C1 segment.
@@ -525,7 +528,7 @@ fn warp_distances(
     let tris: Vec<[Vector2<f64>; 3]> = chart_faces.iter().map(|x| x.1.corners).collect();
     let on_faces = TriangleGrid::new(&tris);
     // Each sample kept with its point on the part: barycentric in the chart face it lies on.
-    let (samples, points): (Vec<Vector2<f64>>, Vec<(Vector3<f64>, Option<usize>)>) = all_samples
+    let (samples, points): (Vec<Vector2<f64>>, Vec<Located>) = all_samples
         .iter()
         .filter_map(|p| {
             let (k, w) = on_faces.locate(p)?;

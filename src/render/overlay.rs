@@ -213,7 +213,8 @@ pub(crate) fn highlight_departure(
                 over(o, DESIGNED_COLOUR, cov_d as f32);
             }
             // A departing stretch is drawn twice as wide, so that it shows at a glance.
-            let departs = !(dd <= departure);
+            // dd is a distance or ∞ (no designed highlight near), never NaN.
+            let departs = dd > departure;
             let width = if departs { 2.0 * half_width } else { half_width };
             let cov_b = (width + 0.5 - db).clamp(0.0, 1.0);
             if cov_b > 0.0 {
@@ -221,7 +222,7 @@ pub(crate) fn highlight_departure(
                 over(o, colour, cov_b as f32);
             }
             if db <= 0.5 {
-                (1, u64::from(!(dd <= departure)))
+                (1, u64::from(departs))
             } else {
                 (0, 0)
             }
