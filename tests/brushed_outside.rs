@@ -245,3 +245,61 @@ fn report_as_brushed_fidelity_agrees_with_the_glb_a_viewer_reads() {
     );
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The run measures its edits as brushed by default, FIELD.json carries the same figures as
+/// the report, and `toolpaths.as_brushed_fidelity: "off"` leaves the rebuild and the measure
+/// out; an unknown value is refused naming the key.
+#[test]
+fn the_run_measures_as_brushed_by_default_and_off_leaves_it_out() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut scene: Value =
+        serde_json::from_slice(&std::fs::read(root.join("examples/kettle/scene.json")).unwrap())
+            .unwrap();
+    scene["mesh"] = root.join("examples/data/kettle.obj").display().to_string().into();
+    scene.as_object_mut().unwrap().remove("render");
+    scene["field"]["output"] = "field.json".into();
+    let d = scratch_dir("brushed-outside", "key");
+    let run = |scene: &Value, name: &str| {
+        let p = d.join(format!("{name}.json"));
+        std::fs::write(&p, serde_json::to_vec(scene).unwrap()).unwrap();
+        let r = d.join(format!("{name}-report.json"));
+        let o =
+            grainline(&["--quiet", "run", p.to_str().unwrap(), "--report", r.to_str().unwrap()]);
+        (o, r)
+    };
+    let stages = |r: &Value| -> Vec<String> {
+        r["stages"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["stage"].as_str().unwrap().into())
+            .collect()
+    };
+    let (o, r) = run(&scene, "auto");
+    ok(&o);
+    let (report, field) = (read_json(&r), read_json(&d.join("field.json")));
+    assert_eq!(report["plan"]["brushed_fidelity"], true);
+    assert!(stages(&report).contains(&"as-brushed fidelity".to_string()));
+    let f = &report["as_brushed"]["fidelity"];
+    assert_eq!(f.as_array().map(Vec::len), Some(1), "{f}");
+    assert_eq!((f[0]["index"].as_u64(), f[0]["tool"].as_str()), (Some(0), Some("bend")));
+    // The designed figures are the optimize stage's.
+    let designed = report["optimize"]["fidelity"][0]["within"].as_f64().unwrap();
+    assert!((f[0]["designed"]["within"].as_f64().unwrap() - designed).abs() < 1e-9);
+    assert_eq!(field["version"], 3);
+    assert_eq!(&field["meta"]["diagnostics"]["fidelity"], f);
+    scene["toolpaths"]["as_brushed_fidelity"] = "off".into();
+    let (o, r) = run(&scene, "off");
+    ok(&o);
+    let (report, field) = (read_json(&r), read_json(&d.join("field.json")));
+    assert_eq!(report["plan"]["brushed_fidelity"], false);
+    assert!(!stages(&report).iter().any(|s| s.starts_with("as-brushed")), "{:?}", stages(&report));
+    assert!(report["as_brushed"].is_null(), "{}", report["as_brushed"]);
+    assert!(field["meta"]["diagnostics"].get("fidelity").is_none());
+    scene["toolpaths"]["as_brushed_fidelity"] = "sometimes".into();
+    let (o, _) = run(&scene, "bad");
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("toolpaths.as_brushed_fidelity"), "{e}");
+    std::fs::remove_dir_all(&d).ok();
+}
