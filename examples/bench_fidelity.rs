@@ -3,8 +3,16 @@
 //! ```text
 //! cargo run --release --example bench_fidelity -- [--energy position|tensor|both]
 //!     [--cases NAME,...] [--edits bend,expand,curve] [--small] [--dump DIR]
-//!     [--solver JSON] [--field JSON] [--mesh FILE [--weld D]]...
+//!     [--solver JSON] [--field JSON] [--mesh FILE [--weld D]]... [--as-brushed]
 //! ```
+//!
+//! `--as-brushed` (issue 47) runs every edit instead as `grainline run` does with strokes
+//! (`pipeline::run::run`, position energy): a brush of 0.8 % of the part's bounding-box diagonal
+//! (`toolpaths.placement.width`), overlap 0.1, and prints each edit's fidelity as designed and
+//! as brushed (the run report's `as_brushed.fidelity`: the same measure on the grain rebuilt
+//! from the strokes), the singular triangles the strokes add, where the two highlights depart
+//! most, and the time the as-brushed rebuild and its fidelity add to the run (the stages
+//! `as-brushed` and `as-brushed fidelity` against the rest of the run's wall time).
 //!
 //! `--mesh FILE` (repeatable) runs the three edits on any mesh (OBJ, STL, PLY) instead of the
 //! corpus, lit and placed as the shared meshes are (`corpus::mesh_case`): a part the corpus has
@@ -46,7 +54,7 @@ fn list(s: &str) -> Vec<String> {
 }
 
 fn main() {
-    let Args { energies, cases, tools, size, dump, meshes, weld } = parse_args();
+    let Args { energies, cases, tools, size, dump, meshes, weld, as_brushed } = parse_args();
     if let Some(t) = tools.iter().find(|t| !corpus::TOOLS.contains(&t.as_str())) {
         usage(&format!("unknown edit {t:?} (bend, expand, curve)"));
     }
@@ -65,6 +73,7 @@ fn main() {
     let names = cases.as_deref();
     let all = gather_cases(size, names, &meshes, weld);
     let mut rows: Vec<Outcome> = Vec::new();
+    let mut brushed_rows: Vec<corpus::BrushedOutcome> = Vec::new();
     let mut notes: Vec<String> = Vec::new();
     for case in &all {
         let t = std::time::Instant::now();
@@ -103,6 +112,16 @@ fn main() {
             }
         }
         for tool in &tools {
+            if as_brushed {
+                match corpus::run_brushed(case, &p, tool) {
+                    Ok(o) => {
+                        eprintln!("  {}", brushed_row(&o));
+                        brushed_rows.push(o);
+                    }
+                    Err(e) => notes.push(format!("{} {tool} as brushed: {e}", case.name)),
+                }
+                continue;
+            }
             for energy in &energies {
                 if let (Some(dir), Ok(pl)) = (&dump, &p.placement) {
                     dump_scene(dir, case, pl, tool, energy);
@@ -117,6 +136,10 @@ fn main() {
                 }
             }
         }
+    }
+    if as_brushed {
+        print_brushed(&brushed_rows, &notes);
+        return;
     }
     println!(
         "| case | V (+refined) | edit | energy | within 0.05 r | p95 (× r) | median (× r) | singular \
@@ -188,6 +211,7 @@ struct Args {
     dump: Option<std::path::PathBuf>,
     meshes: Vec<std::path::PathBuf>,
     weld: Option<f64>,
+    as_brushed: bool,
 }
 
 /// Reads the command line; `--field` and `--solver` are passed on to the corpus through the
@@ -200,6 +224,7 @@ fn parse_args() -> Args {
     let mut dump: Option<std::path::PathBuf> = None;
     let mut meshes: Vec<std::path::PathBuf> = Vec::new();
     let mut weld: Option<f64> = None;
+    let mut as_brushed = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -211,6 +236,7 @@ fn parse_args() -> Args {
             "--cases" => cases = Some(list(&args.next().unwrap_or_default())),
             "--edits" => tools = list(&args.next().unwrap_or_default()),
             "--small" => size = Size::Small,
+            "--as-brushed" => as_brushed = true,
             "--dump" => dump = args.next().map(Into::into),
             "--mesh" => match args.next() {
                 Some(m) => meshes.push(m.into()),
@@ -236,7 +262,7 @@ fn parse_args() -> Args {
             other => usage(&format!("unknown argument {other:?}")),
         }
     }
-    Args { energies, cases, tools, size, dump, meshes, weld }
+    Args { energies, cases, tools, size, dump, meshes, weld, as_brushed }
 }
 
 /// Writes the edited scene of one row (see `--dump`).
@@ -329,7 +355,7 @@ fn usage(msg: &str) -> ! {
     eprintln!(
         "usage: bench_fidelity [--energy position|tensor|both] [--cases NAME,...] \
          [--edits bend,expand,curve] [--small] [--dump DIR] [--solver JSON] [--field JSON] \
-         [--mesh FILE [--weld D]]..."
+         [--mesh FILE [--weld D]]... [--as-brushed]"
     );
     std::process::exit(if msg.is_empty() { 0 } else { 2 });
 }
@@ -337,4 +363,83 @@ fn usage(msg: &str) -> ! {
 fn fail(msg: &str) -> ! {
     eprintln!("error: {msg}");
     std::process::exit(1);
+}
+
+/// One edit's figures as designed and as brushed: "within / p95 / singular after".
+fn brushed_row(o: &corpus::BrushedOutcome) -> String {
+    let head = format!("| {} | {} | {} | {:.2} |", o.case, o.vertices, o.edit, o.width);
+    if let Some(e) = &o.error {
+        return format!("{head} error: {} | – | – | – | – | – |", e.replace('|', "/"));
+    }
+    let Some(f) = &o.fidelity else {
+        return format!("{head} not measured | – | – | – | – | – |");
+    };
+    let figs = |x: &serde_json::Value| {
+        if x["samples"].as_u64().unwrap_or(0) == 0 {
+            return "–".to_string();
+        }
+        format!(
+            "{:.1} % / {:.3} / {}{}",
+            100.0 * x["within"].as_f64().unwrap_or(0.0),
+            x["p95"].as_f64().unwrap_or(0.0),
+            x["singular_after"],
+            if x["landed"].as_bool() == Some(true) { "" } else { " ✗" }
+        )
+    };
+    let dep = match f["departure"].as_object() {
+        Some(d) => format!(
+            "{:+.3} r at ({:.1}, {:.1}, {:.1}) face {}",
+            d["value"].as_f64().unwrap_or(0.0),
+            d["point"][0].as_f64().unwrap_or(0.0),
+            d["point"][1].as_f64().unwrap_or(0.0),
+            d["point"][2].as_f64().unwrap_or(0.0),
+            d["face"]
+        ),
+        None => "–".to_string(),
+    };
+    let rest = o.wall_seconds - o.brushed_seconds;
+    format!(
+        "{head} {} | {} | {:+} | {dep} | {} | {:.2} | {:.2} | {:.3} | {:.1} % |",
+        figs(&f["designed"]),
+        figs(&f["as_brushed"]),
+        f["singular_added"].as_i64().unwrap_or(0),
+        o.strokes,
+        o.trace_seconds,
+        rest,
+        o.brushed_seconds,
+        100.0 * o.brushed_seconds / rest.max(1e-9)
+    )
+}
+
+/// The as-brushed table (`--as-brushed`) and its summary.
+fn print_brushed(rows: &[corpus::BrushedOutcome], notes: &[String]) {
+    println!(
+        "| case | V | edit | brush (mm) | designed: within / p95 / singular | as brushed: within / \
+         p95 / singular | singular added | largest departure (as brushed − designed) | strokes | \
+         toolpaths (s) | run without (s) | as-brushed + fidelity (s) | added |"
+    );
+    println!("|---|---:|---|---:|---|---|---:|---|---:|---:|---:|---:|---:|");
+    for o in rows {
+        println!("{}", brushed_row(o));
+    }
+    let landed = |k: &str| {
+        rows.iter()
+            .filter(|o| o.fidelity.as_ref().is_some_and(|f| f[k]["landed"].as_bool() == Some(true)))
+            .count()
+    };
+    let (d, b) = (landed("designed"), landed("as_brushed"));
+    let worst = rows
+        .iter()
+        .map(|o| o.brushed_seconds / (o.wall_seconds - o.brushed_seconds).max(1e-9))
+        .fold(0.0f64, f64::max);
+    println!();
+    println!(
+        "{d} of {} edits land as designed, {b} as brushed; the as-brushed rebuild and its \
+         fidelity add at most {:.1} % to a run.",
+        rows.len(),
+        100.0 * worst
+    );
+    for n in notes {
+        println!("- {n}");
+    }
 }

@@ -143,15 +143,52 @@ pub struct FieldMeta {
     pub critical_threshold: f64,
     /// Vertex count.
     pub vertices: usize,
-    /// Geometry fallbacks.
-    pub diagnostics: GeometryDiagnostics,
+    /// Geometry fallbacks, and the edits measured as brushed.
+    pub diagnostics: FieldDiagnostics,
     /// The grainline version that wrote the file.
     pub grainline_version: String,
 }
 
-/// The FIELD.json version [`FieldFile::new`] writes: 2, which added `faces` to version 1.
-/// [`FieldFile::read`] reads both.
-pub const FIELD_VERSION: u32 = 2;
+/// `meta.diagnostics`: the counts of the geometry's fallbacks ([`GeometryDiagnostics`]) and,
+/// version 3, the edits measured as brushed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FieldDiagnostics {
+    /// Vertices with no usable normal (isolated or only zero-area faces): normal set to +Z.
+    pub fallback_normals: usize,
+    /// Vertices whose jet fit needed more than the 1-ring.
+    pub extended_jet_rings: usize,
+    /// Vertices where no quadric could be fitted (W = 0).
+    pub failed_jet_fits: usize,
+    /// Vertices whose Eq. 10 stencil needed more than the 1-ring.
+    pub extended_gradient_stencils: usize,
+    /// Vertices with no Eq. 10 stencil (∇φ = 0).
+    pub empty_gradient_stencils: usize,
+    /// Version 3, `grainline run` with strokes traced and a bend, expand or curve edit
+    /// (`toolpaths.as_brushed_fidelity`): each such edit's fidelity on the designed grain and
+    /// on the grain rebuilt from the strokes, as the run report's `as_brushed.fidelity` gives
+    /// it (docs/formats.md). Held as JSON here: the measure is the `fidelity` module's, a layer
+    /// above this one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fidelity: Option<serde_json::Value>,
+}
+
+impl From<GeometryDiagnostics> for FieldDiagnostics {
+    fn from(g: GeometryDiagnostics) -> Self {
+        FieldDiagnostics {
+            fallback_normals: g.fallback_normals,
+            extended_jet_rings: g.extended_jet_rings,
+            failed_jet_fits: g.failed_jet_fits,
+            extended_gradient_stencils: g.extended_gradient_stencils,
+            empty_gradient_stencils: g.empty_gradient_stencils,
+            fidelity: None,
+        }
+    }
+}
+
+/// The FIELD.json version [`FieldFile::new`] writes: 3, which added
+/// `meta.diagnostics.fidelity` to version 2 (which added `faces` to version 1).
+/// [`FieldFile::read`] reads all three.
+pub const FIELD_VERSION: u32 = 3;
 
 /// FIELD.json: one array per quantity, one entry per vertex, world coordinates, and the
 /// triangles the field lives on.
@@ -160,7 +197,7 @@ pub const FIELD_VERSION: u32 = 2;
 pub struct FieldFile {
     /// Always `"grainline-field"`.
     pub format: String,
-    /// Format version: [`FIELD_VERSION`] when written; 1 (no `faces`) or 2 when read.
+    /// Format version: [`FIELD_VERSION`] when written; 1 (no `faces`), 2 or 3 when read.
     pub version: u32,
     /// Where the data came from.
     pub meta: FieldMeta,
@@ -272,7 +309,7 @@ impl FieldFile {
                 fallback_vertices: r.fallback_vertices.clone(),
                 critical_threshold: options.critical_threshold,
                 vertices: mesh.num_vertices(),
-                diagnostics: g.diagnostics,
+                diagnostics: g.diagnostics.into(),
                 grainline_version: env!("CARGO_PKG_VERSION").into(),
             },
             position: mesh.positions.iter().map(arr).collect(),
@@ -349,8 +386,8 @@ impl FieldFile {
         Ok(())
     }
 
-    /// Reads a FIELD.json of version 1 or 2, checking its format, its version, its array
-    /// lengths, its faces (version 2: present, every index a vertex) and that every number is
+    /// Reads a FIELD.json of version 1, 2 or 3, checking its format, its version, its array
+    /// lengths, its faces (versions 2 and 3: present, every index a vertex) and that every number is
     /// finite.
     pub fn read(path: &Path) -> Result<Self> {
         let f: FieldFile = crate::output::read_json(path)?;
@@ -378,15 +415,17 @@ impl FieldFile {
         Ok(f)
     }
 
-    /// `version` is 1 or 2; version 2 has `faces`, and every face names three distinct
-    /// vertices of the file. The message names the key.
+    /// `version` is 1, 2 or 3; versions 2 and 3 have `faces`, and every face names three
+    /// distinct vertices of the file. The message names the key.
     fn check_version_and_faces(&self) -> std::result::Result<(), String> {
         match (self.version, &self.faces) {
-            (1, _) | (2, Some(_)) => {}
-            (2, None) => return Err("version 2 needs `faces` (the mesh's triangles)".into()),
+            (1, _) | (2 | 3, Some(_)) => {}
+            (v @ (2 | 3), None) => {
+                return Err(format!("version {v} needs `faces` (the mesh's triangles)"))
+            }
             (v, _) => {
                 return Err(format!(
-                    "version is {v}; this grainline reads versions 1 and {FIELD_VERSION}"
+                    "version is {v}; this grainline reads versions 1 to {FIELD_VERSION}"
                 ))
             }
         }

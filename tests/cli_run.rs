@@ -60,6 +60,7 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
     write_part(&d);
     let sc = scene(&d, BEND, TOOLPATHS, RENDER);
     let mut bytes = Vec::new();
+    let mut brushed = Vec::new();
     for t in ["1", "2"] {
         let out = d.join(format!("t{t}"));
         let o = run(&[
@@ -88,6 +89,8 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
                 "solve",
                 "toolpaths",
                 "write toolpaths",
+                "as-brushed",
+                "as-brushed fidelity",
                 "render",
                 "write render"
             ]
@@ -117,8 +120,12 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
         );
         assert!(solver["given_energy"].as_f64().unwrap() > 0.0);
         bytes.push(files);
+        // The edit measured as brushed (no times in it): the same at any thread count.
+        assert!(r["as_brushed"]["fidelity"][0]["as_brushed"]["samples"].as_u64() > Some(0));
+        brushed.push(r["as_brushed"].to_string());
     }
     assert!(bytes[0] == bytes[1], "outputs differ between --threads 1 and 2");
+    assert_eq!(brushed[0], brushed[1], "the as-brushed figures differ between --threads 1 and 2");
 }
 
 #[test]

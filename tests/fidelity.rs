@@ -227,6 +227,75 @@ fn curve_targets_are_measured_along_the_drawn_curve() {
     assert!(!f.landed);
 }
 
+/// The as-brushed comparison (issue 47) on the drawn arc of [`arc`]: the designed highlight is
+/// the arc's circle, the "as-brushed" one the same circle with its centre moved by e = 0.05
+/// (0.25 r) along +x. The exact distance of the arc's point at angle t to the moved circle is
+/// |√(ρ² − 2ρe·cos t + e²) − ρ|, largest at t = π (the point c − (ρ, 0), 0.25 r), and the
+/// share within 0.05 r follows from it; the designed grain is on the target everywhere.
+#[test]
+fn the_departure_is_where_the_brushed_highlight_parts_from_the_designed_one() {
+    use grainline::fidelity::brushed_fidelity;
+    let pl = Plane::new();
+    let (c, rho, r, e) = (Vector2::new(0.1, -0.05), 0.6, 0.2, 0.05);
+    let shape = EditShape::Curve { radius: r, polylines: vec![arc(c, rho)], support: pl.all() };
+    let before = pl.field(|_, y| y - 0.9);
+    let designed = pl.field(|x, y| (Vector2::new(x, y) - c).norm() - rho);
+    let moved = pl.field(|x, y| (Vector2::new(x, y) - c - Vector2::new(e, 0.0)).norm() - rho);
+    let hs = pl.hs();
+    let run = |brushed: &[Vector3<f64>]| {
+        let (m, g, o) = (&pl.mesh, &pl.geom, FidelityOptions::default());
+        brushed_fidelity(
+            m,
+            g,
+            &hs,
+            Symmetry::Oriented,
+            &before,
+            &designed,
+            brushed,
+            0,
+            "test",
+            &shape,
+            &o,
+        )
+        .unwrap()
+    };
+    let b = run(&moved);
+    // Both are the published measure of each field.
+    assert_eq!(b.designed, pl.fidelity(Symmetry::Oriented, &before, &designed, &shape));
+    assert_eq!(b.as_brushed, pl.fidelity(Symmetry::Oriented, &before, &moved, &shape));
+    assert_eq!(
+        (b.index, b.tool.as_str(), b.singular_added, b.unbrushed_vertices),
+        (0, "test", 0, 0)
+    );
+    // The share within 0.05 r, from the exact distance over the trimmed arc (t from r/ρ to
+    // 1.5π − r/ρ, uniform in arc length).
+    let (t0, t1) = (r / rho, 1.5 * std::f64::consts::PI - r / rho);
+    let n = 100_000;
+    let inside = (0..n)
+        .map(|k| t0 + (t1 - t0) * (k as f64 + 0.5) / n as f64)
+        .filter(|t| ((rho * rho - 2.0 * rho * e * t.cos() + e * e).sqrt() - rho).abs() <= 0.05 * r)
+        .count();
+    let expected = inside as f64 / n as f64;
+    assert!((b.as_brushed.within - expected).abs() < 0.01, "{} vs {expected}", b.as_brushed.within);
+    assert!(b.designed.within > 0.999, "{:?}", b.designed);
+    let d = b.departure.as_ref().expect("a departure");
+    let want = Vector3::new(c.x - rho, c.y, 0.0);
+    let at = Vector3::from(d.point);
+    assert!((at - want).norm() < 0.01, "{d:?}");
+    assert!((d.value - (e / r)).abs() < 0.005 && d.designed < 0.005, "{d:?}");
+    assert!((d.value - (d.as_brushed - d.designed)).abs() < 1e-12, "{d:?}");
+    // The face holds the point.
+    let [p0, p1, p2] = pl.mesh.face_positions(d.face);
+    let (lo, hi) = (p0.inf(&p1).inf(&p2), p0.sup(&p1).sup(&p2));
+    assert!(
+        at.x >= lo.x - 1e-9 && at.x <= hi.x + 1e-9 && at.y >= lo.y - 1e-9 && at.y <= hi.y + 1e-9
+    );
+    // The same grain departs nowhere.
+    let same = run(&designed);
+    assert_eq!(same.designed, same.as_brushed);
+    assert_eq!(same.departure.unwrap().value, 0.0);
+}
+
 #[test]
 fn line_field_sign_flips_do_not_change_the_figures() {
     let pl = Plane::new();

@@ -168,7 +168,7 @@ fn field_json_of_a_refined_part_rebuilds_its_triangles_and_its_highlight_issue_3
     let rep = d.join("report.json");
     ok(&grainline(&["--quiet", "run", sc.to_str().unwrap(), "--report", rep.to_str().unwrap()]));
     let (field, report) = (read_json(&d.join("o/field.json")), read_json(&rep));
-    assert_eq!(field["version"], 2);
+    assert_eq!(field["version"], 3);
     let pos = json_vectors(&field, "position");
     let (normal, u) = (json_vectors(&field, "normal"), json_vectors(&field, "u"));
     let tris = faces(&field, pos.len());
@@ -255,7 +255,7 @@ fn field_json_of_a_part_cut_into_patches_holds_the_copies_faces() {
         out.to_str().unwrap(),
     ]));
     let plain = read_json(&out);
-    assert_eq!(plain["version"], 2);
+    assert_eq!(plain["version"], 3);
     assert_eq!(faces(&plain, 8).len(), 12);
     std::fs::remove_dir_all(&d).ok();
 }
@@ -290,6 +290,15 @@ fn field_option_reads_version_1_and_checks_version_2s_faces() {
     ok(&render(&d.join("o/field.json"), "v2.png"));
     ok(&render(&v1, "v1.png"));
     assert!(std::fs::read(d.join("v1.png")).unwrap() == std::fs::read(d.join("v2.png")).unwrap());
+    // So does a version-2 file (no `meta.diagnostics.fidelity`, which version 3 added).
+    let mut older = v2.clone();
+    older["meta"]["diagnostics"].as_object_mut().unwrap().remove("fidelity");
+    older["version"] = 2.into();
+    let older = write("older.json", &older);
+    ok(&render(&older, "older.png"));
+    assert!(
+        std::fs::read(d.join("older.png")).unwrap() == std::fs::read(d.join("v2.png")).unwrap()
+    );
     // Version 2 without faces, a face out of range, an unknown version: refused, naming the
     // file and the key.
     let mut no_faces = v2.clone();
@@ -297,12 +306,12 @@ fn field_option_reads_version_1_and_checks_version_2s_faces() {
     let mut out_of_range = v2.clone();
     let n = v2["position"].as_array().unwrap().len();
     out_of_range["faces"][3] = serde_json::json!([0, 1, n]);
-    let mut v3 = v2.clone();
-    v3["version"] = 3.into();
+    let mut v4 = v2.clone();
+    v4["version"] = 4.into();
     for (name, v, want) in [
-        ("no-faces.json", no_faces, "version 2 needs `faces`".to_string()),
+        ("no-faces.json", no_faces, "version 3 needs `faces`".to_string()),
         ("range.json", out_of_range, format!("faces[3] names vertex {n}")),
-        ("v3.json", v3, "version is 3".to_string()),
+        ("v4.json", v4, "version is 4".to_string()),
     ] {
         let p = write(name, &v);
         let o = render(&p, "bad.png");

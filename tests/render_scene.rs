@@ -544,7 +544,12 @@ fn as_brushed_statistics_and_layout() {
     };
     let lights = [dir_light([0.1, 0.4, 1.0], 1.0)];
     let mut st = settings(40, 30, 1);
-    st.effects.as_brushed = Some(AsBrushedSettings { mode: AsBrushedMode::SideBySide, gain: 4.0 });
+    st.effects.as_brushed = Some(AsBrushedSettings {
+        mode: AsBrushedMode::SideBySide,
+        gain: 4.0,
+        departure_px: 2.0,
+        width_px: 1.5,
+    });
     let out = render(&input, &Material::default(), &lights, &cam, &st).unwrap();
     let (w, h, px) = pixels(&out);
     assert_eq!((w, h), (80, 30), "side by side doubles the width");
@@ -560,12 +565,92 @@ fn as_brushed_statistics_and_layout() {
     assert!(px[15 * 80 + 20] != px[15 * 80 + 60]);
     // Difference mode with identical fields is black on the surface.
     input.brushed_u = Some(&q.u);
-    st.effects.as_brushed = Some(AsBrushedSettings { mode: AsBrushedMode::Difference, gain: 4.0 });
+    st.effects.as_brushed = Some(AsBrushedSettings {
+        mode: AsBrushedMode::Difference,
+        gain: 4.0,
+        departure_px: 2.0,
+        width_px: 1.5,
+    });
     let out = render(&input, &Material::default(), &lights, &cam, &st).unwrap();
     let (w, _, px) = pixels(&out);
     assert_eq!(w, 40);
     assert!(px.iter().all(|p| p[0] == 0.0));
     assert_eq!(out.report.as_brushed.unwrap().u_angle.max_deg, 0.0);
+}
+
+/// `as_brushed.mode: "highlights"` against the analytic key highlight of a flat quad: grain
+/// +x designed, the as-brushed grain the same turned by α about the normal. With the eye's and
+/// the light's positions, g = hᵀu(p) is known at every pixel's point of the plane
+/// (`pixel_point`), so in every row the two highlights' crossings are known: where they lie
+/// ≥ 5 px apart the as-brushed one is drawn red (departing), where they lie within 1 px (the
+/// two cross) green. With the same grain nothing departs. One shading only (no second half).
+#[test]
+fn as_brushed_highlights_mark_where_the_brushed_highlight_departs() {
+    use grainline::render::settings::{AsBrushedMode, AsBrushedSettings};
+    let q = quad(24, Vector3::x());
+    let cam = Camera {
+        eye: Vector3::new(0.0, -1.5, 2.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 40.0,
+    };
+    let l = Vector3::new(0.1, 0.4, 1.0).normalize();
+    let (w, h) = (200usize, 150usize);
+    // The crossing of g = hᵀu along row j, for grain u, in pixels (inside the quad's margin).
+    let crossing = |u: &Vector3<f64>, j: usize| -> Option<f64> {
+        let g = |i: usize| {
+            let p = pixel_point(&cam, w, h, i, j);
+            (l + (cam.eye - p).normalize()).normalize().dot(u)
+        };
+        let i = (0..w - 1).find(|&i| g(i) * g(i + 1) <= 0.0)?;
+        let p = pixel_point(&cam, w, h, i, j);
+        (p.x.abs() < 0.9 && p.y.abs() < 0.9).then(|| i as f64 + g(i) / (g(i) - g(i + 1)))
+    };
+    let turned = |a: f64| Vector3::new(a.cos(), a.sin(), 0.0);
+    let alpha = 15f64.to_radians();
+    let lights = [dir_light([l.x, l.y, l.z], 1.0)];
+    let mut st = settings(w as u32, h as u32, 1);
+    st.effects.as_brushed = Some(AsBrushedSettings {
+        mode: AsBrushedMode::Highlights,
+        gain: 4.0,
+        departure_px: 2.0,
+        width_px: 1.5,
+    });
+    let run = |brushed: &[Vector3<f64>]| {
+        let mut input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
+        input.brushed_u = Some(brushed);
+        let out = render(&input, &Material::default(), &lights, &cam, &st).unwrap();
+        assert_eq!(out.report.width, w as u32, "one half");
+        assert_eq!(out.report.counters.as_brushed_shadings, 0, "no second shading");
+        let c = &out.report.counters;
+        let mut reader = png::Decoder::new(std::io::Cursor::new(&out.png)).read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        reader.next_frame(&mut buf).unwrap();
+        (c.brushed_highlight_samples, c.departed_highlight_samples, buf)
+    };
+    let (on, departed, img) = run(&vec![turned(alpha); q.pos.len()]);
+    assert!(on > 100 && departed > 20, "{on} samples on the as-brushed highlight, {departed}");
+    let px = |i: usize, j: usize| {
+        let k = 3 * (j * w + i);
+        [img[k], img[k + 1], img[k + 2]]
+    };
+    let (mut far, mut near) = (0, 0);
+    for j in 0..h {
+        let (Some(cd), Some(cb)) = (crossing(&Vector3::x(), j), crossing(&turned(alpha), j)) else {
+            continue;
+        };
+        let p = px(cb.round() as usize, j);
+        if (cb - cd).abs() >= 5.0 {
+            far += 1;
+            assert!(p[0] > 200 && p[1] < 80, "row {j}: {:.1} px apart, {p:?}", cb - cd);
+        } else if (cb - cd).abs() <= 1.0 {
+            near += 1;
+            assert!(p[1] > 150 && p[0] < 120, "row {j}: {:.1} px apart, {p:?}", cb - cd);
+        }
+    }
+    assert!(far >= 20 && near >= 2, "rows far apart {far}, rows where they cross {near}");
+    let (on, departed, _) = run(&q.u);
+    assert!(on > 100 && departed == 0, "the same grain: {on} {departed}");
 }
 
 #[test]

@@ -137,3 +137,36 @@ pub fn missed_lines(fidelity: &[grainline::fidelity::EditFidelity]) -> Vec<Strin
         })
         .collect()
 }
+
+/// One warning per edit that lands as designed but not as brushed (the run report's
+/// `as_brushed.fidelity`): the figures on the grain rebuilt from the strokes against the
+/// designed ones, the singular triangles the strokes add, and where the two highlights depart
+/// most. An edit that missed as designed already has its warning ([`missed_lines`]).
+pub fn brushed_lines(fidelity: &[grainline::fidelity::BrushedEditFidelity]) -> Vec<String> {
+    let tolerance = grainline::fidelity::FidelityOptions::default().tolerance;
+    fidelity
+        .iter()
+        .filter(|f| f.designed.landed && !f.as_brushed.landed)
+        .map(|f| {
+            let (d, b) = (&f.designed, &f.as_brushed);
+            let place = f.departure.as_ref().map_or(String::new(), |x| {
+                format!(
+                    "; the highlight departs most, by {:.2} r, at ({:.1}, {:.1}, {:.1}) (face {})",
+                    x.value, x.point[0], x.point[1], x.point[2], x.face
+                )
+            });
+            format!(
+                "grainline: warning: edit [{}] ({}) lands as designed but not as brushed: {:.0} % \
+                 of the target highlight within {tolerance} r ({:.0} % designed), p95 {:.2} r \
+                 ({:.2} designed), {:+} singular triangles from the strokes{place}",
+                f.index,
+                f.tool,
+                100.0 * b.within,
+                100.0 * d.within,
+                b.p95,
+                d.p95,
+                f.singular_added
+            )
+        })
+        .collect()
+}

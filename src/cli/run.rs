@@ -53,6 +53,11 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
             super::progress::warn_missed(o);
         }
     }
+    if let (Some(b), false) = (&report.as_brushed, quiet) {
+        for line in super::progress::brushed_lines(&b.fidelity) {
+            eprintln!("{line}");
+        }
+    }
     if let Some(n) = report.patches.as_ref().and_then(|p| p.narrow.as_ref()) {
         eprintln!("grainline: warning: {}", n.warning());
     }

@@ -173,15 +173,23 @@ impl<'a> TriangleGrid<'a> {
     }
 
     /// Whether planar point `p` lies in one of the triangles (a small tolerance).
+    #[cfg(test)]
     pub(super) fn contains(&self, p: &Vector2<f64>) -> bool {
+        self.locate(p).is_some()
+    }
+
+    /// The first triangle (the wide ones, then the cell's, in order) that holds planar point
+    /// `p` within a small tolerance, with `p`'s barycentric coordinates in it.
+    pub(super) fn locate(&self, p: &Vector2<f64>) -> Option<(usize, [f64; 3])> {
         let inside = |k: &u32| {
-            barycentric(p, &self.tris[*k as usize]).is_some_and(|b| b.iter().all(|&x| x >= -1e-6))
+            let b = barycentric(p, &self.tris[*k as usize])?;
+            b.iter().all(|&x| x >= -1e-6).then_some((*k as usize, b))
         };
-        if self.wide.iter().any(inside) {
-            return true;
+        if let Some(hit) = self.wide.iter().find_map(inside) {
+            return Some(hit);
         }
         if self.cells.is_empty() || !p.iter().all(|c| c.is_finite()) {
-            return false;
+            return None;
         }
         // A point just outside the grid's box may still be within the tolerance of a triangle
         // on its edge: the clamped cell holds those.
@@ -190,7 +198,7 @@ impl<'a> TriangleGrid<'a> {
             k[0] * self.n[1] + k[1]
         }]
         .iter()
-        .any(inside)
+        .find_map(inside)
     }
 }
 

@@ -49,12 +49,14 @@ use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
 
+mod brushed;
 mod forced;
 mod grid;
 mod segments;
 
 pub use crate::edit::shape::{warp_shape, EditShape};
 pub use crate::edit::uv_lift::lift_uv_polylines;
+pub use brushed::{brushed_fidelity, brushed_fidelity_of_edits, BrushedEditFidelity, Departure};
 pub use forced::{forced_singular, CriticalGroups, Forced, NEIGHBOURHOOD_RINGS};
 use grid::{point_segment_distance, SegmentGrid, TriangleGrid};
 pub use segments::highlight_segments;
@@ -338,9 +340,22 @@ pub fn edit_fidelity(
     shape: &EditShape,
     options: &FidelityOptions,
 ) -> Result<EditFidelity> {
-    options.validate()?;
     let fields = Fields { mesh, geometry, h, symmetry, u_before, u_after };
+    Ok(measure(&fields, index, tool, shape, options)?.0)
+}
+
+/// [`edit_fidelity`] of `fields`, with the target's samples and their distances when there
+/// were any to score.
+fn measure(
+    fields: &Fields,
+    index: usize,
+    tool: &str,
+    shape: &EditShape,
+    options: &FidelityOptions,
+) -> Result<(EditFidelity, Option<Target>)> {
+    options.validate()?;
     fields.check_vertex_counts()?;
+    let Fields { mesh, geometry, h, symmetry, u_before, u_after } = *fields;
     let radius = shape.radius();
     let mut fid = EditFidelity {
         index,
@@ -361,7 +376,7 @@ pub fn edit_fidelity(
     };
     if !(radius.is_finite() && radius > 0.0) {
         fid.note = Some(format!("the brush radius {radius} is not a positive number"));
-        return Ok(fid);
+        return Ok((fid, None));
     }
     let any = support_faces(mesh, shape.support());
     // Singular triangles inside the support.
@@ -374,19 +389,19 @@ pub fn edit_fidelity(
     fid.singular_forced_after = critical.forced(geometry, h, u_after, symmetry).singular;
 
     // Distances of the target samples, in units of r.
-    let target = target_distances(&fields, &any, shape, options);
+    let target = target_distances(fields, &any, shape, options);
     fid.off_part = target.off_part;
     let off_note = off_part_note(fid.off_part, target.distances.len());
     if target.empty && fid.off_part > 0 {
         fid.note = off_note;
-        return Ok(fid);
+        return Ok((fid, None));
     }
     if target.empty {
         fid.note = Some(empty_target_note(shape, options));
-        return Ok(fid);
+        return Ok((fid, None));
     }
     score(&mut fid, &target, off_note, options);
-    Ok(fid)
+    Ok((fid, Some(target)))
 }
 
 /// The mesh and the fields an edit is measured on: `u_before`/`u_after` world-space unit grain
@@ -430,9 +445,16 @@ impl Fields<'_> {
     }
 }
 
+/// A target sample on the part (scene units) and its face, when known.
+type Located = (Vector3<f64>, Option<usize>);
+
 /// The distances of an edit's target samples to C1, in units of r.
 struct Target {
     distances: Vec<f64>,
+    /// Where each sample lies: on the part (scene units), with its face when known (warps:
+    /// the support face the sample lies on in the brush chart; curves: none, the drawn curve
+    /// is given in space).
+    points: Vec<Located>,
     /// No target sample to compare.
     empty: bool,
     /// No C1 segment.
@@ -505,8 +527,16 @@ fn warp_distances(
     // are counted and left out.
     let tris: Vec<[Vector2<f64>; 3]> = chart_faces.iter().map(|x| x.1.corners).collect();
     let on_faces = TriangleGrid::new(&tris);
-    let samples: Vec<Vector2<f64>> =
-        all_samples.iter().copied().filter(|p| on_faces.contains(p)).collect();
+    // Each sample kept with its point on the part: barycentric in the chart face it lies on.
+    let (samples, points): (Vec<Vector2<f64>>, Vec<Located>) = all_samples
+        .iter()
+        .filter_map(|p| {
+            let (k, w) = on_faces.locate(p)?;
+            let (f, face) = &chart_faces[k];
+            let [a, b, c] = face.positions;
+            Some((*p, (a * w[0] + b * w[1] + c * w[2], Some(*f))))
+        })
+        .unzip();
     let off_part = all_samples.len() - samples.len();
     let c1: Vec<[Vector3<f64>; 2]> = in_chart(indexed_segments(mesh, h, u_after, symmetry, &faces))
         .into_iter()
@@ -517,7 +547,7 @@ fn warp_distances(
     let grid = SegmentGrid::new(c1, MAX_DISTANCE);
     let d: Vec<f64> =
         samples.iter().map(|p| grid.nearest(&Vector3::new(p.x, p.y, 0.0), MAX_DISTANCE)).collect();
-    Target { distances: d, empty: samples.is_empty(), empty_c1, off_part }
+    Target { distances: d, points, empty: samples.is_empty(), empty_c1, off_part }
 }
 
 /// curve: the samples of the drawn curves to the nearest C1 segment, in space, over r.
@@ -547,7 +577,8 @@ fn curve_distances(
     let cap = MAX_DISTANCE * radius;
     let grid = SegmentGrid::in_planes(c1, normals, cap);
     let d: Vec<f64> = samples.iter().map(|p| grid.nearest(p, cap) / radius).collect();
-    Target { distances: d, empty: samples.is_empty(), empty_c1, off_part: 0 }
+    let points = samples.iter().map(|p| (*p, None)).collect();
+    Target { distances: d, points, empty: samples.is_empty(), empty_c1, off_part: 0 }
 }
 
 /// The note on the `off_part` samples left out of `kept` + `off_part`, if any.

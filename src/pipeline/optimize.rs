@@ -21,6 +21,9 @@ pub struct Optimized {
     /// φ after the edits' direct changes (stencils, and the grain the curve, bend and expand
     /// tools designed): the solve's start.
     pub phi_edited: Vec<f64>,
+    /// φ the edits are measured from: the optimizer's input after the stencils, without the
+    /// tools' designed grain ([`crate::fidelity`]'s field before).
+    pub phi_before: Vec<f64>,
     /// The lighting after the light tools.
     pub lighting: Lighting,
     /// Half vectors of that lighting.
@@ -175,6 +178,7 @@ fn finish_optimized(
     Ok(Optimized {
         phi: solved.phi,
         phi_edited: er.phi,
+        phi_before: er.phi_before,
         lighting: er.lighting,
         h,
         h_gradient: hg.clone(),

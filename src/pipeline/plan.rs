@@ -32,8 +32,12 @@ pub struct StagePlan {
     pub trace: bool,
     /// The scene has a `render` section.
     pub render: bool,
-    /// The as-brushed field is needed (as-brushed effect, or `export.as_brushed`).
+    /// The as-brushed field is needed (as-brushed effect, `export.as_brushed`, or the edits
+    /// measured as brushed).
     pub as_brushed: bool,
+    /// Each bend, expand and curve edit is measured on the grain rebuilt from the strokes
+    /// (`toolpaths.as_brushed_fidelity: "auto"` with strokes traced and such an edit).
+    pub brushed_fidelity: bool,
     /// The scene asks for a glTF export (`export.glb`).
     pub export: bool,
     /// The scene asks for the grain maps (`export.maps`).
@@ -54,8 +58,7 @@ impl StagePlan {
         let fx = scene.render.as_ref().map(|r| &r.effects);
         let ex = scene.export.as_ref().filter(|e| e.glb.is_some());
         let export_needs_strokes = ex.is_some_and(|e| e.strokes || e.as_brushed);
-        let as_brushed =
-            fx.is_some_and(|f| f.as_brushed.is_some()) || ex.is_some_and(|e| e.as_brushed);
+        let as_brushed = Self::as_brushed_asked(scene);
         let render_needs_strokes =
             fx.is_some_and(|f| f.strokes.is_some() || f.as_brushed.is_some() || f.gap.is_some());
         let toolpath_outputs = scene
@@ -64,11 +67,13 @@ impl StagePlan {
             .is_some_and(|t| t.svg.is_some() || t.gcode.is_some() || t.strokes_json.is_some());
         let trace = toolpath_outputs || render_needs_strokes || export_needs_strokes;
         let maps = scene.export.as_ref().is_some_and(|e| e.maps.is_some());
+        let brushed_fidelity = trace && Self::measures_edits_as_brushed(scene);
         StagePlan {
             solve: !scene.edits.is_empty(),
             trace,
             render: scene.render.is_some(),
-            as_brushed,
+            as_brushed: as_brushed || brushed_fidelity,
+            brushed_fidelity,
             export: ex.is_some(),
             maps,
             gap: fx.is_some_and(|f| f.gap.is_some()),
@@ -81,9 +86,32 @@ impl StagePlan {
     pub fn for_run(scene: &crate::scene::Scene, options: &RunOptions) -> StagePlan {
         let mut plan = StagePlan::of(scene);
         if options.field.is_some() {
+            // No edit is applied: nothing to measure as brushed.
             plan.solve = false;
+            plan.brushed_fidelity = false;
+            plan.as_brushed = Self::as_brushed_asked(scene);
         }
         plan
+    }
+
+    /// Whether a render effect or the export asks for the as-brushed grain.
+    fn as_brushed_asked(scene: &crate::scene::Scene) -> bool {
+        let fx = scene.render.as_ref().map(|r| &r.effects);
+        let ex = scene.export.as_ref().filter(|e| e.glb.is_some());
+        fx.is_some_and(|f| f.as_brushed.is_some()) || ex.is_some_and(|e| e.as_brushed)
+    }
+
+    /// Whether the scene's edits are measured as brushed when strokes are traced: it has a
+    /// bend, expand or curve edit and `toolpaths.as_brushed_fidelity` is not `off`.
+    fn measures_edits_as_brushed(scene: &crate::scene::Scene) -> bool {
+        use crate::edit::Edit;
+        let on = scene.toolpaths.as_ref().is_none_or(|t| {
+            t.as_brushed_fidelity != crate::scene::toolpaths::AsBrushedFidelity::Off
+        });
+        on && scene
+            .edits
+            .iter()
+            .any(|e| matches!(e, Edit::Bend(_) | Edit::Expand(_) | Edit::Curve(_)))
     }
 
     /// Whether the trace keeps the field mesh it traced on: the as-brushed grain and the gaps

@@ -15,6 +15,7 @@ pub use super::plan::{output_plan, scene_inputs, RunOptions, StagePlan};
 pub use super::trace::{toolpath_section, ToolpathFigures};
 use super::trace::{trace, TraceInput};
 use super::{output_path, prepare_with, Observer, Prepared, StageTime, Stages};
+use crate::fidelity::{brushed_fidelity_of_edits, BrushedEditFidelity, FidelityOptions};
 use crate::field::FieldFile;
 use crate::highlight::{highlight_field_near, Lighting};
 use crate::output::{json_compact, json_pretty, Staged};
@@ -26,6 +27,11 @@ use crate::Result;
 /// The as-brushed fidelity: the grain rebuilt from the strokes against the designed grain.
 #[derive(Clone, Debug, Serialize)]
 pub struct AsBrushedFigures {
+    /// Each bend, expand and curve edit measured on the designed grain and on the grain
+    /// rebuilt from the strokes ([`crate::fidelity::brushed_fidelity`]); absent when the run
+    /// measured none (`toolpaths.as_brushed_fidelity`, docs/scene.md).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fidelity: Vec<BrushedEditFidelity>,
     /// Vertices compared.
     pub compared: usize,
     /// Median angle between designed and as-brushed u, degrees.
@@ -152,21 +158,23 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
     };
     let shown = ShownField::of(&prepared, optimized.as_ref(), given_phi, plan.render);
     let mut out = Outputs { s, options, staged: &mut staged };
-    if let Some(p) = &s.scene.field.output {
-        stages.start("write field");
-        write_field(&mut out, p, &prepared, optimized.as_ref())?;
-    }
     let traced = if plan.trace {
         Some(trace_stage(&mut out, &prepared, &shown, plan, &mut stages)?)
     } else {
         None
     };
+    if let Some(p) = &s.scene.field.output {
+        stages.start("write field");
+        let fidelity = traced.as_ref().map_or(&[][..], |t| t.fidelity.as_slice());
+        write_field(&mut out, p, &prepared, optimized.as_ref(), fidelity)?;
+    }
     let field =
         ShownAndTraced { plan, prepared: &prepared, shown: &shown, traced: traced.as_ref() };
     let render_report = render_stage(&mut out, &field, &mut stages)?;
     let export_report = export_stage(&mut out, &field, &mut stages)?;
-    let brushed = traced.as_ref().and_then(|t| t.brushed.as_ref());
-    let as_brushed_figures = brushed.map(|b| AsBrushedFigures {
+    let brushed = traced.as_ref().and_then(|t| t.brushed.as_ref().map(|b| (b, &t.fidelity)));
+    let as_brushed_figures = brushed.map(|(b, fidelity)| AsBrushedFigures {
+        fidelity: fidelity.clone(),
         compared: b.compared,
         median_deg: b.median_deg,
         p95_deg: b.p95_deg,
@@ -331,6 +339,8 @@ struct RunTraced {
     strokes_3d: Vec<Vec<Vector3<f64>>>,
     gap: Option<Vec<f64>>,
     brushed: Option<AsBrushed>,
+    /// The edits measured as brushed (empty unless [`StagePlan::brushed_fidelity`]).
+    fidelity: Vec<BrushedEditFidelity>,
     figures: ToolpathFigures,
 }
 
@@ -368,22 +378,57 @@ fn trace_stage(
     } else {
         None
     };
+    let fidelity = match (&brushed, shown.optimized) {
+        (Some(b), Some(o)) if plan.brushed_fidelity => {
+            stages.start("as-brushed fidelity");
+            brushed_fidelity(prepared, o, input.phi, b)?
+        }
+        _ => Vec::new(),
+    };
     let figures = t.figures(&input)?;
-    Ok(RunTraced { strokes_3d: t.strokes_3d, gap, brushed, figures })
+    Ok(RunTraced { strokes_3d: t.strokes_3d, gap, brushed, fidelity, figures })
+}
+
+/// Each bend, expand and curve edit of `o` measured on the designed grain `phi` (the angles
+/// the strokes were traced from) and on the grain `b` rebuilt from the strokes.
+fn brushed_fidelity(
+    p: &Prepared,
+    o: &Optimized,
+    phi: &[f64],
+    b: &AsBrushed,
+) -> Result<Vec<BrushedEditFidelity>> {
+    let u: Vec<Vector3<f64>> = b.u.iter().map(|v| Vector3::from(*v)).collect();
+    brushed_fidelity_of_edits(
+        &p.mesh,
+        &p.field.geometry,
+        &o.h,
+        p.field_options.symmetry,
+        &o.phi_before,
+        phi,
+        &u,
+        &o.report.edits,
+        &FidelityOptions::default(),
+    )
 }
 
 /// Writes FIELD.json (`field.output`): the solved field with the field before the edits, or
-/// the initial one.
+/// the initial one; with the edits measured as brushed, if any, in `meta.diagnostics`.
 fn write_field(
     out: &mut Outputs,
     p: &str,
     prepared: &Prepared,
     optimized: Option<&Optimized>,
+    fidelity: &[BrushedEditFidelity],
 ) -> Result<()> {
-    let file = match optimized {
+    let mut file = match optimized {
         Some(o) => optimized_field_file(prepared, o)?,
         None => super::prepare::initial_field_file(prepared)?,
     };
+    if !fidelity.is_empty() {
+        file.meta.diagnostics.fidelity = Some(serde_json::to_value(fidelity).map_err(|e| {
+            crate::Error::Numerical { stage: "field output", message: e.to_string() }
+        })?);
+    }
     out.write("field.output", p, &json_compact(&file)?)
 }
 

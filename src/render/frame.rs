@@ -84,6 +84,8 @@ pub(super) struct Frame<'a> {
     pub precision: Precision,
     pub curve_lights: Vec<Light>,
     pub critical_lights: Vec<Light>,
+    /// The key light of the as-brushed departure overlay (`as_brushed.mode: "highlights"`).
+    pub departure_light: Option<Light>,
     pub w: usize,
     pub h: usize,
     pub s: usize,
@@ -205,7 +207,24 @@ impl Frame<'_> {
         let side_by_side = matches!(&fx.as_brushed, Some(a) if a.mode == AsBrushedMode::SideBySide)
             && brushed.is_some();
         let mut halves: Vec<Half> = Vec::new();
-        let layer = self.overlays(input.u, counters, timer);
+        let mut layer = self.overlays(input.u, counters, timer);
+        if let (Some(a), Some(bu), Some(l)) =
+            (&fx.as_brushed, input.brushed_u, &self.departure_light)
+        {
+            let s = self.s as f64;
+            let (on, departed) = timer.run("as_brushed_highlights", || {
+                overlay::highlight_departure(
+                    &self.ctx,
+                    (input.u, bu),
+                    l,
+                    0.5 * a.width_px * s,
+                    a.departure_px * s,
+                    &mut layer,
+                )
+            });
+            counters.brushed_highlight_samples += on;
+            counters.departed_highlight_samples += departed;
+        }
         let main_rad = match (&fx.as_brushed, &brushed) {
             (Some(a), Some(b)) if a.mode == AsBrushedMode::Difference => {
                 let gain = a.gain as f32;

@@ -243,7 +243,7 @@ pub(crate) fn render_with(
     precision: Precision,
 ) -> Result<RenderOutput> {
     let start = Instant::now();
-    let (curve_lights, critical_lights) =
+    let (curve_lights, critical_lights, departure_light) =
         validate_render(input, material, lights, camera, settings)?;
     let fx = &settings.effects;
 
@@ -303,6 +303,7 @@ pub(crate) fn render_with(
         precision,
         curve_lights,
         critical_lights,
+        departure_light,
         w,
         h,
         s,
@@ -313,7 +314,7 @@ pub(crate) fn render_with(
     let shading_name = if fx.shading { "shading" } else { "clay" };
     let designed = timer.run(shading_name, || frame.radiance(input.u, &mut counters));
     let brushed = match (&fx.as_brushed, input.brushed_u) {
-        (Some(_), Some(bu)) => {
+        (Some(a), Some(bu)) if a.mode != AsBrushedMode::Highlights => {
             counters.as_brushed_shadings += 1;
             Some(timer.run("as_brushed", || frame.radiance(bu, &mut counters)))
         }
@@ -344,23 +345,26 @@ pub(crate) fn render_with(
     Ok(RenderOutput { png, linear, report })
 }
 
+/// The lights of the effects: the highlight curves', the critical points' and the key light
+/// of the as-brushed departure overlay (`as_brushed.mode: "highlights"`).
+type EffectLights = (Vec<Light>, Vec<Light>, Option<Light>);
+
 /// The checks of [`render_with`] before any work: material, lights, settings, camera and
-/// input, the effects' lights (returned: the highlight-curve and critical-point lights), and
-/// the per-vertex fields the listed effects need.
+/// input, the effects' lights (returned), and the per-vertex fields the listed effects need.
 fn validate_render(
     input: &RenderInput,
     material: &Material,
     lights: &[LightSpec],
     camera: &Camera,
     settings: &RenderSettings,
-) -> Result<(Vec<Light>, Vec<Light>)> {
+) -> Result<EffectLights> {
     material.validate().map_err(|e| prefix(e, "material"))?;
     validate_lights(lights).map_err(|e| prefix(e, "lights"))?;
     settings.validate().map_err(|e| prefix(e, "render"))?;
     camera.validate()?;
     input.validate()?;
     let fx = &settings.effects;
-    let (curve_lights, critical_lights) = effect_lights(fx, lights)?;
+    let effect = effect_lights(fx, lights)?;
     if fx.lic.is_some() && input.ell.is_none() {
         return Err(Error::setting("render.effects.lic", "needs ℓ per vertex (RenderInput::ell)"));
     }
@@ -370,13 +374,13 @@ fn validate_render(
             "needs the as-brushed grain (RenderInput::brushed_u)",
         ));
     }
-    Ok((curve_lights, critical_lights))
+    Ok(effect)
 }
 
 /// The lights chosen by `effects.highlight_curves.lights` and `effects.critical_points.lights`
 /// (an empty list: the key light). Each index must be a directional or point light of
 /// `lights`; the error's key is `render.effects.<effect>.lights[k]`.
-fn effect_lights(fx: &Effects, lights: &[LightSpec]) -> Result<(Vec<Light>, Vec<Light>)> {
+fn effect_lights(fx: &Effects, lights: &[LightSpec]) -> Result<EffectLights> {
     let prepared = Light::prepare(lights);
     let chosen = |list: &[usize], key: &str| -> Result<Vec<Light>> {
         if list.is_empty() {
@@ -411,7 +415,19 @@ fn effect_lights(fx: &Effects, lights: &[LightSpec]) -> Result<(Vec<Light>, Vec<
         Some(c) => chosen(&c.lights, "critical_points")?,
         None => Vec::new(),
     };
-    Ok((curves, critical))
+    let departure = match &fx.as_brushed {
+        Some(a) if a.mode == AsBrushedMode::Highlights => {
+            Some(chosen(&[], "as_brushed")?.into_iter().next().ok_or_else(|| {
+                Error::setting(
+                    "render.effects.as_brushed.mode",
+                    "\"highlights\" draws the key light's highlight: the scene needs a \
+                     directional or point key light",
+                )
+            })?)
+        }
+        _ => None,
+    };
+    Ok((curves, critical, departure))
 }
 
 /// The checks of [`render`] that involve the scene's lights and not only the `render`

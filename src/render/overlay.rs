@@ -106,6 +106,25 @@ pub(crate) fn highlight_curves(
     half_width: f64,
     layer: &mut [[f32; 4]],
 ) -> u64 {
+    let dist = zero_distances(ctx, grain, light);
+    layer
+        .par_iter_mut()
+        .zip(dist.par_iter())
+        .map(|(o, d)| {
+            let cov = (half_width + 0.5 - *d).clamp(0.0, 1.0);
+            if cov > 0.0 {
+                over(o, colour, cov as f32);
+                1
+            } else {
+                0
+            }
+        })
+        .sum()
+}
+
+/// Per sample, the distance in samples to the curve hᵀu = 0 of `light` (see
+/// [`highlight_curves`]); infinite where there is no value (unlit, background, flat g).
+fn zero_distances(ctx: &Ctx, grain: &[Vector3<f64>], light: &Light) -> Vec<f64> {
     let (w, h) = (ctx.vis.width, ctx.vis.height);
     // g and u per sample; g = ∞ marks "no value".
     let mut gu = vec![[f32::INFINITY, 0.0, 0.0, 0.0]; w * h];
@@ -141,31 +160,74 @@ pub(crate) fn highlight_curves(
             (None, None) => 0.0,
         }
     };
-    layer
-        .par_chunks_mut(w)
-        .enumerate()
-        .map(|(y, row)| {
-            let mut n = 0;
-            for (x, o) in row.iter_mut().enumerate() {
-                let c = gu[y * w + x];
-                if !c[0].is_finite() {
-                    continue;
-                }
-                let (xi, yi) = (x as isize, y as isize);
-                let grad = diff(xi, yi, 1, 0, &c).hypot(diff(xi, yi, 0, 1, &c)) as f64;
-                if grad.is_nan() || grad <= 1e-12 {
-                    continue;
-                }
-                let d = (c[0] as f64).abs() / grad;
-                let cov = (half_width + 0.5 - d).clamp(0.0, 1.0);
-                if cov > 0.0 {
-                    over(o, colour, cov as f32);
-                    n += 1;
-                }
+    let mut dist = vec![f64::INFINITY; w * h];
+    dist.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, o) in row.iter_mut().enumerate() {
+            let c = gu[y * w + x];
+            if !c[0].is_finite() {
+                continue;
             }
-            n
+            let (xi, yi) = (x as isize, y as isize);
+            let grad = diff(xi, yi, 1, 0, &c).hypot(diff(xi, yi, 0, 1, &c)) as f64;
+            if grad.is_nan() || grad <= 1e-12 {
+                continue;
+            }
+            *o = (c[0] as f64).abs() / grad;
+        }
+    });
+    dist
+}
+
+/// Colour of the designed key highlight in the departure overlay (white).
+pub(crate) const DESIGNED_COLOUR: [f32; 3] = [1.0, 1.0, 1.0];
+/// Colour of the as-brushed key highlight where it lies on the designed one (green).
+pub(crate) const KEPT_COLOUR: [f32; 3] = [0.15, 0.95, 0.3];
+/// Colour of the as-brushed key highlight where it departs from the designed one (red).
+pub(crate) const DEPARTED_COLOUR: [f32; 3] = [1.0, 0.12, 0.1];
+
+/// The key highlight of the designed grain and of the as-brushed one (`render.effects.
+/// as_brushed.mode: "highlights"`): the designed curve hᵀu = 0 in white, the as-brushed curve
+/// over it in green where the designed one is within `departure` samples of it and in red, twice
+/// as wide, where it is farther — where the part as brushed shows its highlight elsewhere than
+/// designed.
+/// Distances are the curves' screen distances ≈ |g|/|∇g| ([`highlight_curves`]). Returns the
+/// samples on the as-brushed curve (its centre line, within half a sample) and those of them
+/// that depart.
+pub(crate) fn highlight_departure(
+    ctx: &Ctx,
+    (designed, brushed): (&[Vector3<f64>], &[Vector3<f64>]),
+    light: &Light,
+    half_width: f64,
+    departure: f64,
+    layer: &mut [[f32; 4]],
+) -> (u64, u64) {
+    let d_designed = zero_distances(ctx, designed, light);
+    let d_brushed = zero_distances(ctx, brushed, light);
+    layer
+        .par_iter_mut()
+        .enumerate()
+        .map(|(k, o)| {
+            let (dd, db) = (d_designed[k], d_brushed[k]);
+            let cov_d = (half_width + 0.5 - dd).clamp(0.0, 1.0);
+            if cov_d > 0.0 {
+                over(o, DESIGNED_COLOUR, cov_d as f32);
+            }
+            // A departing stretch is drawn twice as wide, so that it shows at a glance.
+            // dd is a distance or ∞ (no designed highlight near), never NaN.
+            let departs = dd > departure;
+            let width = if departs { 2.0 * half_width } else { half_width };
+            let cov_b = (width + 0.5 - db).clamp(0.0, 1.0);
+            if cov_b > 0.0 {
+                let colour = if departs { DEPARTED_COLOUR } else { KEPT_COLOUR };
+                over(o, colour, cov_b as f32);
+            }
+            if db <= 0.5 {
+                (1, u64::from(departs))
+            } else {
+                (0, 0)
+            }
         })
-        .sum()
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
 /// Marks samples where hᵀn > threshold for any of `lights`.

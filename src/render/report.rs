@@ -57,6 +57,10 @@ pub struct RenderCounters {
     pub critical_markers: u64,
     /// Second (as-brushed) shadings.
     pub as_brushed_shadings: u64,
+    /// `as_brushed.mode: "highlights"`: samples on the as-brushed key highlight.
+    pub brushed_highlight_samples: u64,
+    /// Of those, the samples farther than `departure_px` from the designed key highlight.
+    pub departed_highlight_samples: u64,
 }
 
 /// Median, 95th percentile and maximum of a set of angles.

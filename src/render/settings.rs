@@ -143,7 +143,8 @@ impl RenderSettings {
 impl RenderSettings {
     /// Bytes the render is estimated to hold at once, counted from the buffers it allocates.
     /// Per supersample: 16 (visibility), 12 (radiance), 16 per image half (overlay layer),
-    /// 12 for the as-brushed radiance and 12 more for its difference, 32 for LIC
+    /// 12 for the as-brushed radiance and 12 more for its difference (48 for the two
+    /// highlights' buffers in `highlights` mode, which shades once), 32 for LIC
     /// (directions, cells, values), 16 for highlight curves (g and u), 8 for the coverage
     /// resolve when supersampled. Per output pixel and half: 28 (resolved radiance and
     /// layer), 3 (8-bit image), 3 (PNG), 12 with a linear output; 4 more for LIC.
@@ -165,10 +166,13 @@ impl RenderSettings {
         };
         let mut per_sample = 16 + 12 + 16 * halves;
         if let Some(a) = &fx.as_brushed {
-            per_sample += 12;
-            if a.mode == AsBrushedMode::Difference {
-                per_sample += 12;
-            }
+            per_sample += match a.mode {
+                AsBrushedMode::SideBySide => 12,
+                AsBrushedMode::Difference => 24,
+                // Two g-and-u buffers (16 bytes) and two distance buffers (8), no second
+                // shading.
+                AsBrushedMode::Highlights => 48,
+            };
         }
         if fx.lic.is_some() {
             per_sample += 32;
@@ -263,6 +267,8 @@ impl Effects {
         }
         if let Some(a) = &self.as_brushed {
             check_open("effects.as_brushed.gain", a.gain, 0.0, 1e6)?;
+            check_open("effects.as_brushed.departure_px", a.departure_px, 0.0, 1000.0)?;
+            check_open("effects.as_brushed.width_px", a.width_px, 0.0, 50.0)?;
         }
         if let Some(g) = &self.gap {
             check_open("effects.gap.max", g.max, 0.0, 1e12)?;
@@ -377,6 +383,10 @@ pub enum AsBrushedMode {
     SideBySide,
     /// |L_designed − L_as_brushed| × gain.
     Difference,
+    /// The designed shading with the key highlight of the designed grain (white) and of the
+    /// as-brushed grain over it: green where it lies within `departure_px` of the designed
+    /// one, red where it departs (issue 47).
+    Highlights,
 }
 
 /// As-brushed settings.
@@ -389,10 +399,20 @@ pub struct AsBrushedSettings {
     /// Gain of the difference image (default 4).
     #[serde(default = "default_gain")]
     pub gain: f64,
+    /// `highlights` mode: an as-brushed highlight farther than this from the designed one, in
+    /// output pixels, is drawn as departing (default 2).
+    #[serde(default = "default_departure")]
+    pub departure_px: f64,
+    /// `highlights` mode: line width of the two highlights, output pixels (default 1.5).
+    #[serde(default = "default_line_width")]
+    pub width_px: f64,
 }
 
 fn default_gain() -> f64 {
     4.0
+}
+fn default_departure() -> f64 {
+    2.0
 }
 
 /// Coverage-gap settings.

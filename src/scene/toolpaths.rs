@@ -39,6 +39,24 @@ pub struct ToolpathSection {
     pub svg_options: SvgOptions,
     /// G-code options, used when `gcode` is set.
     pub gcode_options: GcodeOptions,
+    /// Whether a run measures each bend, expand and curve edit on the grain rebuilt from the
+    /// strokes (the run report's `as_brushed.fidelity`, FIELD.json's
+    /// `meta.diagnostics.fidelity`); default `auto`.
+    pub as_brushed_fidelity: AsBrushedFidelity,
+}
+
+/// `toolpaths.as_brushed_fidelity`: whether a run measures its edits as brushed.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum AsBrushedFidelity {
+    /// Whenever a run traces strokes and has a bend, expand or curve edit: the grain is
+    /// rebuilt from the strokes and each edit measured on it (docs/math.md §10, "As brushed").
+    #[default]
+    Auto,
+    /// Never (the grain is still rebuilt when a render effect or the export asks for it).
+    Off,
 }
 
 /// The section's key path of a toolpaths crate key: the crate names `svg.*`/`gcode.*` after

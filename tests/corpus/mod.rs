@@ -334,8 +334,11 @@ pub(crate) fn bbox(p: &[V3]) -> (V3, V3) {
     (lo, hi)
 }
 
+mod brushed;
 mod placement;
 
+#[allow(unused_imports)]
+pub use brushed::{brushed_scene_json, run_brushed, BrushedOutcome, BRUSH_OVERLAP, BRUSH_WIDTH};
 #[allow(unused_imports)]
 pub use placement::{edits, edits_json, place, Placement};
 
