@@ -34,9 +34,9 @@ const WORLD: P = [0.2, 1.0, 0.3];
 
 /// Shortfalls measured and not yet removed, each with the floor it must keep: the bushing's
 /// 2 mm round (face 2) at `$fn` = 24 and 12 has 98.6 and 98.9 % of its stroke length within 1°
-/// (the segments off by 1.0–2.8° are 0.25–0.55 mm long, scattered over the round: the strokes'
-/// simplification at the plan tolerance bounds where a segment lies, not where it points, and
-/// on a 2 mm round a segment within the tolerance of its curve may lean by more than 1°).
+/// (the segments off by 1.0–2.8° are 0.2–0.55 mm long, scattered over the round, away from the
+/// grain's pole; bounding the simplified segments' lean from the traced polyline does not help,
+/// so the traced polyline itself leans there).
 const SHORTFALLS: [(&str, usize, &str, f64); 1] = [("bushing", 2, "strokes", 0.985)];
 
 /// The `openscad` program, installed with apt when missing.
