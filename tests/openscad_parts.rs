@@ -35,8 +35,8 @@ const WORLD: P = [0.2, 1.0, 0.3];
 /// Shortfalls measured and not yet removed, each with the floor it must keep: the bushing's
 /// 2 mm round (face 2) at `$fn` = 24 and 12 has 98.6 and 98.9 % of its stroke length within 1°
 /// (the segments off by 1.0–2.8° are 0.2–0.55 mm long, scattered over the round, away from the
-/// grain's pole: simplified at the plan tolerance, 0.01 mm, a segment that short may lean by
-/// ≈ 2·tol/L where the stroke's bend varies).
+/// grain's pole; simplifying finer makes it worse, so the traced stroke itself departs from the
+/// true grain there; the cause is not yet found).
 const SHORTFALLS: [(&str, usize, &str, f64); 1] = [("bushing", 2, "strokes", 0.985)];
 
 /// The `openscad` program, installed with apt when missing.
