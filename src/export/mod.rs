@@ -54,7 +54,8 @@ pub struct ExportSection {
     /// Texels per side of the glb's `anisotropyTexture` and of the maps (`maps`): a power of
     /// two in [16, 8192]. Default: chosen for the part, the smallest power of two in
     /// [1024, 4096] at which the shortest 5 % of the UV edges span 8 texels (1024 for the
-    /// kettle and the dome, 2048 for the panel).
+    /// kettle and the dome, 2048 for the panel) and every chord of a recognized curved surface
+    /// spans 8 texels and one per degree of its surface's turn along its middle edge.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub anisotropy_texture_size: Option<u32>,
     /// A directory for the grain as 16-bit PNG maps in UV space (`grain-direction.png`,

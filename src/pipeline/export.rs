@@ -50,7 +50,7 @@ pub fn maps(x: &ExportStageInput) -> Result<Maps> {
     let (normals, u, singular) = grain(x);
     let curved = x.prepared.surfaces.as_ref().map(|r| r.curved_faces(&x.prepared.mesh));
     let input = export_input(x, &normals, &u, &singular, &curved)?;
-    let t = grain_texture(&input, texture_size(x.section, input.uv))?;
+    let t = grain_texture(&input, texture_size(x.section, input.uv, x))?;
     Ok(Maps { direction: t.baked.image.direction_png16()?, angle: t.baked.image.angle_png16()? })
 }
 
@@ -110,13 +110,33 @@ fn export_input<'a>(
     })
 }
 
-/// `export.anisotropy_texture_size`, or the size chosen for the part's UVs
-/// ([`crate::texmap::auto_size`]).
+/// `export.anisotropy_texture_size`, or the size chosen for the part's UVs and its curved
+/// chords ([`crate::texmap::auto_size_with`]).
 fn texture_size(
     e: &ExportSection,
     uv: &crate::mesh::CornerAttribute<nalgebra::Vector2<f64>>,
+    x: &ExportStageInput,
 ) -> u32 {
-    e.anisotropy_texture_size.unwrap_or_else(|| crate::texmap::auto_size(uv))
+    e.anisotropy_texture_size.unwrap_or_else(|| {
+        let turns = x.prepared.surfaces.as_ref().map(|r| chord_turns(r, &x.prepared.mesh));
+        crate::texmap::auto_size_with(uv, turns.as_deref())
+    })
+}
+
+/// Per face of `mesh`, the largest angle (degrees) between its recognized curved surface's
+/// normals at its corners; 0 on other faces.
+fn chord_turns(r: &crate::pipeline::prepare::RecognizedPart, mesh: &crate::mesh::Mesh) -> Vec<f64> {
+    let on = r.on_faces(mesh);
+    (0..mesh.num_faces())
+        .map(|f| {
+            let Some(prim) = on.curved(f) else { return 0.0 };
+            let n = mesh.faces[f].map(|v| prim.normal_at(&mesh.positions[v as usize]));
+            (0..3)
+                .map(|k| n[k].dot(&n[(k + 1) % 3]).abs().min(1.0).acos().to_degrees())
+                .filter(|a| a.is_finite())
+                .fold(0.0, f64::max)
+        })
+        .collect()
 }
 
 /// Writes the glb ([`export_glb`]).
@@ -141,7 +161,7 @@ pub fn export(x: &ExportStageInput) -> Result<ExportOutput> {
             fov_deg: scene.view.fov_deg,
         }),
         // The key light as the highlight model used it (a light edit may have moved it).
-        texture_size: texture_size(x.section, input.uv),
+        texture_size: texture_size(x.section, input.uv, x),
         key_light: crate::appearance::key_light_index(&scene.lights).and_then(|i| {
             match &scene.lights[i] {
                 LightSpec::Directional { irradiance, .. } => {

@@ -54,20 +54,45 @@ pub const AUTO_TEXELS_PER_EDGE: f64 = 8.0;
 /// held at eight texels or more per edge (the round trip of every example within 0.5°,
 /// tests/texture_maps.rs).
 pub fn auto_size(uv: &CornerAttribute<Vector2<f64>>) -> u32 {
+    auto_size_with(uv, None)
+}
+
+/// [`auto_size`], and every face of a recognized curved surface held to texels of its own:
+/// inside such a chord the grain is the surface's, not linear, turning by up to the angle
+/// `turn_deg[f]` between the surface's normals at its corners, and the texture alone carries
+/// it between them; so the chord's middle edge spans [`AUTO_TEXELS_PER_EDGE`] texels, and at
+/// least one per degree of that turn (the wall of a 3 mm hole written with 30° strips showed
+/// the grain within 1° on 97 % of its area at twelve texels a chord, on all of it at
+/// forty-eight). The middle edge, so that a sliver's shortest edge does not decide.
+pub fn auto_size_with(uv: &CornerAttribute<Vector2<f64>>, turn_deg: Option<&[f64]>) -> u32 {
     let space = TextureSpace::of(uv);
-    let mut lengths: Vec<f64> = space
-        .corners(uv)
+    let tris = space.corners(uv);
+    let mut lengths: Vec<f64> = tris
         .iter()
         .flat_map(|t| [(t[1] - t[0]).norm(), (t[2] - t[1]).norm(), (t[0] - t[2]).norm()])
         .filter(|l| *l > 0.0 && l.is_finite())
         .collect();
     let (lo, hi) = AUTO_SIZE_RANGE;
-    if lengths.is_empty() {
-        return lo;
-    }
     lengths.sort_by(f64::total_cmp);
-    let p5 = lengths[lengths.len() / 20];
-    let need = (AUTO_TEXELS_PER_EDGE / p5).min(f64::from(hi));
+    let all = (!lengths.is_empty()).then(|| AUTO_TEXELS_PER_EDGE / lengths[lengths.len() / 20]);
+    let middle = |t: &[Vector2<f64>; 3]| {
+        let mut e = [(t[1] - t[0]).norm(), (t[2] - t[1]).norm(), (t[0] - t[2]).norm()];
+        e.sort_by(f64::total_cmp);
+        e[1]
+    };
+    let on_curves = turn_deg.and_then(|turns| {
+        (0..tris.len())
+            .filter_map(|f| {
+                let turn = turns.get(f).copied().filter(|t| *t > 0.0 && t.is_finite())?;
+                let l = middle(&tris[f]);
+                (l > 0.0 && l.is_finite()).then(|| AUTO_TEXELS_PER_EDGE.max(turn) / l)
+            })
+            .reduce(f64::max)
+    });
+    let Some(need) = [all, on_curves].into_iter().flatten().reduce(f64::max) else {
+        return lo;
+    };
+    let need = need.min(f64::from(hi));
     (need.ceil() as u32).next_power_of_two().clamp(lo, hi)
 }
 
