@@ -118,15 +118,15 @@ fn texture_size(
     x: &ExportStageInput,
 ) -> u32 {
     e.anisotropy_texture_size.unwrap_or_else(|| {
-        let turns = x.prepared.surfaces.as_ref().map(|r| chord_turns(r, &x.prepared.mesh));
+        let mesh = &x.prepared.mesh;
+        let turns = x.prepared.surfaces.as_ref().map(|r| chord_turns(&r.on_faces(mesh), mesh));
         crate::texmap::auto_size_with(uv, turns.as_deref())
     })
 }
 
 /// Per face of `mesh`, the largest angle (degrees) between its recognized curved surface's
 /// normals at its corners; 0 on other faces.
-fn chord_turns(r: &crate::pipeline::prepare::RecognizedPart, mesh: &crate::mesh::Mesh) -> Vec<f64> {
-    let on = r.on_faces(mesh);
+fn chord_turns(on: &crate::geometry::surfaces::FaceSurfaces, mesh: &crate::mesh::Mesh) -> Vec<f64> {
     (0..mesh.num_faces())
         .map(|f| {
             let Some(prim) = on.curved(f) else { return 0.0 };
