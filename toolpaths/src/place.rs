@@ -18,6 +18,12 @@
 //! * Every chart (connected piece of the UV layout) is its own sheet: the fallback raster
 //!   scans each chart's UV box and locates its points in that chart only, so charts that
 //!   overlap in UV (a mirrored half face laid over the other half) all get strokes.
+//! * **Straddled points** (tried before any seed): a point the caller wants left *between*
+//!   two strokes — where the grain rebuilt from the strokes changes from one stroke to the
+//!   next, as an edit's highlight running along the grain must — seeds a stroke `d_sep / 2`
+//!   on the surface to either side of it across the field, each traced when it lies `d_sep`
+//!   from every stroke so far. The two run along the grain on either side of the point; their
+//!   neighbours are seeded from the queue as any stroke's.
 //! * **Gap filling** (after the queue and the raster): beside every stroke, at every
 //!   candidate, a point that is farther than `d_sep / 2` from all strokes (uncovered) seeds
 //!   a *fill* stroke traced with the same `d_test`: the strip between the last stroke and a
@@ -92,6 +98,14 @@ pub struct PlacementOptions {
     pub fill_gaps: bool,
     /// Seeds tried first, in order (UV). Default: the centre of the UV bounding box.
     pub seeds: Vec<Vec2>,
+    /// Points to be left midway between two neighbouring strokes (UV), tried in order before
+    /// any seed: from each, a seed `d_sep / 2` on the surface to either side across the
+    /// field, each traced when it lies `d_sep` from every stroke so far (module docs,
+    /// "Straddled points"). Set by the caller from what the strokes must carry (grainline:
+    /// an edit's highlight where it runs along the grain); not a scene key.
+    #[serde(skip)]
+    #[cfg_attr(feature = "schemars", schemars(skip))]
+    pub straddle: Vec<Vec2>,
     /// Integration options. `max_step` is capped at `d_test / 2`; `exclusion_radius` is
     /// replaced by the one above.
     pub trace: TraceOptions,
@@ -110,6 +124,7 @@ impl Default for PlacementOptions {
             end_run: 1.0,
             fill_gaps: true,
             seeds: Vec::new(),
+            straddle: Vec::new(),
             trace: TraceOptions::default(),
         }
     }
@@ -176,6 +191,11 @@ impl PlacementOptions {
                 return Err(ToolpathError::NonFinite { what: "placement.seeds", index: i });
             }
         }
+        for (i, s) in self.straddle.iter().enumerate() {
+            if !(s[0].is_finite() && s[1].is_finite()) {
+                return Err(ToolpathError::NonFinite { what: "placement.straddle", index: i });
+            }
+        }
         self.trace.validate()
     }
 }
@@ -205,6 +225,8 @@ pub struct Placement {
     pub fill_strokes: usize,
     /// Seeds that passed the validity tests and were traced.
     pub seeds_traced: usize,
+    /// Strokes traced from [`PlacementOptions::straddle`] points (among `strokes`).
+    pub straddle_strokes: usize,
     /// Field evaluations (Runge–Kutta stages).
     pub field_evaluations: u64,
 }
@@ -255,6 +277,12 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
             closure: crate::trace::closure_radius(&topts),
         },
     };
+    let mut straddle_strokes = 0;
+    for &p in &opts.straddle {
+        straddle_strokes += st.straddle(p);
+    }
+    // Their neighbours before any other seed: the sheet is spaced from them.
+    st.drain();
     let mut initial: Vec<Vec2> = opts.seeds.clone();
     if initial.is_empty() {
         let b = dom.bbox;
@@ -307,6 +335,7 @@ pub fn place_strokes(dom: &Domain, opts: &PlacementOptions) -> Result<Placement>
         min_length: st.min_length,
         fill_strokes,
         seeds_traced: st.seeds_traced,
+        straddle_strokes,
         field_evaluations: st.tracer.evals,
         strokes: st.strokes,
         singularities: sing.to_vec(),
@@ -480,6 +509,30 @@ impl State<'_> {
         self.run_outs.add_stroke(dom, &s, metric);
         self.index.insert(dom, &s);
         Some(s)
+    }
+
+    /// Seeds `d_sep / 2` on the surface to either side of `p` across the field (module docs,
+    /// "Straddled points"), each traced when it lies `d_sep` from every stroke; returns the
+    /// strokes accepted. Their neighbours are seeded later, when the queue is drained.
+    fn straddle(&mut self, p: Vec2) -> usize {
+        let dom = self.dom;
+        let Some((f, bary)) = dom.grid.locate(dom, p) else { return 0 };
+        let Some(t) = crate::field::sample(dom, f, bary, None) else { return 0 };
+        let n = self.index.metric(dom, f).unit_normal(t);
+        let index = &self.index;
+        let metric = |g: u32| index.metric(dom, g);
+        let sides: Vec<(Vec2, u32)> = [1.0, -1.0]
+            .into_iter()
+            .filter_map(|side| match march(dom, metric, f, p, scale(n, side), 0.5 * self.d_sep) {
+                March::Inside { p: q, face } => Some((q, face)),
+                March::Exit { .. } => None,
+            })
+            .collect();
+        let before = self.strokes.len();
+        for (q, face) in sides {
+            self.try_seed(q, face, SIDE_SLACK);
+        }
+        self.strokes.len() - before
     }
 
     /// Seed beside every queued stroke until the queue is empty.

@@ -55,6 +55,11 @@ pub struct Report {
     /// after the evenly spaced strokes).
     #[serde(default)]
     pub fill_strokes: usize,
+    /// Strokes seeded to either side of a point to be left between two strokes
+    /// (`PlacementOptions::straddle`; grainline: an edit's highlight where it runs along the
+    /// grain); written when non-zero.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub straddle_strokes: usize,
     /// Charts (sheets) of the UV layout, and how many of them received strokes.
     #[serde(default)]
     pub charts: usize,
@@ -143,6 +148,7 @@ impl Report {
             dropped_short: placement.dropped_short,
             min_length: placement.min_length,
             fill_strokes: placement.fill_strokes,
+            straddle_strokes: placement.straddle_strokes,
             charts: 0,
             charts_with_strokes: 0,
             tight_end_cuts: 0,

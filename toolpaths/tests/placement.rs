@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{field_mesh, rect_mesh};
+use common::{annulus_mesh, field_mesh, rect_mesh};
 use grainline_toolpaths::{place_strokes, Domain, PlacementOptions, StopReason, Symmetry};
 
 /// Constant field on a rectangle: straight vertical strokes exactly `d_sep` apart.
@@ -114,6 +114,64 @@ fn mirrored_chart_gives_mirrored_strokes() {
     for (sa, sb) in a.strokes.iter().zip(&b.strokes) {
         for (p, q) in sa.uv.iter().zip(&sb.uv) {
             assert!((p[0] + q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9);
+        }
+    }
+}
+
+/// Straddled points (module docs of `place`): a point to be left between two strokes gets
+/// one stroke `d_sep / 2` to either side across the field — on a constant field two straight
+/// strokes at x₀ ± d_sep / 2, and the rest of the sheet spaced `d_sep` from them; a second
+/// point closer than `d_sep / 2` to those strokes adds none.
+#[test]
+fn a_straddled_point_lies_midway_between_two_strokes() {
+    let (w, h) = (10.3, 6.0);
+    let mesh = field_mesh(rect_mesh(w, h, 23, 17), Symmetry::Line, |_| [0.0, 1.0]);
+    let dom = Domain::new(mesh).unwrap();
+    let x0 = 3.37;
+    let opts = PlacementOptions {
+        straddle: vec![[x0, 2.9], [x0 + 0.2, 4.0]],
+        ..PlacementOptions::new(1.0, 0.2)
+    };
+    let d_sep = opts.d_sep();
+    let pl = place_strokes(&dom, &opts).unwrap();
+    assert_eq!(pl.straddle_strokes, 2);
+    let xs: Vec<f64> = pl.strokes.iter().map(|s| s.uv[0][0]).collect();
+    // The surface normal of the stroke is turned counter-clockwise from the field: left first.
+    assert!((xs[0] - (x0 - 0.5 * d_sep)).abs() < 1e-6, "{xs:?}");
+    assert!((xs[1] - (x0 + 0.5 * d_sep)).abs() < 1e-6, "{xs:?}");
+    // Every evenly spaced stroke d_sep from the next (fill strokes brush the side strips).
+    let mut xs: Vec<f64> = pl.strokes.iter().filter(|s| !s.fill).map(|s| s.uv[0][0]).collect();
+    xs.sort_by(f64::total_cmp);
+    for pair in xs.windows(2) {
+        let gap = pair[1] - pair[0];
+        assert!((gap - d_sep).abs() < 1e-6 * d_sep, "gap {gap} vs d_sep {d_sep}: {xs:?}");
+    }
+    assert!(xs[0] < d_sep && w - xs[xs.len() - 1] < d_sep, "xs = {xs:?}");
+}
+
+/// On a circular field (an annulus brushed round), the two strokes straddling a point at
+/// radius r are the circles r ± d_sep / 2: the marches to either side follow the surface
+/// normal of the field, not a fixed UV direction.
+#[test]
+fn straddled_circles_lie_half_a_spacing_either_side() {
+    let mesh = field_mesh(annulus_mesh(2.0, 9.0, 28, 160), Symmetry::Line, |p| [-p[1], p[0]]);
+    let dom = Domain::new(mesh).unwrap();
+    let r0 = 5.3;
+    let a = 0.7f64;
+    let opts = PlacementOptions {
+        straddle: vec![[r0 * a.cos(), r0 * a.sin()]],
+        ..PlacementOptions::new(1.0, 0.1)
+    };
+    let d_sep = opts.d_sep();
+    let pl = place_strokes(&dom, &opts).unwrap();
+    assert_eq!(pl.straddle_strokes, 2);
+    for (k, want) in [r0 - 0.5 * d_sep, r0 + 0.5 * d_sep].into_iter().enumerate() {
+        let s = &pl.strokes[k];
+        // Polygonal annulus: the field is exactly tangent only at the mesh vertices; the
+        // stroke stays within the chord sag of a 160-gon (r (1 − cos(π/160)) ≈ 1e-3).
+        for p in &s.uv {
+            let r = (p[0] * p[0] + p[1] * p[1]).sqrt();
+            assert!((r - want).abs() < 2e-2, "stroke {k}: r = {r}, want {want}");
         }
     }
 }
