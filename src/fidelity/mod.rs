@@ -50,6 +50,7 @@ use crate::mesh::Mesh;
 use crate::{Error, Result};
 
 mod brushed;
+pub mod carry;
 mod forced;
 mod grid;
 mod segments;
@@ -441,7 +442,15 @@ impl Fields<'_> {
         let k = self.symmetry.k();
         let phi = self.geometry.angles_of(u);
         let sing = crate::highlight::singularities(self.mesh, self.geometry, &phi, k);
-        sing.iter().filter(|s| any.binary_search(&(s.face as usize)).is_ok()).count()
+        // A face with an unbrushed corner (zero grain) has no index to count.
+        let brushed = |f: usize| {
+            self.mesh.faces[f]
+                .iter()
+                .all(|&v| u.get(v as usize).is_some_and(|x| x.norm_squared() > 0.0))
+        };
+        sing.iter()
+            .filter(|s| any.binary_search(&(s.face as usize)).is_ok() && brushed(s.face as usize))
+            .count()
     }
 }
 

@@ -7,7 +7,8 @@ use crate::highlight::Symmetry;
 use crate::mesh::Mesh;
 
 /// g = hᵀu at the three corners of a face; line fields: corners aligned to the first one.
-/// `None` if a corner is out of range or a value is not finite.
+/// `None` if a corner is out of range, a value is not finite, or a corner has no grain (the
+/// zero vector: a vertex no stroke brushed, which shows no anisotropic highlight).
 pub(super) fn corner_g(
     face: &[u32; 3],
     h: &[Vector3<f64>],
@@ -19,6 +20,9 @@ pub(super) fn corner_g(
     let mut g = [0.0; 3];
     for k in 0..3 {
         let mut uk = *u.get(idx[k])?;
+        if uk.norm_squared() == 0.0 {
+            return None;
+        }
         if symmetry == Symmetry::Line && k > 0 && uk.dot(&ua) < 0.0 {
             uk = -uk;
         }
