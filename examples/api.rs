@@ -92,6 +92,7 @@ fn main() -> grainline::Result<()> {
         keep_map: false,
         keep_field_mesh: false,
         surfaces: None,
+        straddle: &[],
     })?;
     let (job, uv) = (&traced.job, &traced.uv);
     println!(

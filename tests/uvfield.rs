@@ -282,6 +282,7 @@ fn trace_with(mesh: &Mesh, g: &Geometry, phi: &[f64], section: &ToolpathSection)
         keep_map: false,
         keep_field_mesh: false,
         surfaces: None,
+        straddle: &[],
     })
     .unwrap();
     (t.job, t.uv)

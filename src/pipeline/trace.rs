@@ -7,6 +7,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use crate::fidelity::carry::StraddlePoint;
 use crate::geometry::surfaces::FaceSurfaces;
 use crate::geometry::Geometry;
 use crate::highlight::Symmetry;
@@ -89,6 +90,10 @@ pub struct TraceInput<'a> {
     /// on them rather than on the chords, and the field inside a curved chord is
     /// the surface's (docs/math.md §3, "Recognized surfaces").
     pub surfaces: Option<&'a RecognizedPart>,
+    /// Points of the edits' designed highlight to leave between two strokes
+    /// ([`crate::fidelity::carry`]; `toolpaths.carry_edits`), most important first; empty:
+    /// the placement alone decides.
+    pub straddle: &'a [StraddlePoint],
 }
 
 /// The recognized surface of each triangle handed to the toolpaths crate, which lifts the
@@ -187,6 +192,34 @@ fn ambient_corners(
         .collect()
 }
 
+/// The straddled points in the field mesh's UV: each face's triangle (the faces in order, less
+/// the `degenerate` ones, ascending) at the point's barycentric coordinates. Points on a left-out
+/// face are dropped.
+fn straddle_uv(
+    points: &[StraddlePoint],
+    fm: &grainline_toolpaths::FieldMesh,
+    degenerate: &[u32],
+) -> Vec<[f64; 2]> {
+    points
+        .iter()
+        .filter_map(|p| {
+            let f = u32::try_from(p.face).ok()?;
+            let skipped = match degenerate.binary_search(&f) {
+                Ok(_) => return None,
+                Err(k) => k,
+            };
+            let tri = fm.triangles.get(p.face - skipped)?;
+            let mut q = [0.0; 2];
+            for (c, w) in tri.iter().zip(p.bary) {
+                let uv = fm.uv.get(*c as usize)?;
+                q[0] += w * uv[0];
+                q[1] += w * uv[1];
+            }
+            q.iter().all(|x| x.is_finite()).then_some(q)
+        })
+        .collect()
+}
+
 /// The traced strokes and what the later steps of the stage read.
 pub struct TracedStrokes {
     /// The toolpaths section traced with ([`toolpath_section`]).
@@ -217,6 +250,7 @@ pub fn trace(input: &TraceInput) -> Result<TracedStrokes> {
     }
     let field_mesh = if input.keep_field_mesh { Some(fm.clone()) } else { None };
     let mut options = section.job_options(units);
+    options.placement.straddle = straddle_uv(input.straddle, &fm, &uv.degenerate_faces);
     if let Some(rec) = input.surfaces {
         recognized_rotary_axis(&mut options, rec, input.mesh);
     }

@@ -43,6 +43,10 @@ pub struct ToolpathSection {
     /// strokes (the run report's `as_brushed.fidelity`, FIELD.json's
     /// `meta.diagnostics.fidelity`); default `auto`.
     pub as_brushed_fidelity: AsBrushedFidelity,
+    /// Whether the placement leaves each bend, expand and curve edit's designed highlight
+    /// between two strokes where it runs along the grain (docs/math.md §10, "Strokes that
+    /// carry the edit"); default `off`.
+    pub carry_edits: CarryEdits,
 }
 
 /// `toolpaths.as_brushed_fidelity`: whether a run measures its edits as brushed.
@@ -57,6 +61,23 @@ pub enum AsBrushedFidelity {
     Auto,
     /// Never (the grain is still rebuilt when a render effect or the export asks for it).
     Off,
+}
+
+/// `toolpaths.carry_edits`: whether the placement straddles the edits' highlights.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum CarryEdits {
+    /// Evenly spaced strokes from the part's centre; the edits do not steer the placement.
+    #[default]
+    Off,
+    /// Where a bend, expand or curve edit's designed key highlight runs within 30° of the
+    /// grain, a stroke is placed half a spacing to either side of it before any other (most
+    /// nearly parallel first), so the highlight lies between two strokes. On the corpus it
+    /// moves the curves' as-brushed figures by −4 to +7 points (docs/benchmarks.md, "As
+    /// brushed"): not the default.
+    Straddle,
 }
 
 /// The section's key path of a toolpaths crate key: the crate names `svg.*`/`gcode.*` after

@@ -297,6 +297,7 @@ impl Session {
             keep_map: false,
             keep_field_mesh: true,
             surfaces: p.surfaces.as_ref(),
+            straddle: &[],
         };
         let t = crate::pipeline::trace::trace(&input)?;
         let ab =
