@@ -3,7 +3,7 @@
 //! ```text
 //! cargo run --release --example bench_fidelity -- [--energy position|tensor|both]
 //!     [--cases NAME,...] [--edits bend,expand,curve] [--small] [--dump DIR]
-//!     [--solver JSON] [--field JSON] [--mesh FILE [--weld D]]... [--as-brushed]
+//!     [--solver JSON] [--field JSON] [--mesh FILE [--weld D]]... [--as-brushed [--toolpaths JSON]]
 //! ```
 //!
 //! `--as-brushed` (issue 47) runs every edit instead as `grainline run` does with strokes
@@ -19,6 +19,8 @@
 //! never seen. `--weld D` welds its vertices closer than D (file units) and accepts the
 //! non-manifold vertices that leaves.
 //!
+//! `--toolpaths '{"carry_edits": "off"}'` merges further `toolpaths` keys into every
+//! `--as-brushed` run's scene.
 //! `--solver '{"smoothness": 1e-6}'` merges further `solver` keys into every case's settings,
 //! `--field '{"fit_radius": 8}'` further `field` keys into every case's scene.
 //! `--dump DIR` also writes each case's edited scene as `DIR/CASE-EDIT-ENERGY.json` (mesh path
@@ -254,6 +256,16 @@ fn parse_args() -> Args {
                 // SAFETY: single-threaded here, before any thread starts.
                 unsafe { std::env::set_var("GRAINLINE_CORPUS_FIELD", extra) }
             }
+            "--toolpaths" => {
+                let extra = args.next().unwrap_or_default();
+                if !serde_json::from_str::<serde_json::Value>(&extra).is_ok_and(|v| v.is_object()) {
+                    usage(&format!(
+                        "--toolpaths takes a JSON object of `toolpaths` keys, got {extra:?}"
+                    ));
+                }
+                // SAFETY: single-threaded here, before any thread starts.
+                unsafe { std::env::set_var("GRAINLINE_CORPUS_TOOLPATHS", extra) }
+            }
             // SAFETY: single-threaded here, before any thread starts.
             "--solver" => unsafe {
                 std::env::set_var("GRAINLINE_CORPUS_SOLVER", args.next().unwrap_or_default())
@@ -355,7 +367,7 @@ fn usage(msg: &str) -> ! {
     eprintln!(
         "usage: bench_fidelity [--energy position|tensor|both] [--cases NAME,...] \
          [--edits bend,expand,curve] [--small] [--dump DIR] [--solver JSON] [--field JSON] \
-         [--mesh FILE [--weld D]]... [--as-brushed]"
+         [--mesh FILE [--weld D]]... [--as-brushed [--toolpaths JSON]]"
     );
     std::process::exit(if msg.is_empty() { 0 } else { 2 });
 }

@@ -88,9 +88,9 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
                 "edits",
                 "solve",
                 "toolpaths",
-                "write toolpaths",
                 "as-brushed",
                 "as-brushed fidelity",
+                "write toolpaths",
                 "render",
                 "write render"
             ]

@@ -142,12 +142,18 @@ pub fn missed_lines(fidelity: &[grainline::fidelity::EditFidelity]) -> Vec<Strin
 /// `as_brushed.fidelity`): the figures on the grain rebuilt from the strokes against the
 /// designed ones, the singular triangles the strokes add, and where the two highlights depart
 /// most. An edit that missed as designed already has its warning ([`missed_lines`]).
-pub fn brushed_lines(fidelity: &[grainline::fidelity::BrushedEditFidelity]) -> Vec<String> {
+pub fn brushed_lines(
+    fidelity: &[grainline::fidelity::BrushedEditFidelity],
+    carrying: &[grainline::pipeline::brush_width::CarryingWidth],
+    units: &str,
+) -> Vec<String> {
     let tolerance = grainline::fidelity::FidelityOptions::default().tolerance;
     fidelity
         .iter()
         .filter(|f| f.designed.landed && !f.as_brushed.landed)
         .map(|f| {
+            let c = carrying.iter().find(|c| c.index == f.index);
+            let width = c.map_or(String::new(), |c| carrying_note(c, units));
             let (d, b) = (&f.designed, &f.as_brushed);
             let place = f.departure.as_ref().map_or(String::new(), |x| {
                 format!(
@@ -158,7 +164,7 @@ pub fn brushed_lines(fidelity: &[grainline::fidelity::BrushedEditFidelity]) -> V
             format!(
                 "grainline: warning: edit [{}] ({}) lands as designed but not as brushed: {:.0} % \
                  of the target highlight within {tolerance} r ({:.0} % designed), p95 {:.2} r \
-                 ({:.2} designed), {:+} singular triangles from the strokes{place}",
+                 ({:.2} designed), {:+} singular triangles from the strokes{place}{width}",
                 f.index,
                 f.tool,
                 100.0 * b.within,
@@ -169,4 +175,28 @@ pub fn brushed_lines(fidelity: &[grainline::fidelity::BrushedEditFidelity]) -> V
             )
         })
         .collect()
+}
+
+/// "; a brush of W carries it (…)" or "; no brush down to W carries it (…)".
+fn carrying_note(c: &grainline::pipeline::brush_width::CarryingWidth, units: &str) -> String {
+    let b = &c.as_brushed;
+    let figures = format!(
+        "{:.0} % within, p95 {:.2} r, {:+} singular triangles",
+        100.0 * b.within,
+        b.p95,
+        c.singular_added
+    );
+    match (c.width, c.tried.last()) {
+        (Some(w), _) => format!("; a brush {} {units} wide carries it ({figures})", fmt_len(w)),
+        (None, Some(w)) => {
+            format!("; no brush down to {} {units} wide carries it (there: {figures})", fmt_len(*w))
+        }
+        (None, None) => String::new(),
+    }
+}
+
+/// A length with three significant digits.
+fn fmt_len(x: f64) -> String {
+    let digits = (2 - x.abs().log10().floor() as i32).clamp(0, 6) as usize;
+    format!("{x:.digits$}")
 }

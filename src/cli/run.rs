@@ -54,7 +54,7 @@ pub fn run(args: RunArgs, quiet: bool) -> anyhow::Result<()> {
         }
     }
     if let (Some(b), false) = (&report.as_brushed, quiet) {
-        for line in super::progress::brushed_lines(&b.fidelity) {
+        for line in super::progress::brushed_lines(&b.fidelity, &b.carrying_width, &report.units) {
             eprintln!("{line}");
         }
     }

@@ -6,6 +6,7 @@
 //! renders only when the scene has a `render` section, the glTF file only with `export.glb`.
 //! Every stage is timed, and the times add up to the run's wall time.
 
+pub mod brush_width;
 pub mod export;
 pub mod optimize;
 pub mod plan;

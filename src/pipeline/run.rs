@@ -8,6 +8,7 @@ use std::time::Instant;
 use nalgebra::{Matrix2, Vector3};
 use serde::Serialize;
 
+use super::brush_width::{carrying_widths, CarryingWidth};
 use super::optimize::{
     field_file_angles, optimize_stage, optimized_field_file, OptimizeStageReport, Optimized,
 };
@@ -32,6 +33,11 @@ pub struct AsBrushedFigures {
     /// measured none (`toolpaths.as_brushed_fidelity`, docs/scene.md).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub fidelity: Vec<BrushedEditFidelity>,
+    /// For each edit that lands as designed but not as brushed, the brush widths tried again
+    /// and the widest that carries it ([`super::brush_width`]); absent when every measured edit
+    /// lands as brushed.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub carrying_width: Vec<CarryingWidth>,
     /// Vertices compared.
     pub compared: usize,
     /// Median angle between designed and as-brushed u, degrees.
@@ -172,9 +178,10 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         ShownAndTraced { plan, prepared: &prepared, shown: &shown, traced: traced.as_ref() };
     let render_report = render_stage(&mut out, &field, &mut stages)?;
     let export_report = export_stage(&mut out, &field, &mut stages)?;
-    let brushed = traced.as_ref().and_then(|t| t.brushed.as_ref().map(|b| (b, &t.fidelity)));
-    let as_brushed_figures = brushed.map(|(b, fidelity)| AsBrushedFigures {
-        fidelity: fidelity.clone(),
+    let brushed = traced.as_ref().and_then(|t| t.brushed.as_ref().map(|b| (b, t)));
+    let as_brushed_figures = brushed.map(|(b, t)| AsBrushedFigures {
+        fidelity: t.fidelity.clone(),
+        carrying_width: t.carrying.clone(),
         compared: b.compared,
         median_deg: b.median_deg,
         p95_deg: b.p95_deg,
@@ -341,6 +348,8 @@ struct RunTraced {
     brushed: Option<AsBrushed>,
     /// The edits measured as brushed (empty unless [`StagePlan::brushed_fidelity`]).
     fidelity: Vec<BrushedEditFidelity>,
+    /// The brush that carries each edit the strokes lose.
+    carrying: Vec<CarryingWidth>,
     figures: ToolpathFigures,
 }
 
@@ -355,6 +364,7 @@ fn trace_stage(
 ) -> Result<RunTraced> {
     stages.start("toolpaths");
     let scene = &out.s.scene;
+    let straddle = straddle_points(prepared, shown, scene);
     let input = TraceInput {
         toolpaths: scene.toolpaths.as_ref(),
         constraints: &scene.solver.constraints,
@@ -365,12 +375,9 @@ fn trace_stage(
         keep_map: plan.gap,
         keep_field_mesh: plan.keeps_field_mesh(),
         surfaces: prepared.surfaces.as_ref(),
+        straddle: &straddle,
     };
     let t = trace(&input)?;
-    stages.start("write toolpaths");
-    for (key, p, text) in t.outputs() {
-        out.write(key, p, text.as_bytes())?;
-    }
     let gap = if plan.gap { t.gap(prepared.mesh.num_vertices()) } else { None };
     let brushed = if plan.as_brushed {
         stages.start("as-brushed");
@@ -378,15 +385,41 @@ fn trace_stage(
     } else {
         None
     };
-    let fidelity = match (&brushed, shown.optimized) {
-        (Some(b), Some(o)) if plan.brushed_fidelity => {
-            stages.start("as-brushed fidelity");
-            brushed_fidelity(prepared, o, input.phi, b)?
+    let (mut fidelity, mut carrying) = (Vec::new(), Vec::new());
+    if let (Some(b), Some(o)) = (&brushed, shown.optimized.filter(|_| plan.brushed_fidelity)) {
+        stages.start("as-brushed fidelity");
+        fidelity = brushed_fidelity(prepared, o, input.phi, b)?;
+        if fidelity.iter().any(|f| f.designed.landed && !f.as_brushed.landed) {
+            // Before the program is written: the brush that would carry each edit it loses.
+            stages.start("brush width");
+            let measure = |b: &AsBrushed| brushed_fidelity(prepared, o, input.phi, b);
+            carrying = carrying_widths(&input, &t.section, &fidelity, measure)?;
         }
-        _ => Vec::new(),
-    };
+    }
+    stages.start("write toolpaths");
+    for (key, p, text) in t.outputs() {
+        out.write(key, p, text.as_bytes())?;
+    }
     let figures = t.figures(&input)?;
-    Ok(RunTraced { strokes_3d: t.strokes_3d, gap, brushed, fidelity, figures })
+    Ok(RunTraced { strokes_3d: t.strokes_3d, gap, brushed, fidelity, carrying, figures })
+}
+
+/// The points of the edits' designed key highlight the strokes straddle
+/// (`toolpaths.carry_edits: "straddle"`, [`crate::fidelity::carry`]); none without an edit with
+/// a shape or with `"off"` (the default).
+fn straddle_points(
+    p: &Prepared,
+    shown: &ShownField,
+    scene: &crate::scene::Scene,
+) -> Vec<crate::fidelity::carry::StraddlePoint> {
+    use crate::scene::toolpaths::CarryEdits;
+    let carry = scene.toolpaths.as_ref().map_or(CarryEdits::Off, |t| t.carry_edits);
+    let Some(o) = shown.optimized.filter(|_| carry == CarryEdits::Straddle) else {
+        return Vec::new();
+    };
+    let u = p.field.geometry.directions_of(shown.phi(p));
+    let sym = p.field_options.symmetry;
+    crate::fidelity::carry::straddle_points(&p.mesh, &o.h, &u, sym, &o.report.edits)
 }
 
 /// Each bend, expand and curve edit of `o` measured on the designed grain `phi` (the angles

@@ -58,6 +58,14 @@ pub fn brushed_scene_json(
         "svg": format!("{}-{tool}-brushed.svg", case.name),
         "placement": { "width": width, "overlap": BRUSH_OVERLAP },
     });
+    // Further `toolpaths` keys (bench_fidelity's `--toolpaths`).
+    if let Ok(extra) = std::env::var("GRAINLINE_CORPUS_TOOLPATHS") {
+        let extra: serde_json::Value =
+            serde_json::from_str(&extra).map_err(|e| format!("GRAINLINE_CORPUS_TOOLPATHS: {e}"))?;
+        for (k, v) in extra.as_object().into_iter().flatten() {
+            json["toolpaths"][k] = v.clone();
+        }
+    }
     Ok((json, width))
 }
 
