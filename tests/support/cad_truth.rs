@@ -12,6 +12,9 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+#[path = "glb_texture.rs"]
+mod glb_texture;
+
 pub type P = [f64; 3];
 
 /// An edge keyed by its two ends' bits (smaller first).
@@ -248,9 +251,8 @@ pub struct GlbView {
     pub t: Vec<[f32; 4]>,
     pub uv: Vec<[f32; 2]>,
     pub idx: Vec<u32>,
-    /// Texels, row 0 at the top, RG mapped to [−1, 1].
-    tex: Vec<[f64; 2]>,
-    size: usize,
+    /// The `anisotropyTexture`.
+    texture: glb_texture::Texture,
     rot: f64,
 }
 
@@ -259,33 +261,11 @@ impl GlbView {
         let bytes = std::fs::read(glb).unwrap();
         let g = gltf::Gltf::from_slice(&bytes).unwrap();
         let blob = g.blob.as_deref().unwrap();
-        let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-        let doc: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+        let doc = glb_texture::glb_json(&bytes);
         let ext = &doc["materials"][0]["extensions"]["KHR_materials_anisotropy"];
         let rot = ext["anisotropyRotation"].as_f64().unwrap_or(0.0);
-        let tex = ext["anisotropyTexture"]["index"].as_u64().unwrap() as usize;
-        let image = &doc["images"][doc["textures"][tex]["source"].as_u64().unwrap() as usize];
-        let view = &doc["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
-        let off = view["byteOffset"].as_u64().unwrap_or(0) as usize;
-        let len = view["byteLength"].as_u64().unwrap() as usize;
-        let mut r =
-            png::Decoder::new(std::io::Cursor::new(&blob[off..off + len])).read_info().unwrap();
-        let mut buf = vec![0; r.output_buffer_size().unwrap()];
-        let info = r.next_frame(&mut buf).unwrap();
-        assert_eq!(
-            (info.color_type, info.bit_depth),
-            (png::ColorType::Rgb, png::BitDepth::Sixteen)
-        );
-        let size = info.width as usize;
-        let tex = (0..size * size)
-            .map(|i| {
-                let k = 6 * i;
-                let c = |o: usize| {
-                    f64::from(u16::from_be_bytes([buf[k + o], buf[k + o + 1]])) / 65535.0
-                };
-                [2.0 * c(0) - 1.0, 2.0 * c(2) - 1.0]
-            })
-            .collect();
+        let index = ext["anisotropyTexture"]["index"].as_u64().unwrap() as usize;
+        let texture = glb_texture::read_texture(&doc, blob, index);
         let prim = g.meshes().next().unwrap().primitives().next().unwrap();
         let reader = prim.reader(|_| Some(blob));
         GlbView {
@@ -294,32 +274,14 @@ impl GlbView {
             t: reader.read_tangents().unwrap().collect(),
             uv: reader.read_tex_coords(0).unwrap().into_f32().collect(),
             idx: reader.read_indices().unwrap().into_u32().collect(),
-            tex,
-            size,
+            texture,
             rot,
         }
     }
 
     /// The texture's RG at TEXCOORD_0 `st`, bilinear between the four nearest texel centres.
     fn sample(&self, st: [f64; 2]) -> [f64; 2] {
-        let m = self.size as f64;
-        let x = (st[0] * m - 0.5).clamp(0.0, m - 1.0);
-        let y = (st[1] * m - 0.5).clamp(0.0, m - 1.0);
-        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-        let (x1, y1) = ((x0 + 1).min(self.size - 1), (y0 + 1).min(self.size - 1));
-        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-        let mut out = [0.0; 2];
-        for (i, j, w) in [
-            (x0, y0, (1.0 - fx) * (1.0 - fy)),
-            (x1, y0, fx * (1.0 - fy)),
-            (x0, y1, (1.0 - fx) * fy),
-            (x1, y1, fx * fy),
-        ] {
-            let t = self.tex[j * self.size + i];
-            out[0] += w * t[0];
-            out[1] += w * t[1];
-        }
-        out
+        self.texture.sample(st)
     }
 
     /// Position, unit normal and grain at barycentric `b` of the triangle `tri` (vertex
