@@ -381,10 +381,10 @@ fn fail(msg: &str) -> ! {
 fn brushed_row(o: &corpus::BrushedOutcome) -> String {
     let head = format!("| {} | {} | {} | {:.2} |", o.case, o.vertices, o.edit, o.width);
     if let Some(e) = &o.error {
-        return format!("{head} error: {} | – | – | – | – | – |", e.replace('|', "/"));
+        return format!("{head} error: {} | – | – | – | – | – | – |", e.replace('|', "/"));
     }
     let Some(f) = &o.fidelity else {
-        return format!("{head} not measured | – | – | – | – | – |");
+        return format!("{head} not measured | – | – | – | – | – | – |");
     };
     let figs = |x: &serde_json::Value| {
         if x["samples"].as_u64().unwrap_or(0) == 0 {
@@ -409,9 +409,28 @@ fn brushed_row(o: &corpus::BrushedOutcome) -> String {
         ),
         None => "–".to_string(),
     };
-    let rest = o.wall_seconds - o.brushed_seconds;
+    let rest = o.wall_seconds - o.brushed_seconds - o.width_seconds;
+    let carried = match &o.carrying {
+        None => "–".to_string(),
+        Some(c) => match c["width"].as_f64() {
+            Some(w) => format!(
+                "{w:.2} ({:.1} %, {:.2} s)",
+                100.0 * c["as_brushed"]["within"].as_f64().unwrap_or(0.0),
+                o.width_seconds
+            ),
+            None => format!(
+                "none ≥ {:.2} ({:.2} s)",
+                c["tried"]
+                    .as_array()
+                    .and_then(|t| t.last())
+                    .and_then(|x| x.as_f64())
+                    .unwrap_or(0.0),
+                o.width_seconds
+            ),
+        },
+    };
     format!(
-        "{head} {} | {} | {:+} | {dep} | {} | {:.2} | {:.2} | {:.3} | {:.1} % |",
+        "{head} {} | {} | {:+} | {dep} | {carried} | {} | {:.2} | {:.2} | {:.3} | {:.1} % |",
         figs(&f["designed"]),
         figs(&f["as_brushed"]),
         f["singular_added"].as_i64().unwrap_or(0),
@@ -427,10 +446,11 @@ fn brushed_row(o: &corpus::BrushedOutcome) -> String {
 fn print_brushed(rows: &[corpus::BrushedOutcome], notes: &[String]) {
     println!(
         "| case | V | edit | brush (mm) | designed: within / p95 / singular | as brushed: within / \
-         p95 / singular | singular added | largest departure (as brushed − designed) | strokes | \
-         toolpaths (s) | run without (s) | as-brushed + fidelity (s) | added |"
+         p95 / singular | singular added | largest departure (as brushed − designed) | carried \
+         by (mm; within, brush width stage) | strokes | toolpaths (s) | run without (s) | \
+         as-brushed + fidelity (s) | added |"
     );
-    println!("|---|---:|---|---:|---|---|---:|---|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---|---:|---|---|---:|---|---|---:|---:|---:|---:|---:|");
     for o in rows {
         println!("{}", brushed_row(o));
     }
@@ -442,7 +462,9 @@ fn print_brushed(rows: &[corpus::BrushedOutcome], notes: &[String]) {
     let (d, b) = (landed("designed"), landed("as_brushed"));
     let worst = rows
         .iter()
-        .map(|o| o.brushed_seconds / (o.wall_seconds - o.brushed_seconds).max(1e-9))
+        .map(|o| {
+            o.brushed_seconds / (o.wall_seconds - o.brushed_seconds - o.width_seconds).max(1e-9)
+        })
         .fold(0.0f64, f64::max);
     println!();
     println!(

@@ -34,6 +34,11 @@ pub struct BrushedOutcome {
     pub wall_seconds: f64,
     /// The `as-brushed` and `as-brushed fidelity` stages' seconds.
     pub brushed_seconds: f64,
+    /// The report's `as_brushed.carrying_width[0]` (the brush that carries an edit the strokes
+    /// lose), when the run searched for one.
+    pub carrying: Option<serde_json::Value>,
+    /// The `brush width` stage's seconds (0 when the edit landed as brushed).
+    pub width_seconds: f64,
     /// The `toolpaths` stage's seconds.
     pub trace_seconds: f64,
     /// Strokes traced.
@@ -86,6 +91,8 @@ pub fn run_brushed(case: &Case, p: &PreparedCase, tool: &str) -> Result<BrushedO
         fidelity: None,
         wall_seconds: 0.0,
         brushed_seconds: 0.0,
+        carrying: None,
+        width_seconds: 0.0,
         trace_seconds: 0.0,
         strokes: 0,
         error: None,
@@ -107,6 +114,8 @@ pub fn run_brushed(case: &Case, p: &PreparedCase, tool: &str) -> Result<BrushedO
     };
     out.brushed_seconds = secs("as-brushed") + secs("as-brushed fidelity");
     out.trace_seconds = secs("toolpaths");
+    out.width_seconds = secs("brush width");
+    out.carrying = r["as_brushed"]["carrying_width"].get(0).cloned();
     out.strokes = r["toolpaths"]["job"]["stroke_count"].as_u64().unwrap_or(0);
     out.fidelity = r["as_brushed"]["fidelity"].get(0).cloned();
     Ok(out)
