@@ -468,6 +468,15 @@ pub struct AsBrushed {
     pub max_deg: f64,
     /// Number of brushed vertices.
     pub compared: usize,
+    /// Per mesh vertex, its distance on the part to the stroke it took its direction from
+    /// (scene units; `None` where it took none).
+    pub stroke_distance: Vec<Option<f64>>,
+    /// Vertices farther than half the brush's width from that stroke: the brush never passed
+    /// over them (a gap the placement left), though the rebuilt grain gives them the nearest
+    /// stroke's direction.
+    pub beyond_reach: usize,
+    /// The brush's width the strokes were placed for (scene units).
+    pub width: f64,
 }
 
 /// `v / |v|`, or `None` for a zero or non-finite vector.
@@ -578,6 +587,16 @@ impl SegmentGrid {
     }
 
     /// Nearest segment to `p`: (index, distance).
+    /// `p` less its foot on segment `s` (UV).
+    fn offset_to(&self, s: usize, p: [f64; 2]) -> [f64; 2] {
+        let (a, b) = self.segs[s];
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l2 = d[0] * d[0] + d[1] * d[1];
+        let t = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
+        let t = if t.is_finite() { t } else { 0.0 };
+        [p[0] - a[0] - t * d[0], p[1] - a[1] - t * d[1]]
+    }
+
     /// The stroke's unit tangent at the foot of `p` on segment `s`: the tangents at the
     /// segment's ends blended linearly — the direction of the smooth path the stroke's points
     /// sample (the machine blends its moves; the brush does not follow the polyline's kinks).
@@ -672,7 +691,8 @@ pub fn as_brushed(
     let grid = SegmentGrid::new(placement);
     // Each UV vertex's nearest stroke direction on the part, found in parallel (each query is
     // independent), then kept per mesh vertex in UV vertex order: the same at any thread count.
-    let lifted: Vec<Option<(usize, f64, Vector3<f64>)>> = (0..field.uv.len())
+    type Lifted = (usize, f64, Vector3<f64>, f64);
+    let lifted: Vec<Option<Lifted>> = (0..field.uv.len())
         .into_par_iter()
         .map(|uvv| {
             let t = first_tri[uvv];
@@ -690,15 +710,22 @@ pub fn as_brushed(
             let n = geometry.normal(v);
             let tangent = tangent - n * n.dot(&tangent);
             let len = tangent.norm();
-            (len > 0.0 && len.is_finite()).then(|| (v, d, tangent / len))
+            // The distance to the stroke on the part, through this triangle's Jacobian.
+            let off = grid.offset_to(s, field.uv[uvv]);
+            let reach = (j[0] * off[0] + j[1] * off[1]).norm();
+            (len > 0.0 && len.is_finite()).then(|| (v, d, tangent / len, reach))
         })
         .collect();
     let mut best: Vec<Option<(f64, Vector3<f64>)>> = vec![None; nv];
-    for (v, d, t) in lifted.into_iter().flatten() {
+    let mut stroke_distance = vec![f64::INFINITY; nv];
+    for (v, d, t, reach) in lifted.into_iter().flatten() {
         if best[v].is_none_or(|(bd, _)| d < bd) {
             best[v] = Some((d, t));
+            stroke_distance[v] = reach;
         }
     }
+    let half = 0.5 * placement.width;
+    let beyond_reach = stroke_distance.iter().filter(|&&d| d.is_finite() && d > half).count();
     let mut u = vec![[0.0; 3]; nv];
     let mut brushed = vec![false; nv];
     let mut angle_deg = vec![0.0; nv];
@@ -732,6 +759,9 @@ pub fn as_brushed(
         p95_deg: rank(0.95),
         max_deg: angles.last().copied().unwrap_or(0.0),
         compared: angles.len(),
+        stroke_distance: stroke_distance.iter().map(|&d| d.is_finite().then_some(d)).collect(),
+        beyond_reach,
+        width: placement.width,
     })
 }
 

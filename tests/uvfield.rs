@@ -310,3 +310,59 @@ fn the_trace_stage_writes_the_requested_outputs() {
     assert!(out.gcode.is_none());
     assert_eq!(out.report.cycle_time_s, Some(written));
 }
+
+/// The brush's reach (`AsBrushed::beyond_reach`): the vertices of a plane brushed straight
+/// (overlap 0.2) farther than half a width from every stroke — found by brute force over the
+/// strokes' segments on the plane (UV = XY + 10 after the layout's scale) — are exactly those
+/// counted: a few in the corners, where the strokes too short to keep were dropped, and more
+/// than fifty once every other stroke is taken away.
+#[test]
+fn as_brushed_counts_the_vertices_beyond_the_brush_s_reach() {
+    let mesh = plane(10.0, Grid::new(24, 24));
+    let (g, phi) = setup(&mesh, uniform);
+    let (fm, rep) =
+        field_mesh(&mesh, &g, &phi, Symmetry::Line, &UvFieldOptions::default()).unwrap();
+    assert!((rep.uv_scale - 20.0).abs() < 1e-9, "{}", rep.uv_scale);
+    let opts = JobOptions { placement: PlacementOptions::new(1.0, 0.2), ..Default::default() };
+    let out = generate(fm.clone(), &opts).unwrap();
+    let segment = |p: [f64; 2], a: [f64; 2], c: [f64; 2]| {
+        let d = [c[0] - a[0], c[1] - a[1]];
+        let l2 = d[0] * d[0] + d[1] * d[1];
+        let t = if l2 > 0.0 {
+            (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        ((p[0] - a[0] - t * d[0]).powi(2) + (p[1] - a[1] - t * d[1]).powi(2)).sqrt()
+    };
+    let far = |pl: &grainline_toolpaths::Placement| {
+        mesh.positions
+            .iter()
+            .filter(|x| {
+                let p = [x.x + 10.0, x.y + 10.0];
+                let d = pl
+                    .strokes
+                    .iter()
+                    .flat_map(|s| s.uv.windows(2).map(move |w| (w[0], w[1])))
+                    .map(|(a, c)| segment(p, a, c))
+                    .fold(f64::INFINITY, f64::min);
+                d > 0.5 + 1e-6
+            })
+            .count()
+    };
+    let b = as_brushed(&mesh, &g, &phi, Symmetry::Line, &fm, &rep, &out.placement).unwrap();
+    let full = far(&out.placement);
+    assert!(full < 10, "{full}");
+    assert_eq!(b.beyond_reach, full);
+
+    let mut sparse = out.placement.clone();
+    let mut k = 0;
+    sparse.strokes.retain(|_| {
+        k += 1;
+        k % 2 == 0
+    });
+    let b = as_brushed(&mesh, &g, &phi, Symmetry::Line, &fm, &rep, &sparse).unwrap();
+    let gaps = far(&sparse);
+    assert!(gaps > 50, "{gaps}");
+    assert_eq!(b.beyond_reach, gaps);
+}

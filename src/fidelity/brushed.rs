@@ -62,6 +62,11 @@ pub struct BrushedEditFidelity {
     /// Vertices with a corner in the support that no stroke gave a direction (their grain is
     /// zero in the as-brushed field).
     pub unbrushed_vertices: usize,
+    /// Vertices of the support's faces farther than half the brush's width from the stroke
+    /// whose direction they take (on the part): gaps the brush never passed over, which the
+    /// rebuilt grain fills with the nearest stroke's direction (filled in by the run from the
+    /// strokes, [`beyond_reach_in_support`]; 0 otherwise).
+    pub beyond_reach_vertices: usize,
     /// Where the two highlights differ most on the target; absent when nothing was compared.
     pub departure: Option<Departure>,
 }
@@ -104,8 +109,23 @@ pub fn brushed_fidelity(
         as_brushed,
         singular_added,
         unbrushed_vertices,
+        beyond_reach_vertices: 0,
         departure,
     })
+}
+
+/// The vertices of the faces with a corner in the edit's support whose distance to their
+/// stroke (`stroke_distance`, scene units per vertex) exceeds `reach` (half the brush's width).
+pub fn beyond_reach_in_support(
+    mesh: &Mesh,
+    shape: &EditShape,
+    stroke_distance: &[Option<f64>],
+    reach: f64,
+) -> usize {
+    support_vertices(mesh, shape)
+        .iter()
+        .filter(|&&v| stroke_distance.get(v).copied().flatten().is_some_and(|d| d > reach))
+        .count()
 }
 
 /// The vertices of the faces with a corner in the edit's support, ascending.

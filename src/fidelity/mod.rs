@@ -57,7 +57,10 @@ mod segments;
 
 pub use crate::edit::shape::{warp_shape, EditShape};
 pub use crate::edit::uv_lift::lift_uv_polylines;
-pub use brushed::{brushed_fidelity, brushed_fidelity_of_edits, BrushedEditFidelity, Departure};
+pub use brushed::{
+    beyond_reach_in_support, brushed_fidelity, brushed_fidelity_of_edits, BrushedEditFidelity,
+    Departure,
+};
 pub use forced::{forced_singular, CriticalGroups, Forced, NEIGHBOURHOOD_RINGS};
 use grid::{point_segment_distance, SegmentGrid, TriangleGrid};
 pub use segments::highlight_segments;

@@ -16,7 +16,9 @@ pub use super::plan::{output_plan, scene_inputs, RunOptions, StagePlan};
 pub use super::trace::{toolpath_section, ToolpathFigures};
 use super::trace::{trace, TraceInput};
 use super::{output_path, prepare_with, Observer, Prepared, StageTime, Stages};
-use crate::fidelity::{brushed_fidelity_of_edits, BrushedEditFidelity, FidelityOptions};
+use crate::fidelity::{
+    beyond_reach_in_support, brushed_fidelity_of_edits, BrushedEditFidelity, FidelityOptions,
+};
 use crate::field::FieldFile;
 use crate::highlight::{highlight_field_near, Lighting};
 use crate::output::{json_compact, json_pretty, Staged};
@@ -40,6 +42,9 @@ pub struct AsBrushedFigures {
     pub carrying_width: Vec<CarryingWidth>,
     /// Vertices compared.
     pub compared: usize,
+    /// Vertices farther than half the brush's width from the stroke whose direction they take
+    /// (on the part): gaps the brush never passed over (added after 0.2.0).
+    pub beyond_reach_vertices: usize,
     /// Median angle between designed and as-brushed u, degrees.
     pub median_deg: f64,
     /// 95th percentile of that angle, degrees.
@@ -183,6 +188,7 @@ pub fn run(s: &LoadedScene, options: &RunOptions, observer: &dyn Observer) -> Re
         fidelity: t.fidelity.clone(),
         carrying_width: t.carrying.clone(),
         compared: b.compared,
+        beyond_reach_vertices: b.beyond_reach,
         median_deg: b.median_deg,
         p95_deg: b.p95_deg,
         max_deg: b.max_deg,
@@ -431,7 +437,7 @@ fn brushed_fidelity(
     b: &AsBrushed,
 ) -> Result<Vec<BrushedEditFidelity>> {
     let u: Vec<Vector3<f64>> = b.u.iter().map(|v| Vector3::from(*v)).collect();
-    brushed_fidelity_of_edits(
+    let mut out = brushed_fidelity_of_edits(
         &p.mesh,
         &p.field.geometry,
         &o.h,
@@ -441,7 +447,14 @@ fn brushed_fidelity(
         &u,
         &o.report.edits,
         &FidelityOptions::default(),
-    )
+    )?;
+    let shapes = o.report.edits.iter().filter_map(|r| r.shape.as_ref());
+    for (f, shape) in out.iter_mut().zip(shapes) {
+        let reach = 0.5 * b.width;
+        f.beyond_reach_vertices =
+            beyond_reach_in_support(&p.mesh, shape, &b.stroke_distance, reach);
+    }
+    Ok(out)
 }
 
 /// Writes FIELD.json (`field.output`): the solved field with the field before the edits, or
