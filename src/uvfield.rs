@@ -455,7 +455,8 @@ pub fn field_mesh(
 pub struct AsBrushed {
     /// Unit 3D direction per mesh vertex (the zero vector where `brushed` is false).
     pub u: Vec<[f64; 3]>,
-    /// Whether the vertex got a direction (it has a UV vertex and there is a stroke).
+    /// Whether the vertex got a direction (it has a UV vertex within half the brush's width of
+    /// a stroke).
     pub brushed: Vec<bool>,
     /// Angle between designed and as-brushed u per mesh vertex, degrees (mod 180° for k = 2;
     /// 0 where not brushed).
@@ -472,8 +473,7 @@ pub struct AsBrushed {
     /// (scene units; `None` where it took none).
     pub stroke_distance: Vec<Option<f64>>,
     /// Vertices farther than half the brush's width from that stroke: the brush never passed
-    /// over them (a gap the placement left), though the rebuilt grain gives them the nearest
-    /// stroke's direction.
+    /// over them (a gap the placement left); they have no grain (`brushed` false).
     pub beyond_reach: usize,
     /// The brush's width the strokes were placed for (scene units).
     pub width: f64,
@@ -660,8 +660,10 @@ impl SegmentGrid {
 /// `field` and `report` are what [`field_mesh`] returned for the same `mesh`; `placement` the
 /// strokes placed on it. Each UV vertex takes the unit UV tangent `t` of its nearest stroke
 /// segment; its 3D direction is `J t` (normalized, projected onto the vertex's tangent plane)
-/// for the Jacobian `J` of the first field-mesh triangle using that UV vertex. A mesh vertex
-/// with several UV vertices (a seam) takes the one nearest to a stroke.
+/// for the Jacobian `J` of the first field-mesh triangle using that UV vertex, as long as the
+/// brush reached it: a vertex farther than half the placement's width from that stroke on the
+/// part (`|J (p − foot)|`) was never brushed and keeps the zero vector (`brushed` false). A mesh
+/// vertex with several UV vertices (a seam) takes the one nearest to a stroke.
 pub fn as_brushed(
     mesh: &Mesh,
     geometry: &Geometry,
@@ -732,6 +734,10 @@ pub fn as_brushed(
     let mut angles = Vec::new();
     for v in 0..nv {
         let Some((_, t)) = best[v] else { continue };
+        // Beyond the brush's footprint the metal was never brushed: no grain there.
+        if stroke_distance[v] > half {
+            continue;
+        }
         let mut c = t.dot(&designed[v]).clamp(-1.0, 1.0);
         if symmetry == Symmetry::Line {
             c = c.abs();

@@ -79,22 +79,13 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
             .collect();
         assert!(files.iter().all(|f| !f.is_empty()));
         let r = report(&out.join("run-report.json"));
-        assert_eq!(
-            stage_names(&r),
-            [
-                "load",
-                "refine",
-                "field",
-                "edits",
-                "solve",
-                "toolpaths",
-                "as-brushed",
-                "as-brushed fidelity",
-                "write toolpaths",
-                "render",
-                "write render"
-            ]
-        );
+        // `brush width` runs exactly when an edit lands as designed but not as brushed.
+        let lost = r["as_brushed"]["carrying_width"].as_array().is_some_and(|c| !c.is_empty());
+        let mut want = vec!["load", "refine", "field", "edits", "solve", "toolpaths"];
+        want.extend(["as-brushed", "as-brushed fidelity"]);
+        want.extend(lost.then_some("brush width"));
+        want.extend(["write toolpaths", "render", "write render"]);
+        assert_eq!(stage_names(&r), want);
         // The stage times add up to the wall time (within 5 %).
         let sum: f64 =
             r["stages"].as_array().unwrap().iter().map(|s| s["seconds"].as_f64().unwrap()).sum();

@@ -299,11 +299,21 @@ pub fn grain_texture(input: &ExportInput, size: u32) -> Result<GrainTexture> {
             let g = f.map(|k| {
                 tangents[oriented.vertex[k as usize] as usize] * oriented.sign[k as usize]
             });
-            if input.curved_faces.is_none_or(|c| c.get(face) != Some(&true)) {
-                return g;
+            let g = if input.curved_faces.is_none_or(|c| c.get(face) != Some(&true)) {
+                g
+            } else {
+                let n = input.faces[face].map(|v| normals[v as usize]);
+                crate::geometry::surfaces::ambient::extend(g, n).unwrap_or(g)
+            };
+            // A vertex given no grain at all (the zero vector: metal the brush never passed
+            // over) keeps none: the texture's strength falls to zero there.
+            let mut g = g;
+            for (c, &v) in input.faces[face].iter().enumerate() {
+                if input.u[v as usize] == Vector3::zeros() {
+                    g[c] = Vector3::zeros();
+                }
             }
-            let n = input.faces[face].map(|v| normals[v as usize]);
-            crate::geometry::surfaces::ambient::extend(g, n).unwrap_or(g)
+            g
         })
         .collect();
     let baked = crate::texmap::bake(&BakeInput {

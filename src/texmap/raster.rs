@@ -18,6 +18,10 @@ pub struct GrainImage {
     pub sign: Vec<f32>,
     /// Texels whose centre lies inside a UV triangle (the others are dilated).
     pub covered: usize,
+    /// The share of the texel the grain reaches, in [0, 1]: the corners with a grain (not the
+    /// zero vector: a vertex no stroke brushed) interpolated at the texel's centre; 1 for a
+    /// field with a grain everywhere. Written as the anisotropy texture's strength (B).
+    pub strength: Vec<f32>,
 }
 
 /// Barycentric coordinates of `q` in the triangle `p` (pixel space), or `None` outside it
@@ -58,8 +62,15 @@ pub(super) fn rasterize(
 ) -> GrainImage {
     let n = input.size as usize;
     let nf = n as f64;
-    let mut img =
-        GrainImage { size: n, grain: vec![[0.0; 2]; n * n], sign: vec![0.0; n * n], covered: 0 };
+    let mut img = GrainImage {
+        size: n,
+        grain: vec![[0.0; 2]; n * n],
+        sign: vec![0.0; n * n],
+        covered: 0,
+        strength: vec![1.0; n * n],
+    };
+    // Texels whose strength a triangle set (the others take their neighbours').
+    let mut set = vec![false; n * n];
     for (f, corners) in st.iter().enumerate() {
         let p = corners.map(|q| Vector2::new(q.x * nf, (1.0 - q.y) * nf));
         if !p.iter().all(|q| q.x.is_finite() && q.y.is_finite()) {
@@ -78,8 +89,14 @@ pub(super) fn rasterize(
             for i in i0..=i1 as usize {
                 let q = Vector2::new(i as f64 + 0.5, j as f64 + 0.5);
                 let Some(b) = barycentric(&p, q) else { continue };
+                let k = j * n + i;
+                let reached: f64 = (0..3)
+                    .filter(|&c| input.grain[f][c].norm_squared() > 0.0)
+                    .map(|c| b[c].clamp(0.0, 1.0))
+                    .sum();
+                img.strength[k] = reached.clamp(0.0, 1.0) as f32;
+                set[k] = true;
                 if let Some((g, w)) = texel_value(input, frames, f, b) {
-                    let k = j * n + i;
                     img.grain[k] = g;
                     img.sign[k] = w;
                 }
@@ -88,7 +105,56 @@ pub(super) fn rasterize(
     }
     img.covered = img.sign.iter().filter(|&&w| w != 0.0).count();
     dilate(&mut img, input.line);
+    dilate_strength(&mut img.strength, set, n);
     img
+}
+
+/// Gives every texel no triangle covers the mean strength of its neighbours set in earlier
+/// layers, layer by layer outwards (a breadth-first dilation in scan order, as [`dilate`]); all 1
+/// when no texel was set.
+fn dilate_strength(strength: &mut [f32], set: Vec<bool>, n: usize) {
+    if !set.iter().any(|&s| s) {
+        strength.iter_mut().for_each(|x| *x = 1.0);
+        return;
+    }
+    let mut done = set;
+    let mut queued = done.clone();
+    let mut layer: Vec<usize> = Vec::new();
+    for (k, q) in queued.iter_mut().enumerate() {
+        if !*q && neighbours(n, k).any(|m| done[m]) {
+            *q = true;
+            layer.push(k);
+        }
+    }
+    while !layer.is_empty() {
+        let values: Vec<f32> = layer
+            .iter()
+            .map(|&k| {
+                let (sum, count) = neighbours(n, k)
+                    .filter(|&m| done[m])
+                    .fold((0.0f32, 0u32), |(s, c), m| (s + strength[m], c + 1));
+                if count > 0 {
+                    sum / count as f32
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        for (&k, &v) in layer.iter().zip(&values) {
+            strength[k] = v;
+            done[k] = true;
+        }
+        let mut next = Vec::new();
+        for &k in &layer {
+            for m in neighbours(n, k) {
+                if !queued[m] {
+                    queued[m] = true;
+                    next.push(m);
+                }
+            }
+        }
+        layer = next;
+    }
 }
 
 /// The 8 neighbours of texel `k` inside an `n`² image.
@@ -197,8 +263,9 @@ impl GrainImage {
     }
 
     /// The glb's `anisotropyTexture`: 16-bit RGB, RG = the grain turned by `rotation` (the
-    /// material's `anisotropyRotation`, written as 0 in the file), B = 65535 (strength 1 ×
-    /// `anisotropyStrength`). 16 bits: an 8-bit direction is off by up to 0.3°; a browser reads
+    /// material's `anisotropyRotation`, written as 0 in the file), B = the texel's
+    /// [`GrainImage::strength`] × 65535 (1 wherever the field has a grain; 0 where the brush
+    /// never passed, which a viewer shows isotropic), times `anisotropyStrength`. 16 bits: an 8-bit direction is off by up to 0.3°; a browser reads
     /// it at 8 bits, Blender at 16.
     pub fn anisotropy_png16(&self, rotation: f64) -> Result<Vec<u8>> {
         let n = self.size;
@@ -206,7 +273,8 @@ impl GrainImage {
         let mut px = Vec::with_capacity(3 * n * n);
         for k in 0..n * n {
             let d = self.turned(k, rotation);
-            px.extend([q(d[0]), q(d[1]), u16::MAX]);
+            let strength = (f64::from(self.strength[k]).clamp(0.0, 1.0) * 65535.0).round() as u16;
+            px.extend([q(d[0]), q(d[1]), strength]);
         }
         png_io::encode16(n, n, png_io::Channels::Rgb, &px)
     }
@@ -219,8 +287,13 @@ mod tests {
     /// A texel inside one triangle of two, and the dilation fills the rest deterministically.
     #[test]
     fn dilation_fills_everything() {
-        let mut img =
-            GrainImage { size: 8, grain: vec![[0.0; 2]; 64], sign: vec![0.0; 64], covered: 1 };
+        let mut img = GrainImage {
+            size: 8,
+            grain: vec![[0.0; 2]; 64],
+            sign: vec![0.0; 64],
+            covered: 1,
+            strength: vec![1.0; 64],
+        };
         img.grain[27] = [0.6, 0.8];
         img.sign[27] = 1.0;
         dilate(&mut img, true);

@@ -11,30 +11,42 @@ pub struct Texture {
     pub size: usize,
     /// Per texel, row by row.
     pub rg: Vec<[f64; 2]>,
+    /// Per texel, B in [0, 1]: the anisotropy strength.
+    pub b: Vec<f64>,
 }
 
 impl Texture {
     /// Bilinear between the four nearest texel centres at glTF texture coordinates `st`,
     /// clamped to the edge (the file's sampler).
     pub fn sample(&self, st: [f64; 2]) -> [f64; 2] {
+        let mut out = [0.0; 2];
+        for (k, w) in self.bilinear(st) {
+            out[0] += w * self.rg[k][0];
+            out[1] += w * self.rg[k][1];
+        }
+        out
+    }
+
+    /// The strength (B) at `st`, sampled as [`Texture::sample`] samples RG.
+    pub fn sample_strength(&self, st: [f64; 2]) -> f64 {
+        self.bilinear(st).into_iter().map(|(k, w)| w * self.b[k]).sum()
+    }
+
+    /// The four texels glTF's bilinear sampler reads at `st` (clamped), with their weights.
+    fn bilinear(&self, st: [f64; 2]) -> [(usize, f64); 4] {
         let n = self.size as f64;
         let x = (st[0] * n - 0.5).clamp(0.0, n - 1.0);
         let y = (st[1] * n - 0.5).clamp(0.0, n - 1.0);
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(self.size - 1), (y0 + 1).min(self.size - 1));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-        let mut out = [0.0; 2];
-        for (i, j, w) in [
-            (x0, y0, (1.0 - fx) * (1.0 - fy)),
-            (x1, y0, fx * (1.0 - fy)),
-            (x0, y1, (1.0 - fx) * fy),
-            (x1, y1, fx * fy),
-        ] {
-            let t = self.rg[j * self.size + i];
-            out[0] += w * t[0];
-            out[1] += w * t[1];
-        }
-        out
+        let at = |i: usize, j: usize| j * self.size + i;
+        [
+            (at(x0, y0), (1.0 - fx) * (1.0 - fy)),
+            (at(x1, y0), fx * (1.0 - fy)),
+            (at(x0, y1), (1.0 - fx) * fy),
+            (at(x1, y1), fx * fy),
+        ]
     }
 }
 
@@ -63,5 +75,6 @@ pub fn read_texture(doc: &Value, blob: &[u8], index: usize) -> Texture {
         .chunks(6)
         .map(|p| [2.0 * c(p, 0) - 1.0, 2.0 * c(p, 2) - 1.0])
         .collect();
-    Texture { size, rg }
+    let b = buf[..6 * size * size].chunks(6).map(|p| c(p, 4)).collect();
+    Texture { size, rg, b }
 }
