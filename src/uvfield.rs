@@ -485,6 +485,10 @@ fn unit2(v: [f64; 2]) -> Option<[f64; 2]> {
     (l > 0.0 && l.is_finite()).then(|| [v[0] / l, v[1] / l])
 }
 
+/// Relative slack on half the brush's width in the footprint test (rounding of the distance
+/// taken through a triangle's Jacobian).
+const FOOTPRINT_SLACK: f64 = 1e-6;
+
 /// A uniform grid of stroke segments in UV for nearest-segment queries.
 struct SegmentGrid {
     segs: Vec<([f64; 2], [f64; 2])>,
@@ -499,8 +503,21 @@ struct SegmentGrid {
 }
 
 impl SegmentGrid {
+    /// The strokes' segments with their run-outs (the brush runs on past the part's edge along
+    /// the stroke's tangent and brushes the edge beside the stroke's end).
     fn new(placement: &Placement) -> SegmentGrid {
-        SegmentGrid::of_paths(placement.strokes.iter().map(|s| (&s.uv[..], &s.breaks[..])))
+        let paths: Vec<(Vec<[f64; 2]>, Vec<usize>)> = placement
+            .strokes
+            .iter()
+            .map(|s| {
+                let lead = usize::from(s.run_out[0].is_some());
+                let mut uv: Vec<[f64; 2]> = s.run_out[0].into_iter().collect();
+                uv.extend_from_slice(&s.uv);
+                uv.extend(s.run_out[1]);
+                (uv, s.breaks.iter().map(|b| b + lead).collect())
+            })
+            .collect();
+        SegmentGrid::of_paths(paths.iter().map(|(uv, b)| (&uv[..], &b[..])))
     }
 
     /// The grid of polylines in UV, each with the indices of its points that start a new
@@ -657,6 +674,9 @@ impl SegmentGrid {
 
 /// Rebuilds the grain from placed strokes and compares it with the designed field.
 ///
+/// The strokes count with their run-outs (the brush runs on past the part's edge and brushes
+/// the edge beside a stroke's end).
+///
 /// `field` and `report` are what [`field_mesh`] returned for the same `mesh`; `placement` the
 /// strokes placed on it. Each UV vertex takes the unit UV tangent `t` of its nearest stroke
 /// segment; its 3D direction is `J t` (normalized, projected onto the vertex's tangent plane)
@@ -726,7 +746,9 @@ pub fn as_brushed(
             stroke_distance[v] = reach;
         }
     }
-    let half = 0.5 * placement.width;
+    // Half the brush's width, less nothing but rounding: with overlap 0 a vertex midway between
+    // two strokes lies exactly there, brushed by both bands' edges.
+    let half = 0.5 * placement.width * (1.0 + FOOTPRINT_SLACK);
     let beyond_reach = stroke_distance.iter().filter(|&&d| d.is_finite() && d > half).count();
     let mut u = vec![[0.0; 3]; nv];
     let mut brushed = vec![false; nv];

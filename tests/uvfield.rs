@@ -226,7 +226,10 @@ fn as_brushed_recovers_a_uniform_field() {
         let opts = JobOptions { placement: PlacementOptions::new(1.0, 0.0), ..Default::default() };
         let out = generate(fm.clone(), &opts).unwrap();
         let b = as_brushed(&mesh, &g, &phi, sym, &fm, &rep, &out.placement).unwrap();
-        assert_eq!(b.compared, mesh.num_vertices());
+        // Every vertex but a corner or two (where the strokes too short to keep were dropped:
+        // beyond the brush's reach, left without grain) takes its stroke's direction.
+        assert!(b.beyond_reach <= 4, "{}", b.beyond_reach);
+        assert_eq!(b.compared + b.beyond_reach, mesh.num_vertices());
         assert!(b.median_deg < 1.0 && b.p95_deg < 1.0, "{} {}", b.median_deg, b.p95_deg);
         assert!(b.u.iter().all(|u| u.iter().all(|x| x.is_finite())));
     }
