@@ -604,14 +604,24 @@ impl SegmentGrid {
     }
 
     /// Nearest segment to `p`: (index, distance).
-    /// `p` less its foot on segment `s` (UV).
-    fn offset_to(&self, s: usize, p: [f64; 2]) -> [f64; 2] {
+    /// The parameter t ∈ [0, 1] of the foot of `p` on segment `s` (0 for a degenerate one).
+    fn foot(&self, s: usize, p: [f64; 2]) -> f64 {
         let (a, b) = self.segs[s];
         let d = [b[0] - a[0], b[1] - a[1]];
         let l2 = d[0] * d[0] + d[1] * d[1];
         let t = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
-        let t = if t.is_finite() { t } else { 0.0 };
-        [p[0] - a[0] - t * d[0], p[1] - a[1] - t * d[1]]
+        if t.is_finite() {
+            t
+        } else {
+            0.0
+        }
+    }
+
+    /// `p` less its foot on segment `s` (UV).
+    fn offset_to(&self, s: usize, p: [f64; 2]) -> [f64; 2] {
+        let (a, b) = self.segs[s];
+        let t = self.foot(s, p);
+        [p[0] - a[0] - t * (b[0] - a[0]), p[1] - a[1] - t * (b[1] - a[1])]
     }
 
     /// The stroke's unit tangent at the foot of `p` on segment `s`: the tangents at the
@@ -620,11 +630,9 @@ impl SegmentGrid {
     fn tangent_at(&self, s: usize, p: [f64; 2]) -> [f64; 2] {
         let (a, b) = self.segs[s];
         let (ta, tb) = self.tangents[s];
-        let d = [b[0] - a[0], b[1] - a[1]];
-        let l2 = d[0] * d[0] + d[1] * d[1];
-        let t = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
-        let t = if t.is_finite() { t } else { 0.0 };
-        unit2([ta[0] + t * (tb[0] - ta[0]), ta[1] + t * (tb[1] - ta[1])]).unwrap_or(d)
+        let t = self.foot(s, p);
+        let chord = [b[0] - a[0], b[1] - a[1]];
+        unit2([ta[0] + t * (tb[0] - ta[0]), ta[1] + t * (tb[1] - ta[1])]).unwrap_or(chord)
     }
 
     fn nearest(&self, p: [f64; 2]) -> Option<(usize, f64)> {

@@ -144,17 +144,22 @@ fn dilate_strength(strength: &mut [f32], set: Vec<bool>, n: usize) {
             strength[k] = v;
             done[k] = true;
         }
-        let mut next = Vec::new();
-        for &k in &layer {
-            for m in neighbours(n, k) {
-                if !queued[m] {
-                    queued[m] = true;
-                    next.push(m);
-                }
+        layer = next_layer(n, &layer, &mut queued);
+    }
+}
+
+/// The texels next to `layer` not queued yet, now queued: the next layer of a dilation.
+fn next_layer(n: usize, layer: &[usize], queued: &mut [bool]) -> Vec<usize> {
+    let mut next = Vec::new();
+    for &k in layer {
+        for m in neighbours(n, k) {
+            if !queued[m] {
+                queued[m] = true;
+                next.push(m);
             }
         }
-        layer = next;
     }
+    next
 }
 
 /// The 8 neighbours of texel `k` inside an `n`² image.
@@ -218,16 +223,7 @@ fn dilate(img: &mut GrainImage, line: bool) {
             img.grain[k] = g;
             img.sign[k] = w;
         }
-        let mut next = Vec::new();
-        for &k in &layer {
-            for m in neighbours(n, k) {
-                if !queued[m] {
-                    queued[m] = true;
-                    next.push(m);
-                }
-            }
-        }
-        layer = next;
+        layer = next_layer(n, &layer, &mut queued);
     }
 }
 
