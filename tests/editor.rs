@@ -239,6 +239,11 @@ fn drag_a_bend_on_the_kettle_save_and_run_reproduce_the_field() {
     assert!(f["strokes"].as_u64().unwrap() > 10, "{f}");
     assert!(f["grain_segments"].as_u64().unwrap() > 1000, "{f}");
     assert_eq!(f["shading"], "as-brushed", "{f}");
+    // Vertices no stroke's brush reached (zero as-brushed grain) are shaded as bare metal: every
+    // face corner at such a vertex is marked unbrushed, and none other.
+    let (bare, corners) =
+        (f["bare_vertices"].as_u64().unwrap(), f["unbrushed_corners"].as_u64().unwrap());
+    assert!(corners >= bare && (bare == 0) == (corners == 0), "{f}");
     assert_eq!(f["exported"].as_str().map(PathBuf::from), Some(dir.join("scene.glb")), "{f}");
     let glb = std::fs::read(dir.join("scene.glb")).unwrap();
     assert_eq!(&glb[..4], b"glTF");

@@ -578,6 +578,73 @@ fn as_brushed_statistics_and_layout() {
     assert_eq!(out.report.as_brushed.unwrap().u_angle.max_deg, 0.0);
 }
 
+/// Where no brush passed (the as-brushed grain is zero at a vertex) the preview shades the bare
+/// metal, as a glTF viewer does at anisotropy strength 0: the same metal, isotropic, with the
+/// grain's narrower lobe in both directions (`Material::unbrushed`). A quad whose right half
+/// has no grain: its as-brushed half is, pixel for pixel, the designed render with the bare
+/// material on the faces whose corners all lack grain and the anisotropic render on those whose
+/// corners all have it; every designed half is unchanged by the bare corners.
+#[test]
+fn unbrushed_metal_is_shaded_without_grain() {
+    use grainline::render::settings::{AsBrushedMode, AsBrushedSettings};
+    let q = quad(12, Vector3::x());
+    let cam = Camera {
+        eye: Vector3::new(0.0, -1.5, 2.0),
+        target: Vector3::zeros(),
+        up: Vector3::z(),
+        fov_deg: 40.0,
+    };
+    let lights = [dir_light([0.1, 0.4, 1.0], 1.0)];
+    // Grain kept left of x = 0.2 (two columns of faces inside the bare side are mixed).
+    let brushed: Vec<Vector3<f64>> = q
+        .pos
+        .iter()
+        .zip(&q.u)
+        .map(|(p, u)| if p.x < 0.2 { *u } else { Vector3::zeros() })
+        .collect();
+    let (w, h) = (60usize, 45usize);
+    let mut st = settings(w as u32, h as u32, 1);
+    let designed = |m: &Material| {
+        let input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
+        pixels(&render(&input, m, &lights, &cam, &st).unwrap()).2
+    };
+    let aniso = designed(&Material::default());
+    let bare = designed(&Material::default().unbrushed());
+    st.effects.as_brushed = Some(AsBrushedSettings {
+        mode: AsBrushedMode::SideBySide,
+        gain: 4.0,
+        departure_px: 2.0,
+        width_px: 1.5,
+    });
+    let mut input = RenderInput::new(&q.pos, &q.faces, &q.normals, &q.u, Symmetry::Line);
+    input.brushed_u = Some(&brushed);
+    let out = render(&input, &Material::default(), &lights, &cam, &st).unwrap();
+    let (w2, _, both) = pixels(&out);
+    assert_eq!(w2, 2 * w);
+    let (mut on_bare, mut on_grain, mut differ) = (0, 0, 0);
+    for j in 0..h {
+        for i in 0..w {
+            let p = pixel_point(&cam, w, h, i, j);
+            let (left, right) = (both[j * w2 + i], both[j * w2 + w + i]);
+            assert_eq!(left, aniso[j * w + i], "designed half at ({i}, {j})");
+            if p.y.abs() > 0.95 || p.x.abs() > 0.95 {
+                continue;
+            }
+            // Faces are 1/6 wide: x ≥ 1/3 + margin has only bare corners, x ≤ 0 only brushed.
+            if p.x > 0.36 {
+                assert_eq!(right, bare[j * w + i], "bare at ({i}, {j})");
+                on_bare += 1;
+                differ += usize::from(bare[j * w + i] != aniso[j * w + i]);
+            } else if p.x < -0.02 {
+                assert_eq!(right, aniso[j * w + i], "brushed at ({i}, {j})");
+                on_grain += 1;
+            }
+        }
+    }
+    assert!(on_bare > 200 && on_grain > 200, "{on_bare} bare, {on_grain} brushed pixels");
+    assert!(differ > on_bare / 2, "the bare metal looks different: {differ} of {on_bare}");
+}
+
 /// `as_brushed.mode: "highlights"` against the analytic key highlight of a flat quad: grain
 /// +x designed, the as-brushed grain the same turned by α about the normal. With the eye's and
 /// the light's positions, g = hᵀu(p) is known at every pixel's point of the plane

@@ -176,6 +176,28 @@ pub enum Fresnel {
 }
 
 impl Material {
+    /// The same metal where no brush passed (docs/render.md, "Unbrushed metal"): isotropic,
+    /// with the narrower of the grain's two lobes in both directions — what a glTF viewer
+    /// shows at anisotropy strength 0 (roughness r² = α along the grain, docs/gltf.md,
+    /// Eq. G1).
+    pub fn unbrushed(&self) -> Material {
+        let brdf = match self.brdf {
+            BrdfSpec::AshikhminShirley { nu, nv, rs } => {
+                let n = nu.max(nv);
+                BrdfSpec::AshikhminShirley { nu: n, nv: n, rs }
+            }
+            BrdfSpec::Ward { alpha_x, alpha_y, rho_s } => {
+                let a = alpha_x.min(alpha_y);
+                BrdfSpec::Ward { alpha_x: a, alpha_y: a, rho_s }
+            }
+            BrdfSpec::Ggx { alpha_u, alpha_v } => {
+                let a = alpha_u.min(alpha_v);
+                BrdfSpec::Ggx { alpha_u: a, alpha_v: a }
+            }
+        };
+        Material { brdf, ..self.clone() }
+    }
+
     /// Range-checks every parameter.
     pub fn validate(&self) -> Result<()> {
         match &self.brdf {

@@ -81,6 +81,9 @@ pub(super) struct Frame<'a> {
     pub camera: &'a Camera,
     pub ctx: Ctx<'a>,
     pub shader: &'a Shader<'a>,
+    /// The same lights on the metal where no brush passed ([`crate::appearance::Material::unbrushed`]):
+    /// shades the as-brushed grain's zero corners.
+    pub bare: &'a Shader<'a>,
     pub precision: Precision,
     pub curve_lights: Vec<Light>,
     pub critical_lights: Vec<Light>,
@@ -91,6 +94,17 @@ pub(super) struct Frame<'a> {
     pub s: usize,
     pub sw: usize,
     pub sh: usize,
+}
+
+/// The interpolated share of the sample's face corners that carry grain: 1 where every corner
+/// has a direction (every designed field), 0 where none does (a gap no brush passed over,
+/// [`crate::uvfield::AsBrushed`]) — the glb's anisotropy strength, interpolated the same way.
+fn brushed_share(s: &super::surface::Surf, corners: [usize; 3], grain: &[Vector3<f64>]) -> f64 {
+    let bare = |i: usize| grain[i] == Vector3::zeros();
+    if !corners.iter().any(|&i| bare(i)) {
+        return 1.0;
+    }
+    (0..3).filter(|&k| !bare(corners[k])).map(|k| s.w[k]).sum::<f64>().clamp(0.0, 1.0)
 }
 
 impl Frame<'_> {
@@ -108,11 +122,19 @@ impl Frame<'_> {
                     if let Some(surf) = ctx.surf(y * w_ + x) {
                         *o = if fx.shading {
                             let u = ctx.grain(&surf, grain);
-                            match precision {
-                                Precision::Fast => shader.shade_f32(&surf, &u, &mut c),
-                                Precision::Reference => {
-                                    shader.shade(&surf, &u, &mut c).map(|v| v as f32)
-                                }
+                            let shade = |sh: &Shader, c: &mut ShadeCount| match precision {
+                                Precision::Fast => sh.shade_f32(&surf, &u, c),
+                                Precision::Reference => sh.shade(&surf, &u, c).map(|v| v as f32),
+                            };
+                            let t = brushed_share(&surf, ctx.mesh.corners(&surf), grain);
+                            if t < 1.0 {
+                                // Unbrushed corners (zero grain): the bare metal, blended
+                                // by the interpolated share of brushed corners.
+                                let (a, b) = (shade(shader, &mut c), shade(self.bare, &mut c));
+                                let t = t as f32;
+                                [0, 1, 2].map(|k| t * a[k] + (1.0 - t) * b[k])
+                            } else {
+                                shade(shader, &mut c)
                             }
                         } else {
                             // Clay: a grey Lambert surface lit from the eye.

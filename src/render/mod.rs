@@ -293,6 +293,15 @@ pub(crate) fn render_with(
         bvh: bvh.as_ref(),
         eps: 1e-4 * diag,
     };
+    let bare_brdf = brdf::from_material(&material.unbrushed());
+    let bare = Shader {
+        brdf: bare_brdf.as_ref(),
+        lights: shader.lights.clone(),
+        lights32: shader.lights32.clone(),
+        env: &env_samples,
+        bvh: bvh.as_ref(),
+        eps: shader.eps,
+    };
     let frame = frame::Frame {
         input,
         settings,
@@ -300,6 +309,7 @@ pub(crate) fn render_with(
         camera,
         ctx,
         shader: &shader,
+        bare: &bare,
         precision,
         curve_lights,
         critical_lights,

@@ -164,6 +164,7 @@ try {
   const features = await page.evaluate(() => ({
     strokes: window.editor.strokes ?? 0, strokes_error: window.editor.strokesError ?? null,
     grain_segments: window.editor.grainSegments ?? 0, shading: window.editor.shading,
+    bare_vertices: window.editor.bareVertices ?? null, unbrushed_corners: window.editor.unbrushedCorners ?? null,
     toggles: ['show-grain', 'show-strokes', 'show-brushed'].map((id) => document.getElementById(id).checked),
   }));
   await page.screenshot({ path: out('features.png') });

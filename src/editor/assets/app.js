@@ -45,6 +45,7 @@ $('scene-name').textContent = `${sceneName} · ${info.vertices} vertices`;
 // part inside a brush when the drag ends: a solved grain names its part (`partId`), and the
 // page loads that part's mesh (more vertices) when it is not the one shown.
 let partId = 0, nv = 0, nf = 0, vpos = null, faces = null, cgrain = null, grainAttr = null;
+let cbrushed = null, brushedAttr = null;
 let geometry = new THREE.BufferGeometry();
 function setMesh(buf, id) {
   const head = new Uint32Array(buf, 0, 2);
@@ -66,6 +67,11 @@ function setMesh(buf, id) {
   grainAttr = new THREE.BufferAttribute(cgrain, 3);
   grainAttr.setUsage(THREE.DynamicDrawUsage);
   geometry.setAttribute('grain', grainAttr);
+  // 1 where the corner's grain is brushed (or designed), 0 where no stroke's brush reached it.
+  cbrushed = new Float32Array(3 * nf).fill(1);
+  brushedAttr = new THREE.BufferAttribute(cbrushed, 1);
+  brushedAttr.setUsage(THREE.DynamicDrawUsage);
+  geometry.setAttribute('brushed', brushedAttr);
   geometry.computeBoundingSphere();
   geometry.computeBoundingBox();
   partId = id;
@@ -97,10 +103,13 @@ const m = info.material;
 const brdfKind = { ashikhmin_shirley: 0, ward: 1, ggx: 2 }[m.brdf.kind] ?? 0;
 const param = brdfKind === 0 ? [m.brdf.nu, m.brdf.nv, 0]
   : brdfKind === 1 ? [m.brdf.alpha_x, m.brdf.alpha_y, m.brdf.rho_s] : [m.brdf.alpha_u, m.brdf.alpha_v, 0];
+// The bare metal where no brush passed (Material::unbrushed): isotropic, the narrower lobe.
+const bareParam = brdfKind === 0 ? [Math.max(param[0], param[1]), Math.max(param[0], param[1]), 0]
+  : [Math.min(param[0], param[1]), Math.min(param[0], param[1]), param[2]];
 const fr = info.fresnel;
 const v3 = (a) => new THREE.Vector3(a[0], a[1], a[2]);
 const uniforms = {
-  uBrdf: { value: brdfKind }, uParam: { value: v3(param) },
+  uBrdf: { value: brdfKind }, uParam: { value: v3(param) }, uBareParam: { value: v3(bareParam) },
   uRs: { value: v3(m.brdf.rs ?? [0, 0, 0]) }, uDiffuse: { value: v3(m.diffuse) },
   uFresnel: { value: { none: 0, schlick: 1, conductor: 2 }[fr.kind] },
   uF0: { value: v3(fr.f0 ?? [0, 0, 0]) }, uEta: { value: v3(fr.eta ?? [1, 1, 1]) },
@@ -294,13 +303,25 @@ async function loadGrain(version) {
 // ---- the grain shown: designed, or rebuilt from the strokes (as brushed) ----
 let designedU = null, brushedU = null;
 /** Fills the per-corner grain from `u` (per vertex); where `fallback` is given, a zero vector
- * of `u` (no stroke passes the vertex) takes the fallback's direction. */
+ * of `u` (no stroke's brush reached the vertex) is bare metal: the corner is marked unbrushed
+ * (shaded without grain) and takes the fallback's direction only as the shading frame. */
 function fillGrain(u, fallback) {
-  const at = (v) => {
+  const bare = (v) => {
     const x = u[3 * v], y = u[3 * v + 1], z = u[3 * v + 2];
-    if (fallback && x * x + y * y + z * z < 0.25) return [fallback[3 * v], fallback[3 * v + 1], fallback[3 * v + 2]];
-    return [x, y, z];
+    return fallback != null && x * x + y * y + z * z < 0.25;
   };
+  const at = (v) => {
+    if (bare(v)) return [fallback[3 * v], fallback[3 * v + 1], fallback[3 * v + 2]];
+    return [u[3 * v], u[3 * v + 1], u[3 * v + 2]];
+  };
+  let unbrushed = 0;
+  for (let k = 0; k < 3 * nf; k++) {
+    const b = bare(faces[k]);
+    cbrushed[k] = b ? 0 : 1;
+    if (b) unbrushed++;
+  }
+  brushedAttr.needsUpdate = true;
+  editor.unbrushedCorners = unbrushed;
   for (let f = 0; f < nf; f++) {
     const ua = at(faces[3 * f]);
     for (let k = 0; k < 3; k++) {
@@ -390,6 +411,9 @@ async function fetchStrokes(version) {
     }
     strokeLineGeom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
     brushedU = new Float32Array(buf, 16 + 4 * ns + 12 * np, 3 * n);
+    let bare = 0;
+    for (let v = 0; v < n; v++) if (brushedU[3 * v] === 0 && brushedU[3 * v + 1] === 0 && brushedU[3 * v + 2] === 0) bare++;
+    editor.bareVertices = bare;
     strokesVersion = version;
     strokeLines.visible = $('show-strokes').checked;
     editor.strokes = ns;

@@ -7,14 +7,17 @@
 
 export const vertexShader = /* glsl */ `
 attribute vec3 grain;
+attribute float brushed;
 varying vec3 vPos;
 varying vec3 vNormal;
 varying vec3 vGrain;
+varying float vBrushed;
 void main() {
   vec4 p = modelMatrix * vec4(position, 1.0);
   vPos = p.xyz;
   vNormal = normal;
   vGrain = grain;
+  vBrushed = brushed;
   gl_Position = projectionMatrix * viewMatrix * p;
 }
 `;
@@ -25,6 +28,7 @@ precision highp float;
 #define MAX_LIGHTS 8
 uniform int uBrdf;          // 0 Ashikhmin–Shirley, 1 Ward, 2 GGX
 uniform vec3 uParam;        // AS: (nu, nv, -); Ward: (alpha_x, alpha_y, rho_s); GGX: (alpha_u, alpha_v, -)
+uniform vec3 uBareParam;    // the same metal where no brush passed: isotropic, the narrower lobe
 uniform vec3 uRs;           // AS: R_s
 uniform vec3 uDiffuse;      // AS: R_d; Ward, GGX: the Lambert albedo
 uniform int uFresnel;       // 0 none, 1 Schlick, 2 conductor
@@ -45,6 +49,7 @@ uniform float uLicStrength; // 0: no LIC
 varying vec3 vPos;
 varying vec3 vNormal;
 varying vec3 vGrain;
+varying float vBrushed;     // interpolated share of brushed corners (as brushed; 1 designed)
 
 float conductor(float c, float eta, float k) {
   float c2 = c * c;
@@ -73,8 +78,8 @@ vec3 fresnel(float cosv) {
   return vec3(1.0);
 }
 
-vec3 ashikhminShirley(vec3 wi, vec3 wo) {
-  float nu = uParam.x, nv = uParam.y;
+vec3 ashikhminShirley(vec3 wi, vec3 wo, vec3 prm) {
+  float nu = prm.x, nv = prm.y;
   float dwi = 1.0 - pow(1.0 - 0.5 * wi.z, 5.0);
   float dwo = 1.0 - pow(1.0 - 0.5 * wo.z, 5.0);
   float diffuseGeo = 28.0 / (23.0 * PI) * dwi * dwo;
@@ -100,42 +105,42 @@ vec3 ashikhminShirley(vec3 wi, vec3 wo) {
   return specGeo * f + diffuseGeo * uDiffuse * (1.0 - uRs);
 }
 
-vec3 ward(vec3 wi, vec3 wo) {
+vec3 ward(vec3 wi, vec3 wo, vec3 prm) {
   vec3 d = uDiffuse / PI;
   vec3 s = wi + wo;
   float l = length(s);
   if (l <= 1e-12) return d;
   vec3 h = s / l;
   if (h.z <= 0.0) return d;
-  float a = h.x / uParam.x, b = h.y / uParam.y;
+  float a = h.x / prm.x, b = h.y / prm.y;
   float e = exp(-(a * a + b * b) / (h.z * h.z));
-  float sp = uParam.z * e / (4.0 * PI * uParam.x * uParam.y * sqrt(wi.z * wo.z));
+  float sp = prm.z * e / (4.0 * PI * prm.x * prm.y * sqrt(wi.z * wo.z));
   return d + sp * fresnel(dot(h, wi));
 }
 
-float ggxLambda(vec3 w) {
-  float t = pow(uParam.x * w.x, 2.0) + pow(uParam.y * w.y, 2.0);
+float ggxLambda(vec3 w, vec3 prm) {
+  float t = pow(prm.x * w.x, 2.0) + pow(prm.y * w.y, 2.0);
   return 0.5 * (sqrt(1.0 + t / (w.z * w.z)) - 1.0);
 }
 
-vec3 ggx(vec3 wi, vec3 wo) {
+vec3 ggx(vec3 wi, vec3 wo, vec3 prm) {
   vec3 d = uDiffuse / PI;
   vec3 s = wi + wo;
   float l = length(s);
   if (l <= 1e-12) return d;
   vec3 h = s / l;
-  float q = pow(h.x / uParam.x, 2.0) + pow(h.y / uParam.y, 2.0) + h.z * h.z;
-  float dist = 1.0 / (PI * uParam.x * uParam.y * q * q);
-  float g2 = 1.0 / (1.0 + ggxLambda(wi) + ggxLambda(wo));
+  float q = pow(h.x / prm.x, 2.0) + pow(h.y / prm.y, 2.0) + h.z * h.z;
+  float dist = 1.0 / (PI * prm.x * prm.y * q * q);
+  float g2 = 1.0 / (1.0 + ggxLambda(wi, prm) + ggxLambda(wo, prm));
   float sp = dist * g2 / (4.0 * wi.z * wo.z);
   return d + sp * fresnel(dot(h, wi));
 }
 
-vec3 brdf(vec3 wi, vec3 wo) {
+vec3 brdf(vec3 wi, vec3 wo, vec3 prm) {
   if (wi.z <= 0.0 || wo.z <= 0.0) return vec3(0.0);
-  if (uBrdf == 1) return ward(wi, wo);
-  if (uBrdf == 2) return ggx(wi, wo);
-  return ashikhminShirley(wi, wo);
+  if (uBrdf == 1) return ward(wi, wo, prm);
+  if (uBrdf == 2) return ggx(wi, wo, prm);
+  return ashikhminShirley(wi, wo, prm);
 }
 
 float toneMap(float x) {
@@ -164,7 +169,10 @@ void main() {
   }
   vec3 v = cross(n, u);
   vec3 lwo = vec3(dot(wo, u), dot(wo, v), dot(wo, n));
-  vec3 L = vec3(0.0);
+  vec3 L = vec3(0.0), bare = vec3(0.0);
+  // Where a corner has no grain (as brushed: no stroke's brush reached it) the bare metal is
+  // blended in by the interpolated share of brushed corners, as the glb's anisotropy strength.
+  bool someBare = vBrushed < 0.999;
   for (int i = 0; i < MAX_LIGHTS; i++) {
     if (i >= uLightCount) break;
     vec3 wi = uLightVec[i];
@@ -178,8 +186,10 @@ void main() {
     float c = dot(wi, n);
     if (c <= 0.0) continue;
     vec3 lwi = vec3(dot(wi, u), dot(wi, v), c);
-    L += brdf(lwi, lwo) * e * c;
+    L += brdf(lwi, lwo, uParam) * e * c;
+    if (someBare) bare += brdf(lwi, lwo, uBareParam) * e * c;
   }
+  if (someBare) L = mix(bare, L, clamp(vBrushed, 0.0, 1.0));
   vec3 col = vec3(srgb(toneMap(L.r)), srgb(toneMap(L.g)), srgb(toneMap(L.b)));
   if (uLicStrength > 0.0) {
     // As the preview (render::resolve_pixel), the encoded colour times (1 − s) + 2 s · LIC,
