@@ -14,8 +14,8 @@
 //! in a cycle (`tests/structure.rs` reads this list and the sources, and fails on a use within
 //! a layer or upward, or a cycle):
 //!
-//! 1. `error`, `limits`, `output`, `allocator` — the error type, the budgets, the outputs
-//!    written atomically, the allocator.
+//! 1. `error`, `limits`, `output`, `allocator`, `resident` — the error type, the budgets, the
+//!    outputs written atomically, the allocator, the process's resident memory.
 //! 2. `factor`, `cancel` — the bounded sparse Cholesky factor; long work cancelled from
 //!    outside at its check points.
 //! 3. `mesh` — loading (OBJ, STL, PLY), validation, topology, UV charts, refinement.
@@ -78,6 +78,7 @@ pub mod output;
 pub mod panel;
 pub mod pipeline;
 pub mod render;
+pub mod resident;
 pub mod scene;
 pub mod solve;
 pub mod svg_read;

@@ -91,6 +91,14 @@ fn full_scene_writes_every_output_byte_identically_at_1_and_2_threads() {
             r["stages"].as_array().unwrap().iter().map(|s| s["seconds"].as_f64().unwrap()).sum();
         let wall = r["wall_seconds"].as_f64().unwrap();
         assert!((wall - sum).abs() <= 0.05 * wall + 1e-3, "stages {sum} s, wall {wall} s");
+        // On Linux each stage says the process's peak resident memory while it ran (MB): at
+        // least what the part and its field hold, at most the machine.
+        if cfg!(target_os = "linux") {
+            for st in r["stages"].as_array().unwrap() {
+                let mb = st["peak_rss_mb"].as_f64().unwrap_or(0.0);
+                assert!(mb > 1.0 && mb < 1e6, "{st}");
+            }
+        }
         assert!(r["toolpaths"]["job"]["stroke_count"].as_u64().unwrap() > 5);
         // The cycle time (issue 31): in the report and, to one decimal, in the program header.
         let cycle = r["toolpaths"]["job"]["cycle_time_s"].as_f64().unwrap();

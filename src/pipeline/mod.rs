@@ -33,6 +33,12 @@ pub struct StageTime {
     pub stage: String,
     /// Wall seconds.
     pub seconds: f64,
+    /// The process's largest resident memory during the stage, MB (10⁶ bytes;
+    /// [`crate::resident`]: Linux's peak resident set size, reset when the stage starts);
+    /// absent where the system does not say. Work on other threads at the same time counts
+    /// too (added after 0.2.0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_rss_mb: Option<f64>,
 }
 
 /// Receives the name of each stage as it starts (the CLI shows it on a spinner).
@@ -65,13 +71,15 @@ impl<'a> Stages<'a> {
     pub fn start(&mut self, name: &str) {
         self.finish();
         self.observer.stage(name);
+        crate::resident::reset_peak();
         self.current = Some((name.to_string(), Instant::now()));
     }
 
     /// Ends the running stage.
     pub fn finish(&mut self) {
         if let Some((stage, t)) = self.current.take() {
-            self.times.push(StageTime { stage, seconds: t.elapsed().as_secs_f64() });
+            let peak_rss_mb = crate::resident::peak_bytes().map(|b| b as f64 * 1e-6);
+            self.times.push(StageTime { stage, seconds: t.elapsed().as_secs_f64(), peak_rss_mb });
         }
     }
 
