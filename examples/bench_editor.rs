@@ -7,8 +7,10 @@
 //! FIELD.json is not part of a step (it is made when the page or a test asks for it); its cost
 //! is printed apart.
 //!
-//! `cargo run --release --example bench_editor` (GRAINLINE_BENCH_STEPS to change the 30 steps;
-//! GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler).
+//! `cargo run --release --example bench_editor [VERTICES]` (GRAINLINE_BENCH_STEPS to change the
+//! 30 steps; GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler). VERTICES
+//! (default 50,000) scales the cylinder's grid (~50k, ~200k, ~500k vertices) and the brush's
+//! radius with its edge length, so the brush's support stays about 1.2k vertices.
 
 use std::time::Instant;
 
@@ -20,8 +22,12 @@ fn main() {
         std::env::var("GRAINLINE_BENCH_STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
     let dir = std::env::temp_dir().join(format!("grainline-bench-editor-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    // A cylinder r = 30, h = 80 brushed around: 320 × 156 quads → 50,240 vertices.
-    let mesh = grainline::generate::cylinder(30.0, 80.0, 320, 156);
+    // A cylinder r = 30, h = 80 brushed around: 320 × 156 quads → 50,240 vertices at the
+    // default size; the grid scaled by √(VERTICES / 50,000) on both axes otherwise.
+    let target: f64 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(50_000.0);
+    let scale = (target / 50_000.0).sqrt();
+    let (around, along) = ((320.0 * scale).round() as usize, (156.0 * scale).round() as usize);
+    let mesh = grainline::generate::cylinder(30.0, 80.0, around, along);
     std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&mesh, "bench"))
         .unwrap();
     std::fs::write(
@@ -46,7 +52,8 @@ fn main() {
         .min_by(|a, b| a[2].abs().total_cmp(&b[2].abs()))
         .expect("a highlight on the front");
     let centre = [f64::from(front[0]), f64::from(front[1]), f64::from(front[2])];
-    let radius = 11.0;
+    // 11 mm at 50k vertices (support ~1.26k vertices), shrunk with the edge length.
+    let radius = 11.0 / scale;
     let edit = |k: usize| {
         Edit::Bend(WarpEdit {
             centre: Centre::Point(centre),
@@ -102,7 +109,7 @@ fn main() {
     let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
     let qf = |p: f64| full_times[((full_times.len() - 1) as f64 * p).round() as usize];
     println!(
-        "bench_editor: {n} vertices, brush radius {radius} mm with {support} vertices in its \
+        "bench_editor: {n} vertices, brush radius {radius:.2} mm with {support} vertices in its \
          support, {steps} drag steps (bend, strength 0.05 → 0.95)"
     );
     println!(
