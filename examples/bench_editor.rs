@@ -3,7 +3,8 @@
 //! curves for the page — what the editor's solver thread does for each preview
 //! ([`grainline::editor::Session::solve_drag`], incremental) — plus encoding the grain for the
 //! page ([`grainline::editor::grain_bytes`]). Then the whole stage for each step's edit
-//! ([`grainline::editor::Session::solve`], what a commit does), which must give the same grain.
+//! ([`grainline::editor::Session::solve`], what a commit does), which must give the same grain and
+//! highlight curves (a step after the first makes them only around the vertices it changed).
 //! FIELD.json is not part of a step (it is made when the page or a test asks for it); its cost
 //! is printed apart.
 //!
@@ -81,7 +82,7 @@ fn main() {
         std::hint::black_box(bytes);
         support = solved.edited_vertices;
         if !drag_only {
-            grains.push(solved.u.clone());
+            grains.push((solved.u.clone(), solved.segments.clone()));
         }
     }
     if drag_only {
@@ -90,13 +91,17 @@ fn main() {
         return;
     }
     let mut last = None;
-    for (k, u) in grains.iter().enumerate() {
+    for (k, (u, segments)) in grains.iter().enumerate() {
         let t = Instant::now();
         let full = session.solve(&base, &[edit(k)], k as u64 + 1).unwrap();
         let bytes = grain_bytes(&full);
         full_times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);
         assert!(full.u == *u, "step {k}: the drag step's grain is not the whole stage's");
+        assert!(
+            full.segments == *segments,
+            "step {k}: the drag step's highlight curves are not the whole stage's"
+        );
         last = Some(full);
     }
     let last = last.unwrap();
