@@ -12,6 +12,12 @@
 //! 30 steps; GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler). VERTICES
 //! (default 50,000) scales the cylinder's grid (~50k, ~200k, ~500k vertices) and the brush's
 //! radius with its edge length, so the brush's support stays about 1.2k vertices.
+//!
+//! The allocator is the `grainline` binary's (mimalloc, freed memory kept: grainline::allocator),
+//! as `grainline edit` runs.
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use std::time::Instant;
 
@@ -19,6 +25,8 @@ use grainline::edit::{Centre, Edit, Metric, WarpEdit};
 use grainline::editor::{grain_bytes, Session};
 
 fn main() {
+    // As the `grainline` binary does (see grainline::allocator).
+    grainline::allocator::keep_freed_memory();
     let steps: usize =
         std::env::var("GRAINLINE_BENCH_STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
     let dir = std::env::temp_dir().join(format!("grainline-bench-editor-{}", std::process::id()));
@@ -68,7 +76,7 @@ fn main() {
     // The drag: its steps back to back (Session::solve_drag, what the editor's solver thread
     // does for each preview). Then the whole stage for each step's edit (Session::solve: what a
     // commit does, and what every drag step did before the incremental path), which must give
-    // the same grain.
+    // the same grain and highlight curves.
     let drag_only = std::env::var_os("GRAINLINE_BENCH_DRAG_ONLY").is_some();
     let mut times = Vec::with_capacity(steps);
     let mut full_times = Vec::with_capacity(steps);
