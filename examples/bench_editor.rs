@@ -96,6 +96,7 @@ fn main() {
     if drag_only {
         times.sort_by(f64::total_cmp);
         println!("drag steps only: median {:.1} ms, min {:.1} ms", times[steps / 2], times[0]);
+        let _ = std::fs::remove_dir_all(&dir);
         return;
     }
     let mut last = None;
