@@ -3,12 +3,21 @@
 //! curves for the page — what the editor's solver thread does for each preview
 //! ([`grainline::editor::Session::solve_drag`], incremental) — plus encoding the grain for the
 //! page ([`grainline::editor::grain_bytes`]). Then the whole stage for each step's edit
-//! ([`grainline::editor::Session::solve`], what a commit does), which must give the same grain.
+//! ([`grainline::editor::Session::solve`], what a commit does), which must give the same grain and
+//! highlight curves (a step after the first makes them only around the vertices it changed).
 //! FIELD.json is not part of a step (it is made when the page or a test asks for it); its cost
 //! is printed apart.
 //!
-//! `cargo run --release --example bench_editor` (GRAINLINE_BENCH_STEPS to change the 30 steps;
-//! GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler).
+//! `cargo run --release --example bench_editor [VERTICES]` (GRAINLINE_BENCH_STEPS to change the
+//! 30 steps; GRAINLINE_BENCH_DRAG_ONLY=1 times the drag steps alone, for a profiler). VERTICES
+//! (default 50,000) scales the cylinder's grid (~50k, ~200k, ~500k vertices) and the brush's
+//! radius with its edge length, so the brush's support stays about 1.2k vertices.
+//!
+//! The allocator is the `grainline` binary's (mimalloc, freed memory kept: grainline::allocator),
+//! as `grainline edit` runs.
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use std::time::Instant;
 
@@ -16,12 +25,18 @@ use grainline::edit::{Centre, Edit, Metric, WarpEdit};
 use grainline::editor::{grain_bytes, Session};
 
 fn main() {
+    // As the `grainline` binary does (see grainline::allocator).
+    grainline::allocator::keep_freed_memory();
     let steps: usize =
         std::env::var("GRAINLINE_BENCH_STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
     let dir = std::env::temp_dir().join(format!("grainline-bench-editor-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    // A cylinder r = 30, h = 80 brushed around: 320 × 156 quads → 50,240 vertices.
-    let mesh = grainline::generate::cylinder(30.0, 80.0, 320, 156);
+    // A cylinder r = 30, h = 80 brushed around: 320 × 156 quads → 50,240 vertices at the
+    // default size; the grid scaled by √(VERTICES / 50,000) on both axes otherwise.
+    let target: f64 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(50_000.0);
+    let scale = (target / 50_000.0).sqrt();
+    let (around, along) = ((320.0 * scale).round() as usize, (156.0 * scale).round() as usize);
+    let mesh = grainline::generate::cylinder(30.0, 80.0, around, along);
     std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&mesh, "bench"))
         .unwrap();
     std::fs::write(
@@ -46,7 +61,8 @@ fn main() {
         .min_by(|a, b| a[2].abs().total_cmp(&b[2].abs()))
         .expect("a highlight on the front");
     let centre = [f64::from(front[0]), f64::from(front[1]), f64::from(front[2])];
-    let radius = 11.0;
+    // 11 mm at 50k vertices (support ~1.26k vertices), shrunk with the edge length.
+    let radius = 11.0 / scale;
     let edit = |k: usize| {
         Edit::Bend(WarpEdit {
             centre: Centre::Point(centre),
@@ -60,7 +76,7 @@ fn main() {
     // The drag: its steps back to back (Session::solve_drag, what the editor's solver thread
     // does for each preview). Then the whole stage for each step's edit (Session::solve: what a
     // commit does, and what every drag step did before the incremental path), which must give
-    // the same grain.
+    // the same grain and highlight curves.
     let drag_only = std::env::var_os("GRAINLINE_BENCH_DRAG_ONLY").is_some();
     let mut times = Vec::with_capacity(steps);
     let mut full_times = Vec::with_capacity(steps);
@@ -74,22 +90,27 @@ fn main() {
         std::hint::black_box(bytes);
         support = solved.edited_vertices;
         if !drag_only {
-            grains.push(solved.u.clone());
+            grains.push((solved.u.clone(), solved.segments.clone()));
         }
     }
     if drag_only {
         times.sort_by(f64::total_cmp);
         println!("drag steps only: median {:.1} ms, min {:.1} ms", times[steps / 2], times[0]);
+        let _ = std::fs::remove_dir_all(&dir);
         return;
     }
     let mut last = None;
-    for (k, u) in grains.iter().enumerate() {
+    for (k, (u, segments)) in grains.iter().enumerate() {
         let t = Instant::now();
         let full = session.solve(&base, &[edit(k)], k as u64 + 1).unwrap();
         let bytes = grain_bytes(&full);
         full_times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);
         assert!(full.u == *u, "step {k}: the drag step's grain is not the whole stage's");
+        assert!(
+            full.segments == *segments,
+            "step {k}: the drag step's highlight curves are not the whole stage's"
+        );
         last = Some(full);
     }
     let last = last.unwrap();
@@ -102,7 +123,7 @@ fn main() {
     let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
     let qf = |p: f64| full_times[((full_times.len() - 1) as f64 * p).round() as usize];
     println!(
-        "bench_editor: {n} vertices, brush radius {radius} mm with {support} vertices in its \
+        "bench_editor: {n} vertices, brush radius {radius:.2} mm with {support} vertices in its \
          support, {steps} drag steps (bend, strength 0.05 → 0.95)"
     );
     println!(

@@ -178,6 +178,14 @@ fn main() {
             let a: f64 = r.iterations.iter().map(|i| i.assembly_seconds).sum::<f64>() / its * 1e3;
             let s: f64 = r.iterations.iter().map(|i| i.solve_seconds).sum::<f64>() / its * 1e3;
             if std::env::var("BENCH_DEBUG").is_ok() {
+                // The result's bits (FNV-1a of φ, the energies and the iteration count), to
+                // check a speed change leaves the solve as it was.
+                let mut hash = 0xcbf29ce484222325u64;
+                let bits = r.phi.iter().chain(r.iterations.iter().map(|i| &i.energies.highlight));
+                for b in bits.map(|x| x.to_bits()).chain([r.iterations.len() as u64]) {
+                    hash = (hash ^ b).wrapping_mul(0x100000001b3);
+                }
+                eprintln!("{count}: result {hash:016x}");
                 let per: Vec<String> = r
                     .iterations
                     .iter()

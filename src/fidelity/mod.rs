@@ -63,7 +63,7 @@ pub use brushed::{
 };
 pub use forced::{forced_singular, CriticalGroups, Forced, NEIGHBOURHOOD_RINGS};
 use grid::{point_segment_distance, SegmentGrid, TriangleGrid};
-pub use segments::highlight_segments;
+pub use segments::{highlight_segments, highlight_segments_of_faces};
 use segments::{indexed_segments, segments_with_normals};
 
 /// The goal on [`EditFidelity::within`]: at least 90 % of the target within tolerance.

@@ -58,6 +58,19 @@ pub fn highlight_segments(
     segments_on(mesh, h, u, symmetry, &faces)
 }
 
+/// [`highlight_segments`] on the faces `faces` alone (face indices, ascending for a result in
+/// face order): each segment with its face, the same bits as the whole part's (the editor's
+/// drag steps recompute the faces around the vertices they change).
+pub fn highlight_segments_of_faces(
+    mesh: &Mesh,
+    h: &[Vector3<f64>],
+    u: &[Vector3<f64>],
+    symmetry: Symmetry,
+    faces: &[usize],
+) -> Vec<(usize, [Vector3<f64>; 2])> {
+    indexed_segments(mesh, h, u, symmetry, faces).into_iter().map(|(k, s)| (faces[k], s)).collect()
+}
+
 pub(super) fn segments_on(
     mesh: &Mesh,
     h: &[Vector3<f64>],

@@ -296,9 +296,11 @@ fn product_slots(
         bucket_ptr[k + 1] += bucket_ptr[k];
     }
     let mut next = bucket_ptr.clone();
-    let mut bucket = vec![0u32; prod.len()];
-    for (p, &(_, k)) in prod.iter().enumerate() {
-        bucket[next[k as usize]] = p as u32;
+    // Each bucket entry carries its product's row, so the lookups below read the buckets in
+    // order (no gather from `prod`).
+    let mut bucket = vec![(0u32, 0u32); prod.len()];
+    for (p, &(r, k)) in prod.iter().enumerate() {
+        bucket[next[k as usize]] = (r, p as u32);
         next[k as usize] += 1;
     }
     let mut at = vec![u32::MAX; n];
@@ -307,10 +309,10 @@ fn product_slots(
         for e in col_ptr[k]..col_ptr[k + 1] {
             at[row_idx[e]] = e as u32;
         }
-        for &p in &bucket[bucket_ptr[k]..bucket_ptr[k + 1]] {
-            let e = at[prod[p as usize].0 as usize];
+        for &(r, p) in &bucket[bucket_ptr[k]..bucket_ptr[k + 1]] {
+            let e = at[r as usize];
             debug_assert!(
-                e != u32::MAX && row_idx[e as usize] == prod[p as usize].0 as usize,
+                e != u32::MAX && row_idx[e as usize] == r as usize,
                 "a product outside the pattern"
             );
             slot[p as usize] = e;

@@ -11,8 +11,26 @@
 /// Residual and the two Jacobian entries (∂/∂φ_i, ∂/∂φ_j) of one edge.
 #[inline]
 pub fn edge_residual(phi_i: f64, phi_j: f64, rho_ij: f64, weight: f64, k: u32) -> (f64, f64, f64) {
+    edge_residual_scaled(phi_i, phi_j, rho_ij, edge_scale(weight), k)
+}
+
+/// The scale √(λ_s w_ij) of an edge's residual (0 for a negative weight).
+#[inline]
+pub fn edge_scale(weight: f64) -> f64 {
+    weight.max(0.0).sqrt()
+}
+
+/// [`edge_residual`] with the scale `s` = [`edge_scale`]`(weight)` computed once (the same
+/// bits).
+#[inline]
+pub fn edge_residual_scaled(
+    phi_i: f64,
+    phi_j: f64,
+    rho_ij: f64,
+    s: f64,
+    k: u32,
+) -> (f64, f64, f64) {
     let kf = k as f64;
-    let s = weight.max(0.0).sqrt();
     let half = 0.5 * kf * (phi_j + rho_ij - phi_i);
     let d = s * half.cos();
     (s * (2.0 / kf) * half.sin(), -d, d)

@@ -42,6 +42,7 @@ use crate::pipeline::{
 use crate::scene::{LoadedScene, Scene};
 use crate::{Error, Result};
 
+mod page;
 mod solve;
 
 pub use solve::{PageStrokes, Solved};
@@ -240,6 +241,8 @@ pub struct Session {
     parts: Mutex<Parts>,
     /// The drag steps' reusable state.
     drag: Mutex<Option<KeptDrag>>,
+    /// The last drag step's page field (the next step's grain and curves are made from it).
+    drag_page: Mutex<Option<page::PageField>>,
     state: Mutex<State>,
     changed: Condvar,
 }
@@ -259,6 +262,7 @@ impl Session {
             original,
             parts,
             drag: Mutex::new(None),
+            drag_page: Mutex::new(None),
             state: Mutex::new(state),
             changed: Condvar::new(),
         })

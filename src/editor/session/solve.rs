@@ -15,6 +15,7 @@ use crate::pipeline::optimize::{
 use crate::pipeline::{Silent, Stages};
 use crate::{Error, Result};
 
+use super::page::PageField;
 use super::{Base, Part, Session};
 
 /// One solved field, ready for the page.
@@ -103,7 +104,7 @@ impl Session {
         let s = self.with_edits(b, &edits)?;
         let step = base.step(&s, &part.prepared, 1).map_err(|e| s.wrap(e))?;
         let field = FieldOf { phi: &step.phi, h: &step.h, critical: &step.critical };
-        let mut solved = self.solved_field(b, &part, &field, version)?;
+        let mut solved = self.drag_field(b, &part, &field, version)?;
         solved.stop = step.stop.to_string();
         solved.key_light = step.key_light;
         solved.edited_vertices = step.edited_vertices;
@@ -165,6 +166,34 @@ impl Session {
         Ok(solved)
     }
 
+    /// [`Session::solved_field`] of a drag step, made from the previous step's where that was
+    /// on the same part ([`page::PageField`]: the grain and the curves recomputed only around
+    /// the vertices whose φ or h changed; the same bits).
+    fn drag_field(
+        &self,
+        b: &Arc<Base>,
+        part: &Arc<Part>,
+        f: &FieldOf,
+        version: u64,
+    ) -> Result<Solved> {
+        let p = &part.prepared;
+        let mut kept = self.drag_page.lock().unwrap_or_else(|e| e.into_inner());
+        let previous = kept.take().filter(|k| k.is_on(b.gen, part.id, f.phi.len()));
+        let page = match previous {
+            Some(mut k) => {
+                if k.update(p, f.phi, f.h)? {
+                    k
+                } else {
+                    PageField::new(b.gen, part.id, p, f.phi, f.h)?
+                }
+            }
+            None => PageField::new(b.gen, part.id, p, f.phi, f.h)?,
+        };
+        let solved = self.page_view(b, part, f, version, page.u32s.clone(), page.segments());
+        *kept = Some(page);
+        Ok(solved)
+    }
+
     /// The page's view of a field on `part`: the grain, the key light's highlight curves, the
     /// critical vertices (the rest of [`Solved`] is the caller's to fill).
     fn solved_field(
@@ -186,9 +215,23 @@ impl Session {
             .iter()
             .map(|[a, b]| [a.x, a.y, a.z, b.x, b.y, b.z].map(|c| c as f32))
             .collect();
+        let u = u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect();
+        Ok(self.page_view(b, part, f, version, u, segments))
+    }
+
+    /// A [`Solved`] of the grain `u` and the curves `segments` of the field `f`.
+    fn page_view(
+        &self,
+        b: &Arc<Base>,
+        part: &Arc<Part>,
+        f: &FieldOf,
+        version: u64,
+        u: Vec<[f32; 3]>,
+        segments: Vec<[f32; 6]>,
+    ) -> Solved {
         let critical =
             f.critical.iter().enumerate().filter(|(_, c)| **c).map(|(i, _)| i as u32).collect();
-        Ok(Solved {
+        Solved {
             version,
             base: Arc::clone(b),
             part: Arc::clone(part),
@@ -197,7 +240,7 @@ impl Session {
             field_json: OnceLock::new(),
             phi: f.phi.to_vec(),
             traced: OnceLock::new(),
-            u: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
+            u,
             segments,
             critical,
             key_light: [0.0; 3],
@@ -205,7 +248,7 @@ impl Session {
             fidelity: Vec::new(),
             edited_vertices: 0,
             seconds: 0.0,
-        })
+        }
     }
 
     /// FIELD.json of a solved field, exactly as `grainline run` writes it (`field.output`) for

@@ -10,7 +10,7 @@ use crate::solve::cg::JacobianRows;
 use crate::solve::fabrication::{lock_residual, GradientHinge, HingeKind};
 use crate::solve::face_hinge::FaceTurningHinge;
 use crate::solve::highlight_term::HighlightTerm;
-use crate::solve::smoothness::edge_residual;
+use crate::solve::smoothness::{edge_residual_scaled, edge_scale};
 
 /// Rows per parallel chunk. Chunks are fixed by the row order alone, and their results are
 /// merged in chunk order, so the triplets, Jᵀr and the energies are bit-identical at any thread
@@ -31,7 +31,6 @@ struct Local {
     /// Each pushed entry's Jᵀr term dₑ·r, aligned with the entries of `rows` pushed since the
     /// chunk began (their columns are in `rows.col`).
     g: Vec<f64>,
-    block: Vec<(u32, [f64; 2])>,
     /// A row's entries before the free-column filter (reused).
     entries: Vec<(u32, [f64; 2])>,
     /// A one-component row's entries (reused).
@@ -50,17 +49,17 @@ impl Local {
         r: [f64; 2],
     ) {
         self.e += r[0] * r[0] + r[1] * r[1];
-        self.block.clear();
-        self.block.extend(entries.filter_map(|(v, d)| col_of[v as usize].map(|c| (c, d))));
-        if self.block.is_empty() {
-            return;
+        let before = self.rows.col.len();
+        for (v, da) in entries {
+            if let Some(a) = col_of[v as usize] {
+                self.g.push(da[0] * r[0] + da[1] * r[1]);
+                self.rows.col.push(a);
+                self.rows.d.push(da);
+            }
         }
-        for &(a, da) in &self.block {
-            self.g.push(da[0] * r[0] + da[1] * r[1]);
-            self.rows.col.push(a);
-            self.rows.d.push(da);
+        if self.rows.col.len() > before {
+            self.rows.ptr.push(self.rows.col.len() as u32);
         }
-        self.rows.ptr.push(self.rows.col.len() as u32);
     }
 }
 
@@ -225,7 +224,7 @@ impl Block for PositionBlock<'_> {
 }
 
 struct SmoothnessBlock {
-    edges: Vec<(u32, u32, f64, f64)>, // (i, j, ρ_ij, λ_s w_ij), i < j, at least one free
+    edges: Vec<(u32, u32, f64, f64)>, // (i, j, ρ_ij, √(λ_s w_ij)), i < j, at least one free
     k: u32,
 }
 
@@ -234,14 +233,15 @@ impl Block for SmoothnessBlock {
         Term::Smoothness
     }
     fn energy(&self, phi: &[f64]) -> f64 {
-        chunked_sum(&self.edges, |&(i, j, rho, w)| {
-            let r = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k).0;
+        chunked_sum(&self.edges, |&(i, j, rho, s)| {
+            let r = edge_residual_scaled(phi[i as usize], phi[j as usize], rho, s, self.k).0;
             r * r
         })
     }
     fn assemble(&self, phi: &[f64], acc: &mut Assembler) -> f64 {
-        acc.rows(&self.edges, |&(i, j, rho, w), local, col_of| {
-            let (r, di, dj) = edge_residual(phi[i as usize], phi[j as usize], rho, w, self.k);
+        acc.rows(&self.edges, |&(i, j, rho, s), local, col_of| {
+            let (r, di, dj) =
+                edge_residual_scaled(phi[i as usize], phi[j as usize], rho, s, self.k);
             local.push(col_of, [(i, [di, 0.0]), (j, [dj, 0.0])].into_iter(), [r, 0.0]);
         })
     }
@@ -406,7 +406,8 @@ pub(super) fn build_system<'a>(
             for s in g.adjacency.slots(i) {
                 let j = g.adjacency.target(s);
                 if i < j && (col_of[i].is_some() || col_of[j].is_some()) && w[s] > 0.0 {
-                    edges.push((i as u32, j as u32, g.transport[s], options.smoothness * w[s]));
+                    let scale = edge_scale(options.smoothness * w[s]);
+                    edges.push((i as u32, j as u32, g.transport[s], scale));
                 }
             }
         }
