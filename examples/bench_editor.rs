@@ -29,23 +29,8 @@ fn main() {
     grainline::allocator::keep_freed_memory();
     let steps: usize =
         std::env::var("GRAINLINE_BENCH_STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(30);
-    let dir = std::env::temp_dir().join(format!("grainline-bench-editor-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    // A cylinder r = 30, h = 80 brushed around: 320 × 156 quads → 50,240 vertices at the
-    // default size; the grid scaled by √(VERTICES / 50,000) on both axes otherwise.
     let target: f64 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(50_000.0);
-    let scale = (target / 50_000.0).sqrt();
-    let (around, along) = ((320.0 * scale).round() as usize, (156.0 * scale).round() as usize);
-    let mesh = grainline::generate::cylinder(30.0, 80.0, around, along);
-    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&mesh, "bench"))
-        .unwrap();
-    std::fs::write(
-        dir.join("scene.json"),
-        r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
-            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
-            "field": {"init": "uv", "symmetry": "line"}}"#,
-    )
-    .unwrap();
+    let (dir, scale) = write_part(target);
     let t = Instant::now();
     let session = Session::open(&dir.join("scene.json")).unwrap();
     let open_s = t.elapsed().as_secs_f64();
@@ -145,6 +130,27 @@ fn main() {
     println!("  FIELD.json when asked for: {json_ms:.0} ms ({:.1} MB)", json_len as f64 / 1e6);
     println!("  solver: {}; fidelity: {:?}", last.stop, last.fidelity.first().map(|f| f.landed));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Writes the part and its scene into a fresh temporary folder: a cylinder r = 30, h = 80
+/// brushed around, 320 × 156 quads → 50,240 vertices at the default size; the grid scaled by
+/// √(target / 50,000) on both axes otherwise. Returns the folder and that scale.
+fn write_part(target: f64) -> (std::path::PathBuf, f64) {
+    let dir = std::env::temp_dir().join(format!("grainline-bench-editor-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scale = (target / 50_000.0).sqrt();
+    let (around, along) = ((320.0 * scale).round() as usize, (156.0 * scale).round() as usize);
+    let mesh = grainline::generate::cylinder(30.0, 80.0, around, along);
+    std::fs::write(dir.join("part.obj"), grainline::mesh::write::obj_string(&mesh, "bench"))
+        .unwrap();
+    std::fs::write(
+        dir.join("scene.json"),
+        r#"{"mesh": "part.obj", "view": {"eye": [0, -300, 0]},
+            "lights": [{"type": "directional", "direction": [0.3, -0.5, 1]}],
+            "field": {"init": "uv", "symmetry": "line"}}"#,
+    )
+    .unwrap();
+    (dir, scale)
 }
 
 /// Where a step's time goes, printed: the stages of optimize_stage ("edits": targets, "solve":
