@@ -68,7 +68,7 @@ pub fn run(args: FlattenArgs, quiet: bool) -> anyhow::Result<()> {
         }
         e => e,
     })?;
-    let mut mesh = grainline::mesh::load::load_obj(path, &args.mesh.load_options())?.mesh;
+    let mut mesh = grainline::mesh::load::load_mesh(path, &args.mesh.load_options())?.mesh;
     let layout = flatten(&mesh, &options)?;
     mesh.uv = Some(layout.uv);
     let r = &layout.report;

@@ -14,7 +14,10 @@
 //!    one chart, flattened with little distortion.
 //! 2. A piece that is not kept is cut: along its sharp creases first, then by region growing
 //!    on normal cones, then by bisection ([`charts`]); each piece is tried again. Single
-//!    triangles flatten exactly, so every mesh gets a layout.
+//!    triangles flatten exactly, so every mesh gets a layout. On a noisy part (a scan whose
+//!    sharp edges enclose many single faces, [`charts::NOISE_FRACTION`]) the tiny crease pieces
+//!    join their neighbours and cuts keep whole the fans that would wrap on a chart's boundary
+//!    ([`charts::WRAP_ANGLE`]).
 //! 3. Small charts (at most [`MERGE_FRACTION`] of the faces) are merged into neighbours
 //!    while the union still flattens within the same bounds, smallest first, so a closed
 //!    scan ends up with a handful of charts.
@@ -554,6 +557,9 @@ impl Charting<'_> {
             .into_iter()
             .map(|faces| Region { faces, next_cut: 0 })
             .collect();
+        // Whether the part is noisy (charts::NOISE_FRACTION): its sharp creases' pieces.
+        let crease_pieces = charts::pieces(&all, he, ctx.tag, 0, |h| self.joins_across(h));
+        let noisy = charts::is_noisy(&crease_pieces, nf);
         let mut accepted: Vec<(ChartMesh, Vec<Vector2<f64>>)> = Vec::new();
         while let Some(region) = queue.pop_front() {
             let id = *ctx.next_id;
@@ -576,10 +582,22 @@ impl Charting<'_> {
                     message: format!("face {} cannot be flattened", region.faces[0]),
                 });
             }
-            let (pieces, cut) = self.cut_region(&region, ctx.tag, id, cuts);
+            let (pieces, cut) = self.cut_region(&region, ctx.tag, ctx.pos_in, id, noisy, cuts);
+            let pieces = if noisy {
+                charts::unwrap_fans(pieces, &region.faces, mesh, he, ctx.tag, ctx.pos_in, id)
+            } else {
+                pieces
+            };
             queue.extend(pieces.into_iter().map(|faces| Region { faces, next_cut: cut }));
         }
         Ok(accepted)
+    }
+
+    /// Whether the faces on either side of half-edge `h` are on the same side of every sharp
+    /// crease (their normals' angle is at most the crease angle).
+    fn joins_across(&self, h: u32) -> bool {
+        let (f, g) = (h / 3, self.he.twin(h).map_or(h / 3, |t| t / 3));
+        self.normals[f as usize].dot(&self.normals[g as usize]) >= self.crease_cos
     }
 
     /// Cuts the region tagged `id`: creases, then normal cones, then bisection (each only
@@ -588,18 +606,20 @@ impl Charting<'_> {
         &self,
         region: &Region,
         tag: &[u32],
+        pos_in: &[u32],
         id: u32,
+        noisy: bool,
         cuts: &mut Cuts,
     ) -> (Vec<Vec<u32>>, u8) {
-        let (he, normals, crease_cos) = (self.he, self.normals, self.crease_cos);
+        let he = self.he;
         // Cut: creases, then normal cones, then bisection (each only when it splits).
         let mut cut = region.next_cut;
         let mut pieces = Vec::new();
         if cut == 0 {
-            pieces = charts::pieces(&region.faces, he, tag, id, |h| {
-                let (f, g) = (h / 3, he.twin(h).map_or(h / 3, |t| t / 3));
-                normals[f as usize].dot(&normals[g as usize]) >= crease_cos
-            });
+            pieces = charts::pieces(&region.faces, he, tag, id, |h| self.joins_across(h));
+            if noisy {
+                pieces = charts::absorb_small(pieces, &region.faces, he, tag, pos_in, id);
+            }
             cut = 1;
             if pieces.len() > 1 {
                 cuts.creases += 1;
