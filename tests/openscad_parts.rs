@@ -32,8 +32,14 @@ type V3 = Vector3<f64>;
 
 const WORLD: P = [0.2, 1.0, 0.3];
 
-/// The `openscad` program, installed with apt when missing.
+/// The `openscad` program, installed with apt when missing — once for all the tests of this
+/// binary (they run at the same time, and two apt-gets at once fail on apt's lock).
 fn openscad() -> PathBuf {
+    static PROGRAM: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    PROGRAM.get_or_init(find_or_install_openscad).clone()
+}
+
+fn find_or_install_openscad() -> PathBuf {
     let found = |p: &str| Command::new("sh").args(["-c", &format!("command -v {p}")]).output();
     if let Ok(o) = found("openscad") {
         if o.status.success() {
@@ -44,8 +50,8 @@ fn openscad() -> PathBuf {
     let ok = Command::new("sh")
         .args([
             "-c",
-            "apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
-             --no-install-recommends openscad",
+            "apt-get -o DPkg::Lock::Timeout=600 update -qq && DEBIAN_FRONTEND=noninteractive \
+             apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends openscad",
         ])
         .status()
         .is_ok_and(|s| s.success());
