@@ -325,6 +325,32 @@ fn a_noisy_scan_is_not_cut_into_its_crease_specks() {
     assert_valid("noisy bust", &m, m.uv.as_ref().unwrap());
 }
 
+/// A flat sheet whose surface folds over itself at one vertex, as a scan's noise folds it: its
+/// map has to flip the folded triangles, which are untangled (docs/math.md §11.5) instead of
+/// cutting the sheet into charts around them.
+#[test]
+fn a_sheet_with_a_small_fold_stays_one_chart() {
+    use grainline::generate::{plane, Grid};
+    let mut mesh = plane(10.0, Grid::new(24, 24));
+    mesh.uv = None;
+    // The vertex nearest the centre pushed 1.3 cells across its neighbours, a little up.
+    let d = |p: &nalgebra::Vector3<f64>| p.x.hypot(p.y);
+    let v = (0..mesh.num_vertices())
+        .min_by(|&a, &b| d(&mesh.positions[a]).total_cmp(&d(&mesh.positions[b])))
+        .unwrap();
+    mesh.positions[v] += nalgebra::Vector3::new(1.1, 0.3, 0.05);
+    let layout = flatten(&mesh, &options(Method::Arap)).unwrap();
+    let r = &layout.report;
+    assert_eq!(r.charts, 1, "{r:?}");
+    assert_eq!(r.cuts.bisections, 0, "{r:?}");
+    assert_eq!(r.flipped_faces, 0);
+    let mut m = mesh.clone();
+    m.uv = Some(layout.uv);
+    assert_valid("folded sheet", &m, m.uv.as_ref().unwrap());
+    // Away from the fold the sheet keeps its lengths.
+    assert!(r.edge_length_error.p95 < 0.05, "{:?}", r.edge_length_error);
+}
+
 const CORPUS: [&str; 8] = [
     "paper-crumpled2.obj",
     "spot_triangulated.obj",

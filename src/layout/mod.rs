@@ -9,9 +9,11 @@
 //!    [`Method::Bff`] a disk chart is flattened by boundary first flattening instead ([`bff`],
 //!    conformal, boundary lengths kept), other charts and invalid BFF maps by LSCM. It is
 //!    kept when the flattening is valid (no flipped triangle, no boundary crossing,
-//!    [`distortion`]) and the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most
-//!    [`LayoutOptions::max_stretch`]. A developable or nearly developable sheet therefore stays
-//!    one chart, flattened with little distortion.
+//!    [`distortion`]; a few flipped triangles of a scan's small folds are first untangled,
+//!    [`untangle`]) and the stretch max(σ₁, 1/σ₂) of 95 % of its area is at most
+//!    [`LayoutOptions::max_stretch`]. With ARAP, a chart whose LSCM map already passes is kept
+//!    with it and ARAP runs once on the final charts (step 4). A developable or nearly
+//!    developable sheet therefore stays one chart, flattened with little distortion.
 //! 2. A piece that is not kept is cut: along its sharp creases first, then by region growing
 //!    on normal cones, then by bisection ([`charts`]); each piece is tried again. Single
 //!    triangles flatten exactly, so every mesh gets a layout. On a noisy part (a scan whose
@@ -21,7 +23,8 @@
 //! 3. Small charts (at most [`MERGE_FRACTION`] of the faces) are merged into neighbours
 //!    while the union still flattens within the same bounds, smallest first, so a closed
 //!    scan ends up with a handful of charts.
-//! 4. The charts are scaled to their surface area, packed into [0, 1]² at one common scale
+//! 4. ARAP runs on the final charts kept with their LSCM map. The charts are scaled to their
+//!    surface area, packed into [0, 1]² at one common scale
 //!    ([`pack`]) and reported: charts, seams, area and angle distortion, edge-length error.
 //!
 //! The result is deterministic: no step depends on the thread count.
@@ -33,6 +36,7 @@ pub mod distortion;
 mod linsys;
 pub mod lscm;
 pub mod pack;
+pub mod untangle;
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -204,7 +208,8 @@ pub struct LayoutReport {
     pub edge_length_error: Stat,
     /// UV triangles with signed area ≤ 0 (always 0: such charts are cut).
     pub flipped_faces: usize,
-    /// Charts whose ARAP result was not valid, so their LSCM flattening was kept.
+    /// Charts whose ARAP result was not valid (or, for a final chart kept with its LSCM map,
+    /// not within the stretch bound), so their LSCM flattening was kept.
     pub arap_fallbacks: usize,
     /// Charts (tried, merges included) that BFF could not flatten, so LSCM's map was used:
     /// not a disk, or BFF's map not valid (added after 0.2.0).
@@ -213,7 +218,7 @@ pub struct LayoutReport {
     pub bff_not_disk: usize,
     /// Charts (tried) whose conformal BFF map was not valid and got the harmonic one.
     pub bff_harmonic: usize,
-    /// ARAP local/global iterations over all charts.
+    /// ARAP local/global iterations over the charts whose ARAP map was kept.
     pub arap_iterations: usize,
     /// Cuts made.
     pub cuts: Cuts,
@@ -265,7 +270,8 @@ fn flatten_bff(
     // The conformal extension first; the harmonic one (boundary exactly the closed polygon)
     // when the conformal map is not valid.
     for extension in [bff::Extension::Conformal, bff::Extension::Harmonic] {
-        if let Ok(uv) = bff::bff(chart, pos, extension) {
+        if let Ok(mut uv) = bff::bff(chart, pos, extension) {
+            untangle_if_invalid(chart, pos, &mut uv);
             if invalid(chart, &uv).is_none() {
                 counters.bff_harmonic += (extension == bff::Extension::Harmonic) as usize;
                 return Some(uv);
@@ -276,13 +282,28 @@ fn flatten_bff(
     None
 }
 
+/// A chart kept, with its flattening.
+struct Flat {
+    chart: ChartMesh,
+    uv: Vec<Vector2<f64>>,
+    /// The map is LSCM's, valid and within the stretch bound; ARAP refines it once the charts
+    /// are final ([`finish_arap`]).
+    arap_pending: bool,
+}
+
+/// A flattening found by [`flatten_chart`].
+struct Found {
+    uv: Vec<Vector2<f64>>,
+    arap_pending: bool,
+}
+
 /// Flattens one disk (or planar) chart; `None` when the result is not valid or too stretched.
 fn flatten_chart(
     chart: &ChartMesh,
     pos: &[Vector3<f64>],
     options: &LayoutOptions,
     counters: &mut Counters,
-) -> Option<Vec<Vector2<f64>>> {
+) -> Option<Found> {
     let single = chart.tris.len() == 1;
     let bff_uv = (options.method == Method::Bff && !single)
         .then(|| flatten_bff(chart, pos, counters))
@@ -294,28 +315,81 @@ fn flatten_chart(
             let s = area_scale(chart, pos, &uv);
             uv.iter_mut().for_each(|p| *p *= s);
             if single {
-                return Some(uv);
+                return Some(Found { uv, arap_pending: false });
+            }
+            untangle_if_invalid(chart, pos, &mut uv);
+            // With ARAP, a valid LSCM map within the bound decides: ARAP runs once the charts
+            // are final (every merge tried), on the final charts only.
+            if options.method == Method::Arap
+                && invalid(chart, &uv).is_none()
+                && within_bound(chart, pos, &uv, options)
+            {
+                return Some(Found { uv, arap_pending: true });
             }
             match options.method {
                 Method::Lscm | Method::Bff => invalid(chart, &uv).is_none().then_some(uv)?,
-                Method::Arap => match arap::arap(chart, pos, &uv, options.arap_iterations) {
-                    Ok(run) if invalid(chart, &run.uv).is_none() => {
-                        counters.arap_iterations += run.iterations;
-                        run.uv
+                Method::Arap => {
+                    match arap::arap(chart, pos, &uv, options.arap_iterations).map(|mut run| {
+                        untangle_if_invalid(chart, pos, &mut run.uv);
+                        run
+                    }) {
+                        Ok(run) if invalid(chart, &run.uv).is_none() => {
+                            counters.arap_iterations += run.iterations;
+                            run.uv
+                        }
+                        _ => {
+                            invalid(chart, &uv).is_none().then_some(())?;
+                            counters.arap_fallbacks += 1;
+                            uv
+                        }
                     }
-                    _ => {
-                        invalid(chart, &uv).is_none().then_some(())?;
-                        counters.arap_fallbacks += 1;
-                        uv
-                    }
-                },
+                }
             }
         }
     };
-    let s = area_scale(chart, pos, &uv);
-    let m = FaceMeasures::new(chart, pos, &uv, s);
+    within_bound(chart, pos, &uv, options).then_some(Found { uv, arap_pending: false })
+}
+
+/// Whether the stretch max(σ₁, 1/σ₂) of 95 % of the chart's area is within the bound.
+fn within_bound(
+    chart: &ChartMesh,
+    pos: &[Vector3<f64>],
+    uv: &[Vector2<f64>],
+    options: &LayoutOptions,
+) -> bool {
+    let s = area_scale(chart, pos, uv);
+    let m = FaceMeasures::new(chart, pos, uv, s);
     let stretch = Stat::of(&m.stretch(), &m.area, 1e12);
-    (stretch.p95 <= options.max_stretch).then_some(uv)
+    stretch.p95 <= options.max_stretch
+}
+
+/// ARAP (math.md §11.4) on the charts kept with LSCM's map: its map where it is valid and
+/// within the stretch bound, LSCM's otherwise (counted as a fallback).
+fn finish_arap(flats: &mut [Flat], mesh: &Mesh, options: &LayoutOptions, counters: &mut Counters) {
+    for flat in flats.iter_mut().filter(|f| f.arap_pending) {
+        let (chart, pos) = (&flat.chart, flat.chart.positions(mesh));
+        match arap::arap(chart, &pos, &flat.uv, options.arap_iterations) {
+            Ok(mut run) => {
+                untangle_if_invalid(chart, &pos, &mut run.uv);
+                if invalid(chart, &run.uv).is_none() && within_bound(chart, &pos, &run.uv, options)
+                {
+                    counters.arap_iterations += run.iterations;
+                    flat.uv = run.uv;
+                } else {
+                    counters.arap_fallbacks += 1;
+                }
+            }
+            Err(_) => counters.arap_fallbacks += 1,
+        }
+        flat.arap_pending = false;
+    }
+}
+
+/// Untangles the map's small folds ([`untangle`]) when it is not valid as it is.
+fn untangle_if_invalid(chart: &ChartMesh, pos: &[Vector3<f64>], uv: &mut [Vector2<f64>]) {
+    if invalid(chart, uv).is_some() {
+        untangle::untangle(chart, pos, uv);
+    }
 }
 
 /// Area-weighted mean of the face normals, as a length in [0, 1]: 1 for a flat chart, about
@@ -354,7 +428,7 @@ const PLANAR_MIN_SPREAD: f64 = 0.5;
 /// neighbours in order of shared edges, passes repeated until none merges.
 #[allow(clippy::too_many_arguments)]
 fn merge_charts(
-    accepted: &mut Vec<(ChartMesh, Vec<Vector2<f64>>)>,
+    accepted: &mut Vec<Flat>,
     mesh: &Mesh,
     he: &HalfEdges,
     ctx: &mut MergeContext<'_>,
@@ -365,7 +439,7 @@ fn merge_charts(
     let mut merges = 0;
     let nf = mesh.num_faces();
     let mut owner = vec![usize::MAX; nf];
-    for (k, (c, _)) in accepted.iter().enumerate() {
+    for (k, Flat { chart: c, .. }) in accepted.iter().enumerate() {
         for &f in &c.faces {
             owner[f as usize] = k;
         }
@@ -375,13 +449,13 @@ fn merge_charts(
     for _pass in 0..8 {
         let mut merged_any = false;
         let mut order: Vec<usize> = (0..accepted.len()).filter(|&k| alive[k]).collect();
-        order.sort_by_key(|&k| (accepted[k].0.faces.len(), k));
+        order.sort_by_key(|&k| (accepted[k].chart.faces.len(), k));
         for a in order {
-            if !alive[a] || accepted[a].0.faces.len() > cap {
+            if !alive[a] || accepted[a].chart.faces.len() > cap {
                 continue;
             }
             let mut shared: std::collections::BTreeMap<usize, usize> = Default::default();
-            for &f in &accepted[a].0.faces {
+            for &f in &accepted[a].chart.faces {
                 for c in 0..3 {
                     if let Some(t) = he.twin(3 * f + c) {
                         let b = owner[(t / 3) as usize];
@@ -394,12 +468,12 @@ fn merge_charts(
             let mut nb: Vec<(usize, usize)> = shared.into_iter().collect();
             nb.sort_by(|x, y| y.1.cmp(&x.1).then(x.0.cmp(&y.0)));
             for &(b, _) in nb.iter().take(3) {
-                let key = (a, accepted[a].0.faces.len(), b, accepted[b].0.faces.len());
+                let key = (a, accepted[a].chart.faces.len(), b, accepted[b].chart.faces.len());
                 if !tried.insert(key) {
                     continue;
                 }
-                let mut faces = accepted[b].0.faces.clone();
-                faces.extend_from_slice(&accepted[a].0.faces);
+                let mut faces = accepted[b].chart.faces.clone();
+                faces.extend_from_slice(&accepted[a].chart.faces);
                 let id = *ctx.next_id;
                 *ctx.next_id += 1;
                 for (i, &f) in faces.iter().enumerate() {
@@ -411,11 +485,12 @@ fn merge_charts(
                     continue;
                 }
                 let pos = chart.positions(mesh);
-                if let Some(uv) = flatten_chart(&chart, &pos, options, counters) {
-                    for &f in &accepted[a].0.faces {
+                if let Some(found) = flatten_chart(&chart, &pos, options, counters) {
+                    for &f in &accepted[a].chart.faces {
                         owner[f as usize] = b;
                     }
-                    accepted[b] = (chart, uv);
+                    let arap_pending = found.arap_pending;
+                    accepted[b] = Flat { chart, uv: found.uv, arap_pending };
                     alive[a] = false;
                     merged_any = true;
                     merges += 1;
@@ -495,8 +570,9 @@ pub fn flatten(mesh: &Mesh, options: &LayoutOptions) -> Result<Layout> {
     // Merge small charts into their neighbours while the unions flatten.
     let cap = (MERGE_FRACTION * nf as f64) as usize;
     cuts.merges = merge_charts(&mut accepted, mesh, &he, &mut ctx, options, &mut counters, cap);
+    finish_arap(&mut accepted, mesh, options, &mut counters);
     // Pack at one scale, then measure.
-    let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|(_, uv)| uv.clone()).collect();
+    let mut uvs: Vec<Vec<Vector2<f64>>> = accepted.iter().map(|f| f.uv.clone()).collect();
     let factor = pack::pack(&mut uvs, options.gap);
     let uv_scale = 1.0 / factor;
     let m = measure(mesh, &accepted, &uvs, uv_scale);
@@ -546,7 +622,7 @@ impl Charting<'_> {
         ctx: &mut MergeContext,
         cuts: &mut Cuts,
         counters: &mut Counters,
-    ) -> Result<Vec<(ChartMesh, Vec<Vector2<f64>>)>> {
+    ) -> Result<Vec<Flat>> {
         let (mesh, he, options) = (self.mesh, self.he, self.options);
         let nf = mesh.num_faces();
         // The mesh's edge-connected pieces.
@@ -560,7 +636,7 @@ impl Charting<'_> {
         // Whether the part is noisy (charts::NOISE_FRACTION): its sharp creases' pieces.
         let crease_pieces = charts::pieces(&all, he, ctx.tag, 0, |h| self.joins_across(h));
         let noisy = charts::is_noisy(&crease_pieces, nf);
-        let mut accepted: Vec<(ChartMesh, Vec<Vector2<f64>>)> = Vec::new();
+        let mut accepted: Vec<Flat> = Vec::new();
         while let Some(region) = queue.pop_front() {
             let id = *ctx.next_id;
             *ctx.next_id += 1;
@@ -571,8 +647,9 @@ impl Charting<'_> {
             let chart = ChartMesh::new(&region.faces, he, mesh, ctx.tag, ctx.pos_in, id);
             if worth_flattening(&chart, mesh) {
                 let pos = chart.positions(mesh);
-                if let Some(uv) = flatten_chart(&chart, &pos, options, counters) {
-                    accepted.push((chart, uv));
+                if let Some(found) = flatten_chart(&chart, &pos, options, counters) {
+                    let arap_pending = found.arap_pending;
+                    accepted.push(Flat { chart, uv: found.uv, arap_pending });
                     continue;
                 }
             }
@@ -658,12 +735,7 @@ struct Measures {
 
 /// The charts' UVs (`uvs`, scaled by `uv_scale`) gathered as corner values, and every face's
 /// area and angle distortion, angle error and edges' length errors, chart by chart.
-fn measure(
-    mesh: &Mesh,
-    accepted: &[(ChartMesh, Vec<Vector2<f64>>)],
-    uvs: &[Vec<Vector2<f64>>],
-    uv_scale: f64,
-) -> Measures {
+fn measure(mesh: &Mesh, accepted: &[Flat], uvs: &[Vec<Vector2<f64>>], uv_scale: f64) -> Measures {
     let nf = mesh.num_faces();
     let mut values = Vec::new();
     let mut corners = vec![[0u32; 3]; nf];
@@ -673,7 +745,7 @@ fn measure(
     let (mut edge_e, mut edge_w) = (Vec::new(), Vec::new());
     let mut flipped = 0;
     let mut largest = 0;
-    for (k, ((chart, _), uv)) in accepted.iter().zip(uvs).enumerate() {
+    for (k, (Flat { chart, .. }, uv)) in accepted.iter().zip(uvs).enumerate() {
         let offset = values.len() as u32;
         values.extend_from_slice(uv);
         largest = largest.max(chart.faces.len());
