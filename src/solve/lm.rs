@@ -33,6 +33,7 @@ use crate::{Error, Result};
 
 mod blocks;
 
+pub use blocks::Region;
 use blocks::{build_system, Assembler, System};
 
 /// A hinge constraint for [`LmOptions`]: |x| ≤ bound with weight λ (see
@@ -291,18 +292,51 @@ pub fn solve_cached(
             format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
         ));
     }
-    let w = match &options.cotan_weights {
+    let w = weights(mesh, term, options);
+    let region = Region::new(g, free, &w, None);
+    solve_in(mesh, term, phi, &region, options, cache)
+}
+
+/// The cotangent weights `options` lend, or the mesh's.
+fn weights(mesh: &Mesh, term: &HighlightTerm, options: &LmOptions) -> std::sync::Arc<Vec<f64>> {
+    let g = term.geometry;
+    match &options.cotan_weights {
         Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
         _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
-    };
-    let sys = build_system(mesh, term, free, options, &w);
+    }
+}
+
+/// [`solve_cached`] over the free vertices of `region`, made with the cotangent weights
+/// `options` lend ([`Region::new`]): the same result as [`solve_cached`]'s for those vertices.
+pub fn solve_in(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    region: &Region,
+    options: &LmOptions,
+    cache: &mut SolveCache,
+) -> Result<LmResult> {
+    let g = term.geometry;
+    let nv = g.num_vertices();
+    if phi.len() != nv
+        || term.target_q.len() != nv
+        || term.weight.len() != nv
+        || term.target_g.len() != nv
+    {
+        return Err(Error::invalid_arg(
+            "phi",
+            format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
+        ));
+    }
+    let w = weights(mesh, term, options);
+    let sys = build_system(mesh, term, region, options, &w);
     let phi = phi.to_vec();
     let n = sys.free.len();
     // The first iteration's rows, assembled here: their energies are the initial ones (the
     // same bits as `System::energy`), so the start's residuals are evaluated once. The time is
     // the first iteration's.
     let t0 = Instant::now();
-    let mut acc = Assembler::new(&sys.col_of, n);
+    let mut acc = Assembler::new(sys.col_of, n);
     let initial_energy = if n == 0 { sys.energy(&phi) } else { sys.assemble(&phi, &mut acc) };
     let first_assembly = t0.elapsed().as_secs_f64();
     if !initial_energy.total().is_finite() {
@@ -335,7 +369,7 @@ pub fn solve_cached(
         direct,
         checked: false,
         acc,
-        next: Assembler::new(&sys.col_of, n),
+        next: Assembler::new(sys.col_of, n),
         assembled: true,
         first_assembly,
         product: None,
