@@ -280,20 +280,9 @@ pub fn solve_cached(
     options: &LmOptions,
     cache: &mut SolveCache,
 ) -> Result<LmResult> {
-    let g = term.geometry;
-    let nv = g.num_vertices();
-    if phi.len() != nv
-        || term.target_q.len() != nv
-        || term.weight.len() != nv
-        || term.target_g.len() != nv
-    {
-        return Err(Error::invalid_arg(
-            "phi",
-            format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
-        ));
-    }
+    check_sizes(term, phi)?;
     let w = weights(mesh, term, options);
-    let region = Region::new(g, free, &w, None);
+    let region = Region::new(term.geometry, free, &w, None);
     solve_in(mesh, term, phi, &region, options, cache)
 }
 
@@ -306,18 +295,27 @@ fn weights(mesh: &Mesh, term: &HighlightTerm, options: &LmOptions) -> std::sync:
     }
 }
 
-/// [`solve_cached`] over the free vertices of `region`, made with the cotangent weights
-/// `options` lend ([`Region::new`]): the same result as [`solve_cached`]'s for those vertices.
-pub fn solve_in(
+/// The energies of `phi` over the free vertices of `region`: the initial energies
+/// [`solve_in`] reports, the same bits, without assembling the Jacobian or copying `phi`.
+pub fn energy_in(
     mesh: &Mesh,
     term: &HighlightTerm,
     phi: &[f64],
     region: &Region,
     options: &LmOptions,
-    cache: &mut SolveCache,
-) -> Result<LmResult> {
-    let g = term.geometry;
-    let nv = g.num_vertices();
+) -> Result<Energies> {
+    check_sizes(term, phi)?;
+    let w = weights(mesh, term, options);
+    let e = build_system(mesh, term, region, options, &w).energy(phi);
+    if !e.total().is_finite() {
+        return Err(numerical(format!("the initial energy is not finite: {e:?}")));
+    }
+    Ok(e)
+}
+
+/// The sizes of `phi` and of `term`'s targets against the geometry's vertices.
+fn check_sizes(term: &HighlightTerm, phi: &[f64]) -> Result<()> {
+    let nv = term.geometry.num_vertices();
     if phi.len() != nv
         || term.target_q.len() != nv
         || term.weight.len() != nv
@@ -328,6 +326,20 @@ pub fn solve_in(
             format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
         ));
     }
+    Ok(())
+}
+
+/// [`solve_cached`] over the free vertices of `region`, made with the cotangent weights
+/// `options` lend ([`Region::new`]): the same result as [`solve_cached`]'s for those vertices.
+pub fn solve_in(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    region: &Region,
+    options: &LmOptions,
+    cache: &mut SolveCache,
+) -> Result<LmResult> {
+    check_sizes(term, phi)?;
     let w = weights(mesh, term, options);
     let sys = build_system(mesh, term, region, options, &w);
     let phi = phi.to_vec();

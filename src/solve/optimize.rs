@@ -20,8 +20,8 @@ use super::face_hinge::{FaceTurningHinge, QUADRATURE};
 use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
 use super::lm::{
-    solve_in, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, Region, SolveCache,
-    StopReason,
+    energy_in, solve_in, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, Region,
+    SolveCache, StopReason,
 };
 use super::locks::{angle_difference, resolve_locks, LockConflict};
 use super::settings::SolverSettings;
@@ -445,12 +445,9 @@ impl Solves<'_> {
         Ok(run)
     }
 
-    /// The energy of `phi` (a solve of no iteration over the free set).
+    /// The energy of `phi` over the free set (a solve's initial energy, the same bits).
     fn energy(&self, phi: &[f64]) -> Result<f64> {
-        let probe = LmOptions { max_iterations: 0, ..self.options.clone() };
-        let r =
-            solve_in(self.mesh, self.term, phi, self.region, &probe, &mut SolveCache::default())?;
-        Ok(r.initial_energy.total())
+        Ok(energy_in(self.mesh, self.term, phi, self.region, self.options)?.total())
     }
 
     /// The starts to run, in order, and the given start's energy.
