@@ -13,6 +13,9 @@
 //! (default 50,000) scales the cylinder's grid (~50k, ~200k, ~500k vertices) and the brush's
 //! radius with its edge length, so the brush's support stays about 1.2k vertices.
 //!
+//! It prints an FNV-1a hash of every drag step's φ bits, in order: a change that keeps the
+//! algorithm keeps the hash (the drag steps' φ bit for bit).
+//!
 //! The allocator is the `grainline` binary's (mimalloc, freed memory kept: grainline::allocator),
 //! as `grainline edit` runs.
 

@@ -570,9 +570,9 @@ impl State {
 
     /// Notes vertex `i`'s values in the undo log (when applying in place) before a write.
     fn touch(&mut self, i: usize) {
-        if self.undo.is_some() {
-            let v = kept::VertexValues::of(self, i);
-            self.undo.as_mut().expect("checked").push((i as u32, v));
+        if let Some(mut log) = self.undo.take() {
+            log.push((i as u32, kept::VertexValues::of(self, i)));
+            self.undo = Some(log);
         }
     }
 

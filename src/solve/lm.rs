@@ -619,7 +619,7 @@ impl Lm<'_, '_> {
     fn smoothed(&self, after: f64) -> Option<(Vec<f64>, Energies)> {
         if self.options.interleaved_smoothing {
             for tau in [0.5, 0.25, 0.125] {
-                let s = smoothing_pass(&self.phi, &self.sys.free, self.term, self.w, tau);
+                let s = smoothing_pass(&self.phi, self.sys.free, self.term, self.w, tau);
                 let es = self.sys.energy(&s);
                 if es.total().is_finite() && es.total() <= after {
                     return Some((s, es));
