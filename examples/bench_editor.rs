@@ -13,6 +13,9 @@
 //! (default 50,000) scales the cylinder's grid (~50k, ~200k, ~500k vertices) and the brush's
 //! radius with its edge length, so the brush's support stays about 1.2k vertices.
 //!
+//! It prints an FNV-1a hash of every drag step's φ bits, in order: a change that keeps the
+//! algorithm keeps the hash (the drag steps' φ bit for bit).
+//!
 //! The allocator is the `grainline` binary's (mimalloc, freed memory kept: grainline::allocator),
 //! as `grainline edit` runs.
 
@@ -67,12 +70,20 @@ fn main() {
     let mut full_times = Vec::with_capacity(steps);
     let mut support = 0;
     let mut grains = Vec::with_capacity(steps);
+    // FNV-1a of every step's φ bits, in order: the same number before and after a change that
+    // keeps the algorithm (the drag steps' φ bit for bit).
+    let mut phi_hash: u64 = 0xcbf2_9ce4_8422_2325;
     for k in 0..steps {
         let t = Instant::now();
         let solved = session.solve_drag(&base, &[], &edit(k), k as u64 + 1).unwrap();
         let bytes = grain_bytes(&solved);
         times.push(t.elapsed().as_secs_f64() * 1e3);
         std::hint::black_box(bytes);
+        for x in solved.phi() {
+            for b in x.to_bits().to_le_bytes() {
+                phi_hash = (phi_hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
         support = solved.edited_vertices;
         if !drag_only {
             grains.push((solved.u.clone(), solved.segments.clone()));
@@ -81,6 +92,7 @@ fn main() {
     if drag_only {
         times.sort_by(f64::total_cmp);
         println!("drag steps only: median {:.1} ms, min {:.1} ms", times[steps / 2], times[0]);
+        println!("  φ of the {steps} steps: FNV-1a {phi_hash:016x}");
         let _ = std::fs::remove_dir_all(&dir);
         return;
     }
@@ -126,6 +138,7 @@ fn main() {
         qf(0.9),
         full_times[0]
     );
+    println!("  φ of the {steps} steps: FNV-1a {phi_hash:016x}");
     println!("  session open (load, geometry, initial field): {:.0} ms", open_s * 1e3);
     println!("  FIELD.json when asked for: {json_ms:.0} ms ({:.1} MB)", json_len as f64 / 1e6);
     println!("  solver: {}; fidelity: {:?}", last.stop, last.fidelity.first().map(|f| f.landed));

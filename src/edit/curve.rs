@@ -263,7 +263,7 @@ pub(crate) fn apply(
     let (profile, design) = position_profile(ctx, st, &found, reach, width);
     for (i, hit) in found.iter().enumerate() {
         let Some(hit) = hit else { continue };
-        st.support[i] = true;
+        st.set_support(i);
         if st.critical[i] {
             critical += 1;
             continue;

@@ -24,6 +24,7 @@
 
 pub mod chart;
 pub mod curve;
+mod kept;
 pub mod light;
 pub mod resolution;
 mod segment_grid;
@@ -263,7 +264,8 @@ pub fn apply_edits(input: &EditInput, edits: &[Edit], options: &EditOptions) -> 
 /// the whole list, since it runs the same steps on the same state.
 pub struct EditBase {
     tables: Tables,
-    state: State,
+    /// The kept edits' state ([`EditBase::with_then`] applies more in place and puts it back).
+    work: std::sync::Mutex<kept::Work>,
     reports: Vec<EditReport>,
 }
 
@@ -301,7 +303,7 @@ impl EditBase {
         let ctx = Context::new(input, &tables);
         let mut state = State::new(&ctx, input);
         let reports = apply_in_order(&ctx, &mut state, edits, 0)?;
-        Ok(EditBase { tables, state, reports })
+        Ok(EditBase { tables, work: std::sync::Mutex::new(kept::Work::new(state)), reports })
     }
 
     /// The targets of the kept edits followed by `more`, for the same `input` as
@@ -326,22 +328,28 @@ impl EditBase {
         options: &EditOptions,
     ) -> Result<EditResult> {
         let ctx = Context::new(input, &self.tables);
-        let mut state = self.state.clone();
+        let mut state = self.work.lock().unwrap_or_else(|e| e.into_inner()).state.clone();
         let mut reports = self.reports.clone();
         reports.extend(apply_in_order(&ctx, &mut state, more, self.reports.len())?);
         if options.untangle {
-            let u = untangle::untangle(&ctx, &mut state);
-            if let (Some(last), true) = (reports.last_mut(), u.singular_designed > 0) {
-                last.notes.push(format!(
-                    "the designed grain turned by more than a right angle within {} triangles \
-                     (critical points of the key light close together, as on skin folds finer \
-                     than the brush); untangling turned {} vertices and left {} of them \
-                     (docs/math.md §10, \"Untangling\")",
-                    u.singular_designed, u.vertices_turned, u.singular_left
-                ));
-            }
+            untangle_noted(&ctx, &mut state, &mut reports);
         }
         state.finish(options, reports)
+    }
+}
+
+/// Untangles the designed grain of `st` ([`untangle`]), noting in the last report what it
+/// could not untangle.
+fn untangle_noted(ctx: &Context, st: &mut State, reports: &mut [EditReport]) {
+    let u = untangle::untangle(ctx, st);
+    if let (Some(last), true) = (reports.last_mut(), u.singular_designed > 0) {
+        last.notes.push(format!(
+            "the designed grain turned by more than a right angle within {} triangles \
+             (critical points of the key light close together, as on skin folds finer \
+             than the brush); untangling turned {} vertices and left {} of them \
+             (docs/math.md §10, \"Untangling\")",
+            u.singular_designed, u.vertices_turned, u.singular_left
+        ));
     }
 }
 
@@ -407,6 +415,32 @@ impl EditResult {
                 target_g: self.target_g.clone(),
                 ..base
             },
+        }
+    }
+}
+
+/// One vertex's entries of a [`crate::solve::HighlightTerm`]: its `target_q`, `weight` and
+/// `target_g`.
+pub type TermValues = (Option<Vector2<f64>>, f64, Option<f64>);
+
+impl EditResult {
+    /// Vertex `i`'s entries of the term [`EditResult::highlight_term`] makes with `energy` and
+    /// `epsilon` (the same bits).
+    pub fn term_values(
+        &self,
+        geometry: &Geometry,
+        i: usize,
+        energy: crate::solve::HighlightEnergy,
+        epsilon: f64,
+    ) -> TermValues {
+        match energy {
+            crate::solve::HighlightEnergy::Tensor => {
+                let f = &geometry.frames[i];
+                let q = self.target_ell[i]
+                    .map(|l| crate::highlight::tensor::q(&f.to_local(&l), epsilon));
+                (q, self.weight[i], None)
+            }
+            crate::solve::HighlightEnergy::Position => (None, self.weight_g[i], self.target_g[i]),
         }
     }
 }
@@ -500,6 +534,9 @@ pub(crate) struct State {
     pub pinned: bool,
     /// The angle a vertex had before an edit designed its grain (`None`: not designed).
     pub designed: Vec<Option<f64>>,
+    /// While edits are applied in place ([`kept`]): each written vertex's values from before
+    /// the write, in order (a vertex may repeat; put back in reverse order).
+    pub undo: Option<Vec<(u32, kept::VertexValues)>>,
 }
 
 impl State {
@@ -527,12 +564,40 @@ impl State {
             support: vec![false; n],
             pinned: false,
             designed: vec![None; n],
+            undo: None,
         }
+    }
+
+    /// Notes vertex `i`'s values in the undo log (when applying in place) before a write.
+    fn touch(&mut self, i: usize) {
+        if let Some(mut log) = self.undo.take() {
+            log.push((i as u32, kept::VertexValues::of(self, i)));
+            self.undo = Some(log);
+        }
+    }
+
+    /// Sets vertex `i`'s grain angle (not a design: see [`State::design`]).
+    pub fn set_phi(&mut self, i: usize, phi: f64) {
+        self.touch(i);
+        self.phi[i] = phi;
+    }
+
+    /// Sets vertex `i`'s position target without changing its weight.
+    pub fn set_g_target(&mut self, i: usize, g: f64) {
+        self.touch(i);
+        self.target_g[i] = g;
+    }
+
+    /// Puts vertex `i` inside an edit's support.
+    pub fn set_support(&mut self, i: usize) {
+        self.touch(i);
+        self.support[i] = true;
     }
 
     /// Recomputes h, ℓ and the critical points after φ or the lighting changed, and refreshes
     /// the "keep current" targets of the vertices no edit has set (unless pinned).
     pub fn refresh(&mut self, ctx: &Context, lighting_changed: bool) {
+        debug_assert!(self.undo.is_none(), "a whole-part refresh while applying in place");
         if lighting_changed {
             self.h = half_vectors(&self.lighting, &ctx.mesh.positions, ctx.normals);
             self.h_gradient = h_gradients(&self.lighting, &ctx.mesh.positions, &ctx.geom.frames);
@@ -565,6 +630,7 @@ impl State {
     /// exactly and the solve has nothing left to do.
     pub fn design(&mut self, ctx: &Context, i: usize, phi: f64) -> f64 {
         let phi = self.h_angle(ctx, i).map_or(phi, |theta| clamp_design(phi, theta));
+        self.touch(i);
         self.designed[i].get_or_insert(self.phi[i]);
         self.phi[i] = phi;
         self.g[i] = g_hat(&ctx.geom.frames[i], phi, &self.h[i]);
@@ -580,6 +646,7 @@ impl State {
 
     /// Sets the position target of vertex `i` from an edit of weight `w`.
     pub fn set_target_g(&mut self, i: usize, g: f64, w: f64) {
+        self.touch(i);
         self.target_g[i] = g;
         self.edit_weight_g[i] = Some(w);
         self.support[i] = true;
@@ -587,6 +654,7 @@ impl State {
 
     /// Sets the target of vertex `i` from an edit of weight `w`.
     pub fn set_target(&mut self, i: usize, ell: Vector3<f64>, w: f64) {
+        self.touch(i);
         self.target[i] = ell;
         self.edit_weight[i] = Some(w);
         self.support[i] = true;
@@ -599,40 +667,12 @@ impl State {
         let mut weight = vec![0.0; n];
         let mut weight_g = vec![0.0; n];
         for i in 0..n {
-            if self.critical[i] {
-                continue;
-            }
-            let wg = self.edit_weight_g[i].unwrap_or(options.outside_weight);
-            if wg > 0.0 {
-                let g = self.target_g[i];
-                if !g.is_finite() {
-                    return Err(Error::Numerical {
-                        stage: "edits",
-                        message: format!("the position target of vertex {i} is not finite"),
-                    });
-                }
-                target_g[i] = Some(g);
-                weight_g[i] = wg;
-            }
-            let w = self.edit_weight[i].unwrap_or(options.outside_weight);
-            if w <= 0.0 {
-                continue;
-            }
-            let t = self.target[i];
-            if !t.iter().all(|c| c.is_finite()) {
-                return Err(Error::Numerical {
-                    stage: "edits",
-                    message: format!("the target of vertex {i} is not finite"),
-                });
-            }
-            target_ell[i] = Some(t);
-            weight[i] = w;
+            let t = self.targets_at(i, options)?;
+            (target_ell[i], weight[i], target_g[i], weight_g[i]) =
+                (t.ell, t.weight, t.g, t.weight_g);
         }
         if let Some(i) = self.phi.iter().position(|p| !p.is_finite()) {
-            return Err(Error::Numerical {
-                stage: "edits",
-                message: format!("the grain angle of vertex {i} is not finite"),
-            });
+            return Err(phi_not_finite(i));
         }
         let phi_before =
             self.phi.iter().zip(&self.designed).map(|(p, d)| d.unwrap_or(*p)).collect();
@@ -649,6 +689,47 @@ impl State {
             support: self.support,
             reports,
         })
+    }
+
+    /// Vertex `i`'s targets as [`EditResult`] states them (none at a critical point; a weight
+    /// of 0 drops a target); the error of a target that is not finite.
+    fn targets_at(&self, i: usize, options: &EditOptions) -> Result<kept::Targets> {
+        let mut out = kept::Targets { ell: None, weight: 0.0, g: None, weight_g: 0.0 };
+        if self.critical[i] {
+            return Ok(out);
+        }
+        let wg = self.edit_weight_g[i].unwrap_or(options.outside_weight);
+        if wg > 0.0 {
+            let g = self.target_g[i];
+            if !g.is_finite() {
+                return Err(Error::Numerical {
+                    stage: "edits",
+                    message: format!("the position target of vertex {i} is not finite"),
+                });
+            }
+            (out.g, out.weight_g) = (Some(g), wg);
+        }
+        let w = self.edit_weight[i].unwrap_or(options.outside_weight);
+        if w <= 0.0 {
+            return Ok(out);
+        }
+        let t = self.target[i];
+        if !t.iter().all(|c| c.is_finite()) {
+            return Err(Error::Numerical {
+                stage: "edits",
+                message: format!("the target of vertex {i} is not finite"),
+            });
+        }
+        (out.ell, out.weight) = (Some(t), w);
+        Ok(out)
+    }
+}
+
+/// The error of a grain angle that is not finite at vertex `i`.
+fn phi_not_finite(i: usize) -> Error {
+    Error::Numerical {
+        stage: "edits",
+        message: format!("the grain angle of vertex {i} is not finite"),
     }
 }
 

@@ -109,7 +109,7 @@ pub(crate) fn apply(
         }
         let u = f.direction(st.phi[i]);
         let c = if c.dot(&u) < 0.0 { -c / len } else { c / len };
-        st.phi[i] = f.angle_of(&c);
+        st.set_phi(i, f.angle_of(&c));
     }
     if !band.is_empty() {
         blend_band(ctx, &mut st.phi, &band, k)?;
@@ -126,7 +126,7 @@ pub(crate) fn apply(
             st.set_target(i, ell, e.weight);
             st.set_target_g(i, g, e.weight);
         }
-        st.support[i] = true;
+        st.set_support(i);
     }
     report.vertices = inside.len() - inside.iter().filter(|&&i| st.critical[i]).count()
         + band.iter().filter(|&&i| !st.critical[i]).count();

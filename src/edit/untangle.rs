@@ -35,7 +35,7 @@ pub mod pairs;
 
 use super::{g_hat, Context, State};
 use crate::geometry::connection::wrap_angle;
-use crate::highlight::singularities::face_index;
+use crate::highlight::singularities::{face_index, face_index_of};
 use crate::solve::turn::{bounded_turn, TurnInput, TurnOptions};
 
 /// |ĝ*| up to which a vertex at a key-highlight crossing holds it.
@@ -77,40 +77,66 @@ pub struct Untangled {
 
 /// Untangles the designed grain of `st` inside the edits' support (see the module docs).
 pub(crate) fn untangle(ctx: &Context, st: &mut State) -> Untangled {
-    let before: Vec<f64> = st.phi.iter().zip(&st.designed).map(|(p, d)| d.unwrap_or(*p)).collect();
+    // The grain before the edits, φ where no edit designed it: a design keeps the angle it
+    // replaced, so this is the same before and after meet_rows and the turns.
     meet_rows(ctx, st);
-    let support = st.support.clone();
-    let mut reach = vec![false; support.len()];
+    let mut reach = vec![false; st.support.len()];
+    let mut reached = Vec::new();
     grow(
         &ctx.geom.adjacency,
-        (0..reach.len() as u32).filter(|&v| support[v as usize]),
+        (0..reach.len() as u32).filter(|&v| st.support[v as usize]),
         REACH_RINGS,
-        |w| !std::mem::replace(&mut reach[w], true),
+        |w| {
+            let new = !std::mem::replace(&mut reach[w], true);
+            if new {
+                reached.push(w as u32);
+            }
+            new
+        },
     );
+    let region = Region { inside: &reach, faces: faces_of(ctx, &reached) };
     let mut out = Untangled {
-        singular_designed: designed_singular(ctx, st, &before, &reach).len(),
+        singular_designed: designed_singular(ctx, st, &region).len(),
         ..Default::default()
     };
     if out.singular_designed == 0 {
         return out;
     }
-    out.singular_left = turn_passes(ctx, st, &before, &reach, &mut out);
+    let before: Vec<f64> = st.phi.iter().zip(&st.designed).map(|(p, d)| d.unwrap_or(*p)).collect();
+    out.singular_left = turn_passes(ctx, st, &before, &region, &mut out);
     out
 }
 
+/// Where untangling acts: the support and [`REACH_RINGS`] rings beyond (`inside`, per vertex)
+/// and the faces with a corner there (ascending).
+struct Region<'a> {
+    inside: &'a [bool],
+    faces: Vec<usize>,
+}
+
+/// The faces with a corner among `vertices`, ascending.
+fn faces_of(ctx: &Context, vertices: &[u32]) -> Vec<usize> {
+    let mut faces: Vec<usize> =
+        vertices.iter().flat_map(|&v| ctx.vf.of(v as usize)).map(|&(f, _)| f as usize).collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
+}
+
 /// The bounded turns, around the design's singular faces and then around the paths that pair
-/// them (see the module docs), inside `reach`; the singular faces left.
+/// them (see the module docs), inside the `region`; the singular faces left.
 fn turn_passes(
     ctx: &Context,
     st: &mut State,
     before: &[f64],
-    reach: &[bool],
+    region: &Region,
     out: &mut Untangled,
 ) -> usize {
+    let reach = region.inside;
     let (mesh, k) = (ctx.mesh, ctx.symmetry.k());
     let theta: Vec<f64> =
         (0..mesh.num_vertices()).map(|i| st.h_angle(ctx, i).unwrap_or(f64::NAN)).collect();
-    let mut left = designed_singular(ctx, st, before, reach);
+    let mut left = designed_singular(ctx, st, region);
     for paired in [false, true] {
         for rings in TURN_RINGS {
             if left.is_empty() {
@@ -134,7 +160,7 @@ fn turn_passes(
                     out.vertices_turned += n;
                 }
             }
-            left = designed_singular(ctx, st, before, reach);
+            left = designed_singular(ctx, st, region);
         }
     }
     left.len()
@@ -165,23 +191,28 @@ fn meet_rows(ctx: &Context, st: &mut State) {
         let (p, m) = (near(theta + a), near(theta - a));
         let phi = if (p - st.phi[i]).abs() <= (m - st.phi[i]).abs() { p } else { m };
         let g = st.design(ctx, i, phi);
-        st.target_g[i] = g;
+        st.set_g_target(i, g);
     }
 }
 
 /// The faces with every corner in `region` and one the edits designed, whose index differs
 /// from the field's before the edits and is not 0; ascending.
-fn designed_singular(ctx: &Context, st: &State, before: &[f64], region: &[bool]) -> Vec<usize> {
+fn designed_singular(ctx: &Context, st: &State, region: &Region) -> Vec<usize> {
     let (mesh, k) = (ctx.mesh, ctx.symmetry.k());
-    (0..mesh.num_faces())
+    let before = |v: usize| st.designed[v].unwrap_or(st.phi[v]);
+    // A face with every corner in the region has one there: among the region's faces.
+    region
+        .faces
+        .iter()
+        .copied()
         .filter(|&f| {
             let c = mesh.faces[f];
-            c.iter().all(|&v| region[v as usize])
+            c.iter().all(|&v| region.inside[v as usize])
                 && c.iter().any(|&v| st.designed[v as usize].is_some())
         })
         .filter(|&f| {
             let after = face_index(mesh, ctx.geom, &st.phi, f, k);
-            after != 0 && after != face_index(mesh, ctx.geom, before, f, k)
+            after != 0 && after != face_index_of(mesh, ctx.geom, before, f, k)
         })
         .collect()
 }
@@ -291,11 +322,11 @@ fn turn_part(
     let was = singular(&st.phi);
     let old: Vec<f64> = interior.iter().map(|&v| st.phi[v as usize]).collect();
     for &(v, a) in &turned {
-        st.phi[v as usize] = a;
+        st.set_phi(v as usize, a);
     }
     let now = singular(&st.phi);
     for (&v, a) in interior.iter().zip(old) {
-        st.phi[v as usize] = a;
+        st.set_phi(v as usize, a);
     }
     (now < was).then(|| keep(ctx, st, &turned))
 }
@@ -335,7 +366,8 @@ fn keep(ctx: &Context, st: &mut State, turned: &[(u32, f64)]) -> usize {
         }
         changed += 1;
         // The row follows (beyond the support too, where it kept the grain before the edits).
-        st.target_g[i] = st.design(ctx, i, a);
+        let g = st.design(ctx, i, a);
+        st.set_g_target(i, g);
     }
     changed
 }

@@ -304,7 +304,7 @@ pub(crate) fn apply(
         }
     }
     for &v in &support.vertices {
-        st.support[v] = true;
+        st.set_support(v);
     }
     report.vertices = targets.len();
     report.critical_vertices = critical;

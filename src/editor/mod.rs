@@ -191,20 +191,19 @@ pub fn grain_bytes(s: &Solved) -> Vec<u8> {
     for k in [s.u.len(), s.segments.len(), s.critical.len(), id] {
         out.extend((k as u32).to_le_bytes());
     }
-    for v in &s.u {
-        for c in v {
-            out.extend(c.to_le_bytes());
-        }
-    }
-    for seg in &s.segments {
-        for c in seg {
-            out.extend(c.to_le_bytes());
-        }
-    }
-    for c in &s.critical {
-        out.extend(c.to_le_bytes());
-    }
+    put_le(&mut out, s.u.as_flattened(), f32::to_le_bytes);
+    put_le(&mut out, s.segments.as_flattened(), f32::to_le_bytes);
+    put_le(&mut out, &s.critical, u32::to_le_bytes);
     out
+}
+
+/// Appends `values` to `out`, four little-endian bytes each.
+fn put_le<T: Copy>(out: &mut Vec<u8>, values: &[T], bytes: fn(T) -> [u8; 4]) {
+    let start = out.len();
+    out.resize(start + 4 * values.len(), 0);
+    for (b, &v) in out[start..].chunks_exact_mut(4).zip(values) {
+        b.copy_from_slice(&bytes(v));
+    }
 }
 
 /// `GET /api/strokes`: the strokes and the as-brushed grain of a solved field ([`PageStrokes`]),

@@ -60,6 +60,26 @@ pub struct GradientStencil {
     pub empty: usize,
 }
 
+/// [`GradientStencil::users`]: the vertices whose stencil holds each vertex, in CSR form.
+#[derive(Clone, Debug, Default)]
+pub struct StencilUsers {
+    offsets: Vec<u32>,
+    users: Vec<u32>,
+}
+
+impl StencilUsers {
+    /// The vertices whose stencil holds vertex `j` (ascending; a vertex may appear twice when
+    /// its stencil holds `j` twice).
+    pub fn of(&self, j: usize) -> &[u32] {
+        &self.users[self.offsets[j] as usize..self.offsets[j + 1] as usize]
+    }
+
+    /// Number of vertices.
+    pub fn num_vertices(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+}
+
 impl GradientStencil {
     /// Builds the stencil. `transport` holds ρᵢⱼ per adjacency slot.
     pub fn new(
@@ -142,6 +162,31 @@ impl GradientStencil {
     /// Number of vertices.
     pub fn num_vertices(&self) -> usize {
         self.offsets.len().saturating_sub(1)
+    }
+
+    /// The stencil transposed: for each vertex j, the vertices whose stencil holds j, in
+    /// ascending order (what a solve over a few free vertices needs to find its rows without
+    /// scanning the part).
+    pub fn users(&self) -> StencilUsers {
+        let n = self.num_vertices();
+        let mut offsets = vec![0u32; n + 1];
+        for &j in &self.neighbor {
+            offsets[j as usize + 1] += 1;
+        }
+        for j in 0..n {
+            offsets[j + 1] += offsets[j];
+        }
+        let mut next = offsets.clone();
+        let mut users = vec![0u32; self.neighbor.len()];
+        // Vertices in ascending order: each list comes out sorted.
+        for i in 0..n {
+            for e in self.range(i) {
+                let j = self.neighbor[e] as usize;
+                users[next[j] as usize] = i as u32;
+                next[j] += 1;
+            }
+        }
+        StencilUsers { offsets, users }
     }
 
     /// ∇φ at vertex `i` in its frame, for symmetry `k` (1 or 2).

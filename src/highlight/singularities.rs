@@ -53,6 +53,17 @@ pub fn singularities(mesh: &Mesh, geometry: &Geometry, phi: &[f64], k: u32) -> V
 /// The index of face `f` in units of 1/k (0 on a face with an edge the adjacency lacks, or with
 /// a non-finite angle).
 pub fn face_index(mesh: &Mesh, geometry: &Geometry, phi: &[f64], f: usize, k: u32) -> i32 {
+    face_index_of(mesh, geometry, |v| phi[v], f, k)
+}
+
+/// [`face_index`] of the field whose angle at vertex v is `phi(v)`.
+pub fn face_index_of(
+    mesh: &Mesh,
+    geometry: &Geometry,
+    phi: impl Fn(usize) -> f64,
+    f: usize,
+    k: u32,
+) -> i32 {
     let kf = k as f64;
     let adj = &geometry.adjacency;
     let tri = mesh.faces[f];
@@ -62,7 +73,7 @@ pub fn face_index(mesh: &Mesh, geometry: &Geometry, phi: &[f64], f: usize, k: u3
         let Some(s) = adj.slot(i, j) else { return 0 };
         let rho = geometry.transport[s];
         sum_rho += rho;
-        sum_d += wrap_angle(kf * (phi[j as usize] + rho - phi[i])) / kf;
+        sum_d += wrap_angle(kf * (phi(j as usize) + rho - phi(i))) / kf;
     }
     let turns = (sum_d - wrap_angle(sum_rho)) / std::f64::consts::TAU;
     let n = (turns * kf).round();

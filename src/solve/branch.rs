@@ -124,14 +124,15 @@ impl ParitySets {
 fn choose_branches(
     term: &HighlightTerm,
     phi: &[f64],
-    cand: &[Option<[f64; 2]>],
+    cand: &[(u32, [f64; 2])],
     line: bool,
 ) -> Vec<bool> {
     let g = term.geometry;
-    let n = phi.len();
+    // The candidates of vertex j, if it has some (`cand` is by increasing vertex).
+    let of = |j: usize| cand.binary_search_by_key(&(j as u32), |c| c.0).ok();
     let mut links = Vec::new();
-    for (i, ci) in cand.iter().enumerate() {
-        let Some(ci) = ci else { continue };
+    for &(i, ref ci) in cand {
+        let i = i as usize;
         // A small preference for the branch nearer the vertex's own start.
         let own =
             [SELF_PREFERENCE * (ci[0] - phi[i]).cos(), SELF_PREFERENCE * (ci[1] - phi[i]).cos()];
@@ -147,7 +148,7 @@ fn choose_branches(
             // The targets' signs were stated in the orientations of the start: weighted by how
             // clear the relative orientation of the two grains was there (line fields).
             let rel = if line { (phi[i] - phi[j] - rho).cos() } else { 1.0 };
-            match &cand[j] {
+            match of(j).map(|k| &cand[k].1) {
                 None => {
                     let pj = phi[j] + rho;
                     let s = [rel * (ci[0] - pj).cos(), rel * (ci[1] - pj).cos()];
@@ -179,13 +180,17 @@ fn choose_branches(
     links.sort_by(|x, y| {
         y.confidence.total_cmp(&x.confidence).then(x.a.cmp(&y.a)).then(x.b.cmp(&y.b))
     });
-    let ground = n as u32;
-    let mut sets = ParitySets::new(n);
+    // The sets hold the candidates' vertices, numbered in their order (the union's choice of
+    // root compares numbers, and this numbering keeps their order), and the ground last.
+    let m = cand.len();
+    let ground = m as u32;
+    let local = |v: u32| of(v as usize).expect("a link joins candidates") as u32;
+    let mut sets = ParitySets::new(m);
     for l in &links {
-        let b = if l.b == GROUND { ground } else { l.b };
-        sets.union(l.a, b, l.parity, ground);
+        let b = if l.b == GROUND { ground } else { local(l.b) };
+        sets.union(local(l.a), b, l.parity, ground);
     }
-    (0..n as u32)
+    (0..m as u32)
         // A group never linked to the decided vertices gives its root branch 0.
         .map(|i| sets.find(i).1)
         .collect()
@@ -205,11 +210,9 @@ fn nearest_turn(a: f64, near: f64) -> f64 {
 /// The branch-coherent start for the position rows of `term` on the `free` vertices, from
 /// `phi`; `None` when no free vertex has a position row.
 pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option<Vec<f64>> {
-    let n = phi.len();
     let line = term.symmetry.k() == 2;
-    // The two candidates of every free vertex with a position row.
-    let mut cand: Vec<Option<[f64; 2]>> = vec![None; n];
-    let mut any = false;
+    // The two candidates of every free vertex with a position row, by increasing vertex.
+    let mut cand: Vec<(u32, [f64; 2])> = Vec::new();
     for &v in free {
         let i = v as usize;
         let Some(t) = term.target_g[i] else { continue };
@@ -229,18 +232,17 @@ pub fn coherent_start(term: &HighlightTerm, phi: &[f64], free: &[u32]) -> Option
             continue;
         }
         let a = t.clamp(-TARGET_BOUND, TARGET_BOUND).acos();
-        cand[i] = Some([nearest_turn(theta + a, phi[i]), nearest_turn(theta - a, phi[i])]);
-        any = true;
+        cand.push((v, [nearest_turn(theta + a, phi[i]), nearest_turn(theta - a, phi[i])]));
     }
-    if !any {
+    if cand.is_empty() {
         return None;
     }
+    cand.sort_by_key(|c| c.0);
+    cand.dedup_by_key(|c| c.0);
     let mut out = phi.to_vec();
     let choice = choose_branches(term, phi, &cand, line);
-    for (i, c) in cand.iter().enumerate() {
-        if let Some(c) = c {
-            out[i] = c[usize::from(choice[i])];
-        }
+    for (&(i, c), choose) in cand.iter().zip(choice) {
+        out[i as usize] = c[usize::from(choose)];
     }
     Some(out)
 }

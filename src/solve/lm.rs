@@ -33,6 +33,7 @@ use crate::{Error, Result};
 
 mod blocks;
 
+pub use blocks::Region;
 use blocks::{build_system, Assembler, System};
 
 /// A hinge constraint for [`LmOptions`]: |x| ≤ bound with weight λ (see
@@ -279,8 +280,42 @@ pub fn solve_cached(
     options: &LmOptions,
     cache: &mut SolveCache,
 ) -> Result<LmResult> {
+    check_sizes(term, phi)?;
+    let w = weights(mesh, term, options);
+    let region = Region::new(term.geometry, free, &w, None);
+    solve_in(mesh, term, phi, &region, options, cache)
+}
+
+/// The cotangent weights `options` lend, or the mesh's.
+fn weights(mesh: &Mesh, term: &HighlightTerm, options: &LmOptions) -> std::sync::Arc<Vec<f64>> {
     let g = term.geometry;
-    let nv = g.num_vertices();
+    match &options.cotan_weights {
+        Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
+        _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
+    }
+}
+
+/// The energies of `phi` over the free vertices of `region`: the initial energies
+/// [`solve_in`] reports, the same bits, without assembling the Jacobian or copying `phi`.
+pub fn energy_in(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    region: &Region,
+    options: &LmOptions,
+) -> Result<Energies> {
+    check_sizes(term, phi)?;
+    let w = weights(mesh, term, options);
+    let e = build_system(mesh, term, region, options, &w).energy(phi);
+    if !e.total().is_finite() {
+        return Err(numerical(format!("the initial energy is not finite: {e:?}")));
+    }
+    Ok(e)
+}
+
+/// The sizes of `phi` and of `term`'s targets against the geometry's vertices.
+fn check_sizes(term: &HighlightTerm, phi: &[f64]) -> Result<()> {
+    let nv = term.geometry.num_vertices();
     if phi.len() != nv
         || term.target_q.len() != nv
         || term.weight.len() != nv
@@ -291,18 +326,29 @@ pub fn solve_cached(
             format!("{} angles, {} targets for {nv} vertices", phi.len(), term.target_q.len()),
         ));
     }
-    let w = match &options.cotan_weights {
-        Some(w) if w.len() == g.adjacency.num_slots() => w.clone(),
-        _ => std::sync::Arc::new(cotan_weights(mesh, &g.adjacency)),
-    };
-    let sys = build_system(mesh, term, free, options, &w);
+    Ok(())
+}
+
+/// [`solve_cached`] over the free vertices of `region`, made with the cotangent weights
+/// `options` lend ([`Region::new`]): the same result as [`solve_cached`]'s for those vertices.
+pub fn solve_in(
+    mesh: &Mesh,
+    term: &HighlightTerm,
+    phi: &[f64],
+    region: &Region,
+    options: &LmOptions,
+    cache: &mut SolveCache,
+) -> Result<LmResult> {
+    check_sizes(term, phi)?;
+    let w = weights(mesh, term, options);
+    let sys = build_system(mesh, term, region, options, &w);
     let phi = phi.to_vec();
     let n = sys.free.len();
     // The first iteration's rows, assembled here: their energies are the initial ones (the
     // same bits as `System::energy`), so the start's residuals are evaluated once. The time is
     // the first iteration's.
     let t0 = Instant::now();
-    let mut acc = Assembler::new(&sys.col_of, n);
+    let mut acc = Assembler::new(sys.col_of, n);
     let initial_energy = if n == 0 { sys.energy(&phi) } else { sys.assemble(&phi, &mut acc) };
     let first_assembly = t0.elapsed().as_secs_f64();
     if !initial_energy.total().is_finite() {
@@ -335,7 +381,7 @@ pub fn solve_cached(
         direct,
         checked: false,
         acc,
-        next: Assembler::new(&sys.col_of, n),
+        next: Assembler::new(sys.col_of, n),
         assembled: true,
         first_assembly,
         product: None,
@@ -573,7 +619,7 @@ impl Lm<'_, '_> {
     fn smoothed(&self, after: f64) -> Option<(Vec<f64>, Energies)> {
         if self.options.interleaved_smoothing {
             for tau in [0.5, 0.25, 0.125] {
-                let s = smoothing_pass(&self.phi, &self.sys.free, self.term, self.w, tau);
+                let s = smoothing_pass(&self.phi, self.sys.free, self.term, self.w, tau);
                 let es = self.sys.energy(&s);
                 if es.total().is_finite() && es.total() <= after {
                     return Some((s, es));

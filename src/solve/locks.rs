@@ -189,8 +189,9 @@ pub fn resolve_locks(
     key: &str,
 ) -> Result<ResolvedLocks> {
     let nv = mesh.num_vertices();
-    // Per vertex: (angle, weight or None for hard), in lock order.
-    let mut asked: Vec<Vec<(f64, Option<f64>)>> = vec![Vec::new(); nv];
+    // (vertex, angle, weight or None for hard), in lock order; grouped by vertex below (a
+    // list of the locked vertices alone: no work per vertex of the part without locks).
+    let mut asked: Vec<(u32, f64, Option<f64>)> = Vec::new();
     let mut degenerate = Vec::new();
     let mut topology: Option<Topology> = None;
     for (li, spec) in specs.iter().enumerate() {
@@ -255,16 +256,17 @@ pub fn resolve_locks(
                 degenerate.push(v);
                 continue;
             }
-            asked[v as usize].push((tangential.y.atan2(tangential.x), spec.weight));
+            asked.push((v, tangential.y.atan2(tangential.x), spec.weight));
         }
     }
     degenerate.sort_unstable();
     degenerate.dedup();
     let mut out = ResolvedLocks { degenerate, ..Default::default() };
-    for (v, list) in asked.iter().enumerate() {
-        if list.is_empty() {
-            continue;
-        }
+    // A stable sort: each vertex's locks stay in lock order.
+    asked.sort_by_key(|a| a.0);
+    for group in asked.chunk_by(|a, b| a.0 == b.0) {
+        let v = group[0].0;
+        let list: Vec<(f64, Option<f64>)> = group.iter().map(|a| (a.1, a.2)).collect();
         let hard: Vec<(f64, f64)> =
             list.iter().filter(|a| a.1.is_none()).map(|a| (a.0, 1.0)).collect();
         let used: Vec<(f64, f64)> = if hard.is_empty() {
@@ -277,16 +279,16 @@ pub fn resolve_locks(
         let conflict = list.iter().any(|a| angle_difference(a.0, first, k).abs() > tolerance);
         if conflict {
             out.conflicts.push(LockConflict {
-                vertex: v as u32,
+                vertex: v,
                 angles: list.iter().map(|a| a.0).collect(),
                 resolved: angle,
             });
         }
         if hard.is_empty() {
             let weight: f64 = used.iter().map(|a| a.1).sum();
-            out.soft.push((v as u32, angle, weight));
+            out.soft.push((v, angle, weight));
         } else {
-            out.hard.push((v as u32, angle));
+            out.hard.push((v, angle));
         }
     }
     Ok(out)

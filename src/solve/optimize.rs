@@ -20,8 +20,8 @@ use super::face_hinge::{FaceTurningHinge, QUADRATURE};
 use super::fill::harmonic_fill;
 use super::highlight_term::HighlightTerm;
 use super::lm::{
-    solve, solve_cached, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, SolveCache,
-    StopReason,
+    energy_in, solve_in, Energies, HingeOptions, Iteration, LinearSolver, LmOptions, Region,
+    SolveCache, StopReason,
 };
 use super::locks::{angle_difference, resolve_locks, LockConflict};
 use super::settings::SolverSettings;
@@ -202,11 +202,27 @@ pub struct OptimizeReuse {
     /// Whether the whole-mesh figures of the report are measured: the constraint violations
     /// and the singularities (false: left empty, for a report made later on the same field).
     pub whole_mesh_report: bool,
+    /// The gradient stencil's users ([`crate::geometry::GradientStencil::users`]), made once:
+    /// the solve's set-up then visits the free vertices and their neighbours, not the part.
+    pub stencil_users: Option<std::sync::Arc<crate::geometry::gradient::StencilUsers>>,
+    /// The part's [`surface_area`], summed once.
+    pub surface_area: Option<f64>,
+}
+
+/// The surface area the relative smoothness weight is scaled by: the sum of the vertex areas
+/// that are finite and positive.
+pub fn surface_area(g: &crate::geometry::Geometry) -> f64 {
+    g.areas.iter().filter(|a| a.is_finite() && **a > 0.0).sum()
 }
 
 impl Default for OptimizeReuse {
     fn default() -> Self {
-        OptimizeReuse { cotan_weights: None, whole_mesh_report: true }
+        OptimizeReuse {
+            cotan_weights: None,
+            whole_mesh_report: true,
+            stencil_users: None,
+            surface_area: None,
+        }
     }
 }
 
@@ -251,6 +267,8 @@ pub fn optimize_with(
     }
     let free_list: Vec<u32> = (0..nv as u32).filter(|&v| free[v as usize]).collect();
     let options = lm_options(mesh, term, settings, &locks, reuse);
+    let w = options.cotan_weights.clone().expect("set by lm_options");
+    let region = Region::new(g, &free_list, &w, reuse.stencil_users.as_deref());
     let stages: Vec<f64> = if settings.continuation && settings.smoothness > 0.0 {
         vec![1000.0, 100.0, 10.0, 1.0]
     } else {
@@ -260,6 +278,7 @@ pub fn optimize_with(
         mesh,
         term,
         free_list: &free_list,
+        region: &region,
         options: &options,
         settings,
         stages,
@@ -337,7 +356,7 @@ fn lm_options(
 ) -> LmOptions {
     let g = term.geometry;
     let c = &settings.constraints;
-    let area: f64 = g.areas.iter().filter(|a| a.is_finite() && **a > 0.0).sum();
+    let area = reuse.surface_area.unwrap_or_else(|| surface_area(g));
     LmOptions {
         smoothness: settings.smoothness * area,
         max_iterations: settings.max_iterations,
@@ -382,6 +401,7 @@ struct Solves<'a> {
     mesh: &'a Mesh,
     term: &'a HighlightTerm<'a>,
     free_list: &'a [u32],
+    region: &'a Region,
     options: &'a LmOptions,
     settings: &'a SolverSettings,
     stages: Vec<f64>,
@@ -406,11 +426,11 @@ impl Solves<'_> {
                 max_iterations: if last { left } else { left.min(5) },
                 ..options.clone()
             };
-            let lm = solve_cached(
+            let lm = solve_in(
                 self.mesh,
                 self.term,
                 &run.phi,
-                self.free_list,
+                self.region,
                 &opts,
                 &mut cache.borrow_mut(),
             )?;
@@ -425,10 +445,15 @@ impl Solves<'_> {
         Ok(run)
     }
 
+    /// The energy of `phi` over the free set (a solve's initial energy, the same bits).
+    fn energy(&self, phi: &[f64]) -> Result<f64> {
+        Ok(energy_in(self.mesh, self.term, phi, self.region, self.options)?.total())
+    }
+
     /// The starts to run, in order, and the given start's energy.
     fn candidates(&self, start: Vec<f64>) -> Result<(Candidates, f64)> {
-        let (mesh, term, free_list, options, settings) =
-            (self.mesh, self.term, self.free_list, self.options, self.settings);
+        let (term, free_list, options, settings) =
+            (self.term, self.free_list, self.options, self.settings);
         let g = term.geometry;
         let k = term.symmetry.k();
         // Candidate starts: the given field and, when asked, the harmonic fill; the one of lower
@@ -438,10 +463,8 @@ impl Solves<'_> {
         if settings.harmonic_start && !settings.whole_mesh && !free_list.is_empty() {
             let w = options.cotan_weights.clone().expect("set above");
             if let Some(fill) = harmonic_fill(g, &w, &candidates[0].1, free_list, k) {
-                let probe = LmOptions { max_iterations: 0, ..options.clone() };
-                let e_given =
-                    solve(mesh, term, &candidates[0].1, free_list, &probe)?.initial_energy.total();
-                let e_fill = solve(mesh, term, &fill, free_list, &probe)?.initial_energy.total();
+                let e_given = self.energy(&candidates[0].1)?;
+                let e_fill = self.energy(&fill)?;
                 let fill = (StartChoice::HarmonicFill, fill);
                 if e_fill < e_given {
                     candidates.insert(0, fill);
@@ -454,9 +477,8 @@ impl Solves<'_> {
         // every position row, and the other starts can reach the same (zero) energy on mixed
         // branches, which misplace the highlight. It is kept when its solve ends at a negligible
         // energy relative to the given start's.
-        let probe = LmOptions { max_iterations: 0, ..options.clone() };
         let given = candidates.iter().find(|(c, _)| *c == StartChoice::Given).expect("given");
-        let given_energy = solve(mesh, term, &given.1, free_list, &probe)?.initial_energy.total();
+        let given_energy = self.energy(&given.1)?;
         if let Some(coherent) = coherent_start(term, &given.1, free_list) {
             candidates.insert(0, (StartChoice::CoherentBranch, coherent));
         }

@@ -4,6 +4,8 @@
 //! faces around them; the rest is the previous step's. Each value is computed as the whole
 //! part's would be (the same functions on the same inputs), so the result is the same bits.
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 
 use crate::fidelity::highlight_segments_of_faces;
@@ -20,7 +22,9 @@ pub(super) struct PageField {
     gen: u64,
     part: u32,
     phi: Vec<f64>,
-    h: Vec<Vector3<f64>>,
+    /// The half vectors (shared with the drag step's: a step that leaves the light hands the
+    /// same ones, and only φ is compared).
+    h: Arc<Vec<Vector3<f64>>>,
     u: Vec<Vector3<f64>>,
     /// `u` as the page is sent it.
     pub(super) u32s: Vec<[f32; 3]>,
@@ -58,7 +62,7 @@ impl PageField {
         part: u32,
         p: &Prepared,
         phi: &[f64],
-        h: &[Vector3<f64>],
+        h: &Arc<Vec<Vector3<f64>>>,
     ) -> Result<PageField> {
         let u = (0..phi.len()).map(|i| direction(p, phi, i)).collect::<Result<Vec<_>>>()?;
         let faces: Vec<usize> = (0..p.mesh.num_faces()).collect();
@@ -67,7 +71,7 @@ impl PageField {
             gen,
             part,
             phi: phi.to_vec(),
-            h: h.to_vec(),
+            h: Arc::clone(h),
             u32s: u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect(),
             u,
             segments,
@@ -82,22 +86,32 @@ impl PageField {
 
     /// Moves this field to `phi`, `h` (on the same part): false, and unchanged, when more than
     /// a quarter of the vertices changed (the caller computes it whole).
-    pub(super) fn update(&mut self, p: &Prepared, phi: &[f64], h: &[Vector3<f64>]) -> Result<bool> {
+    pub(super) fn update(
+        &mut self,
+        p: &Prepared,
+        phi: &[f64],
+        h: &Arc<Vec<Vector3<f64>>>,
+    ) -> Result<bool> {
         let same = |a: &Vector3<f64>, b: &Vector3<f64>| {
             a.iter().zip(b.iter()).all(|(x, y)| x.to_bits() == y.to_bits())
         };
-        let changed: Vec<usize> = (0..phi.len())
-            .filter(|&i| phi[i].to_bits() != self.phi[i].to_bits() || !same(&h[i], &self.h[i]))
-            .collect();
+        let changed: Vec<usize> = if Arc::ptr_eq(h, &self.h) {
+            (0..phi.len()).filter(|&i| phi[i].to_bits() != self.phi[i].to_bits()).collect()
+        } else {
+            (0..phi.len())
+                .filter(|&i| phi[i].to_bits() != self.phi[i].to_bits() || !same(&h[i], &self.h[i]))
+                .collect()
+        };
         if changed.len() > phi.len() / MAX_CHANGED_FRACTION {
             return Ok(false);
         }
         // Checked first, in vertex order: the error names the vertex the whole part's would.
         let u = changed.iter().map(|&i| direction(p, phi, i)).collect::<Result<Vec<_>>>()?;
+        // The new half vectors: the same bits as the kept ones but at the changed vertices.
+        self.h = Arc::clone(h);
         let mut faces = Vec::new();
         for (&i, ui) in changed.iter().zip(u) {
             self.phi[i] = phi[i];
-            self.h[i] = h[i];
             self.u[i] = ui;
             self.u32s[i] = [ui.x as f32, ui.y as f32, ui.z as f32];
             faces.extend(self.faces.of(i).iter().map(|&(f, _)| f as usize));

@@ -7,7 +7,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
 use crate::edit::Edit;
-use crate::editor::drag::DragBase;
+use crate::editor::drag::{DragBase, DragStep};
 use crate::fidelity::{highlight_segments, EditFidelity};
 use crate::pipeline::optimize::{
     field_file_angles, optimize_stage, optimized_field_file, Optimized,
@@ -71,6 +71,13 @@ struct FieldOf<'a> {
     critical: &'a [bool],
 }
 
+impl Solved {
+    /// The solved angles per vertex (the solver's own, before FIELD.json's round trip).
+    pub fn phi(&self) -> &[f64] {
+        &self.phi
+    }
+}
+
 impl Session {
     /// Solves the committed `edits` exactly as `grainline run` would solve a scene file holding
     /// them, on the part prepared for them ([`Session::part_for`]: refined inside their
@@ -103,11 +110,12 @@ impl Session {
         edits.push(dragged.clone());
         let s = self.with_edits(b, &edits)?;
         let step = base.step(&s, &part.prepared, 1).map_err(|e| s.wrap(e))?;
-        let field = FieldOf { phi: &step.phi, h: &step.h, critical: &step.critical };
-        let mut solved = self.drag_field(b, &part, &field, version)?;
-        solved.stop = step.stop.to_string();
-        solved.key_light = step.key_light;
-        solved.edited_vertices = step.edited_vertices;
+        let (stop, key_light, edited) =
+            (step.stop.to_string(), step.key_light, step.edited_vertices);
+        let mut solved = self.drag_field(b, &part, step, version)?;
+        solved.stop = stop;
+        solved.key_light = key_light;
+        solved.edited_vertices = edited;
         solved.edits = edits;
         solved.seconds = start.elapsed().as_secs_f64();
         solved.part = part;
@@ -173,24 +181,28 @@ impl Session {
         &self,
         b: &Arc<Base>,
         part: &Arc<Part>,
-        f: &FieldOf,
+        step: DragStep,
         version: u64,
     ) -> Result<Solved> {
         let p = &part.prepared;
+        let (phi, h) = (&step.phi, &step.h);
         let mut kept = self.drag_page.lock().unwrap_or_else(|e| e.into_inner());
-        let previous = kept.take().filter(|k| k.is_on(b.gen, part.id, f.phi.len()));
+        let previous = kept.take().filter(|k| k.is_on(b.gen, part.id, phi.len()));
         let page = match previous {
             Some(mut k) => {
-                if k.update(p, f.phi, f.h)? {
+                if k.update(p, phi, h)? {
                     k
                 } else {
-                    PageField::new(b.gen, part.id, p, f.phi, f.h)?
+                    PageField::new(b.gen, part.id, p, phi, h)?
                 }
             }
-            None => PageField::new(b.gen, part.id, p, f.phi, f.h)?,
+            None => PageField::new(b.gen, part.id, p, phi, h)?,
         };
-        let solved = self.page_view(b, part, f, version, page.u32s.clone(), page.segments());
+        let field = FieldOf { phi, h, critical: &step.critical };
+        let (u, segments) = (page.u32s.clone(), page.segments());
+        let mut solved = self.page_view(b, part, &field, version, u, segments);
         *kept = Some(page);
+        solved.phi = step.phi;
         Ok(solved)
     }
 
@@ -216,10 +228,13 @@ impl Session {
             .map(|[a, b]| [a.x, a.y, a.z, b.x, b.y, b.z].map(|c| c as f32))
             .collect();
         let u = u.iter().map(|v| [v.x as f32, v.y as f32, v.z as f32]).collect();
-        Ok(self.page_view(b, part, f, version, u, segments))
+        let mut solved = self.page_view(b, part, f, version, u, segments);
+        solved.phi = f.phi.to_vec();
+        Ok(solved)
     }
 
-    /// A [`Solved`] of the grain `u` and the curves `segments` of the field `f`.
+    /// A [`Solved`] of the grain `u` and the curves `segments` of the field `f`, without its
+    /// angles (the caller's to move in).
     fn page_view(
         &self,
         b: &Arc<Base>,
@@ -238,7 +253,7 @@ impl Session {
             edits: Vec::new(),
             optimized: None,
             field_json: OnceLock::new(),
-            phi: f.phi.to_vec(),
+            phi: Vec::new(),
             traced: OnceLock::new(),
             u,
             segments,

@@ -5,6 +5,8 @@
 use rayon::prelude::*;
 
 use super::{Energies, LmOptions, Term};
+use crate::geometry::gradient::StencilUsers;
+use crate::geometry::Geometry;
 use crate::mesh::Mesh;
 use crate::solve::cg::JacobianRows;
 use crate::solve::fabrication::{lock_residual, GradientHinge, HingeKind};
@@ -332,8 +334,8 @@ impl Block for LockBlock {
 }
 
 pub(super) struct System<'a> {
-    pub(super) col_of: Vec<Option<u32>>,
-    pub(super) free: Vec<u32>,
+    pub(super) col_of: &'a [Option<u32>],
+    pub(super) free: &'a [u32],
     blocks: Vec<Box<dyn Block + 'a>>,
 }
 
@@ -362,58 +364,118 @@ impl System<'_> {
     }
 }
 
-/// The stacked system of [`super::solve_cached`] over the `free` vertices (out-of-range ones
-/// dropped): their columns, and a block per term that has rows touching them.
+/// The free set of a solve and what its blocks take from it: each free vertex's column, the
+/// vertices whose gradient stencil holds a free angle, and the edges with a free end. Made once
+/// for the solves of one free set (the optimizer's starts, probes and continuation stages);
+/// with the stencil's users ([`crate::geometry::GradientStencil::users`]) it visits only
+/// the free vertices and their neighbours, and holds the same lists as the scan of the part.
+pub struct Region {
+    col_of: Vec<Option<u32>>,
+    free: Vec<u32>,
+    touched: Vec<u32>,
+    /// (i, j, slot) of the edges i < j with a free end and a positive cotangent weight, in
+    /// the order of i, then of i's slots.
+    edges: Vec<(u32, u32, u32)>,
+}
+
+impl Region {
+    /// The region of the `free` vertices (out-of-range ones dropped) of `g`, with the
+    /// cotangent weights `w` (one per adjacency slot) and, when lent, the stencil's users.
+    pub fn new(g: &Geometry, free: &[u32], w: &[f64], users: Option<&StencilUsers>) -> Region {
+        let nv = g.num_vertices();
+        let mut col_of = vec![None; nv];
+        let mut free_sorted: Vec<u32> =
+            free.iter().copied().filter(|&v| (v as usize) < nv).collect();
+        free_sorted.sort_unstable();
+        free_sorted.dedup();
+        for (c, &v) in free_sorted.iter().enumerate() {
+            col_of[v as usize] = Some(c as u32);
+        }
+        // Vertices whose Eq. 10 stencil touches a free angle (itself or a neighbour).
+        let touched: Vec<u32> = match users {
+            Some(u) if u.num_vertices() == nv => {
+                let mut t = free_sorted.clone();
+                for &j in &free_sorted {
+                    t.extend_from_slice(u.of(j as usize));
+                }
+                t.sort_unstable();
+                t.dedup();
+                t
+            }
+            _ => (0..nv as u32)
+                .filter(|&i| {
+                    col_of[i as usize].is_some()
+                        || g.stencil
+                            .range(i as usize)
+                            .any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
+                })
+                .collect(),
+        };
+        // An edge with a free end starts at a free vertex or at a neighbour of one (the
+        // adjacency is symmetric): those, in ascending order, as the scan of the part meets them.
+        let mut near = free_sorted.clone();
+        for &v in &free_sorted {
+            near.extend_from_slice(g.adjacency.neighbors(v as usize));
+        }
+        near.sort_unstable();
+        near.dedup();
+        let mut edges = Vec::new();
+        if w.len() == g.adjacency.num_slots() {
+            for &i in &near {
+                let i = i as usize;
+                for s in g.adjacency.slots(i) {
+                    let j = g.adjacency.target(s);
+                    if i < j && (col_of[i].is_some() || col_of[j].is_some()) && w[s] > 0.0 {
+                        edges.push((i as u32, j as u32, s as u32));
+                    }
+                }
+            }
+        }
+        Region { col_of, free: free_sorted, touched, edges }
+    }
+
+    /// The free vertices, ascending.
+    pub fn free(&self) -> &[u32] {
+        &self.free
+    }
+}
+
+/// The stacked system of [`super::solve_cached`] over the free vertices of `region`: their
+/// columns, and a block per term that has rows touching them (`w`: the cotangent weights the
+/// region was made with).
 pub(super) fn build_system<'a>(
     mesh: &Mesh,
     term: &'a HighlightTerm,
-    free: &[u32],
+    region: &'a Region,
     options: &LmOptions,
     w: &[f64],
 ) -> System<'a> {
     let g = term.geometry;
     let nv = g.num_vertices();
-    let mut col_of = vec![None; nv];
-    let mut free_sorted: Vec<u32> = free.iter().copied().filter(|&v| (v as usize) < nv).collect();
-    free_sorted.sort_unstable();
-    free_sorted.dedup();
-    for (c, &v) in free_sorted.iter().enumerate() {
-        col_of[v as usize] = Some(c as u32);
-    }
-    // Vertices whose Eq. 10 stencil touches a free angle (itself or a neighbour).
-    let touched: Vec<u32> = (0..nv as u32)
-        .filter(|&i| {
-            col_of[i as usize].is_some()
-                || g.stencil
-                    .range(i as usize)
-                    .any(|e| col_of[g.stencil.neighbor[e] as usize].is_some())
-        })
-        .collect();
+    let col_of = &region.col_of[..];
     let k = term.symmetry.k();
     let mut blocks: Vec<Box<dyn Block + 'a>> = Vec::new();
-    let rows = touched.iter().copied().filter(|&i| term.target_q[i as usize].is_some()).collect();
+    let rows =
+        region.touched.iter().copied().filter(|&i| term.target_q[i as usize].is_some()).collect();
     blocks.push(Box::new(HighlightBlock { term, rows }));
     // A position row depends on its own angle only: the free vertices with a target.
-    let rows: Vec<u32> = (0..nv as u32)
-        .filter(|&i| col_of[i as usize].is_some() && term.target_g[i as usize].is_some())
-        .collect();
+    let rows: Vec<u32> =
+        region.free.iter().copied().filter(|&i| term.target_g[i as usize].is_some()).collect();
     if !rows.is_empty() {
         blocks.push(Box::new(PositionBlock { term, rows }));
     }
     if options.smoothness > 0.0 {
-        let mut edges = Vec::new();
-        for i in 0..nv {
-            for s in g.adjacency.slots(i) {
-                let j = g.adjacency.target(s);
-                if i < j && (col_of[i].is_some() || col_of[j].is_some()) && w[s] > 0.0 {
-                    let scale = edge_scale(options.smoothness * w[s]);
-                    edges.push((i as u32, j as u32, g.transport[s], scale));
-                }
-            }
-        }
+        let edges = region
+            .edges
+            .iter()
+            .map(|&(i, j, s)| {
+                let s = s as usize;
+                (i, j, g.transport[s], edge_scale(options.smoothness * w[s]))
+            })
+            .collect();
         blocks.push(Box::new(SmoothnessBlock { edges, k }));
     }
-    blocks.extend(hinge_blocks(mesh, term, options, &col_of, &touched));
+    blocks.extend(hinge_blocks(mesh, term, options, col_of, &region.touched));
     let locks: Vec<(u32, f64, f64)> = options
         .soft_locks
         .iter()
@@ -423,7 +485,7 @@ pub(super) fn build_system<'a>(
     if !locks.is_empty() {
         blocks.push(Box::new(LockBlock { locks, k }));
     }
-    System { col_of, free: free_sorted, blocks }
+    System { col_of, free: &region.free, blocks }
 }
 
 /// The blocks of the vertex hinges (turning, splay: rows at the `touched` vertices) and of
