@@ -5,7 +5,7 @@
 //! flipped, and a chart that is otherwise well flattened would be rejected, and cut, for a
 //! handful of triangles a thousandth of its area.
 //!
-//! [`untangle`] moves the vertices of the flipped triangles (and of interior vertices whose UV
+//! `untangle` moves the vertices of the flipped triangles (and of interior vertices whose UV
 //! angles do not add up to 2π) to the Tutte embedding of their neighbourhood, the vertices
 //! around them held where the map put them: each free vertex at the mean of its neighbours,
 //!
@@ -17,7 +17,7 @@
 //! is an embedding). When a triangle around a free vertex is still flipped, the free set grows
 //! by a ring and is solved again, at most [`MAX_RINGS`] times. The free set may cover at most
 //! [`MAX_FOLD_SHARE`] of the chart's 3D area: a larger fold is no noise, and the chart is cut
-//! as before. The caller checks the whole map again ([`super::distortion::invalid`]).
+//! as before. The caller checks the whole map again (`distortion::invalid`).
 
 use nalgebra::{Vector2, Vector3};
 
