@@ -271,8 +271,7 @@ fn flatten_bff(
     // when the conformal map is not valid.
     for extension in [bff::Extension::Conformal, bff::Extension::Harmonic] {
         if let Ok(mut uv) = bff::bff(chart, pos, extension) {
-            untangle_if_invalid(chart, pos, &mut uv);
-            if invalid(chart, &uv).is_none() {
+            if valid_untangled(chart, pos, &mut uv) {
                 counters.bff_harmonic += (extension == bff::Extension::Harmonic) as usize;
                 return Some(uv);
             }
@@ -317,33 +316,31 @@ fn flatten_chart(
             if single {
                 return Some(Found { uv, arap_pending: false });
             }
-            untangle_if_invalid(chart, pos, &mut uv);
+            let lscm_valid = valid_untangled(chart, pos, &mut uv);
             // With ARAP, a valid LSCM map within the bound decides: ARAP runs once the charts
             // are final (every merge tried), on the final charts only.
             if options.method == Method::Arap
-                && invalid(chart, &uv).is_none()
+                && lscm_valid
                 && within_bound(chart, pos, &uv, options)
             {
                 return Some(Found { uv, arap_pending: true });
             }
             match options.method {
-                Method::Lscm | Method::Bff => invalid(chart, &uv).is_none().then_some(uv)?,
-                Method::Arap => {
-                    match arap::arap(chart, pos, &uv, options.arap_iterations).map(|mut run| {
-                        untangle_if_invalid(chart, pos, &mut run.uv);
-                        run
-                    }) {
-                        Ok(run) if invalid(chart, &run.uv).is_none() => {
-                            counters.arap_iterations += run.iterations;
-                            run.uv
-                        }
-                        _ => {
-                            invalid(chart, &uv).is_none().then_some(())?;
-                            counters.arap_fallbacks += 1;
-                            uv
-                        }
+                Method::Lscm | Method::Bff => lscm_valid.then_some(uv)?,
+                Method::Arap => match arap::arap(chart, pos, &uv, options.arap_iterations)
+                    .ok()
+                    .and_then(|mut run| valid_untangled(chart, pos, &mut run.uv).then_some(run))
+                {
+                    Some(run) => {
+                        counters.arap_iterations += run.iterations;
+                        run.uv
                     }
-                }
+                    None => {
+                        lscm_valid.then_some(())?;
+                        counters.arap_fallbacks += 1;
+                        uv
+                    }
+                },
             }
         }
     };
@@ -370,8 +367,8 @@ fn finish_arap(flats: &mut [Flat], mesh: &Mesh, options: &LayoutOptions, counter
         let (chart, pos) = (&flat.chart, flat.chart.positions(mesh));
         match arap::arap(chart, &pos, &flat.uv, options.arap_iterations) {
             Ok(mut run) => {
-                untangle_if_invalid(chart, &pos, &mut run.uv);
-                if invalid(chart, &run.uv).is_none() && within_bound(chart, &pos, &run.uv, options)
+                if valid_untangled(chart, &pos, &mut run.uv)
+                    && within_bound(chart, &pos, &run.uv, options)
                 {
                     counters.arap_iterations += run.iterations;
                     flat.uv = run.uv;
@@ -385,11 +382,11 @@ fn finish_arap(flats: &mut [Flat], mesh: &Mesh, options: &LayoutOptions, counter
     }
 }
 
-/// Untangles the map's small folds ([`untangle`]) when it is not valid as it is.
-fn untangle_if_invalid(chart: &ChartMesh, pos: &[Vector3<f64>], uv: &mut [Vector2<f64>]) {
-    if invalid(chart, uv).is_some() {
-        untangle::untangle(chart, pos, uv);
-    }
+/// Whether the map is valid, after untangling its small folds ([`untangle`]) when it is not
+/// valid as it is.
+fn valid_untangled(chart: &ChartMesh, pos: &[Vector3<f64>], uv: &mut [Vector2<f64>]) -> bool {
+    invalid(chart, uv).is_none()
+        || (untangle::untangle(chart, pos, uv) && invalid(chart, uv).is_none())
 }
 
 /// Area-weighted mean of the face normals, as a length in [0, 1]: 1 for a flat chart, about

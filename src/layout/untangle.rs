@@ -70,6 +70,12 @@ impl Incidence {
     }
 }
 
+/// The 3D area of a chart triangle.
+fn area_3d(pos: &[Vector3<f64>], t: &[u32; 3]) -> f64 {
+    let p = t.map(|v| pos[v as usize]);
+    0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm()
+}
+
 /// Whether the map flips a triangle.
 fn flipped(chart: &ChartMesh, uv: &[Vector2<f64>], t: usize) -> bool {
     let a = signed_area(chart.tris[t].map(|v| uv[v as usize]));
@@ -157,10 +163,7 @@ pub(crate) fn squashed(
     uv: &[Vector2<f64>],
     tris: impl Iterator<Item = usize>,
 ) -> bool {
-    let area3 = |t: &[u32; 3]| {
-        let p = t.map(|v| pos[v as usize]);
-        0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm()
-    };
+    let area3 = |t: &[u32; 3]| area_3d(pos, t);
     let (mut a3, mut a2) = (0.0, 0.0);
     for t in &chart.tris {
         a3 += area3(t);
@@ -184,10 +187,7 @@ pub(crate) fn untangle(chart: &ChartMesh, pos: &[Vector3<f64>], uv: &mut [Vector
         return true;
     }
     let inc = Incidence::new(chart);
-    let area = |t: &[u32; 3]| {
-        let p = t.map(|v| pos[v as usize]);
-        0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm()
-    };
+    let area = |t: &[u32; 3]| area_3d(pos, t);
     let total: f64 = chart.tris.iter().map(area).sum();
     let n = chart.num_vertices();
     for _ in 0..=MAX_RINGS {
